@@ -1,0 +1,138 @@
+r"""Continuation problems :math:`G(z, p) = 0` in one free scalar parameter ``p``.
+
+Every problem the engine continues (equilibria, fold and Hopf curves, connecting
+orbits) implements :class:`ContinuationProblem`, so one pseudo-arclength driver
+serves all of them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from ._types import ComplexArray, FloatArray
+from .params import Params
+from .system import System
+
+
+@runtime_checkable
+class ContinuationProblem(Protocol):
+    r"""A system :math:`G(z, p) = 0`, :math:`G: R^N \times R \to R^N`.
+
+    Attributes
+    ----------
+    free : str
+        Name of the free (continuation) parameter.
+    n_unknowns : int
+        ``N``, the length of ``z``.
+    """
+
+    free: str
+
+    @property
+    def n_unknowns(self) -> int:
+        """Length ``N`` of the unknown vector ``z``."""
+        ...
+
+    def residual(self, z: FloatArray, p: float) -> FloatArray:
+        """``G(z, p)``, shape ``(N,)``."""
+        ...
+
+    def jacobian(self, z: FloatArray, p: float) -> Any:
+        """``dG/dz``, shape ``(N, N)`` (ndarray or SciPy sparse)."""
+        ...
+
+    def dp(self, z: FloatArray, p: float) -> FloatArray:
+        """``dG/dp``, shape ``(N,)``."""
+        ...
+
+    def stability(self, z: FloatArray, p: float) -> ComplexArray | None:
+        """Eigenvalues that decide stability at ``(z, p)``, or None if not applicable."""
+        ...
+
+    def record(self, z: FloatArray, p: float) -> Mapping[str, float]:
+        """Cheap named scalars stored at every branch point (may be empty)."""
+        ...
+
+
+@dataclass(frozen=True)
+class EquilibriumProblem:
+    r"""Equilibria :math:`f(x, p) = 0` of a :class:`System`, ``free`` parameter varying.
+
+    Parameters
+    ----------
+    system : System
+        The dynamical system.
+    params : Params
+        Values of all parameters; the ``free`` entry is overwritten by ``p``.
+    free : str
+        Name of the continuation parameter; must be one of ``system.param_names``.
+    sparse : bool or None
+        Use sparse Jacobians (``None``: automatically for ``n >= 100``).
+
+    Notes
+    -----
+    ``z = x`` (shape ``(n,)``), ``G(z, p) = f(x, P(p))`` where ``P(p)`` is
+    ``params`` with the free entry replaced by ``p``.
+    """
+
+    system: System
+    params: Params
+    free: str
+    sparse: bool | None = None
+    _index: int = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.params, Params):
+            vec = self.system.check_params(self.params)
+            object.__setattr__(self, "params", Params(self.system.param_names, vec))
+        if self.params.names != self.system.param_names:
+            raise ValueError(
+                f"`params` names {self.params.names} do not match the system's "
+                f"{self.system.param_names}"
+            )
+        if self.free not in self.system.param_names:
+            raise ValueError(f"`free` must be one of {self.system.param_names}, got {self.free!r}")
+        object.__setattr__(self, "_index", self.system.param_names.index(self.free))
+        if self.sparse is None:
+            object.__setattr__(self, "sparse", self.system.n_states >= 100)
+
+    @property
+    def n_unknowns(self) -> int:
+        """Number of states ``n``."""
+        return self.system.n_states
+
+    def param_vector(self, p: float) -> FloatArray:
+        """Full parameter vector with the free entry set to ``p``, shape ``(m,)``."""
+        v = np.array(self.params.values, dtype=float)
+        v[self._index] = p
+        return v
+
+    def residual(self, z: FloatArray, p: float) -> FloatArray:
+        """``f(x, P(p))``, shape ``(n,)``."""
+        return self.system.f(z, self.param_vector(p))
+
+    def jacobian(self, z: FloatArray, p: float) -> Any:
+        """``df/dx``, dense ``(n, n)`` or sparse CSC when ``self.sparse``."""
+        if self.sparse:
+            return self.system.jacobian_sparse(z, self.param_vector(p))
+        return self.system.jacobian(z, self.param_vector(p))
+
+    def dp(self, z: FloatArray, p: float) -> FloatArray:
+        """``df/dp_free``, shape ``(n,)``."""
+        return np.asarray(self.system.dfdp(z, self.param_vector(p)))[:, self._index]
+
+    def stability(self, z: FloatArray, p: float) -> ComplexArray:
+        """Eigenvalues of ``df/dx``, shape ``(n,)``."""
+        J = self.system.jacobian(z, self.param_vector(p))
+        return np.asarray(np.linalg.eigvals(J), dtype=complex)
+
+    def record(self, z: FloatArray, p: float) -> Mapping[str, float]:
+        """No extra records for plain equilibria."""
+        return {}
+
+
+__all__ = ["ContinuationProblem", "EquilibriumProblem"]

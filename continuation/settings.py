@@ -1,0 +1,136 @@
+"""Immutable, self-validating settings for Newton solves and continuation."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+
+def _positive(name: str, value: float) -> None:
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+        raise ValueError(f"`{name}` must be a positive finite number, got {value!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class NewtonSettings:
+    """Settings of Newton's method.
+
+    Attributes
+    ----------
+    tol : float
+        Converged when ``||G(z)||_inf <= tol`` (and the last step is below ``step_tol``
+        scaled by ``1 + ||z||_inf``).
+    step_tol : float
+        Tolerance on the last Newton step.
+    max_iter : int
+        Maximum number of iterations.
+    damping : bool
+        Halve the step (up to 10 times) when the residual does not decrease.
+    """
+
+    tol: float = 1e-10
+    step_tol: float = 1e-8
+    max_iter: int = 20
+    damping: bool = False
+
+    def __post_init__(self) -> None:
+        _positive("tol", self.tol)
+        _positive("step_tol", self.step_tol)
+        if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
+            raise ValueError(f"`max_iter` must be an integer >= 1, got {self.max_iter!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class DetectionSettings:
+    """Which special points to detect, and whether to locate them.
+
+    Attributes
+    ----------
+    fold, hopf, branch_point : bool
+        Detect these kinds of special point.
+    locate : bool
+        Locate detected points to ``tol`` (otherwise only bracket them).
+    tol : float
+        Location tolerance on the arclength/parameter.
+    max_iter : int
+        Maximum iterations of the locator.
+    eig_tol : float
+        Real parts with ``|Re| <= eig_tol`` count as zero when counting unstable
+        eigenvalues.
+    """
+
+    fold: bool = True
+    hopf: bool = True
+    branch_point: bool = True
+    locate: bool = True
+    tol: float = 1e-10
+    max_iter: int = 50
+    eig_tol: float = 1e-10
+
+    def __post_init__(self) -> None:
+        _positive("tol", self.tol)
+        _positive("eig_tol", self.eig_tol)
+        if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
+            raise ValueError(f"`max_iter` must be an integer >= 1, got {self.max_iter!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ContinuationSettings:
+    """Settings of pseudo-arclength continuation.
+
+    Attributes
+    ----------
+    ds : float
+        Initial signed step; its sign picks the direction (``+`` increases the
+        free parameter at the start).
+    ds_min, ds_max : float
+        Bounds on ``|ds|``; the branch stops with ``Status.DS_MIN`` below ``ds_min``.
+    p_min, p_max : float
+        Bounds on the free parameter; the branch stops on reaching one.
+    max_steps : int
+        Maximum number of continuation steps (each direction).
+    theta : float
+        Weight of the parameter in the arclength norm, in (0, 1].
+    grow, shrink : float
+        Step-size factors on easy convergence / failure.
+    newton : NewtonSettings
+        Corrector settings.
+    detect : DetectionSettings
+        Special-point detection settings.
+    """
+
+    ds: float = 1e-2
+    ds_min: float = 1e-8
+    ds_max: float = 1e-1
+    p_min: float = -math.inf
+    p_max: float = math.inf
+    max_steps: int = 500
+    theta: float = 0.5
+    grow: float = 1.5
+    shrink: float = 0.5
+    newton: NewtonSettings = field(default_factory=NewtonSettings)
+    detect: DetectionSettings = field(default_factory=DetectionSettings)
+
+    def __post_init__(self) -> None:
+        for name in ("ds", "ds_min", "ds_max"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v)):
+                raise ValueError(f"`{name}` must be a finite number, got {v!r}")
+        if not (self.ds_max >= abs(self.ds) >= self.ds_min > 0):
+            raise ValueError(
+                "need ds_max >= |ds| >= ds_min > 0, got "
+                f"ds_max={self.ds_max}, ds={self.ds}, ds_min={self.ds_min}"
+            )
+        if not self.p_min < self.p_max:
+            raise ValueError(f"need p_min < p_max, got p_min={self.p_min}, p_max={self.p_max}")
+        if not (isinstance(self.max_steps, int) and self.max_steps >= 1):
+            raise ValueError(f"`max_steps` must be an integer >= 1, got {self.max_steps!r}")
+        if not (0 < self.theta <= 1):
+            raise ValueError(f"`theta` must be in (0, 1], got {self.theta}")
+        if not self.grow >= 1:
+            raise ValueError(f"`grow` must be >= 1, got {self.grow}")
+        if not (0 < self.shrink < 1):
+            raise ValueError(f"`shrink` must be in (0, 1), got {self.shrink}")
+
+
+__all__ = ["NewtonSettings", "DetectionSettings", "ContinuationSettings"]

@@ -1,0 +1,37 @@
+"""Termination status of every numerical routine; each value is a human message."""
+
+from __future__ import annotations
+
+import enum
+
+
+class Status(enum.Enum):
+    """Why a routine stopped. ``status.value`` is a message for humans."""
+
+    SUCCESS = "Reached the requested end of the computation."
+    MAX_STEPS = "The maximum number of continuation steps was reached. Increase `max_steps`."
+    PARAM_BOUND = "The free parameter reached the bound [p_min, p_max]."
+    CLOSED_LOOP = "The branch closed on itself (returned to its start point)."
+    DS_MIN = (
+        "Step size fell below `ds_min`: Newton failed to converge. "
+        "Try a smaller `ds` or a looser `newton.tol`."
+    )
+    SINGULAR = "Singular Jacobian: the linear system could not be solved."
+    NEWTON_FAILED = "Newton's method did not converge."
+    NONFINITE = "The model returned a non-finite value (NaN or inf)."
+    INTERRUPTED = "Interrupted by the user; the results computed so far are kept."
+    EVENT = "A terminal event stopped the computation."
+
+    @property
+    def ok(self) -> bool:
+        """True when the routine ended normally (not a numerical failure)."""
+        return self in (
+            Status.SUCCESS,
+            Status.MAX_STEPS,
+            Status.PARAM_BOUND,
+            Status.CLOSED_LOOP,
+            Status.EVENT,
+        )
+
+
+__all__ = ["Status"]

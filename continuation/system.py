@@ -1,0 +1,381 @@
+r"""User-facing dynamical systems :math:`\dot x = f(x, p)` with named states and parameters.
+
+A user writes the right-hand side once as ``rhs(x, p, ops)`` against an
+:class:`~continuation.ops.Ops` namespace. :class:`System` evaluates it with NumPy
+and traces it once with CasADi ``SX`` symbols, giving compiled functions for
+``f``, the state Jacobian ``df/dx`` and the parameter Jacobian ``df/dp``. A plain
+NumPy callable ``rhs(x, p)`` also works: then derivatives come from central
+differences.
+
+A state may be periodic (an angle, or the ship's wave-relative position
+``xi_G/lambda`` with period 1): :meth:`System.wrap`, :meth:`System.difference` and
+:meth:`System.same_point` treat ``x`` and ``x + period`` as one point.
+"""
+
+from __future__ import annotations
+
+import inspect
+import logging
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, Protocol, runtime_checkable
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from ._types import FloatArray
+from .differentiation import fd_jacobian
+from .errors import ModelError
+from .ops import CASADI_OPS, NUMPY_OPS, Ops
+from .params import Params
+
+log = logging.getLogger(__name__)
+
+RhsFn = Callable[..., Any]
+
+
+@runtime_checkable
+class DynamicalSystem(Protocol):
+    """What the engine needs of a system ``x' = f(x, p)``."""
+
+    state_names: tuple[str, ...]
+    param_names: tuple[str, ...]
+
+    def f(self, x: FloatArray, p: FloatArray) -> FloatArray:
+        """Right-hand side, shape ``(n,)``."""
+        ...
+
+    def jacobian(self, x: FloatArray, p: FloatArray) -> FloatArray:
+        """State Jacobian ``df/dx``, shape ``(n, n)``."""
+        ...
+
+    def dfdp(self, x: FloatArray, p: FloatArray) -> FloatArray:
+        """Parameter Jacobian ``df/dp``, shape ``(n, m)``."""
+        ...
+
+
+def _accepts_ops(fn: RhsFn) -> bool:
+    try:
+        sig = inspect.signature(fn)
+    except (TypeError, ValueError):
+        return True
+    params = list(sig.parameters.values())
+    if any(p.kind == p.VAR_POSITIONAL for p in params):
+        return True
+    if "ops" in sig.parameters:
+        return True
+    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    return len(positional) >= 3
+
+
+def _names(arg: Sequence[str] | str, what: str) -> tuple[str, ...]:
+    if isinstance(arg, str):
+        arg = (arg,)
+    names = tuple(str(n) for n in arg)
+    if not names and what == "state_names":
+        raise ValueError("`state_names` must name at least one state")
+    if len(set(names)) != len(names):
+        raise ValueError(f"`{what}` must be unique, got {names}")
+    return names
+
+
+class System:
+    r"""An autonomous ODE :math:`\dot x = f(x, p)` with named states and parameters.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(x, p, ops) -> sequence of n expressions`` (preferred: traced with CasADi
+        for exact derivatives) or ``rhs(x, p) -> ndarray (n,)`` (NumPy only;
+        derivatives by central differences). ``x`` has shape ``(n,)``, ``p`` shape
+        ``(m,)``; use ``ops.sin`` etc. and return ``ops.stack([...])``.
+    state_names : sequence of str
+        Names of the ``n`` states.
+    param_names : sequence of str
+        Names of the ``m`` parameters (may be empty).
+    periodic : mapping of str to float, optional
+        ``{state_name: period}`` for states that live on a circle.
+    defaults : mapping of str to float, optional
+        Default parameter values, used by :meth:`params`.
+    name : str, optional
+        A label for messages and saved files.
+    backend : {"auto", "casadi", "numpy"}
+        ``"auto"`` traces with CasADi when ``rhs`` accepts ``ops`` and falls back to
+        NumPy (with a logged note) if tracing fails; ``"casadi"`` requires tracing;
+        ``"numpy"`` never traces.
+
+    Raises
+    ------
+    ValueError
+        For duplicate or empty names, unknown periodic states, non-positive periods,
+        an unknown backend, or ``backend="casadi"`` with an ``rhs`` that cannot be traced.
+
+    Examples
+    --------
+    >>> def rhs(x, p, ops):
+    ...     return ops.stack([p[0] - x[0] ** 2])
+    >>> s = System(rhs, ("x",), ("mu",))
+    >>> s.jacobian(np.array([1.0]), np.array([0.0]))
+    array([[-2.]])
+    """
+
+    def __init__(
+        self,
+        rhs: RhsFn,
+        state_names: Sequence[str] | str,
+        param_names: Sequence[str] | str = (),
+        *,
+        periodic: Mapping[str, float] | None = None,
+        defaults: Mapping[str, float] | None = None,
+        name: str = "",
+        backend: str = "auto",
+    ) -> None:
+        if not callable(rhs):
+            raise ValueError(f"`rhs` must be callable, got {type(rhs).__name__}")
+        if backend not in ("auto", "casadi", "numpy"):
+            raise ValueError(f"`backend` must be 'auto', 'casadi' or 'numpy', got {backend!r}")
+        self._rhs = rhs
+        self.state_names = _names(state_names, "state_names")
+        self.param_names = _names(param_names, "param_names")
+        self.name = name or getattr(rhs, "__name__", "system")
+        self._with_ops = _accepts_ops(rhs)
+        n = len(self.state_names)
+        period = np.zeros(n)
+        for k, v in dict(periodic or {}).items():
+            if k not in self.state_names:
+                raise ValueError(
+                    f"`periodic` names unknown state {k!r}; states are {self.state_names}"
+                )
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"`periodic[{k!r}]` must be a positive period, got {v}")
+            period[self.state_names.index(k)] = float(v)
+        period.setflags(write=False)
+        self.period: FloatArray = period
+        self._defaults = None
+        if defaults is not None:
+            self._defaults = Params.from_mapping(self.param_names, defaults)
+        self._ca: dict[str, ca.Function] | None = None
+        if backend != "numpy" and self._with_ops:
+            try:
+                self._ca = self._trace()
+            except Exception as exc:  # tracing may fail for numpy-only code
+                if backend == "casadi":
+                    raise ValueError(f"`rhs` could not be traced with CasADi: {exc}") from exc
+                warnings.warn(
+                    f"rhs of {self.name!r} could not be traced with CasADi ({exc}); "
+                    "using NumPy with finite-difference derivatives",
+                    stacklevel=2,
+                )
+        elif backend == "casadi":
+            raise ValueError("`rhs` must accept an `ops` argument for backend='casadi'")
+
+    # ------------------------------------------------------------------ sizes/names
+    @property
+    def n_states(self) -> int:
+        """Number of states ``n``."""
+        return len(self.state_names)
+
+    @property
+    def n_params(self) -> int:
+        """Number of parameters ``m``."""
+        return len(self.param_names)
+
+    @property
+    def has_casadi(self) -> bool:
+        """True when exact derivatives from a CasADi trace are available."""
+        return self._ca is not None
+
+    def state_index(self, name: str) -> int:
+        """Position of state ``name``; raises ValueError listing valid names."""
+        try:
+            return self.state_names.index(name)
+        except ValueError:
+            raise ValueError(
+                f"unknown state name {name!r}; valid names are {self.state_names}"
+            ) from None
+
+    def param_index(self, name: str) -> int:
+        """Position of parameter ``name``; raises ValueError listing valid names."""
+        try:
+            return self.param_names.index(name)
+        except ValueError:
+            raise ValueError(
+                f"unknown parameter name {name!r}; valid names are {self.param_names}"
+            ) from None
+
+    def params(self, **values: float) -> Params:
+        """Named parameters: the defaults, updated by ``values``.
+
+        Without defaults every parameter must be given.
+        """
+        if self._defaults is None:
+            return Params.from_mapping(self.param_names, values)
+        return self._defaults.replace(**values)
+
+    # ------------------------------------------------------------------ checking
+    def check_state(self, x: Any, name: str = "x") -> FloatArray:
+        """Return ``x`` as a float array of shape ``(n,)``; raise ValueError if not."""
+        arr = np.asarray(x, dtype=float)
+        if arr.shape != (self.n_states,):
+            raise ValueError(
+                f"`{name}` must have shape ({self.n_states},) for states {self.state_names}, "
+                f"got {arr.shape}"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"`{name}` contains NaN or inf: {arr}")
+        return arr
+
+    def check_params(self, p: Any, name: str = "p") -> FloatArray:
+        """Return a parameter vector of shape ``(m,)`` from an array, Params or mapping."""
+        if isinstance(p, Params):
+            if p.names != self.param_names:
+                raise ValueError(f"`{name}` has names {p.names}, expected {self.param_names}")
+            return np.array(p.values, dtype=float)
+        if isinstance(p, Mapping):
+            base = self._defaults
+            if base is not None:
+                return np.array(base.replace(**p).values)
+            return np.array(Params.from_mapping(self.param_names, p).values)
+        arr = np.asarray(p, dtype=float).reshape(-1) if np.ndim(p) else np.asarray([p], float)
+        if arr.shape != (self.n_params,):
+            raise ValueError(
+                f"`{name}` must have shape ({self.n_params},) for parameters "
+                f"{self.param_names}, got {arr.shape}"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"`{name}` contains NaN or inf: {arr}")
+        return arr
+
+    # ------------------------------------------------------------------ evaluation
+    def rhs(self, x: Any, p: Any, ops: Ops = NUMPY_OPS) -> Any:
+        """Call the user's right-hand side with the given ops namespace."""
+        if self._with_ops:
+            return self._rhs(x, p, ops)
+        if ops is not NUMPY_OPS:
+            raise ValueError("this System's `rhs` is NumPy-only and takes no `ops`")
+        return self._rhs(x, p)
+
+    def symbolic(self, x: Any, p: Any) -> Any:
+        """CasADi expression of ``f`` for symbolic ``x`` (n,) and ``p`` (m,).
+
+        Used by derived problems (fold/Hopf augmentations, collocation) so that they
+        share one source of truth with the equilibrium engine.
+        """
+        if not self._with_ops:
+            raise ValueError("this System's `rhs` is NumPy-only; it has no CasADi path")
+        out = self._rhs(x, p, CASADI_OPS)
+        if isinstance(out, (list, tuple)):
+            out = ca.vertcat(*out)
+        return out
+
+    def _trace(self) -> dict[str, ca.Function]:
+        n, m = self.n_states, self.n_params
+        X = ca.SX.sym("x", n)
+        P = ca.SX.sym("p", max(m, 0))
+        F = self.symbolic(X, P)
+        if F.shape != (n, 1):
+            raise ModelError(f"rhs returned shape {F.shape}, expected ({n}, 1)")
+        J = ca.jacobian(F, X)
+        Jp = ca.jacobian(F, P) if m else ca.SX(n, 0)
+        return {
+            "f": ca.Function("f", [X, P], [F], ["x", "p"], ["f"]),
+            "jac": ca.Function("jac_x", [X, P], [J], ["x", "p"], ["J"]),
+            "dfdp": ca.Function("dfdp", [X, P], [Jp], ["x", "p"], ["Jp"]),
+        }
+
+    def casadi_functions(self) -> dict[str, ca.Function]:
+        """The compiled CasADi functions ``{"f", "jac", "dfdp"}`` (x, p) -> value."""
+        if self._ca is None:
+            raise ValueError(f"system {self.name!r} has no CasADi trace")
+        return self._ca
+
+    def f(self, x: FloatArray, p: FloatArray) -> FloatArray:
+        """Evaluate ``f(x, p)``; returns shape ``(n,)``."""
+        if self._ca is not None:
+            return np.asarray(self._ca["f"](x, p)).reshape(-1)
+        out = np.asarray(self.rhs(np.asarray(x, float), np.asarray(p, float)), dtype=float)
+        return out.reshape(-1)
+
+    def jacobian(self, x: FloatArray, p: FloatArray) -> FloatArray:
+        """State Jacobian ``df/dx`` at ``(x, p)``, dense, shape ``(n, n)``."""
+        if self._ca is not None:
+            return np.asarray(self._ca["jac"](x, p))
+        return fd_jacobian(lambda y: self.f(y, p), np.asarray(x, float))
+
+    def jacobian_sparse(self, x: FloatArray, p: FloatArray) -> sp.csc_matrix:
+        """State Jacobian as a SciPy CSC matrix (exact sparsity with CasADi)."""
+        if self._ca is not None:
+            return sp.csc_matrix(self._ca["jac"](x, p).sparse())
+        return sp.csc_matrix(self.jacobian(x, p))
+
+    def dfdp(self, x: FloatArray, p: FloatArray) -> FloatArray:
+        """Parameter Jacobian ``df/dp`` at ``(x, p)``, shape ``(n, m)``."""
+        if self._ca is not None:
+            return np.asarray(self._ca["dfdp"](x, p)).reshape(self.n_states, self.n_params)
+        return fd_jacobian(lambda q: self.f(np.asarray(x, float), q), np.asarray(p, float))
+
+    # ------------------------------------------------------------------ periodicity
+    def wrap(self, x: FloatArray) -> FloatArray:
+        """Map periodic coordinates into ``[0, period)``; shape of ``x`` kept (..., n)."""
+        x = np.array(x, dtype=float)
+        mask = self.period > 0
+        if np.any(mask):
+            x[..., mask] = np.mod(x[..., mask], self.period[mask])
+        return x
+
+    def difference(self, x1: FloatArray, x2: FloatArray) -> FloatArray:
+        """``x1 - x2`` with periodic components reduced to ``[-period/2, period/2)``."""
+        d = np.asarray(x1, dtype=float) - np.asarray(x2, dtype=float)
+        mask = self.period > 0
+        if np.any(mask):
+            per = self.period[mask]
+            d[..., mask] = np.mod(d[..., mask] + per / 2, per) - per / 2
+        return d
+
+    def same_point(self, x1: FloatArray, x2: FloatArray, tol: float = 1e-6) -> bool:
+        """True if ``x1`` and ``x2`` are the same point modulo the periods (max-norm)."""
+        return bool(np.max(np.abs(self.difference(x1, x2))) <= tol)
+
+    def __repr__(self) -> str:
+        return (
+            f"System({self.name!r}, states={self.state_names}, params={self.param_names}, "
+            f"backend={'casadi' if self.has_casadi else 'numpy'})"
+        )
+
+
+def check_jacobian(
+    system: DynamicalSystem,
+    x: FloatArray,
+    p: FloatArray,
+    *,
+    rtol: float = 1e-6,
+    atol: float = 1e-8,
+) -> tuple[float, float]:
+    """Compare ``system.jacobian`` and ``system.dfdp`` with central differences.
+
+    Returns
+    -------
+    tuple of float
+        Maximum scaled errors ``(err_x, err_p)``, each
+        ``max |J - J_fd| / (atol + rtol * max|J_fd|)``; both must be ``<= 1``.
+
+    Raises
+    ------
+    AssertionError
+        Never; the caller decides. Use ``assert max(check_jacobian(...)) <= 1``.
+    """
+    x = np.asarray(x, dtype=float)
+    p = np.asarray(p, dtype=float)
+    J = np.asarray(system.jacobian(x, p))
+    Jfd = fd_jacobian(lambda y: system.f(y, p), x)
+    ex = float(np.max(np.abs(J - Jfd)) / (atol + rtol * max(1.0, np.max(np.abs(Jfd)))))
+    ep = 0.0
+    if p.size:
+        Jp = np.asarray(system.dfdp(x, p))
+        Jpfd = fd_jacobian(lambda q: system.f(x, q), p)
+        ep = float(np.max(np.abs(Jp - Jpfd)) / (atol + rtol * max(1.0, np.max(np.abs(Jpfd)))))
+    return ex, ep
+
+
+__all__ = ["DynamicalSystem", "System", "check_jacobian"]

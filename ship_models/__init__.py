@@ -1,0 +1,1 @@
+"""Vessel models for broachkit (plugins; registry to come)."""
