@@ -21,6 +21,16 @@ class Status(enum.Enum):
     NONFINITE = "The model returned a non-finite value (NaN or inf)."
     INTERRUPTED = "Interrupted by the user; the results computed so far are kept."
     EVENT = "A terminal event stopped the computation."
+    INTEGRATION_FAILED = (
+        "The time integrator failed (step size underflow, repeated error-test or "
+        "corrector failures, or a non-finite state); the part computed so far is kept."
+    )
+    NO_BRACKET = "The two ends of the bracket give the same outcome; there is no switch to locate."
+    UNDECIDED = (
+        "An evaluation ended undecided (time limit reached before its fate was known); "
+        "increase `t_max`."
+    )
+    MAX_ITER = "The maximum number of iterations/evaluations was reached before the tolerance."
 
     @property
     def ok(self) -> bool:
