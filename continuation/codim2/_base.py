@@ -1,0 +1,277 @@
+r"""Shared machinery of the augmented two-parameter problems.
+
+A codim-1 bifurcation curve of :math:`\dot x = f(x, p)` is continued in two
+parameters: ``free2`` is the continuation parameter ``p`` of the
+:class:`~continuation.problem.ContinuationProblem`, ``free1`` is solved for and
+sits in the unknown vector ``z = (x, p1, extra...)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .._types import ComplexArray, FloatArray
+from ..newton import NewtonResult, newton
+from ..params import Params
+from ..settings import NewtonSettings
+from ..system import System
+from ._build import AugmentedFunctions, Recipe, augmented_functions, param_vector
+
+
+@dataclass(frozen=True, eq=False)
+class AugmentedProblem:
+    """Base of :class:`FoldProblem` and :class:`HopfProblem` (not used directly).
+
+    Parameters
+    ----------
+    system : System
+        The dynamical system ``x' = f(x, p)``.
+    params : Params
+        Values of all parameters; the ``free1`` and ``free2`` entries are
+        overwritten by the unknown ``p1 = z[n]`` and the continuation parameter.
+    free1 : str
+        The parameter solved for along the curve (the first parameter, the free
+        parameter of the one-parameter branch the curve starts from).
+    free2 : str
+        The continuation parameter of the curve (``problem.free``).
+    sparse : bool or None
+        Return sparse ``dG/dz`` (``None``: automatically for ``n >= 100``).
+    z0 : ndarray, shape (N,), optional
+        A point on the curve (set by ``from_point`` / ``from_state``).
+    p0 : float, optional
+        The value of ``free2`` at ``z0``.
+    """
+
+    system: System
+    params: Params
+    free1: str
+    free2: str
+    sparse: bool | None = None
+    z0: FloatArray | None = field(default=None, repr=False)
+    p0: float | None = None
+
+    kind: ClassVar[str] = ""
+    n_extra: ClassVar[int] = 0
+    extra_names: ClassVar[tuple[str, ...]] = ()
+    _recipe: ClassVar[Recipe]
+
+    def __post_init__(self) -> None:
+        system = self.system
+        for attr in ("state_names", "param_names", "f", "jacobian"):
+            if not hasattr(system, attr):
+                raise ValueError(f"`system` must be a System (missing {attr!r})")
+        if not isinstance(self.params, Params):
+            if hasattr(system, "check_params"):
+                vec = system.check_params(self.params, "params")
+            else:
+                vec = np.asarray(self.params, dtype=float)
+            object.__setattr__(self, "params", Params(system.param_names, vec))
+        if self.params.names != tuple(system.param_names):
+            raise ValueError(
+                f"`params` names {self.params.names} do not match the system's "
+                f"{tuple(system.param_names)}"
+            )
+        names = tuple(system.param_names)
+        for arg in ("free1", "free2"):
+            val = getattr(self, arg)
+            if val not in names:
+                raise ValueError(f"`{arg}` must be one of {names}, got {val!r}")
+        if self.free1 == self.free2:
+            raise ValueError(f"`free2` must differ from `free1`, both are {self.free1!r}")
+        if self.sparse is None:
+            object.__setattr__(self, "sparse", len(system.state_names) >= 100)
+        if self.z0 is not None:
+            z0 = np.array(self.z0, dtype=float).reshape(-1)
+            if z0.shape != (self.n_unknowns,) or not np.all(np.isfinite(z0)):
+                raise ValueError(
+                    f"`z0` must be a finite vector of shape ({self.n_unknowns},), got {z0.shape}"
+                )
+            z0.setflags(write=False)
+            object.__setattr__(self, "z0", z0)
+        if self.p0 is not None:
+            if not np.isfinite(self.p0):
+                raise ValueError(f"`p0` must be finite, got {self.p0}")
+            object.__setattr__(self, "p0", float(self.p0))
+        object.__setattr__(self, "_i1", names.index(self.free1))
+        object.__setattr__(self, "_i2", names.index(self.free2))
+        fns = augmented_functions(
+            system, self.kind, type(self)._recipe, self.n_unknowns, self._i1, self._i2
+        )
+        object.__setattr__(self, "_fns", fns)
+
+    # ----------------------------------------------------------------- layout
+    @property
+    def free(self) -> str:
+        """The continuation parameter, ``free2``."""
+        return self.free2
+
+    @property
+    def n(self) -> int:
+        """Number of states ``n``."""
+        return len(self.system.state_names)
+
+    @property
+    def n_unknowns(self) -> int:
+        """``N = 2 n + 1 + n_extra`` (state, first parameter, extras, vector)."""
+        return 2 * self.n + 1 + self.n_extra
+
+    @property
+    def functions(self) -> AugmentedFunctions:
+        """The compiled residual and derivatives (exact when CasADi-traced)."""
+        return self._fns  # type: ignore[attr-defined,no-any-return]
+
+    def state(self, z: FloatArray) -> FloatArray:
+        """The equilibrium ``x = z[:n]``, shape ``(n,)``."""
+        return np.asarray(z, dtype=float)[: self.n]
+
+    def p1(self, z: FloatArray) -> float:
+        """The first parameter ``z[n]``."""
+        return float(np.asarray(z, dtype=float)[self.n])
+
+    def vector(self, z: FloatArray) -> FloatArray:
+        """The critical vector ``v`` (last ``n`` entries of ``z``), shape ``(n,)``."""
+        return np.asarray(z, dtype=float)[self.n + 1 + self.n_extra :]
+
+    def param_vector(self, z: FloatArray, p: float) -> FloatArray:
+        """Full parameter vector at ``(z, p)``, shape ``(m,)``."""
+        return param_vector(self.params.values, self.p1(z), float(p), self._i1, self._i2)  # type: ignore[attr-defined]
+
+    def params_at(self, z: FloatArray, p: float) -> Params:
+        """Named parameters at ``(z, p)``."""
+        return self.params.with_vector(self.param_vector(z, p))
+
+    def state_jacobian(self, z: FloatArray, p: float) -> FloatArray:
+        """``df/dx`` at the curve point, shape ``(n, n)``."""
+        return np.asarray(self.system.jacobian(self.state(z), self.param_vector(z, p)))
+
+    def _c(self) -> FloatArray:
+        return np.zeros(self.n)
+
+    # ----------------------------------------------------------------- protocol
+    def residual(self, z: FloatArray, p: float) -> FloatArray:
+        """``G(z, p)``, shape ``(N,)``."""
+        return self.functions.G(z, float(p), self.params.values, self._c())
+
+    def jacobian(self, z: FloatArray, p: float) -> Any:
+        """``dG/dz``, shape ``(N, N)``: dense, or SciPy CSC when ``self.sparse``."""
+        if self.sparse:
+            return self.functions.dGdz_sparse(z, float(p), self.params.values, self._c())
+        return self.functions.dGdz(z, float(p), self.params.values, self._c())
+
+    def dp(self, z: FloatArray, p: float) -> FloatArray:
+        """``dG/dp`` with respect to ``free2``, shape ``(N,)``."""
+        return self.functions.dGdp(z, float(p), self.params.values, self._c())
+
+    # optional extensions read by the continuation driver
+    #: the stability eigenvalues are those of ``df/dx``, not of ``dG/dz``
+    jacobian_is_stability: ClassVar[bool] = False
+
+    def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
+        """``(G, dG/dz, dG/dp)`` at ``(z, p)`` in one evaluation."""
+        return self.functions.linearize(
+            z, float(p), self.params.values, self._c(), bool(self.sparse)
+        )
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the entries of ``z``: states, ``free1``, extras, ``v_<state>``."""
+        states = tuple(self.system.state_names)
+        return (*states, self.free1, *self.extra_names, *(f"v_{s}" for s in states))
+
+    def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
+        """``z1 - z2`` with periodic states reduced modulo their period."""
+        d = np.asarray(z1, dtype=float) - np.asarray(z2, dtype=float)
+        if hasattr(self.system, "difference"):
+            d[..., : self.n] = self.system.difference(
+                np.asarray(z1, dtype=float)[..., : self.n],
+                np.asarray(z2, dtype=float)[..., : self.n],
+            )
+        return d
+
+    def stability(self, z: FloatArray, p: float) -> ComplexArray:
+        """Eigenvalues of ``df/dx`` at the curve point, shape ``(n,)``."""
+        return np.asarray(np.linalg.eigvals(self.state_jacobian(z, p)), dtype=complex)
+
+    def record(self, z: FloatArray, p: float) -> Mapping[str, float]:
+        """``{free1: p1}``; subclasses add more."""
+        return {self.free1: self.p1(z)}
+
+    # ----------------------------------------------------------------- solving
+    def solve(
+        self,
+        z_guess: FloatArray | None = None,
+        p: float | None = None,
+        settings: NewtonSettings | None = None,
+        *,
+        throw: bool = True,
+    ) -> NewtonResult:
+        """Newton solve of ``G(z, p) = 0`` at fixed ``p`` from a nearby guess.
+
+        Parameters
+        ----------
+        z_guess : ndarray, shape (N,), optional
+            Starting guess (default ``self.z0``).
+        p : float, optional
+            Value of ``free2`` (default ``self.p0``).
+        settings : NewtonSettings, optional
+            Tolerances.
+        throw : bool
+            Raise :class:`~continuation.errors.ConvergenceError` on failure
+            (default, as for every one-shot solve).
+
+        Returns
+        -------
+        NewtonResult
+        """
+        z = self.z0 if z_guess is None else z_guess
+        pv = self.p0 if p is None else p
+        if z is None:
+            raise ValueError("`z_guess` is required when the problem has no `z0`")
+        if pv is None:
+            raise ValueError("`p` is required when the problem has no `p0`")
+        z = np.asarray(z, dtype=float)
+        if z.shape != (self.n_unknowns,):
+            raise ValueError(f"`z_guess` must have shape ({self.n_unknowns},), got {z.shape}")
+        return newton(
+            lambda w: self.residual(w, pv),
+            lambda w: self.jacobian(w, pv),
+            z,
+            settings,
+            throw=throw,
+        )
+
+
+def null_vector(J: FloatArray) -> FloatArray:
+    """Unit right singular vector of the smallest singular value of ``J``; shape ``(n,)``.
+
+    The sign is fixed so that the largest-magnitude entry is positive.
+    """
+    _, _, vt = np.linalg.svd(np.asarray(J, dtype=float))
+    v = vt[-1]
+    k = int(np.argmax(np.abs(v)))
+    return v if v[k] >= 0 else -v
+
+
+def adjugate(J: FloatArray) -> FloatArray:
+    r"""Adjugate (classical adjoint) of a square matrix via the SVD, shape ``(n, n)``.
+
+    With :math:`J = U S V^T`, :math:`\operatorname{adj}(J) = \det(U)\det(V)\,
+    V \operatorname{diag}(\prod_{j \ne i} s_j)\, U^T`. Well defined and smooth
+    for singular ``J``: at a simple zero eigenvalue it is the rank-one matrix
+    :math:`(\prod_{\lambda \ne 0} \lambda)\, v w^T / (w^T v)`.
+    """
+    J = np.asarray(J, dtype=float)
+    n = J.shape[0]
+    if n == 1:
+        return np.ones((1, 1))
+    u, s, vt = np.linalg.svd(J)
+    prods = np.array([np.prod(np.delete(s, i)) for i in range(n)])
+    sign = np.linalg.det(u) * np.linalg.det(vt)
+    return np.asarray(sign * (vt.T * prods) @ u.T, dtype=float)
+
+
+__all__ = ["AugmentedProblem", "adjugate", "null_vector"]

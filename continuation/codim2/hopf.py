@@ -1,0 +1,316 @@
+r"""Hopf curves in two parameters: the Roose-Hlavacek augmented system.
+
+Unknowns ``z = (x, p1, kappa, v)`` (shape ``(2n+2,)``), continuation parameter
+``p = p2``, fixed normalisation vector ``c`` (shape ``(n,)``)::
+
+    G(z, p2) = ( f(x, p1, p2),  (J^2 + kappa I) v,  c.v - 1,  c.(J v) ) = 0
+
+At a Hopf point ``J`` has eigenvalues ``±i omega`` with ``omega = sqrt(kappa)``,
+and ``v``, ``J v`` span the real critical eigenspace (Roose & Hlavacek 1985, SIAM
+J. Appl. Math. 45, 879-894; Kuznetsov 2004, "Elements of Applied Bifurcation
+Theory", 3rd ed., Sec. 10.2.2). The two normalisations fix ``v`` uniquely in that
+plane as long as ``c^T q != 0`` for the complex eigenvector ``q``; ``c`` is chosen
+at the start as the unit vector ``Re q`` with ``Re q ⟂ Im q``. The system stays
+regular through Bogdanov-Takens points, where ``kappa`` changes sign and the curve
+goes on as a neutral-saddle curve (real eigenvalues ``±sqrt(-kappa)``); there
+``omega`` is recorded as NaN.
+
+Codim-2 test functions along the curve, each changing sign at the point it
+detects (Kuznetsov 2004, Sec. 10.2.2; Govaerts 2000, Ch. 4):
+
+``bt`` (Bogdanov-Takens)
+    ``kappa`` itself.
+``zh`` (zero-Hopf)
+    The product of the eigenvalues other than the critical pair (the pair is the
+    two eigenvalues nearest to solving ``lambda**2 + kappa = 0``).
+``hh`` (double Hopf)
+    ``prod_{i<j} (lambda_i + lambda_j)`` over the eigenvalues other than the
+    critical pair; kept at the located point only if a second imaginary pair exists.
+``gh`` (generalised Hopf / Bautin)
+    The first Lyapunov coefficient ``l1`` (Kuznetsov 2004, eq. (3.20)), NaN where
+    ``kappa <= 0``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .._types import FloatArray
+from ..params import Params
+from ..settings import NewtonSettings
+from ..system import System
+from ._base import AugmentedProblem
+from ._build import hopf_recipe
+from .fold import _pair_sum_product
+
+
+def _critical_pair(eigs: np.ndarray, kappa: float) -> tuple[int, int]:
+    """Indices of the two eigenvalues closest to ``lambda**2 = -kappa``."""
+    order = np.argsort(np.abs(eigs**2 + kappa))
+    return int(order[0]), int(order[1])
+
+
+@dataclass(frozen=True, eq=False)
+class HopfProblem(AugmentedProblem):
+    """Continuation of a Hopf point of equilibria in the parameters ``(free1, free2)``.
+
+    See the module docstring for the equations. Build it with :meth:`from_point`
+    (from a located Hopf point of a one-parameter branch) or :meth:`from_state`.
+
+    Parameters
+    ----------
+    c : ndarray, shape (n,), optional
+        Normalisation vector. If omitted it is taken from ``z0``'s ``v`` as
+        ``v / (v.v)`` (then ``z0`` must be given).
+    """
+
+    c: FloatArray | None = None
+
+    kind: ClassVar[str] = "hopf"
+    n_extra: ClassVar[int] = 1
+    extra_names: ClassVar[tuple[str, ...]] = ("kappa",)
+    _recipe = staticmethod(hopf_recipe)
+    test_names: ClassVar[tuple[str, ...]] = ("bt", "zh", "hh", "gh")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.c is None:
+            if self.z0 is None:
+                raise ValueError("`c` is required when `z0` is not given")
+            v = self.vector(self.z0)
+            c = v / max(float(v @ v), 1e-300)
+        else:
+            c = np.array(self.c, dtype=float).reshape(-1)
+        if c.shape != (self.n,) or not np.all(np.isfinite(c)) or not np.any(c):
+            raise ValueError(f"`c` must be a finite nonzero vector of shape ({self.n},)")
+        c.setflags(write=False)
+        object.__setattr__(self, "c", c)
+
+    def _c(self) -> FloatArray:
+        return self.c  # type: ignore[return-value]
+
+    @classmethod
+    def from_state(
+        cls,
+        system: System,
+        params: Params | Mapping[str, float],
+        free1: str,
+        free2: str,
+        x: Any,
+        *,
+        omega: float | None = None,
+        refine: bool = True,
+        newton_settings: NewtonSettings | None = None,
+        sparse: bool | None = None,
+    ) -> HopfProblem:
+        """A Hopf problem started from a state ``x`` at (or near) a Hopf point.
+
+        Parameters
+        ----------
+        system : System
+        params : Params or mapping
+            ``params[free1]`` is the guess of the first parameter,
+            ``params[free2]`` the starting continuation parameter.
+        free1, free2 : str
+        x : array_like, shape (n,)
+        omega : float, optional
+            Expected frequency: selects the eigenvalue nearest ``i omega``. Default:
+            the complex eigenvalue (``Im > 0``) with the smallest ``|Re|``.
+        refine : bool
+            Solve the augmented system at fixed ``free2`` by Newton's method.
+        newton_settings : NewtonSettings, optional
+        sparse : bool or None
+
+        Raises
+        ------
+        ValueError
+            If ``J(x)`` has no complex eigenvalue pair.
+        """
+        if not isinstance(params, Params):
+            params = Params(system.param_names, system.check_params(params, "params"))
+        x = system.check_state(x, "x") if hasattr(system, "check_state") else np.asarray(x)
+        for arg, val in (("free1", free1), ("free2", free2)):
+            if val not in params.names:
+                raise ValueError(f"`{arg}` must be one of {params.names}, got {val!r}")
+        J = np.asarray(system.jacobian(x, params.values), dtype=float)
+        eigs, vecs = np.linalg.eig(J)
+        scale = max(1.0, float(np.max(np.abs(eigs))))
+        cand = np.flatnonzero(eigs.imag > 1e-12 * scale)
+        if cand.size == 0:
+            raise ValueError(
+                f"`x`: the Jacobian has no complex eigenvalue pair (eigenvalues {eigs})"
+            )
+        if omega is not None:
+            if not (np.isfinite(omega) and omega > 0):
+                raise ValueError(f"`omega` must be positive, got {omega}")
+            k = int(cand[np.argmin(np.abs(eigs[cand] - 1j * omega))])
+        else:
+            k = int(cand[np.argmin(np.abs(eigs[cand].real))])
+        lam = eigs[k]
+        q = vecs[:, k]
+        # rotate q so that Re q ⟂ Im q and |Re q| >= |Im q| (q^T q real positive)
+        q = q * np.exp(-0.5j * np.angle(q @ q))
+        v = q.real / np.linalg.norm(q.real)
+        kappa = float(-(lam**2).real)
+        z0 = np.concatenate([x, [params[free1]], [kappa], v])
+        prob = cls(system, params, free1, free2, sparse=sparse, z0=z0, p0=params[free2], c=v)
+        if refine:
+            res = prob.solve(settings=newton_settings, throw=True)
+            prob = cls(system, params, free1, free2, sparse=sparse, z0=res.z, p0=prob.p0, c=v)
+        return prob
+
+    # ----------------------------------------------------------------- unpacking
+    def kappa(self, z: FloatArray) -> float:
+        """``kappa = omega**2`` (negative on the neutral-saddle continuation)."""
+        return float(np.asarray(z, dtype=float)[self.n + 1])
+
+    def omega(self, z: FloatArray) -> float:
+        """Hopf frequency ``sqrt(kappa)``; NaN where ``kappa <= 0``."""
+        k = self.kappa(z)
+        return float(np.sqrt(k)) if k > 0 else float("nan")
+
+    def record(self, z: FloatArray, p: float) -> Mapping[str, float]:
+        """``{free1: p1, "omega": omega, "kappa": kappa}``."""
+        return {self.free1: self.p1(z), "omega": self.omega(z), "kappa": self.kappa(z)}
+
+    def with_normalisation(self, z: FloatArray, p: float) -> HopfProblem:
+        """The same problem with ``c`` refreshed from the curve point ``(z, p)``.
+
+        Use it to restart a long curve on which the eigenspace has turned away
+        from the starting ``c``; ``z`` is corrected within the plane of
+        ``v, J v`` so it satisfies the new normalisation.
+        """
+        v = self.vector(z)
+        c = v / np.linalg.norm(v)
+        # within span(v, Jv): pick v' = v + t J v with c.(J v') = 0, then scale c.v' = 1
+        J = self.state_jacobian(z, p)
+        Jv = J @ v
+        JJv = J @ Jv
+        denom = float(c @ JJv)
+        t = -float(c @ Jv) / denom if abs(denom) > 1e-300 else 0.0
+        vn = v + t * Jv
+        vn = vn / float(c @ vn)
+        zn = np.array(z, dtype=float)
+        zn[self.n + 2 :] = vn
+        return HopfProblem(
+            self.system, self.params, self.free1, self.free2, self.sparse, zn, float(p), c
+        )
+
+    # ----------------------------------------------------------------- codim 2
+    def eigenvectors(
+        self, z: FloatArray, p: float
+    ) -> tuple[complex, np.ndarray, np.ndarray] | None:
+        r"""Critical eigenvalue and normalised eigenvectors at a Hopf point.
+
+        Returns ``(i omega, q, p)`` with :math:`J q = i\omega q`,
+        :math:`J^T p = -i\omega p`, :math:`\bar q^T q = 1`, :math:`\bar p^T q = 1`;
+        None where ``kappa <= 0``.
+        """
+        kappa = self.kappa(z)
+        if kappa <= 0:
+            return None
+        om = np.sqrt(kappa)
+        J = self.state_jacobian(z, p)
+        v = self.vector(z)
+        q = J @ v + 1j * om * v  # (J + i omega) v lies along q
+        q = q / np.linalg.norm(q)
+        _, _, vh = np.linalg.svd(J.T + 1j * om * np.eye(self.n))
+        pv = vh[-1].conj()
+        s = np.vdot(pv, q)
+        pv = pv / np.conj(s)
+        return 1j * om, q, pv
+
+    def lyapunov_coefficient(self, z: FloatArray, p: float) -> float:
+        r"""First Lyapunov coefficient :math:`l_1` at a Hopf point.
+
+        .. math::
+
+            l_1 = \frac{1}{2\omega}\,\mathrm{Re}\big[\langle p, C(q,q,\bar q)\rangle
+                - 2\langle p, B(q, J^{-1} B(q,\bar q))\rangle
+                + \langle p, B(\bar q, (2i\omega I - J)^{-1} B(q,q))\rangle\big]
+
+        (Kuznetsov 2004, eq. (3.20)), with ``<q, q> = <p, q> = 1``. Negative:
+        supercritical (stable cycles), positive: subcritical. NaN if
+        ``kappa <= 0``. ``B`` and ``C`` come from exact CasADi directional
+        derivatives (finite differences for NumPy-only systems).
+        """
+        ev = self.eigenvectors(z, p)
+        if ev is None:
+            return float("nan")
+        iom, q, pv = ev
+        om = iom.imag
+        x = self.state(z)
+        Pv = self.param_vector(z, p)
+        J = self.state_jacobian(z, p)
+        bvv, cvvv = self.functions.bvv, self.functions.cvvv
+
+        def Bre(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+            return 0.25 * (bvv(x, Pv, a + b) - bvv(x, Pv, a - b))
+
+        def B(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+            ur, ui, wr, wi = u.real, u.imag, w.real, w.imag
+            return Bre(ur, wr) - Bre(ui, wi) + 1j * (Bre(ur, wi) + Bre(ui, wr))
+
+        a, b = q.real, q.imag
+        c3 = {
+            "aaa": cvvv(x, Pv, a),
+            "bbb": cvvv(x, Pv, b),
+            "apb": cvvv(x, Pv, a + b),
+            "amb": cvvv(x, Pv, a - b),
+        }
+        C_aab = (c3["apb"] - c3["amb"] - 2 * c3["bbb"]) / 6
+        C_abb = (c3["apb"] + c3["amb"] - 2 * c3["aaa"]) / 6
+        Cqqqb = c3["aaa"] + C_abb + 1j * (C_aab + c3["bbb"])
+        h11 = np.linalg.solve(J, B(q, q.conj()))
+        h20 = np.linalg.solve(2j * om * np.eye(self.n) - J, B(q, q))
+        val = np.vdot(pv, Cqqqb) - 2 * np.vdot(pv, B(q, h11)) + np.vdot(pv, B(q.conj(), h20))
+        return float(val.real / (2 * om))
+
+    def test_functions(self, z: FloatArray, p: float) -> dict[str, float]:
+        """Values of the codim-2 test functions ``{"bt", "zh", "hh", "gh"}``."""
+        kappa = self.kappa(z)
+        eigs = np.linalg.eigvals(self.state_jacobian(z, p))
+        i, j = _critical_pair(eigs, kappa)
+        rest = np.delete(eigs, [i, j])
+        return {
+            "bt": kappa,
+            "zh": float(np.prod(rest).real) if rest.size else 1.0,
+            "hh": _pair_sum_product(rest),
+            "gh": self.lyapunov_coefficient(z, p) if kappa > 0 else float("nan"),
+        }
+
+    def test_function(self, name: str, z: FloatArray, p: float) -> float:
+        """One codim-2 test function by name (see :attr:`test_names`)."""
+        if name not in self.test_names:
+            raise ValueError(f"`name` must be one of {self.test_names}, got {name!r}")
+        if name == "bt":
+            return self.kappa(z)
+        if name == "gh":
+            return self.lyapunov_coefficient(z, p)
+        return self.test_functions(z, p)[name]
+
+    def classify(self, name: str, z: FloatArray, p: float, tol: float = 1e-6) -> str | None:
+        """Confirm a located zero of test function ``name``; return its kind or None.
+
+        ``zh``/``gh`` need ``kappa > 0`` (a true Hopf point); ``hh`` needs a second
+        purely imaginary pair (otherwise a neutral saddle is crossed).
+        """
+        kappa = self.kappa(z)
+        if name == "bt":
+            return "bt"
+        if kappa <= 0:
+            return None
+        if name in ("zh", "gh"):
+            return name
+        eigs = np.linalg.eigvals(self.state_jacobian(z, p))
+        rest = np.delete(eigs, list(_critical_pair(eigs, kappa)))
+        scale = max(1.0, float(np.max(np.abs(eigs))))
+        ok = np.any((np.abs(rest.real) <= tol * scale) & (np.abs(rest.imag) > tol * scale))
+        return "hh" if ok else None
+
+
+__all__ = ["HopfProblem"]
