@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -133,6 +133,32 @@ class EquilibriumProblem:
     def record(self, z: FloatArray, p: float) -> Mapping[str, float]:
         """No extra records for plain equilibria."""
         return {}
+
+    # -- optional extensions used by the continuation driver (not part of the protocol) --
+    #: The stability eigenvalues are those of :meth:`jacobian`, so the driver may
+    #: compute them from the Jacobian it already has instead of calling :meth:`stability`.
+    jacobian_is_stability: ClassVar[bool] = True
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the unknowns (the system's states)."""
+        return self.system.state_names
+
+    def linearize(self, z: FloatArray, p: float) -> tuple[Any, FloatArray, FloatArray]:
+        """``(G, dG/dz, dG/dp)`` at ``(z, p)`` in one model evaluation.
+
+        Returns
+        -------
+        G : ndarray, shape (n,)
+        Gz : ndarray (n, n), or SciPy CSC matrix when ``self.sparse``
+        Gp : ndarray, shape (n,)
+        """
+        f, J, Jp = self.system.linearize(z, self.param_vector(p), sparse=bool(self.sparse))
+        return f, J, Jp[:, self._index]
+
+    def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
+        """``z1 - z2`` with periodic states reduced modulo their period."""
+        return self.system.difference(z1, z2)
 
 
 __all__ = ["ContinuationProblem", "EquilibriumProblem"]

@@ -57,6 +57,19 @@ class DetectionSettings:
     eig_tol : float
         Real parts with ``|Re| <= eig_tol`` count as zero when counting unstable
         eigenvalues.
+    imag_tol : float
+        An eigenvalue counts as complex when ``|Im| > imag_tol * max(1, |lambda|)``.
+    n_eigs : int
+        For large sparse problems (sparse Jacobian and ``n > dense_eigs_max``) only
+        the ``n_eigs`` eigenvalues nearest ``eig_sigma`` are computed, by ARPACK
+        shift-invert (``scipy.sparse.linalg.eigs``); the others are stored as NaN and
+        ``n_unstable`` counts among the computed ones. This is exact as long as every
+        eigenvalue with positive real part is among the ``n_eigs`` nearest ``eig_sigma``
+        (the usual situation near the first instabilities; raise ``n_eigs`` if not).
+    eig_sigma : float
+        Shift of the shift-invert eigenvalue solve.
+    dense_eigs_max : int
+        Problems up to this size always get all eigenvalues by dense LAPACK.
     """
 
     fold: bool = True
@@ -66,12 +79,25 @@ class DetectionSettings:
     tol: float = 1e-10
     max_iter: int = 50
     eig_tol: float = 1e-10
+    imag_tol: float = 1e-8
+    n_eigs: int = 6
+    eig_sigma: float = 0.0
+    dense_eigs_max: int = 100
 
     def __post_init__(self) -> None:
         _positive("tol", self.tol)
         _positive("eig_tol", self.eig_tol)
+        _positive("imag_tol", self.imag_tol)
         if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
             raise ValueError(f"`max_iter` must be an integer >= 1, got {self.max_iter!r}")
+        if not (isinstance(self.n_eigs, int) and self.n_eigs >= 1):
+            raise ValueError(f"`n_eigs` must be an integer >= 1, got {self.n_eigs!r}")
+        if not (isinstance(self.dense_eigs_max, int) and self.dense_eigs_max >= 0):
+            raise ValueError(
+                f"`dense_eigs_max` must be an integer >= 0, got {self.dense_eigs_max!r}"
+            )
+        if not math.isfinite(self.eig_sigma):
+            raise ValueError(f"`eig_sigma` must be finite, got {self.eig_sigma!r}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -90,7 +116,10 @@ class ContinuationSettings:
     max_steps : int
         Maximum number of continuation steps (each direction).
     theta : float
-        Weight of the parameter in the arclength norm, in (0, 1].
+        Weight of the parameter in the arclength norm, in (0, 1]:
+        ``||(dz, dp)||_theta**2 = (1 - theta) * |dz|**2 / N + theta * dp**2``
+        (``N`` unknowns). ``theta = 1`` degenerates to natural parameter stepping,
+        which cannot pass folds.
     grow, shrink : float
         Step-size factors on easy convergence / failure.
     newton : NewtonSettings

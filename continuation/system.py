@@ -284,6 +284,39 @@ class System:
             "dfdp": ca.Function("dfdp", [X, P], [Jp], ["x", "p"], ["Jp"]),
         }
 
+    def linearize(self, x: FloatArray, p: FloatArray, *, sparse: bool = False) -> tuple[Any, ...]:
+        """``(f, df/dx, df/dp)`` at ``(x, p)`` in one evaluation.
+
+        Returns
+        -------
+        f : ndarray, shape (n,)
+        J : ndarray, shape (n, n), or SciPy CSC matrix when ``sparse``
+        Jp : ndarray, shape (n, m)
+
+        Notes
+        -----
+        With a CasADi trace the three come from one compiled function (built on first
+        use), which saves call overhead in continuation loops.
+        """
+        if self._ca is None:
+            J = self.jacobian(x, p)
+            return self.f(x, p), (sp.csc_matrix(J) if sparse else J), self.dfdp(x, p)
+        fn = getattr(self, "_ca_lin", None)
+        if fn is None:
+            X = ca.SX.sym("x", self.n_states)
+            P = ca.SX.sym("p", self.n_params)
+            F = self.symbolic(X, P)
+            Jp = ca.jacobian(F, P) if self.n_params else ca.SX(self.n_states, 0)
+            fn = ca.Function("lin", [X, P], [F, ca.jacobian(F, X), Jp])
+            self._ca_lin = fn
+        f, J, Jp = fn(x, p)
+        Jout = sp.csc_matrix(J.sparse()) if sparse else J.full()
+        return (
+            f.full().reshape(-1),
+            Jout,
+            Jp.full().reshape(self.n_states, self.n_params),
+        )
+
     def casadi_functions(self) -> dict[str, ca.Function]:
         """The compiled CasADi functions ``{"f", "jac", "dfdp"}`` (x, p) -> value."""
         if self._ca is None:

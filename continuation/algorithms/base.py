@@ -1,0 +1,511 @@
+r"""Shared machinery of the continuation algorithms.
+
+Notation: ``u = (z, p)`` in ``R^(N+1)``; ``G(z, p) = 0`` has ``N`` equations. The
+``theta``-weighted inner product (settings ``theta``) is
+
+.. math::
+
+    \langle a, b \rangle_\theta = \frac{1-\theta}{N}\, a_z \cdot b_z + \theta\, a_p b_p
+    = (w \circ a) \cdot b ,
+
+with weight vector ``w`` (:func:`theta_weights`). Tangents ``tau`` have unit
+``theta``-norm.
+
+Bordered systems
+----------------
+Every linear solve is with a bordered matrix
+
+.. math::
+
+    M = \begin{pmatrix} G_z & G_p \\ c^T & \end{pmatrix} \in R^{(N+1)\times(N+1)},
+
+factorised once (:class:`BorderedLU`: dense LAPACK LU, or SuperLU ``splu`` on an
+assembled CSC matrix when ``G_z`` is sparse). The same factorisation gives the tangent
+(``M t = e_{N+1}``, then ``tau = t / ||t||_theta``), which is oriented so that
+``c . tau > 0`` (with ``c = w o tau_prev`` this keeps the orientation of the branch),
+and the sign of ``det M``.
+
+Branch-point test function
+--------------------------
+For any row ``c`` with ``c . tau != 0``, linearity of the determinant in its last row
+gives ``det [G_z G_p; (w o tau)^T] = det M / (c . tau)`` (``tau`` spans the kernel of
+``[G_z G_p]``, and ``(w o tau) . tau = 1``). This quantity is smooth along the branch,
+non-zero at regular points and at folds, and changes sign at simple branch points
+(Allgower & Georg 1990, *Numerical Continuation Methods*, Sec. 8.1; Govaerts 2000,
+Sec. 3.3). :class:`PointInfo` stores its sign and ``log|.|``.
+"""
+
+from __future__ import annotations
+
+import abc
+import logging
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.linalg as la
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .._types import FloatArray
+from ..settings import ContinuationSettings, NewtonSettings
+
+log = logging.getLogger(__name__)
+
+
+# ---------------------------------------------------------------------------- norms
+def theta_weights(n_unknowns: int, theta: float) -> FloatArray:
+    """Weights ``w`` of the ``theta`` inner product, shape ``(N + 1,)``."""
+    w = np.full(n_unknowns + 1, (1.0 - theta) / max(n_unknowns, 1))
+    w[-1] = theta
+    return w
+
+
+def theta_norm(v: FloatArray, w: FloatArray) -> float:
+    """``sqrt(sum(w * v**2))``."""
+    return math.sqrt(float(np.dot(w * v, v)))
+
+
+# ---------------------------------------------------------------------------- linear algebra
+# LAPACK getrf/getrs directly: same factorisation as scipy.linalg.lu_factor, without its
+# per-call overhead (a few microseconds, which matters for small systems) and warnings.
+_getrf, _getrs = la.get_lapack_funcs(("getrf", "getrs"), (np.zeros(1),))
+_ARANGE: dict[int, Any] = {}
+
+
+def _arange(n: int) -> Any:
+    r = _ARANGE.get(n)
+    if r is None:
+        r = _ARANGE[n] = np.arange(n, dtype=np.int32)
+    return r
+
+
+def _perm_parity(perm: Any) -> int:
+    """Sign (+1/-1) of the permutation ``perm`` (array of images of 0..n-1)."""
+    perm = np.asarray(perm)
+    n = perm.size
+    seen = np.zeros(n, dtype=bool)
+    sign = 1
+    for i in range(n):
+        if seen[i]:
+            continue
+        j = i
+        length = 0
+        while not seen[j]:
+            seen[j] = True
+            j = perm[j]
+            length += 1
+        if length % 2 == 0:
+            sign = -sign
+    return sign
+
+
+def assemble_bordered_csc(Gz: Any, Gp: FloatArray, c: FloatArray) -> sp.csc_matrix:
+    """CSC matrix ``[[Gz, Gp], [c^T]]`` built directly from the CSC arrays of ``Gz``.
+
+    ``Gp`` is stored as a dense column and ``c`` as a dense row.
+    """
+    Gz = Gz if sp.isspmatrix_csc(Gz) or isinstance(Gz, sp.csc_array) else sp.csc_matrix(Gz)
+    n = Gz.shape[0]
+    indptr, indices, data = Gz.indptr, Gz.indices, Gz.data
+    nnz = indptr[-1]
+    counts = np.diff(indptr)
+    total = nnz + n + (n + 1)
+    new_indices = np.empty(total, dtype=np.int32)
+    new_data = np.empty(total, dtype=float)
+    pos = np.arange(nnz) + np.repeat(np.arange(n), counts)
+    new_indices[pos] = indices[:nnz]
+    new_data[pos] = data[:nnz]
+    border_pos = indptr[1:] + np.arange(n)
+    new_indices[border_pos] = n
+    new_data[border_pos] = c[:n]
+    start = nnz + n
+    new_indices[start:] = np.arange(n + 1)
+    new_data[start : start + n] = Gp
+    new_data[-1] = c[n]
+    new_indptr = np.empty(n + 2, dtype=np.int32)
+    new_indptr[: n + 1] = indptr + np.arange(n + 1)
+    new_indptr[n + 1] = total
+    return sp.csc_matrix((new_data, new_indices, new_indptr), shape=(n + 1, n + 1))
+
+
+class BorderedLU:
+    """LU factorisation of ``M = [[Gz, Gp], [c^T]]`` with determinant sign.
+
+    Parameters
+    ----------
+    Gz : ndarray (N, N) or SciPy sparse matrix
+    Gp : ndarray, shape (N,)
+    c : ndarray, shape (N + 1,)
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If ``M`` is exactly singular or the factorisation fails.
+    """
+
+    __slots__ = ("sparse", "_lu", "sign", "logabsdet", "n")
+
+    def __init__(self, Gz: Any, Gp: FloatArray, c: FloatArray) -> None:
+        n = Gz.shape[0]
+        self.n = n + 1
+        self.sparse = sp.issparse(Gz)
+        if self.sparse:
+            M = assemble_bordered_csc(Gz, Gp, c)
+            try:
+                lu = spla.splu(M)
+            except RuntimeError as exc:
+                raise np.linalg.LinAlgError(str(exc)) from exc
+            d = lu.U.diagonal()
+            sign = float(np.prod(np.sign(d)))
+            sign *= _perm_parity(lu.perm_r) * _perm_parity(lu.perm_c)
+            self._lu = lu
+        else:
+            M = np.empty((n + 1, n + 1))
+            M[:n, :n] = Gz
+            M[:n, n] = Gp
+            M[n, :] = c
+            lu, piv, info = _getrf(M)
+            if info < 0:
+                raise np.linalg.LinAlgError(f"LAPACK getrf failed (info={info})")
+            d = np.diag(lu)
+            swaps = int(np.count_nonzero(piv != _arange(n + 1)))
+            sign = float(np.prod(np.sign(d))) * (-1.0 if swaps % 2 else 1.0)
+            self._lu = (lu, piv)
+        with np.errstate(divide="ignore"):
+            self.logabsdet = float(np.sum(np.log(np.abs(d))))
+        if sign == 0.0 or not np.all(np.isfinite(d)):
+            raise np.linalg.LinAlgError("singular bordered matrix")
+        self.sign = sign
+
+    def solve(self, b: FloatArray) -> FloatArray:
+        """Solve ``M x = b``; raises LinAlgError on a non-finite result."""
+        if self.sparse:
+            x = self._lu.solve(np.asarray(b, dtype=float))
+        else:
+            x, info = _getrs(self._lu[0], self._lu[1], b)
+        if not np.all(np.isfinite(x)):
+            raise np.linalg.LinAlgError("singular or ill-conditioned bordered matrix")
+        return x
+
+
+# ---------------------------------------------------------------------------- evaluation
+def linearize(problem: Any, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
+    """``(G, G_z, G_p)`` at ``(z, p)``: one call of ``problem.linearize`` if it has one."""
+    lin = getattr(problem, "linearize", None)
+    if lin is not None:
+        G, Gz, Gp = lin(z, p)
+    else:
+        G, Gz, Gp = problem.residual(z, p), problem.jacobian(z, p), problem.dp(z, p)
+    G = np.asarray(G, dtype=float).reshape(-1)
+    Gp = np.asarray(Gp, dtype=float).reshape(-1)
+    if not sp.issparse(Gz):
+        Gz = np.asarray(Gz, dtype=float)
+    return G, Gz, Gp
+
+
+@dataclass(eq=False)
+class PointInfo:
+    """A converged branch point with its linearisation and tangent.
+
+    Attributes
+    ----------
+    z : ndarray, shape (N,)
+    p : float
+    tau : ndarray, shape (N + 1,)
+        Unit (``theta``-norm) tangent, oriented so that ``border . tau > 0``.
+    G, Gz, Gp
+        Residual ``(N,)``, Jacobian ``(N, N)`` (dense or sparse), ``dG/dp (N,)``.
+    lu : BorderedLU
+        Factorisation of ``[[Gz, Gp], [border^T]]``.
+    border : ndarray, shape (N + 1,)
+    t_raw : ndarray, shape (N + 1,)
+        ``M^{-1} e_{N+1}`` (un-normalised tangent, sign as solved).
+    bp_sign : float
+        Sign of ``det [Gz Gp; (w o tau)^T]`` (branch-point test function).
+    bp_logdet : float
+        ``log |det [Gz Gp; (w o tau)^T]|``.
+    iters : int
+        Corrector iterations spent on this point.
+    residual_norm : float
+        ``max |G|``.
+    """
+
+    z: FloatArray
+    p: float
+    tau: FloatArray
+    G: FloatArray
+    Gz: Any
+    Gp: FloatArray
+    lu: BorderedLU
+    border: FloatArray
+    t_raw: FloatArray
+    bp_sign: float
+    bp_logdet: float
+    iters: int = 0
+    residual_norm: float = 0.0
+    cache: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def u(self) -> FloatArray:
+        """``(z, p)``, shape ``(N + 1,)``."""
+        return np.append(self.z, self.p)
+
+
+def make_point(
+    z: FloatArray,
+    p: float,
+    lin: tuple[FloatArray, Any, FloatArray],
+    border: FloatArray,
+    w: FloatArray,
+    *,
+    iters: int = 0,
+    orient: FloatArray | None = None,
+) -> PointInfo:
+    """Factorise the bordered matrix at a converged point and compute its tangent.
+
+    Parameters
+    ----------
+    z, p
+        The point.
+    lin : tuple
+        ``(G, Gz, Gp)`` at the point.
+    border : ndarray, shape (N + 1,)
+        Last row ``c`` of the bordered matrix.
+    w : ndarray, shape (N + 1,)
+        ``theta`` weights.
+    orient : ndarray, shape (N + 1,), optional
+        Orientation: ``tau`` is chosen with ``orient . tau >= 0``; default ``border``.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the bordered matrix is singular.
+    """
+    G, Gz, Gp = lin
+    lu = BorderedLU(Gz, Gp, border)
+    rhs = np.zeros(lu.n)
+    rhs[-1] = 1.0
+    t = lu.solve(rhs)
+    nrm = theta_norm(t, w)
+    if not (nrm > 0 and math.isfinite(nrm)):
+        raise np.linalg.LinAlgError("degenerate tangent")
+    tau = t / nrm
+    ref = border if orient is None else orient
+    if float(np.dot(ref, tau)) < 0:
+        tau = -tau
+    ctau = float(np.dot(border, tau))
+    if ctau == 0.0:
+        raise np.linalg.LinAlgError("border orthogonal to the tangent")
+    bp_sign = lu.sign * math.copysign(1.0, ctau)
+    bp_logdet = lu.logabsdet - math.log(abs(ctau))
+    return PointInfo(
+        z=np.asarray(z, dtype=float),
+        p=float(p),
+        tau=tau,
+        G=G,
+        Gz=Gz,
+        Gp=Gp,
+        lu=lu,
+        border=border,
+        t_raw=t,
+        bp_sign=bp_sign,
+        bp_logdet=bp_logdet,
+        iters=iters,
+        residual_norm=float(np.max(np.abs(G))) if G.size else 0.0,
+    )
+
+
+def initial_point(
+    problem: Any,
+    z: FloatArray,
+    p: float,
+    w: FloatArray,
+    direction: float,
+    lin: tuple[FloatArray, Any, FloatArray] | None = None,
+) -> PointInfo:
+    """Tangent and factorisation at a start point, with ``sign(dp/ds) = direction``.
+
+    Uses the border ``c = e_p`` (tangent ``(-G_z^{-1} G_p, 1)``); at a singular ``G_z``
+    (start on a fold) a fixed pseudo-random border is used instead.
+    """
+    lin = lin or linearize(problem, z, p)
+    n = z.size
+    e_p = np.zeros(n + 1)
+    e_p[-1] = direction
+    try:
+        return make_point(z, p, lin, e_p, w)
+    except np.linalg.LinAlgError:
+        rng = np.random.default_rng(12345)
+        c = rng.standard_normal(n + 1)
+        c[-1] = abs(c[-1]) * direction
+        pt = make_point(z, p, lin, c, w)
+        if pt.tau[-1] * direction < 0:
+            pt = make_point(z, p, lin, c, w, orient=-pt.tau)
+        return pt
+
+
+@dataclass(eq=False)
+class CorrectorResult:
+    """Outcome of :func:`correct`."""
+
+    converged: bool
+    z: FloatArray
+    p: float
+    lin: tuple[FloatArray, Any, FloatArray] | None
+    iters: int
+    residual_norm: float
+    message: str = ""
+
+
+def correct(
+    problem: Any,
+    u_pred: FloatArray,
+    u_ref: FloatArray,
+    c: FloatArray,
+    sigma: float,
+    newton: NewtonSettings,
+) -> CorrectorResult:
+    r"""Newton's method on the bordered system.
+
+    Solves ``G(z, p) = 0`` together with the linear constraint
+    ``c . (u - u_ref) = sigma`` (the pseudo-arclength condition for
+    ``c = w o tau_ref``; natural stepping for ``c = e_p``), from ``u_pred``.
+
+    Converged when ``max |G| <= newton.tol`` and the last step is below
+    ``newton.step_tol * (1 + max |u|)``. Stops early (not converged) when the residual
+    becomes non-finite, grows by a factor ``1e4`` over its initial value, or the
+    bordered matrix is singular.
+    """
+    n = u_pred.size - 1
+    u = np.array(u_pred, dtype=float)
+    lin = linearize(problem, u[:n], float(u[n]))
+    h = float(np.dot(c, u - u_ref)) - sigma
+    rn = max(float(np.max(np.abs(lin[0]))) if n else 0.0, abs(h))
+    rn0 = rn
+    step = math.inf
+    it = 0
+    while True:
+        if not math.isfinite(rn):
+            return CorrectorResult(False, u[:n], float(u[n]), None, it, rn, "non-finite residual")
+        if rn <= newton.tol and step <= newton.step_tol * (1.0 + float(np.max(np.abs(u)))):
+            return CorrectorResult(True, u[:n], float(u[n]), lin, it, rn)
+        if it >= newton.max_iter:
+            return CorrectorResult(False, u[:n], float(u[n]), lin, it, rn, "max_iter reached")
+        if it >= 2 and rn > 1e4 * max(rn0, newton.tol):
+            return CorrectorResult(False, u[:n], float(u[n]), lin, it, rn, "diverging")
+        try:
+            lu = BorderedLU(lin[1], lin[2], c)
+            du = lu.solve(np.append(lin[0], h))
+        except np.linalg.LinAlgError as exc:
+            # exactly singular at a point that already solves G = 0 (e.g. a trial point
+            # landing exactly on a branch point): accept it
+            ok = rn <= newton.tol
+            return CorrectorResult(ok, u[:n], float(u[n]), lin, it, rn, f"singular: {exc}")
+        u -= du
+        it += 1
+        step = float(np.max(np.abs(du)))
+        lin = linearize(problem, u[:n], float(u[n]))
+        h = float(np.dot(c, u - u_ref)) - sigma
+        rn = max(float(np.max(np.abs(lin[0]))) if n else 0.0, abs(h))
+
+
+# ---------------------------------------------------------------------------- algorithm API
+@dataclass(eq=False)
+class StepState:
+    """Mutable iteration state passed between the driver and an algorithm.
+
+    Attributes
+    ----------
+    point : PointInfo
+        The last accepted point.
+    ds : float
+        Current step length (``> 0``; the direction is carried by ``point.tau``).
+    w : ndarray, shape (N + 1,)
+        ``theta`` weights.
+    direction : float
+        ``+1`` or ``-1``: the sign of ``dp/ds`` requested at the start.
+    n_steps : int
+        Accepted steps so far.
+    """
+
+    point: PointInfo
+    ds: float
+    w: FloatArray
+    direction: float = 1.0
+    n_steps: int = 0
+
+
+@dataclass(frozen=True)
+class StepOutcome:
+    """Result of one attempted step.
+
+    Attributes
+    ----------
+    converged : bool
+        The step was accepted.
+    newton_iters : int
+        Corrector iterations.
+    residual_norm : float
+        Final ``max |G|``.
+    sigma : float
+        Pseudo-arclength step achieved, ``<tau_prev, u_new - u_prev>_theta``.
+    message : str
+        Why a step was rejected.
+    """
+
+    converged: bool
+    newton_iters: int
+    residual_norm: float
+    sigma: float = 0.0
+    message: str = ""
+
+
+def adapt_ds(
+    ds: float, outcome: StepOutcome, settings: ContinuationSettings, *, grow_iters: int = 3
+) -> float:
+    """Next step length: ``grow`` after an easy step (``<= grow_iters`` iterations),
+    ``shrink`` after a failure, capped at ``ds_max`` (never below zero)."""
+    if outcome.converged:
+        if outcome.newton_iters <= grow_iters:
+            return min(ds * settings.grow, settings.ds_max)
+        return min(ds, settings.ds_max)
+    return ds * settings.shrink
+
+
+class ContinuationAlgorithm(abc.ABC):
+    """A predictor-corrector scheme: ``init`` once, then ``step`` repeatedly."""
+
+    @abc.abstractmethod
+    def init(
+        self, problem: Any, z0: FloatArray, p0: float, settings: ContinuationSettings
+    ) -> StepState:
+        """State at the (already corrected) start point ``(z0, p0)``;
+        ``sign(settings.ds)`` picks the direction of ``p`` at the start."""
+
+    @abc.abstractmethod
+    def step(
+        self, problem: Any, state: StepState, settings: ContinuationSettings
+    ) -> tuple[StepState, StepOutcome]:
+        """Attempt one step of length ``state.ds``; on success return the new state."""
+
+    grow_iters: int = 3
+
+
+__all__ = [
+    "BorderedLU",
+    "ContinuationAlgorithm",
+    "CorrectorResult",
+    "PointInfo",
+    "StepOutcome",
+    "StepState",
+    "adapt_ds",
+    "assemble_bordered_csc",
+    "correct",
+    "initial_point",
+    "linearize",
+    "make_point",
+    "theta_norm",
+    "theta_weights",
+]

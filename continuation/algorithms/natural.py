@@ -1,0 +1,81 @@
+r"""Natural parameter continuation: step the free parameter, correct the state.
+
+From ``(z_a, p_a)`` one step sets ``p_b = p_a + direction * ds``, predicts
+``z = z_a + (p_b - p_a) dz/dp`` (the secant-free tangent predictor,
+``dz/dp = -G_z^{-1} G_p``) and solves ``G(z, p_b) = 0`` by Newton's method at fixed
+``p_b``. Simple and robust on monotone branches; it cannot pass a fold (Newton fails as
+``G_z`` becomes singular, and the branch ends with ``Status.DS_MIN``). Meant for tests
+and simple smooth branches; use :class:`~continuation.algorithms.palc.PALC` otherwise.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from .._types import FloatArray
+from ..settings import ContinuationSettings
+from .base import (
+    ContinuationAlgorithm,
+    StepOutcome,
+    StepState,
+    correct,
+    initial_point,
+    make_point,
+    theta_weights,
+)
+
+
+class Natural(ContinuationAlgorithm):
+    """Natural parameter stepping (``ds`` is a step in the free parameter).
+
+    Parameters
+    ----------
+    grow_iters : int
+        The step grows by ``settings.grow`` after at most this many Newton iterations.
+    """
+
+    def __init__(self, *, grow_iters: int = 3) -> None:
+        if not (isinstance(grow_iters, int) and grow_iters >= 0):
+            raise ValueError(f"`grow_iters` must be an integer >= 0, got {grow_iters!r}")
+        self.grow_iters = grow_iters
+
+    def __repr__(self) -> str:
+        return f"Natural(grow_iters={self.grow_iters})"
+
+    def init(
+        self, problem: Any, z0: FloatArray, p0: float, settings: ContinuationSettings
+    ) -> StepState:
+        """State at the start; ``sign(settings.ds)`` is the direction of ``p``."""
+        w = theta_weights(z0.size, settings.theta)
+        direction = 1.0 if settings.ds > 0 else -1.0
+        pt = initial_point(problem, np.asarray(z0, float), float(p0), w, direction)
+        return StepState(point=pt, ds=abs(settings.ds), w=w, direction=direction)
+
+    def step(
+        self, problem: Any, state: StepState, settings: ContinuationSettings
+    ) -> tuple[StepState, StepOutcome]:
+        """Step ``p`` by ``direction * ds`` and correct ``z`` at fixed ``p``."""
+        a = state.point
+        dp = state.direction * state.ds
+        if a.tau[-1] * state.direction <= 0:
+            return state, StepOutcome(False, 0, 0.0, 0.0, "dp/ds changed sign: a fold")
+        ua = a.u
+        u_pred = ua + (dp / a.tau[-1]) * a.tau
+        e_p = np.zeros(ua.size)
+        e_p[-1] = state.direction
+        res = correct(problem, u_pred, ua, e_p, abs(dp), settings.newton)
+        if not res.converged or res.lin is None:
+            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, res.message)
+        try:
+            b = make_point(res.z, res.p, res.lin, e_p, state.w, iters=res.iters)
+        except np.linalg.LinAlgError as exc:
+            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
+        sigma = float(np.dot(state.w * a.tau, b.u - ua))
+        new = dataclasses.replace(state, point=b, n_steps=state.n_steps + 1)
+        return new, StepOutcome(True, res.iters, res.residual_norm, sigma)
+
+
+__all__ = ["Natural"]

@@ -1,0 +1,109 @@
+r"""Pseudo-arclength continuation (PALC, Keller 1977).
+
+Keller, H. B. (1977), "Numerical solution of bifurcation and nonlinear eigenvalue
+problems", in *Applications of Bifurcation Theory*, Academic Press, 359-384.
+
+From an accepted point ``u_a = (z_a, p_a)`` with unit tangent ``tau_a`` (``theta``-norm),
+one step of length ``ds``
+
+1. predicts ``u_pred = u_a + ds * tau_a``;
+2. corrects by Newton's method on the bordered system
+
+   .. math::
+
+       G(z, p) = 0, \qquad \langle \tau_a, u - u_a \rangle_\theta - ds = 0,
+
+   whose Jacobian is ``[[G_z, G_p], [(w o tau_a)^T]]``;
+3. computes the new tangent from ``[[G_z, G_p], [(w o tau_a)^T]] t = e_{N+1}`` at the
+   converged point, ``tau = t / ||t||_theta``; the last equation gives
+   ``<tau_a, tau>_theta > 0``, so the orientation is kept through folds. The same LU
+   factorisation gives the branch-point test function (see :mod:`.base`).
+
+A step is rejected (and retried by the driver with a smaller ``ds``) when Newton fails
+or the tangent turns by more than ``max_angle_deg`` (to avoid jumping between branches).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+
+from .._types import FloatArray
+from ..settings import ContinuationSettings
+from .base import (
+    ContinuationAlgorithm,
+    StepOutcome,
+    StepState,
+    correct,
+    initial_point,
+    make_point,
+    theta_weights,
+)
+
+
+class PALC(ContinuationAlgorithm):
+    """Pseudo-arclength continuation with a bordered tangent predictor.
+
+    Parameters
+    ----------
+    max_angle_deg : float
+        Largest accepted angle (``theta``-metric) between consecutive tangents; a larger
+        turn rejects the step unless ``ds`` is already at ``ds_min``.
+    grow_iters : int
+        The step grows by ``settings.grow`` after a step needing at most this many
+        corrector iterations.
+    """
+
+    def __init__(self, *, max_angle_deg: float = 60.0, grow_iters: int = 3) -> None:
+        if not (0 < max_angle_deg <= 180):
+            raise ValueError(f"`max_angle_deg` must be in (0, 180], got {max_angle_deg}")
+        if not (isinstance(grow_iters, int) and grow_iters >= 0):
+            raise ValueError(f"`grow_iters` must be an integer >= 0, got {grow_iters!r}")
+        self.max_angle_deg = float(max_angle_deg)
+        self.grow_iters = grow_iters
+        self._cos_max = math.cos(math.radians(max_angle_deg))
+
+    def __repr__(self) -> str:
+        return f"PALC(max_angle_deg={self.max_angle_deg}, grow_iters={self.grow_iters})"
+
+    def init(
+        self, problem: Any, z0: FloatArray, p0: float, settings: ContinuationSettings
+    ) -> StepState:
+        """Tangent at the start, oriented so that ``sign(dp/ds) = sign(settings.ds)``."""
+        w = theta_weights(z0.size, settings.theta)
+        direction = 1.0 if settings.ds > 0 else -1.0
+        pt = initial_point(problem, np.asarray(z0, float), float(p0), w, direction)
+        return StepState(point=pt, ds=abs(settings.ds), w=w, direction=direction)
+
+    def step(
+        self, problem: Any, state: StepState, settings: ContinuationSettings
+    ) -> tuple[StepState, StepOutcome]:
+        """One predictor-corrector step of length ``state.ds``."""
+        a = state.point
+        ds = state.ds
+        c = state.w * a.tau
+        ua = a.u
+        res = correct(problem, ua + ds * a.tau, ua, c, ds, settings.newton)
+        if not res.converged or res.lin is None:
+            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, res.message)
+        try:
+            b = make_point(res.z, res.p, res.lin, c, state.w, iters=res.iters)
+        except np.linalg.LinAlgError as exc:
+            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
+        cos_angle = float(np.dot(c, b.tau))
+        if cos_angle < self._cos_max and ds > settings.ds_min * (1 + 1e-12):
+            return state, StepOutcome(
+                False,
+                res.iters,
+                res.residual_norm,
+                0.0,
+                f"tangent turned by {math.degrees(math.acos(max(-1.0, cos_angle))):.1f} deg",
+            )
+        new = dataclasses.replace(state, point=b, n_steps=state.n_steps + 1)
+        return new, StepOutcome(True, res.iters, res.residual_norm, ds)
+
+
+__all__ = ["PALC"]

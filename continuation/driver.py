@@ -1,0 +1,703 @@
+r"""The one entry point of one-parameter continuation: :func:`continue_branch`.
+
+``continue_branch(problem, z0, p0, algorithm, settings)`` corrects the start point,
+then repeats ``algorithm.step`` with adaptive step length, computing at every accepted
+point the stability eigenvalues (once), the records and the test functions of the
+special points and events; special points are detected by sign changes between
+consecutive rows and located inside the step (:mod:`continuation.locate`). It stops at
+``max_steps``, at a parameter bound (the last row is then exactly on the bound), at a
+terminal event, when the branch closes on itself (periodic states compared modulo their
+periods) or when the step falls below ``ds_min``; the reason is ``Branch.status``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from ._types import ComplexArray, FloatArray
+from .algorithms.base import ContinuationAlgorithm, PointInfo, adapt_ds, theta_norm
+from .algorithms.palc import PALC
+from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
+from .errors import ContinuationError, ConvergenceError
+from .events import Event, HopfTest, bp_test, crossed
+from .locate import LocateResult, locate_zero
+from .newton import newton
+from .settings import ContinuationSettings
+from .stability import count_unstable, eigenvalues, sort_eigenvalues
+from .status import Status
+
+log = logging.getLogger(__name__)
+
+ProgressFn = Callable[[BranchPoint], None]
+
+_PREFIX = {
+    SpecialKind.FOLD: "F",
+    SpecialKind.HOPF: "H",
+    SpecialKind.BRANCH_POINT: "BP",
+}
+
+
+# ---------------------------------------------------------------------------- helpers
+def _eig_function(problem: Any, settings: ContinuationSettings) -> Callable[[PointInfo], Any]:
+    det = settings.detect
+    if getattr(problem, "jacobian_is_stability", False):
+
+        def from_jacobian(pt: PointInfo) -> ComplexArray:
+            ev = pt.cache.get("eig")
+            if ev is None:
+                ev = eigenvalues(
+                    pt.Gz, n_eigs=det.n_eigs, sigma=det.eig_sigma, dense_max=det.dense_eigs_max
+                )
+                pt.cache["eig"] = ev
+            return ev
+
+        return from_jacobian
+
+    def from_problem(pt: PointInfo) -> ComplexArray | None:
+        if "eig" not in pt.cache:
+            ev = problem.stability(pt.z, pt.p)
+            pt.cache["eig"] = None if ev is None else sort_eigenvalues(ev)
+        return pt.cache["eig"]
+
+    return from_problem
+
+
+def _difference_fn(problem: Any) -> Callable[[FloatArray, FloatArray], FloatArray]:
+    diff = getattr(problem, "difference", None)
+    if callable(diff):
+        return diff  # type: ignore[no-any-return]
+    return lambda a, b: np.asarray(a) - np.asarray(b)
+
+
+def _state_names(problem: Any, n: int) -> tuple[str, ...]:
+    names = getattr(problem, "state_names", None)
+    if names is None and hasattr(problem, "system"):
+        names = getattr(problem.system, "state_names", None)
+    names = tuple(names) if names is not None else ()
+    return names if len(names) == n else tuple(f"z{k}" for k in range(n))
+
+
+def _param_values(problem: Any, p0: float) -> dict[str, float]:
+    params = getattr(problem, "params", None)
+    out: dict[str, float] = {}
+    if params is not None and hasattr(params, "names") and hasattr(params, "values"):
+        out = {str(k): float(v) for k, v in zip(params.names, params.values, strict=False)}
+    out[str(problem.free)] = float(p0)
+    return out
+
+
+@dataclass(eq=False)
+class _Row:
+    z: FloatArray
+    p: float
+    eig: ComplexArray | None
+    counts: tuple[int, int] | None
+    ds: float
+    iters: int
+    records: dict[str, float]
+    events: list[float]
+    point: PointInfo
+
+
+@dataclass(eq=False)
+class _Run:
+    rows: list[_Row] = field(default_factory=list)
+    specials: list[SpecialPoint] = field(default_factory=list)
+    status: Status = Status.MAX_STEPS
+    message: str = ""
+    arclength: float = 0.0
+
+
+class _Context:
+    """Everything one run needs: problem, settings, events and cached functions."""
+
+    def __init__(
+        self,
+        problem: Any,
+        algorithm: ContinuationAlgorithm,
+        settings: ContinuationSettings,
+        events: Sequence[Event],
+        progress: ProgressFn | None,
+    ) -> None:
+        self.problem = problem
+        self.algorithm = algorithm
+        self.settings = settings
+        self.events = tuple(events)
+        self.progress = progress
+        self.eig = _eig_function(problem, settings)
+        self.diff = _difference_fn(problem)
+        self.grow_iters = int(getattr(algorithm, "grow_iters", 3))
+
+    # ------------------------------------------------------------------ rows
+    def make_row(self, pt: PointInfo, ds: float) -> _Row:
+        det = self.settings.detect
+        ev = self.eig(pt)
+        counts = None if ev is None else count_unstable(ev, det.eig_tol, det.imag_tol)
+        rec = {str(k): float(v) for k, v in dict(self.problem.record(pt.z, pt.p)).items()}
+        evs = [e.value(pt.z, pt.p) for e in self.events]
+        return _Row(pt.z, pt.p, ev, counts, ds, pt.iters, rec, evs, pt)
+
+    # ------------------------------------------------------------------ location
+    def locate(
+        self,
+        a: _Row,
+        b: _Row,
+        sigma_b: float,
+        w: FloatArray,
+        test: Callable[..., float],
+        g_a: float,
+        g_b: float,
+    ) -> LocateResult:
+        det = self.settings.detect
+        if not det.locate:
+            return LocateResult(0.0, a.point, g_a, False, 0, "location disabled")
+        return locate_zero(
+            self.problem,
+            a.point,
+            b.point,
+            sigma_b,
+            w,
+            test,
+            g_a,
+            g_b,
+            newton=self.settings.newton,
+            tol=det.tol,
+            max_iter=det.max_iter,
+        )
+
+    def detect(
+        self,
+        a: _Row,
+        b: _Row,
+        sigma_b: float,
+        w: FloatArray,
+        index: int,
+        s_a: float,
+        terminal: tuple[int, LocateResult] | None = None,
+    ) -> list[SpecialPoint]:
+        """Detect and locate the special points between rows ``a`` and ``b``.
+
+        ``terminal = (k, result)``: event ``k`` ended the step at ``b`` (already located).
+        """
+        det = self.settings.detect
+        pa, pb = a.point, b.point
+        found: list[tuple[SpecialKind, LocateResult, dict[str, float], str]] = []
+        if det.fold and pa.tau[-1] * pb.tau[-1] < 0:
+            r = self.locate(
+                a,
+                b,
+                sigma_b,
+                w,
+                lambda pt, t: float(pt.tau[-1]),
+                float(pa.tau[-1]),
+                float(pb.tau[-1]),
+            )
+            found.append((SpecialKind.FOLD, r, {}, ""))
+        if det.branch_point and pa.bp_sign != pb.bp_sign:
+            ref = pa.bp_logdet
+
+            def g_bp(pt: PointInfo, t: float) -> float:
+                return bp_test(pt.bp_sign, pt.bp_logdet, ref)
+
+            r = self.locate(
+                a,
+                b,
+                sigma_b,
+                w,
+                g_bp,
+                bp_test(pa.bp_sign, pa.bp_logdet, ref),
+                bp_test(pb.bp_sign, pb.bp_logdet, ref),
+            )
+            found.append((SpecialKind.BRANCH_POINT, r, {}, ""))
+        if (
+            det.hopf
+            and a.counts is not None
+            and b.counts is not None
+            and a.counts[0] == b.counts[0]
+            and a.counts[1] != b.counts[1]
+        ):
+            assert a.eig is not None and b.eig is not None
+            ht = HopfTest(a.eig, b.eig, det.imag_tol)
+            if ht.ok:
+
+                def g_h(pt: PointInfo, t: float) -> float:
+                    lam = ht.track(self.eig(pt), t)
+                    return math.nan if lam is None else lam.real
+
+                assert ht.lam_a is not None and ht.lam_b is not None
+                r = self.locate(a, b, sigma_b, w, g_h, ht.lam_a.real, ht.lam_b.real)
+                lam = ht.track(self.eig(r.point), r.sigma / sigma_b)
+                omega = abs(lam.imag) if lam is not None else math.nan
+                found.append((SpecialKind.HOPF, r, {"omega": omega}, ""))
+            else:
+                log.warning("Hopf bracketed near p=%.6g but no critical pair found", pa.p)
+                r = LocateResult(0.0, pa, math.nan, False, 0, "no critical pair")
+                found.append((SpecialKind.HOPF, r, {}, ""))
+        for k, e in enumerate(self.events):
+            if terminal is not None and k == terminal[0]:
+                r = terminal[1]
+                found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
+            elif crossed(a.events[k], b.events[k], e.direction):
+                r = self.locate(
+                    a,
+                    b,
+                    sigma_b,
+                    w,
+                    lambda pt, t, e=e: e.value(pt.z, pt.p),
+                    a.events[k],
+                    b.events[k],
+                )
+                found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
+        out = []
+        dr = (0, 0)
+        if a.counts is not None and b.counts is not None:
+            dr = (b.counts[0] - a.counts[0], b.counts[1] - a.counts[1])
+        for kind, r, data, label in found:
+            if not r.located:
+                log.warning(
+                    "%s between p=%.8g and p=%.8g was detected but not located (%s)",
+                    label or kind.value,
+                    pa.p,
+                    pb.p,
+                    r.message,
+                )
+            out.append(
+                SpecialPoint(
+                    kind=kind,
+                    index=index,
+                    p=float(r.point.p),
+                    x=np.array(r.point.z),
+                    located=bool(r.located),
+                    bracket=(float(pa.p), float(pb.p)),
+                    delta_unstable=dr,
+                    label=label,
+                    data=dict(data),
+                    s=s_a + r.sigma,
+                    tangent=np.array(r.point.tau),
+                )
+            )
+        out.sort(key=lambda sp: sp.s)
+        return out
+
+    # ------------------------------------------------------------------ stopping points
+    def stop_point(
+        self, a: _Row, b: _Row, sigma_b: float, w: FloatArray
+    ) -> tuple[LocateResult, Status, str, int | None] | None:
+        """The earliest parameter bound or terminal event crossed in this step.
+
+        Returns ``(result, status, message, event_index or None)``.
+        """
+        s = self.settings
+        cands: list[tuple[LocateResult, Status, str, int | None]] = []
+        pa, pb = a.point.p, b.point.p
+        for bound, outside in ((s.p_max, pb > s.p_max), (s.p_min, pb < s.p_min)):
+            if outside and math.isfinite(bound):
+                r = locate_zero(
+                    self.problem,
+                    a.point,
+                    b.point,
+                    sigma_b,
+                    w,
+                    lambda pt, t, bound=bound: pt.p - bound,
+                    pa - bound,
+                    pb - bound,
+                    newton=s.newton,
+                    tol=s.detect.tol,
+                    max_iter=s.detect.max_iter,
+                )
+                if not r.located:
+                    r = LocateResult(sigma_b, b.point, pb - bound, False, r.iterations)
+                msg = f"{Status.PARAM_BOUND.value} ({self.problem.free}={bound:.10g})"
+                cands.append((r, Status.PARAM_BOUND, msg, None))
+        for k, e in enumerate(self.events):
+            if e.terminal and crossed(a.events[k], b.events[k], e.direction):
+                r = self.locate(
+                    a,
+                    b,
+                    sigma_b,
+                    w,
+                    lambda pt, t, e=e: e.value(pt.z, pt.p),
+                    a.events[k],
+                    b.events[k],
+                )
+                if not r.located:
+                    r = LocateResult(sigma_b, b.point, b.events[k], False, r.iterations)
+                cands.append((r, Status.EVENT, f"terminal event {e.name!r}", k))
+        if not cands:
+            return None
+        return min(cands, key=lambda c: c[0].sigma)
+
+    def closed(
+        self, start: _Row, a: _Row, b: _Row, w: FloatArray, far: float, sigma: float
+    ) -> bool:
+        """Did the chord ``a -> b`` pass through the start point (modulo periods)?"""
+        if far < 3.0 * sigma:
+            return False
+        d_ab = np.append(self.diff(b.z, a.z), b.p - a.p)
+        d_a0 = np.append(self.diff(start.z, a.z), start.p - a.p)
+        nn = float(np.dot(w * d_ab, d_ab))
+        if nn <= 0:
+            return False
+        t = float(np.dot(w * d_a0, d_ab)) / nn
+        if not (-1e-9 <= t <= 1 + 1e-9):
+            return False
+        dist = theta_norm(d_a0 - t * d_ab, w)
+        aligned = float(np.dot(w * start.point.tau, b.point.tau)) > 0
+        return aligned and dist <= 0.25 * sigma
+
+
+# ---------------------------------------------------------------------------- one run
+def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
+    s = ctx.settings
+    run = _Run()
+    try:
+        state = ctx.algorithm.init(ctx.problem, z0, p0, s)
+    except np.linalg.LinAlgError as exc:
+        run.status, run.message = Status.SINGULAR, f"no tangent at the start point: {exc}"
+        return run
+    state.point.iters = iters0
+    row0 = ctx.make_row(state.point, 0.0)
+    run.rows.append(row0)
+    if ctx.progress is not None:
+        ctx.progress(_branch_point(row0, 0))
+    w = state.w
+    far = 0.0
+    u0 = state.point.u
+    p_at_bound = (p0 >= s.p_max and state.direction > 0) or (p0 <= s.p_min and state.direction < 0)
+    if p_at_bound:
+        run.status, run.message = Status.PARAM_BOUND, "the start point is on the parameter bound"
+        return run
+    try:
+        while state.n_steps < s.max_steps:
+            new_state, outcome = ctx.algorithm.step(ctx.problem, state, s)
+            if not outcome.converged:
+                ds_new = adapt_ds(state.ds, outcome, s, grow_iters=ctx.grow_iters)
+                log.debug(
+                    "step rejected at p=%.6g (ds=%.3g): %s",
+                    state.point.p,
+                    state.ds,
+                    outcome.message,
+                )
+                if ds_new < s.ds_min:
+                    run.status = Status.DS_MIN
+                    run.message = (
+                        f"{Status.DS_MIN.value} Last point p={state.point.p:.10g}; last "
+                        f"failure: {outcome.message}"
+                    )
+                    break
+                state.ds = ds_new
+                continue
+            a = run.rows[-1]
+            sigma_b = outcome.sigma
+            b = ctx.make_row(new_state.point, sigma_b)
+            stop = ctx.stop_point(a, b, sigma_b, w)
+            terminal = None
+            if stop is not None:
+                r, status, msg, k_event = stop
+                if r.sigma < sigma_b:
+                    b = ctx.make_row(r.point, r.sigma)
+                    sigma_b = r.sigma
+                run.status, run.message = status, msg
+                if k_event is not None:
+                    terminal = (k_event, r)
+            index = len(run.rows) - 1
+            if sigma_b > 0:
+                run.specials.extend(ctx.detect(a, b, sigma_b, w, index, run.arclength, terminal))
+            if stop is None or sigma_b > 0:
+                run.rows.append(b)
+                run.arclength += sigma_b
+                if ctx.progress is not None:
+                    ctx.progress(_branch_point(b, len(run.rows) - 1))
+            if stop is not None:
+                break
+            far = max(far, theta_norm(new_state.point.u - u0, w))
+            if ctx.closed(run.rows[0], a, b, w, far, sigma_b):
+                run.status, run.message = Status.CLOSED_LOOP, Status.CLOSED_LOOP.value
+                break
+            new_state.ds = adapt_ds(new_state.ds, outcome, s, grow_iters=ctx.grow_iters)
+            state = new_state
+        else:
+            run.status, run.message = Status.MAX_STEPS, Status.MAX_STEPS.value
+    except KeyboardInterrupt:
+        run.status, run.message = Status.INTERRUPTED, Status.INTERRUPTED.value
+        log.warning("continuation interrupted after %d points", len(run.rows))
+    return run
+
+
+def _branch_point(row: _Row, index: int) -> BranchPoint:
+    ev = row.eig if row.eig is not None else np.zeros(0, complex)
+    nu = -1 if row.counts is None else row.counts[0] + 2 * row.counts[1]
+    return BranchPoint(
+        index=index,
+        p=row.p,
+        x=row.z,
+        eigenvalues=ev,
+        n_unstable=nu,
+        stable=nu == 0,
+        ds=row.ds,
+        newton_iters=row.iters,
+        records=dict(row.records),
+    )
+
+
+# ---------------------------------------------------------------------------- assembling
+def _relabel(specials: list[SpecialPoint]) -> tuple[SpecialPoint, ...]:
+    count: dict[SpecialKind, int] = {}
+    out = []
+    for sp in specials:
+        if sp.kind in _PREFIX:
+            count[sp.kind] = count.get(sp.kind, 0) + 1
+            sp = dataclasses.replace(sp, label=f"{_PREFIX[sp.kind]}{count[sp.kind]}")
+        out.append(sp)
+    return tuple(out)
+
+
+def _merge(back: _Run, fwd: _Run) -> tuple[list[_Row], list[float], list[SpecialPoint]]:
+    """Rows ordered from the backward end to the forward end (start row once)."""
+    m = len(back.rows) - 1
+    rows: list[_Row] = []
+    ds: list[float] = []
+    for j in range(m, 0, -1):
+        rows.append(back.rows[j])
+        ds.append(0.0 if j == m else back.rows[j + 1].ds)
+    specials: list[SpecialPoint] = []
+    s_back = back.arclength
+    for sp in back.specials:
+        specials.append(
+            dataclasses.replace(
+                sp,
+                index=m - sp.index - 1,
+                bracket=(sp.bracket[1], sp.bracket[0]),
+                delta_unstable=(-sp.delta_unstable[0], -sp.delta_unstable[1]),
+                s=s_back - sp.s,
+                tangent=None if sp.tangent is None else -sp.tangent,
+            )
+        )
+    specials.reverse()
+    for k, row in enumerate(fwd.rows):
+        rows.append(row)
+        ds.append((back.rows[1].ds if m >= 1 else 0.0) if k == 0 else row.ds)
+    for sp in fwd.specials:
+        specials.append(dataclasses.replace(sp, index=sp.index + m, s=sp.s + s_back))
+    return rows, ds, specials
+
+
+def _make_branch(
+    problem: Any,
+    rows: list[_Row],
+    ds: list[float],
+    specials: list[SpecialPoint],
+    status: Status,
+    message: str,
+    settings: ContinuationSettings,
+    p0: float,
+    n: int,
+    events: Sequence[Event] = (),
+) -> Branch:
+    N = len(rows)
+    width = max((r.eig.size for r in rows if r.eig is not None), default=0)
+    eig = np.full((N, width), np.nan + 0j)
+    nun = np.full(N, -1, dtype=int)
+    for k, r in enumerate(rows):
+        if r.eig is not None:
+            eig[k, : r.eig.size] = r.eig
+        if r.counts is not None:
+            nun[k] = r.counts[0] + 2 * r.counts[1]
+    keys: list[str] = []
+    for r in rows:
+        for key in r.records:
+            if key not in keys:
+                keys.append(key)
+    records = {key: np.array([r.records.get(key, np.nan) for r in rows]) for key in keys}
+    return Branch(
+        problem=problem,
+        free=str(problem.free),
+        p=np.array([r.p for r in rows], dtype=float),
+        x=np.array([r.z for r in rows], dtype=float).reshape(N, n),
+        eigenvalues=eig,
+        n_unstable=nun,
+        ds=np.array(ds, dtype=float),
+        newton_iters=np.array([r.iters for r in rows], dtype=int),
+        records=records,
+        special_points=_relabel(specials),
+        status=status,
+        message=message,
+        settings=settings,
+        state_names=_state_names(problem, n),
+        param_values=_param_values(problem, p0),
+        event_names=tuple(e.name for e in events),
+    )
+
+
+def _empty_branch(
+    problem: Any,
+    n: int,
+    status: Status,
+    message: str,
+    settings: ContinuationSettings,
+    p0: float,
+    events: Sequence[Event] = (),
+) -> Branch:
+    return _make_branch(problem, [], [], [], status, message, settings, p0, n, events)
+
+
+# ---------------------------------------------------------------------------- entry point
+def continue_branch(
+    problem: Any,
+    z0: Any,
+    p0: float,
+    algorithm: ContinuationAlgorithm | None = None,
+    settings: ContinuationSettings | None = None,
+    *,
+    events: Sequence[Event] = (),
+    direction: Literal["forward", "backward", "both"] = "forward",
+    throw: bool = False,
+    progress: ProgressFn | None = None,
+) -> Branch:
+    r"""Continue the solutions of ``G(z, p) = 0`` in the free parameter ``p``.
+
+    Parameters
+    ----------
+    problem : ContinuationProblem
+        Residual, Jacobians, stability and records (:mod:`continuation.problem`).
+    z0 : array_like, shape (N,)
+        Start point, or a guess: it is first corrected by Newton's method at fixed
+        ``p0`` (``settings.newton``).
+    p0 : float
+        Start value of the free parameter; must lie in ``[p_min, p_max]``.
+    algorithm : ContinuationAlgorithm, optional
+        Default :class:`~continuation.algorithms.palc.PALC`.
+    settings : ContinuationSettings, optional
+        Step control, bounds, corrector and detection settings. ``sign(ds)`` is the
+        "forward" direction of ``p`` at the start.
+    events : sequence of Event
+        User events, detected and located like the built-in special points.
+    direction : {"forward", "backward", "both"}
+        ``"forward"`` follows ``sign(ds)``; ``"backward"`` the opposite; ``"both"`` runs
+        backward, then forward, and returns ONE branch ordered from the backward end
+        to the forward end (the start point appears once, at row ``len(backward) - 1``);
+        special points are re-indexed and their ``bracket``, ``delta_unstable`` and
+        ``tangent`` follow that order. ``max_steps`` applies to each direction.
+    throw : bool
+        Raise :class:`~continuation.errors.ConvergenceError` if the start point does
+        not converge, and :class:`~continuation.errors.ContinuationError` if the branch
+        ends in a numerical failure (``DS_MIN``, ``SINGULAR``, ...). Otherwise failures
+        are reported in ``Branch.status``.
+    progress : callable, optional
+        ``progress(BranchPoint)`` after every accepted point (``index`` counts within
+        the current direction).
+
+    Returns
+    -------
+    Branch
+        ``status`` says why it stopped; ``Status.INTERRUPTED`` (Ctrl-C) keeps the points
+        computed so far.
+
+    Raises
+    ------
+    ValueError
+        Bad input: ``z0`` of the wrong shape or not finite, ``p0`` not finite or out of
+        bounds, ``direction`` unknown, ``events`` not :class:`Event` instances.
+    """
+    settings = settings if settings is not None else ContinuationSettings()
+    if not isinstance(settings, ContinuationSettings):
+        raise ValueError(f"`settings` must be a ContinuationSettings, got {type(settings)}")
+    algorithm = algorithm if algorithm is not None else PALC()
+    if not isinstance(algorithm, ContinuationAlgorithm):
+        raise ValueError(f"`algorithm` must be a ContinuationAlgorithm, got {algorithm!r}")
+    if direction not in ("forward", "backward", "both"):
+        raise ValueError(f"`direction` must be 'forward', 'backward' or 'both', got {direction!r}")
+    events = tuple(events)
+    for e in events:
+        if not isinstance(e, Event):
+            raise ValueError(f"`events` must contain Event instances, got {e!r}")
+    n = int(problem.n_unknowns)
+    z = np.asarray(z0, dtype=float)
+    if z.shape != (n,):
+        raise ValueError(f"`z0` must have shape ({n},), got {z.shape}")
+    if not np.all(np.isfinite(z)):
+        raise ValueError(f"`z0` contains NaN or inf: {z}")
+    try:
+        p0 = float(p0)
+    except (TypeError, ValueError):
+        raise ValueError(f"`p0` must be a float, got {p0!r}") from None
+    if not math.isfinite(p0):
+        raise ValueError(f"`p0` must be finite, got {p0}")
+    if not settings.p_min <= p0 <= settings.p_max:
+        raise ValueError(
+            f"`p0`={p0} lies outside [p_min, p_max] = [{settings.p_min}, {settings.p_max}]"
+        )
+
+    start = newton(
+        lambda zz: problem.residual(zz, p0),
+        lambda zz: problem.jacobian(zz, p0),
+        z,
+        settings.newton,
+    )
+    if not start.converged:
+        msg = f"start point did not converge at {problem.free}={p0:.10g}: {start.message}"
+        log.warning(msg)
+        if throw:
+            raise ConvergenceError(msg)
+        return _empty_branch(problem, n, Status.NEWTON_FAILED, msg, settings, p0, events)
+
+    ctx_args = (problem, algorithm)
+    ds_abs = abs(settings.ds)
+    sgn = 1.0 if settings.ds > 0 else -1.0
+
+    def run_dir(sign: float) -> _Run:
+        st = dataclasses.replace(settings, ds=sign * ds_abs)
+        return _run(_Context(*ctx_args, st, events, progress), start.z, p0, start.iterations)
+
+    if direction == "both":
+        back = run_dir(-sgn)
+        if back.status in (Status.INTERRUPTED, Status.CLOSED_LOOP) or not back.rows:
+            # a closed loop is complete already; an interrupt stops everything
+            fwd = _Run(rows=back.rows[:1], status=back.status, message=back.message)
+        else:
+            fwd = run_dir(sgn)
+        if back.rows:
+            rows, ds, specials = _merge(back, fwd)
+        else:
+            rows, ds, specials = fwd.rows, [r.ds for r in fwd.rows], fwd.specials
+        status, message = _combine(back, fwd)
+    else:
+        one = run_dir(sgn if direction == "forward" else -sgn)
+        rows, ds, specials = one.rows, [r.ds for r in one.rows], one.specials
+        status, message = one.status, one.message
+    br = _make_branch(problem, rows, ds, specials, status, message, settings, p0, n, events)
+    return _finish(br, throw)
+
+
+def _combine(back: _Run, fwd: _Run) -> tuple[Status, str]:
+    if Status.INTERRUPTED in (back.status, fwd.status):
+        return Status.INTERRUPTED, Status.INTERRUPTED.value
+    message = f"backward: {back.message}; forward: {fwd.message}"
+    for run in (fwd, back):
+        if not run.status.ok:
+            return run.status, message
+    return fwd.status, message
+
+
+def _finish(branch: Branch, throw: bool) -> Branch:
+    n_sp = len(branch.special_points)
+    log.info(
+        "branch in %s: %d points, %d special points, status %s",
+        branch.free,
+        len(branch),
+        n_sp,
+        branch.status.name,
+    )
+    if throw and not branch.status.ok and branch.status is not Status.INTERRUPTED:
+        raise ContinuationError(branch.message or branch.status.value)
+    return branch
+
+
+__all__ = ["continue_branch"]

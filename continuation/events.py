@@ -1,0 +1,170 @@
+r"""Events and test functions along a branch.
+
+A special point is where a scalar *test function* ``g`` changes sign between two
+consecutive branch rows; the same mechanism serves the built-in bifurcations and the
+user's :class:`Event`:
+
+========== ============================================= ===============================
+kind       detected when                                 located as the zero of
+========== ============================================= ===============================
+fold       ``dp/ds`` (last tangent component) changes     ``dp/ds``
+           sign
+bp         ``det [G_z G_p; tau^T]`` changes sign           that determinant (scaled)
+hopf       the number of unstable complex-conjugate       ``Re`` of the critical pair
+           pairs changes by one while the number of
+           unstable real eigenvalues stays the same
+user       ``fn(x, p)`` changes sign (``direction``)      ``fn(x, p)``
+========== ============================================= ===============================
+
+References: Govaerts (2000), *Numerical Methods for Bifurcations of Dynamical
+Equilibria*, SIAM, Ch. 3-4; Kuznetsov (2004), *Elements of Applied Bifurcation
+Theory*, 3rd ed., Sec. 10.2.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from ._types import ComplexArray, FloatArray
+
+Direction = Literal["both", "up", "down"]
+
+
+@dataclass(frozen=True)
+class Event:
+    """A user event: a zero of ``fn(x, p)`` along the branch.
+
+    Parameters
+    ----------
+    name : str
+        Label of the special points it creates (``SpecialPoint.label``).
+    fn : callable
+        ``fn(x, p) -> float`` with ``x`` the unknowns ``(N,)`` and ``p`` the free
+        parameter.
+    direction : {"both", "up", "down"}
+        ``"up"``: only crossings from negative to positive (in branch order);
+        ``"down"``: positive to negative.
+    terminal : bool
+        Stop the branch at the (located) event; the branch then ends with
+        ``Status.EVENT`` and its last row is the event point.
+    """
+
+    name: str
+    fn: Callable[[FloatArray, float], float]
+    direction: Direction = "both"
+    terminal: bool = False
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.name, str) and self.name):
+            raise ValueError(f"`name` must be a non-empty string, got {self.name!r}")
+        if not callable(self.fn):
+            raise ValueError(f"`fn` of event {self.name!r} must be callable")
+        if self.direction not in ("both", "up", "down"):
+            raise ValueError(
+                f"`direction` of event {self.name!r} must be 'both', 'up' or 'down', "
+                f"got {self.direction!r}"
+            )
+
+    def value(self, x: FloatArray, p: float) -> float:
+        """``fn(x, p)`` as a float."""
+        return float(self.fn(x, p))
+
+
+def crossed(g_a: float, g_b: float, direction: Direction = "both") -> bool:
+    """True when ``g`` changes sign from ``g_a`` to ``g_b`` in ``direction``.
+
+    A zero at the end row ``g_b == 0`` counts (a zero at ``g_a`` was counted in the
+    previous step).
+    """
+    if not (math.isfinite(g_a) and math.isfinite(g_b)):
+        return False
+    if g_a == 0.0 or not (g_a * g_b < 0 or g_b == 0.0):
+        return False
+    if direction == "up":
+        return g_a < 0
+    if direction == "down":
+        return g_a > 0
+    return True
+
+
+def fold_test(tau: FloatArray) -> float:
+    """Fold test function: the parameter component ``dp/ds`` of the unit tangent."""
+    return float(tau[-1])
+
+
+def bp_test(sign: float, logdet: float, ref_logdet: float) -> float:
+    """Branch-point test function ``det[G_z G_p; tau^T]`` scaled by ``exp(-ref_logdet)``."""
+    return float(sign * math.exp(min(logdet - ref_logdet, 700.0)))
+
+
+def complex_mask(eigs: ComplexArray, imag_tol: float) -> Any:
+    """Boolean mask of eigenvalues with ``Im > imag_tol * max(1, |lambda|)``."""
+    v = np.asarray(eigs, dtype=complex)
+    ok = ~np.isnan(v)
+    out = np.zeros(v.shape, dtype=bool)
+    out[ok] = v[ok].imag > imag_tol * np.maximum(1.0, np.abs(v[ok]))
+    return out
+
+
+def critical_pair(eigs: ComplexArray, imag_tol: float) -> complex | None:
+    """The eigenvalue with ``Im > 0`` nearest the imaginary axis, or None."""
+    v = np.asarray(eigs, dtype=complex)
+    m = complex_mask(v, imag_tol)
+    if not np.any(m):
+        return None
+    c = v[m]
+    return complex(c[int(np.argmin(np.abs(c.real)))])
+
+
+class HopfTest:
+    """Test function for locating a Hopf point between rows ``a`` and ``b``.
+
+    The critical pair is the complex eigenvalue (``Im > 0``) nearest the imaginary axis
+    at each row; at a trial point at fraction ``t`` of the step, the tracked eigenvalue
+    is the complex one nearest ``(1 - t) lambda_a + t lambda_b``, and the test value is
+    its real part. ``omega`` is its imaginary part.
+    """
+
+    def __init__(self, eig_a: ComplexArray, eig_b: ComplexArray, imag_tol: float) -> None:
+        self.imag_tol = imag_tol
+        self.lam_a = critical_pair(eig_a, imag_tol)
+        self.lam_b = critical_pair(eig_b, imag_tol)
+
+    @property
+    def ok(self) -> bool:
+        """Both rows have a critical pair, with real parts of opposite signs."""
+        return (
+            self.lam_a is not None
+            and self.lam_b is not None
+            and self.lam_a.real * self.lam_b.real <= 0
+        )
+
+    def track(self, eigs: ComplexArray, t: float) -> complex | None:
+        """The tracked eigenvalue at fraction ``t`` in ``[0, 1]`` of the step."""
+        if self.lam_a is None or self.lam_b is None:
+            return None
+        target = (1 - t) * self.lam_a + t * self.lam_b
+        v = np.asarray(eigs, dtype=complex)
+        m = complex_mask(v, self.imag_tol)
+        if not np.any(m):
+            m = ~np.isnan(v) & (v.imag >= 0)
+            if not np.any(m):
+                return None
+        c = v[m]
+        return complex(c[int(np.argmin(np.abs(c - target)))])
+
+
+__all__ = [
+    "Event",
+    "HopfTest",
+    "bp_test",
+    "complex_mask",
+    "critical_pair",
+    "crossed",
+    "fold_test",
+]

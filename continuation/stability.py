@@ -1,0 +1,242 @@
+r"""Linear stability of equilibria: eigenvalues, saddle index, eigenvectors.
+
+An equilibrium ``x*`` of ``x' = f(x, p)`` is linearly stable when every eigenvalue of
+``J = df/dx(x*, p)`` has negative real part. The *saddle index* (``n_unstable``) is the
+number of eigenvalues with real part ``> eig_tol``.
+
+Dense problems get all ``n`` eigenvalues from LAPACK (``numpy.linalg.eigvals``). For a
+large sparse Jacobian (``n > dense_max``) only the ``n_eigs`` eigenvalues nearest the
+shift ``sigma`` are computed with ARPACK in shift-invert mode
+(``scipy.sparse.linalg.eigs(J, k, sigma=sigma)``); the other entries are NaN. This is
+how AUTO and BifurcationKit treat large problems: the eigenvalues that cross the
+imaginary axis first are the ones near the origin.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ._types import ComplexArray
+
+log = logging.getLogger(__name__)
+
+
+def sort_eigenvalues(vals: Any) -> ComplexArray:
+    """Sort by decreasing real part, then decreasing imaginary part; NaN last.
+
+    Parameters
+    ----------
+    vals : array_like, shape (k,)
+
+    Returns
+    -------
+    ndarray, shape (k,) complex
+    """
+    v = np.asarray(vals, dtype=complex).reshape(-1)
+    re = np.where(np.isnan(v.real), -np.inf, v.real)
+    im = np.where(np.isnan(v.imag), -np.inf, v.imag)
+    order = np.lexsort((-im, -re))
+    return v[order]
+
+
+def _sorted_pairs(vals: ComplexArray, vecs: Any) -> tuple[ComplexArray, Any]:
+    re, im = vals.real, vals.imag
+    order = np.lexsort((-im, -re))
+    return vals[order], (vecs[:, order] if vecs is not None else None)
+
+
+def eigenvalues(
+    J: Any,
+    *,
+    n_eigs: int | None = None,
+    sigma: float = 0.0,
+    dense_max: int = 100,
+    v0: Any = None,
+) -> ComplexArray:
+    """Eigenvalues of a dense or sparse square matrix, sorted by decreasing real part.
+
+    Parameters
+    ----------
+    J : ndarray or SciPy sparse matrix, shape (n, n)
+    n_eigs : int, optional
+        For sparse ``J`` with ``n > dense_max``: number of eigenvalues nearest
+        ``sigma`` to compute by shift-invert ARPACK (default 6).
+    sigma : float
+        Shift for the sparse solve.
+    dense_max : int
+        Sparse matrices up to this size are converted and solved densely.
+    v0 : ndarray, shape (n,), optional
+        ARPACK start vector (default: a fixed vector, for reproducibility).
+
+    Returns
+    -------
+    ndarray, shape (n,) complex
+        Sorted eigenvalues; NaN entries (at the end) for those not computed.
+    """
+    n = J.shape[0]
+    if n == 0:
+        return np.zeros(0, dtype=complex)
+    if sp.issparse(J):
+        k = int(n_eigs or 6)
+        if n > dense_max and k < n - 2:
+            vals = _sparse_eigs(J, k, sigma, v0)
+            if vals is not None:
+                out = np.full(n, np.nan + 0j)
+                out[: vals.size] = sort_eigenvalues(vals)
+                return out
+        J = J.toarray()
+    return sort_eigenvalues(np.linalg.eigvals(np.asarray(J, dtype=float)))
+
+
+def _sparse_eigs(J: Any, k: int, sigma: float, v0: Any) -> ComplexArray | None:
+    n = J.shape[0]
+    if v0 is None:
+        v0 = np.cos(np.arange(n) + 1.0)
+    for shift in (sigma, sigma + 1e-6 * (1.0 + abs(sigma))):
+        try:
+            vals = spla.eigs(
+                sp.csc_matrix(J),
+                k=k,
+                sigma=shift,
+                which="LM",
+                v0=v0,
+                tol=0,
+                return_eigenvectors=False,
+            )
+            break
+        except (RuntimeError, spla.ArpackError, spla.ArpackNoConvergence) as exc:
+            log.debug("sparse eigs failed at shift %g: %s", shift, exc)
+    else:
+        log.info("ARPACK failed; falling back to dense eigenvalues (n=%d)", n)
+        return None
+    vals = np.asarray(vals, dtype=complex)
+    # A real matrix has conjugate pairs: complete a pair cut at the k boundary.
+    tol = 1e-8 * max(1.0, float(np.max(np.abs(vals))))
+    missing = [
+        np.conj(v)
+        for v in vals
+        if abs(v.imag) > tol and np.min(np.abs(vals - np.conj(v))) > tol * 10
+    ]
+    if missing and vals.size + len(missing) <= n:
+        vals = np.concatenate([vals, missing])
+    return vals
+
+
+def count_unstable(eigs: Any, eig_tol: float = 1e-10, imag_tol: float = 1e-8) -> tuple[int, int]:
+    """Count unstable eigenvalues: ``(n_real, n_complex_pairs)``.
+
+    An eigenvalue is unstable when ``Re > eig_tol``; it is complex when
+    ``|Im| > imag_tol * max(1, |lambda|)``. NaN entries are ignored. The saddle index is
+    ``n_real + 2 * n_complex_pairs`` (pairs are counted by their member with
+    ``Im > 0``).
+    """
+    v = np.asarray(eigs, dtype=complex).reshape(-1)
+    v = v[~np.isnan(v)]
+    unstable = v.real > eig_tol
+    cplx = np.abs(v.imag) > imag_tol * np.maximum(1.0, np.abs(v))
+    n_real = int(np.count_nonzero(unstable & ~cplx))
+    n_pairs = int(np.count_nonzero(unstable & cplx & (v.imag > 0)))
+    return n_real, n_pairs
+
+
+def n_unstable(eigs: Any, eig_tol: float = 1e-10) -> int:
+    """Saddle index: number of eigenvalues with real part ``> eig_tol`` (NaN ignored)."""
+    v = np.asarray(eigs, dtype=complex).reshape(-1)
+    return int(np.count_nonzero(v.real[~np.isnan(v)] > eig_tol))
+
+
+@dataclass(frozen=True, eq=False)
+class EigenResult:
+    """Eigen-decomposition at one point.
+
+    Attributes
+    ----------
+    values : ndarray, shape (n,) complex
+        Sorted by decreasing real part.
+    vectors : ndarray, shape (n, n) complex or None
+        Column ``k`` is the unit eigenvector of ``values[k]``.
+    n_unstable : int
+        Number of values with ``Re > eig_tol``.
+    """
+
+    values: ComplexArray
+    vectors: Any
+    n_unstable: int
+
+    @property
+    def stable(self) -> bool:
+        """True when no eigenvalue has positive real part."""
+        return self.n_unstable == 0
+
+
+def _jacobian_of(obj: Any, x: Any, p: Any) -> Any:
+    if hasattr(obj, "state_names") and hasattr(obj, "param_names") and hasattr(obj, "f"):
+        # a DynamicalSystem: p is the full parameter vector / Params / mapping
+        xv = obj.check_state(x, "x") if hasattr(obj, "check_state") else np.asarray(x, float)
+        pv = obj.check_params(p, "p") if hasattr(obj, "check_params") else np.asarray(p, float)
+        return obj.jacobian(xv, pv)
+    if hasattr(obj, "residual") and hasattr(obj, "jacobian"):
+        xv = np.asarray(x, dtype=float)
+        if hasattr(obj, "system") and getattr(obj, "jacobian_is_stability", False):
+            return obj.system.jacobian(xv, obj.param_vector(float(p)))
+        if not getattr(obj, "jacobian_is_stability", False):
+            raise ValueError(
+                "`problem_or_system`: this problem's stability is not the spectrum of its "
+                "Jacobian; call its `stability` method instead"
+            )
+        J = obj.jacobian(xv, float(p))
+        return J.toarray() if sp.issparse(J) else J
+    raise ValueError(
+        f"`problem_or_system` must be a System or a ContinuationProblem, got {type(obj).__name__}"
+    )
+
+
+def eigen(
+    problem_or_system: Any,
+    x: Any,
+    p: Any,
+    vectors: bool = True,
+    *,
+    eig_tol: float = 1e-10,
+) -> EigenResult:
+    """All eigenvalues (and unit eigenvectors) of the Jacobian at ``(x, p)``.
+
+    Parameters
+    ----------
+    problem_or_system : System or EquilibriumProblem
+        For a system, ``p`` is the full parameter vector (array, Params or mapping);
+        for an equilibrium problem, ``p`` is the value of its free parameter.
+    x : ndarray, shape (n,)
+    p : see above
+    vectors : bool
+        Also return eigenvectors (dense ``numpy.linalg.eig``).
+    eig_tol : float
+        Threshold for counting unstable eigenvalues.
+
+    Returns
+    -------
+    EigenResult
+    """
+    J = np.asarray(_jacobian_of(problem_or_system, x, p), dtype=float)
+    if vectors:
+        vals, vecs = np.linalg.eig(J)
+        vals, vecs = _sorted_pairs(np.asarray(vals, complex), np.asarray(vecs, complex))
+    else:
+        vals, vecs = sort_eigenvalues(np.linalg.eigvals(J)), None
+    return EigenResult(values=vals, vectors=vecs, n_unstable=n_unstable(vals, eig_tol))
+
+
+__all__ = [
+    "EigenResult",
+    "count_unstable",
+    "eigen",
+    "eigenvalues",
+    "n_unstable",
+    "sort_eigenvalues",
+]

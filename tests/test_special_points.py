@@ -1,0 +1,212 @@
+"""Special points of normal forms, located against their exact positions (mu = 0)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import (
+    fold_normal_form,
+    hopf_normal_form,
+    periodic_sine,
+    pitchfork,
+    pitchfork_2d,
+    transcritical,
+)
+
+from continuation.api import continue_equilibria
+from continuation.branch import SpecialKind
+from continuation.driver import continue_branch
+from continuation.events import Event
+from continuation.problem import EquilibriumProblem
+from continuation.settings import ContinuationSettings
+from continuation.status import Status
+
+TOL = 1e-8  # required location accuracy on normal forms
+
+
+def assert_invariants(br, tol=1e-9):
+    """Branch invariants that must hold on every run."""
+    prob = br.problem
+    for k in range(len(br)):
+        assert np.max(np.abs(prob.residual(br.x[k], br.p[k]))) < tol
+    s = br.arclength
+    sp_idx = {sp.index for sp in br.special_points}
+    for k in range(len(br) - 1):
+        if br.n_unstable[k] != br.n_unstable[k + 1]:
+            assert k in sp_idx, f"saddle index changes at row {k} without a special point"
+    for sp in br.special_points:
+        if sp.located:
+            assert s[sp.index] - 1e-12 <= sp.s <= s[sp.index + 1] + 1e-12
+            assert np.max(np.abs(prob.residual(sp.x, sp.p))) < tol
+            if sp.kind is not SpecialKind.FOLD:
+                lo, hi = sorted(sp.bracket)
+                assert lo - 1e-12 <= sp.p <= hi + 1e-12
+        assert sp.bracket == (br.p[sp.index], br.p[sp.index + 1])
+
+
+def test_fold_normal_form_located():
+    br = continue_equilibria(fold_normal_form(), [1.0], {"mu": 1.0}, "mu", p_min=-1.0, p_max=2.0)
+    folds = br.find("fold")
+    assert len(folds) == 1 and len(br.special_points) == 1
+    f = folds[0]
+    assert f.located and f.label == "F1"
+    assert abs(f.p) < TOL and abs(f.x[0]) < 1e-4  # x ~ sqrt(error in p)
+    # the upper branch x = sqrt(mu) is stable, the lower one unstable
+    assert np.all(br.stable[br.x[:, 0] > 1e-6])
+    assert np.all(~br.stable[br.x[:, 0] < -1e-6])
+    assert f.delta_unstable in ((1, 0), (-1, 0))
+    assert br.status is Status.PARAM_BOUND
+    assert br.p[0] == pytest.approx(2.0, abs=1e-12) and br.p[-1] == pytest.approx(2.0, abs=1e-12)
+    assert br.newton_iters.mean() < 4
+    assert_invariants(br)
+
+
+def test_fold_start_guess_is_corrected():
+    br = continue_equilibria(
+        fold_normal_form(), [1.3], {"mu": 1.0}, "mu", p_max=1.5, direction="forward"
+    )
+    assert br.x[0, 0] == pytest.approx(1.0, abs=1e-12)
+    assert br.p[0] == 1.0
+
+
+def test_hopf_normal_form_located_with_omega():
+    br = continue_equilibria(
+        hopf_normal_form(),
+        [0.0, 0.0],
+        {"mu": -1.0},
+        "mu",
+        p_min=-1.0,
+        p_max=1.0,
+        direction="forward",
+    )
+    (h,) = br.find("hopf")
+    assert h.located and abs(h.p) < TOL
+    assert h.data["omega"] == pytest.approx(1.0, abs=1e-10)
+    assert h.delta_unstable == (0, 1)
+    assert br.n_unstable[0] == 0 and br.n_unstable[-1] == 2
+    assert_invariants(br)
+
+
+def test_hopf_normal_form_shifted():
+    """Hopf at mu=0.3137 for the normal form shifted in mu (not a grid point)."""
+    from continuation.system import System
+
+    def rhs(x, p, ops):
+        m = p[0] - 0.3137
+        r2 = x[0] ** 2 + x[1] ** 2
+        return ops.stack([m * x[0] - 2.5 * x[1] - x[0] * r2, 2.5 * x[0] + m * x[1] - x[1] * r2])
+
+    br = continue_equilibria(
+        System(rhs, ("x", "y"), ("mu",)),
+        [0.0, 0.0],
+        [-0.77],
+        "mu",
+        p_max=1.0,
+        direction="forward",
+        ds=0.037,
+    )
+    (h,) = br.find("hopf")
+    assert abs(h.p - 0.3137) < TOL and h.data["omega"] == pytest.approx(2.5, abs=1e-10)
+
+
+@pytest.mark.parametrize("factory", [transcritical, pitchfork])
+@pytest.mark.parametrize("ds", [0.1, 0.037])
+def test_branch_points_on_trivial_branch(factory, ds):
+    br = continue_equilibria(
+        factory(),
+        [0.0],
+        {"mu": -1.0},
+        "mu",
+        p_min=-1.0,
+        p_max=1.0,
+        direction="forward",
+        ds=ds,
+        ds_max=ds,
+    )
+    bps = br.find("bp")
+    assert len(bps) == 1 and not br.find("fold")
+    assert bps[0].located and abs(bps[0].p) < TOL
+    assert bps[0].delta_unstable == (1, 0)
+    assert_invariants(br)
+
+
+def test_pitchfork_jumped_by_large_step_is_detected():
+    """A symmetric step across mu = 0 (rows at -0.5, +0.5) still finds the BP."""
+    sys = pitchfork_2d()
+    prob = EquilibriumProblem(sys, sys.params(mu=-0.5), "mu")
+    st = ContinuationSettings(ds=0.5, ds_max=0.5, ds_min=1e-3, p_min=-0.6, p_max=0.6)
+    br = continue_branch(prob, [0.0, 0.0], -0.5, settings=st)
+    (bp,) = br.find("bp")
+    assert bp.located and abs(bp.p) < TOL
+    assert_invariants(br)
+
+
+def test_transcritical_nontrivial_branch():
+    """Along x = mu the BP is at (0, 0) too; the branch crosses the trivial one."""
+    br = continue_equilibria(
+        transcritical(), [-0.8], {"mu": -0.8}, "mu", p_min=-1.0, p_max=1.0, direction="forward"
+    )
+    (bp,) = br.find("bp")
+    assert abs(bp.p) < TOL and abs(bp.x[0]) < TOL
+    np.testing.assert_allclose(br.x[:, 0], br.p, atol=1e-9)
+
+
+def test_user_event_located_and_terminal():
+    ev = Event("x_half", lambda x, p: x[0] - 0.5, direction="down")
+    br = continue_equilibria(
+        fold_normal_form(),
+        [1.0],
+        {"mu": 1.0},
+        "mu",
+        p_min=-1.0,
+        p_max=2.0,
+        events=[ev],
+        direction="forward",
+        ds=-0.01,
+    )
+    (e,) = br.find("x_half")
+    assert e.kind is SpecialKind.USER and e.located
+    assert e.p == pytest.approx(0.25, abs=1e-12) and e.x[0] == pytest.approx(0.5, abs=1e-12)
+    term = Event("stop", lambda x, p: x[0] + 0.5, terminal=True)
+    br2 = continue_equilibria(
+        fold_normal_form(),
+        [1.0],
+        {"mu": 1.0},
+        "mu",
+        p_min=-1.0,
+        p_max=2.0,
+        events=[term],
+        direction="forward",
+        ds=-0.01,
+    )
+    assert br2.status is Status.EVENT
+    assert br2.x[-1, 0] == pytest.approx(-0.5, abs=1e-12)
+    assert [sp.kind.value for sp in br2.special_points] == ["fold", "user"]
+    assert_invariants(br2)
+
+
+def test_event_direction_filter():
+    up = Event("up", lambda x, p: x[0] - 0.5, direction="up")
+    br = continue_equilibria(
+        fold_normal_form(),
+        [1.0],
+        {"mu": 1.0},
+        "mu",
+        p_min=-1.0,
+        p_max=2.0,
+        events=[up],
+        direction="forward",
+        ds=-0.01,
+    )
+    assert not br.find("up")  # x decreases along this branch
+
+
+def test_periodic_branch_closes_with_two_folds():
+    sys = periodic_sine()
+    br = continue_equilibria(sys, [0.0], {"mu": 0.0}, "mu", direction="forward", max_steps=2000)
+    assert br.status is Status.CLOSED_LOOP
+    folds = br.find("fold")
+    assert len(folds) == 2
+    ps = sorted(f.p for f in folds)
+    assert ps[0] == pytest.approx(-1.0, abs=1e-10) and ps[1] == pytest.approx(1.0, abs=1e-10)
+    assert_invariants(br)
