@@ -3,16 +3,40 @@
 Knows nothing of ships. The public API is exactly what this module exports.
 """
 
+from .algorithms import PALC, ContinuationAlgorithm, Natural
+from .api import continue_equilibria
+from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
+from .driver import continue_branch
+from .equilibria import EquilibriumResult, solve_equilibrium, unique_equilibria
 from .errors import ContinuationError, ConvergenceError, ModelError
+from .events import Event
 from .newton import NewtonResult, newton
 from .ops import CASADI_OPS, NUMPY_OPS, Ops
 from .params import Params
 from .problem import ContinuationProblem, EquilibriumProblem
 from .settings import ContinuationSettings, DetectionSettings, NewtonSettings
+from .stability import EigenResult, count_unstable, eigen, eigenvalues
 from .status import Status
 from .system import DynamicalSystem, System, check_jacobian
 
 __all__ = [
+    "PALC",
+    "Branch",
+    "BranchPoint",
+    "ContinuationAlgorithm",
+    "EigenResult",
+    "EquilibriumResult",
+    "Event",
+    "Natural",
+    "SpecialKind",
+    "SpecialPoint",
+    "continue_branch",
+    "continue_equilibria",
+    "count_unstable",
+    "eigen",
+    "eigenvalues",
+    "solve_equilibrium",
+    "unique_equilibria",
     "CASADI_OPS",
     "NUMPY_OPS",
     "ContinuationError",

@@ -53,7 +53,7 @@ def compute(out: Path) -> dict[str, Any]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from continuation import continue_equilibria
+    from continuation import Event, continue_equilibria
     from continuation.plotting import plot_branch
 
     out.mkdir(parents=True, exist_ok=True)
@@ -66,11 +66,12 @@ def compute(out: Path) -> dict[str, Any]:
         {"lam": 0.0},
         "lam",
         ds=0.05,
-        ds_max=0.5,
+        ds_max=0.2,
         p_min=0.0,
         p_max=4.0,
         direction="forward",
         max_steps=300,
+        events=(Event("max_u_10", lambda x, p: float(np.max(x)) - 10.0, terminal=True),),
     )
     br.save(out / "bratu50_branch.npz")
     br.to_csv(out / "bratu50_branch.csv")
@@ -100,13 +101,13 @@ def compute(out: Path) -> dict[str, Any]:
     }
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    plot_branch(axes[0], br, y=lambda x: float(np.max(x)))
+    plot_branch(axes[0], br, y=lambda x, p: float(np.max(x)))
     axes[0].set_xlabel("lambda")
     axes[0].set_ylabel("max u")
     axes[0].set_title("Bratu problem, N = 50 (fold)")
-    plot_branch(axes[1], bb, y="x")
+    plot_branch(axes[1], bb, y="y")
     axes[1].set_xlabel("B")
-    axes[1].set_ylabel("x")
+    axes[1].set_ylabel("y")
     axes[1].set_title("Brusselator, A = 1 (Hopf at B = 2)")
     fig.tight_layout()
     fig.savefig(out / "demo.png", dpi=120)
