@@ -22,13 +22,19 @@ from typing import Any, Literal
 import numpy as np
 
 from ._types import ComplexArray, FloatArray
-from .algorithms.base import ContinuationAlgorithm, PointInfo, adapt_ds, theta_norm
+from .algorithms.base import (
+    ContinuationAlgorithm,
+    CorrectorResult,
+    PointInfo,
+    adapt_ds,
+    correct,
+    theta_norm,
+)
 from .algorithms.palc import PALC
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .errors import ContinuationError, ConvergenceError
 from .events import Event, HopfTest, bp_test, crossed
 from .locate import LocateResult, locate_zero
-from .newton import newton
 from .settings import ContinuationSettings
 from .stability import count_unstable, eigenvalues, sort_eigenvalues
 from .status import Status
@@ -635,12 +641,7 @@ def continue_branch(
             f"`p0`={p0} lies outside [p_min, p_max] = [{settings.p_min}, {settings.p_max}]"
         )
 
-    start = newton(
-        lambda zz: problem.residual(zz, p0),
-        lambda zz: problem.jacobian(zz, p0),
-        z,
-        settings.newton,
-    )
+    start = _correct_start(problem, z, p0, settings)
     if not start.converged:
         msg = f"start point did not converge at {problem.free}={p0:.10g}: {start.message}"
         log.warning(msg)
@@ -654,7 +655,7 @@ def continue_branch(
 
     def run_dir(sign: float) -> _Run:
         st = dataclasses.replace(settings, ds=sign * ds_abs)
-        return _run(_Context(*ctx_args, st, events, progress), start.z, p0, start.iterations)
+        return _run(_Context(*ctx_args, st, events, progress), start.z, p0, start.iters)
 
     if direction == "both":
         back = run_dir(-sgn)
@@ -674,6 +675,19 @@ def continue_branch(
         status, message = one.status, one.message
     br = _make_branch(problem, rows, ds, specials, status, message, settings, p0, n, events)
     return _finish(br, throw)
+
+
+def _correct_start(
+    problem: Any, z: FloatArray, p0: float, settings: ContinuationSettings
+) -> CorrectorResult:
+    """Newton's method on ``G(z, p0) = 0`` at fixed ``p0`` (bordered with ``e_p``)."""
+    u0 = np.append(z, p0)
+    e_p = np.zeros(u0.size)
+    e_p[-1] = 1.0
+    res = correct(problem, u0, u0, e_p, 0.0, settings.newton)
+    if not res.converged and not res.message:
+        res.message = "Newton did not converge"
+    return res
 
 
 def _combine(back: _Run, fwd: _Run) -> tuple[Status, str]:

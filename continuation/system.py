@@ -80,6 +80,31 @@ def _names(arg: Sequence[str] | str, what: str) -> tuple[str, ...]:
     return names
 
 
+class _BufferedFunction:
+    """Evaluate a CasADi ``Function`` of dense vector inputs through its buffer API.
+
+    ``Function.buffer()`` evaluates into pre-bound NumPy memory, avoiding the DM
+    conversions of ``Function.__call__`` (tens of microseconds per call, which dominate
+    continuation steps of small systems). Each call returns fresh copies of the
+    outputs' non-zeros (column-major for dense outputs). Not thread-safe.
+    """
+
+    def __init__(self, fn: ca.Function) -> None:
+        self._buf, self._eval = fn.buffer()
+        self._args = [np.zeros(fn.nnz_in(i)) for i in range(fn.n_in())]
+        self._res = [np.zeros(fn.nnz_out(i)) for i in range(fn.n_out())]
+        for i, a in enumerate(self._args):
+            self._buf.set_arg(i, memoryview(a))
+        for i, r in enumerate(self._res):
+            self._buf.set_res(i, memoryview(r))
+
+    def __call__(self, *args: Any) -> tuple[FloatArray, ...]:
+        for a, v in zip(self._args, args, strict=True):
+            a[:] = np.ravel(v)
+        self._eval()
+        return tuple(r.copy() for r in self._res)
+
+
 class System:
     r"""An autonomous ODE :math:`\dot x = f(x, p)` with named states and parameters.
 
@@ -301,21 +326,36 @@ class System:
         if self._ca is None:
             J = self.jacobian(x, p)
             return self.f(x, p), (sp.csc_matrix(J) if sparse else J), self.dfdp(x, p)
-        fn = getattr(self, "_ca_lin", None)
-        if fn is None:
-            X = ca.SX.sym("x", self.n_states)
-            P = ca.SX.sym("p", self.n_params)
-            F = self.symbolic(X, P)
-            Jp = ca.jacobian(F, P) if self.n_params else ca.SX(self.n_states, 0)
-            fn = ca.Function("lin", [X, P], [F, ca.jacobian(F, X), Jp])
-            self._ca_lin = fn
-        f, J, Jp = fn(x, p)
-        Jout = sp.csc_matrix(J.sparse()) if sparse else J.full()
-        return (
-            f.full().reshape(-1),
-            Jout,
-            Jp.full().reshape(self.n_states, self.n_params),
-        )
+        lin = getattr(self, "_ca_lin", None)
+        if lin is None:
+            lin = self._ca_lin = self._build_linearize()
+        n, m = self.n_states, self.n_params
+        if sparse:
+            f, nz, Jp = lin["sparse"](x, p)
+            Jout: Any = sp.csc_matrix((nz, lin["indices"], lin["indptr"]), shape=(n, n))
+        else:
+            f, Jd, Jp = lin["dense"](x, p)
+            Jout = Jd.reshape(n, n, order="F")
+        return f, Jout, Jp.reshape(n, m, order="F")
+
+    def _build_linearize(self) -> dict[str, Any]:
+        X = ca.SX.sym("x", self.n_states)
+        P = ca.SX.sym("p", self.n_params)
+        F = self.symbolic(X, P)
+        J = ca.jacobian(F, X)
+        Jp = ca.jacobian(F, P) if self.n_params else ca.SX(self.n_states, 0)
+        # sparse variant: the Jacobian leaves as its vector of structural non-zeros
+        # (CSC order), so a SciPy matrix is built without converting a CasADi DM
+        nz = ca.vertcat(*J.nonzeros()) if J.nnz() else ca.SX(0, 1)
+        spy = J.sparsity()
+        return {
+            "dense": _BufferedFunction(
+                ca.Function("lin", [X, P], [F, ca.densify(J), ca.densify(Jp)])
+            ),
+            "sparse": _BufferedFunction(ca.Function("lin_nz", [X, P], [F, nz, ca.densify(Jp)])),
+            "indptr": np.asarray(spy.colind(), dtype=np.int32),
+            "indices": np.asarray(spy.row(), dtype=np.int32),
+        }
 
     def casadi_functions(self) -> dict[str, ca.Function]:
         """The compiled CasADi functions ``{"f", "jac", "dfdp"}`` (x, p) -> value."""

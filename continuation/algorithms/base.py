@@ -81,9 +81,27 @@ def _arange(n: int) -> Any:
     return r
 
 
+_PARITY_CACHE: dict[bytes, int] = {}
+
+
 def _perm_parity(perm: Any) -> int:
-    """Sign (+1/-1) of the permutation ``perm`` (array of images of 0..n-1)."""
+    """Sign (+1/-1) of the permutation ``perm`` (array of images of 0..n-1).
+
+    Cached: SuperLU's column ordering depends only on the sparsity pattern and the row
+    pivoting rarely changes along a branch, so the same permutations recur.
+    """
     perm = np.asarray(perm)
+    key = perm.tobytes()
+    sign = _PARITY_CACHE.get(key)
+    if sign is None:
+        sign = _perm_parity_uncached(perm)
+        if len(_PARITY_CACHE) > 64:
+            _PARITY_CACHE.clear()
+        _PARITY_CACHE[key] = sign
+    return sign
+
+
+def _perm_parity_uncached(perm: Any) -> int:
     n = perm.size
     seen = np.zeros(n, dtype=bool)
     sign = 1
@@ -145,39 +163,53 @@ class BorderedLU:
         If ``M`` is exactly singular or the factorisation fails.
     """
 
-    __slots__ = ("sparse", "_lu", "sign", "logabsdet", "n")
+    __slots__ = ("sparse", "_lu", "_det", "n")
 
     def __init__(self, Gz: Any, Gp: FloatArray, c: FloatArray) -> None:
         n = Gz.shape[0]
         self.n = n + 1
         self.sparse = sp.issparse(Gz)
+        self._det: tuple[float, float] | None = None
         if self.sparse:
             M = assemble_bordered_csc(Gz, Gp, c)
             try:
-                lu = spla.splu(M)
+                self._lu = spla.splu(M)
             except RuntimeError as exc:
                 raise np.linalg.LinAlgError(str(exc)) from exc
-            d = lu.U.diagonal()
-            sign = float(np.prod(np.sign(d)))
-            sign *= _perm_parity(lu.perm_r) * _perm_parity(lu.perm_c)
-            self._lu = lu
         else:
             M = np.empty((n + 1, n + 1))
             M[:n, :n] = Gz
             M[:n, n] = Gp
             M[n, :] = c
             lu, piv, info = _getrf(M)
-            if info < 0:
-                raise np.linalg.LinAlgError(f"LAPACK getrf failed (info={info})")
-            d = np.diag(lu)
-            swaps = int(np.count_nonzero(piv != _arange(n + 1)))
-            sign = float(np.prod(np.sign(d))) * (-1.0 if swaps % 2 else 1.0)
+            if info != 0:
+                raise np.linalg.LinAlgError(f"singular bordered matrix (getrf info={info})")
             self._lu = (lu, piv)
-        with np.errstate(divide="ignore"):
-            self.logabsdet = float(np.sum(np.log(np.abs(d))))
-        if sign == 0.0 or not np.all(np.isfinite(d)):
-            raise np.linalg.LinAlgError("singular bordered matrix")
-        self.sign = sign
+
+    def _determinant(self) -> tuple[float, float]:
+        if self._det is None:
+            if self.sparse:
+                d = self._lu.U.diagonal()
+                parity = _perm_parity(self._lu.perm_r) * _perm_parity(self._lu.perm_c)
+            else:
+                lu, piv = self._lu
+                d = lu.diagonal()
+                parity = -1 if np.count_nonzero(piv != _arange(self.n)) % 2 else 1
+            sign = float(parity * np.prod(np.sign(d)))
+            with np.errstate(divide="ignore"):
+                logabsdet = float(np.sum(np.log(np.abs(d))))
+            self._det = (sign, logabsdet)
+        return self._det
+
+    @property
+    def sign(self) -> float:
+        """Sign of ``det M`` (+1, -1, or 0 if singular)."""
+        return self._determinant()[0]
+
+    @property
+    def logabsdet(self) -> float:
+        """``log |det M|``."""
+        return self._determinant()[1]
 
     def solve(self, b: FloatArray) -> FloatArray:
         """Solve ``M x = b``; raises LinAlgError on a non-finite result."""
@@ -373,10 +405,13 @@ def correct(
     ``c . (u - u_ref) = sigma`` (the pseudo-arclength condition for
     ``c = w o tau_ref``; natural stepping for ``c = e_p``), from ``u_pred``.
 
-    Converged when ``max |G| <= newton.tol`` and the last step is below
-    ``newton.step_tol * (1 + max |u|)``. Stops early (not converged) when the residual
-    becomes non-finite, grows by a factor ``1e4`` over its initial value, or the
-    bordered matrix is singular.
+    Converged when the last step is below ``newton.step_tol * (1 + max |u|)`` and
+    either ``max |G| <= newton.tol`` or the residual has stagnated at its round-off
+    floor (it did not decrease by a factor 2 in the last iteration while the step was
+    already that small: more iterations cannot improve the point, e.g. for finely
+    discretised PDEs whose Jacobian entries are large). Stops early (not converged) when
+    the residual becomes non-finite, grows by a factor ``1e4`` over its initial value,
+    or the bordered matrix is singular.
     """
     n = u_pred.size - 1
     u = np.array(u_pred, dtype=float)
@@ -384,13 +419,25 @@ def correct(
     h = float(np.dot(c, u - u_ref)) - sigma
     rn = max(float(np.max(np.abs(lin[0]))) if n else 0.0, abs(h))
     rn0 = rn
+    rn_prev = math.inf
     step = math.inf
     it = 0
+    lu: BorderedLU | None = None
     while True:
         if not math.isfinite(rn):
             return CorrectorResult(False, u[:n], float(u[n]), None, it, rn, "non-finite residual")
-        if rn <= newton.tol and step <= newton.step_tol * (1.0 + float(np.max(np.abs(u)))):
+        step_ok = newton.step_tol * (1.0 + float(np.max(np.abs(u))))
+        if step <= step_ok and (rn <= newton.tol or rn > 0.5 * rn_prev):
             return CorrectorResult(True, u[:n], float(u[n]), lin, it, rn)
+        if rn <= newton.tol and lu is not None:
+            # the next Newton correction, estimated with the last factorisation (a chord
+            # step: first-order accurate), is already below step_tol: converged
+            try:
+                est = float(np.max(np.abs(lu.solve(np.append(lin[0], h)))))
+            except np.linalg.LinAlgError:
+                est = math.inf
+            if est <= step_ok:
+                return CorrectorResult(True, u[:n], float(u[n]), lin, it, rn)
         if it >= newton.max_iter:
             return CorrectorResult(False, u[:n], float(u[n]), lin, it, rn, "max_iter reached")
         if it >= 2 and rn > 1e4 * max(rn0, newton.tol):
@@ -406,6 +453,7 @@ def correct(
         u -= du
         it += 1
         step = float(np.max(np.abs(du)))
+        rn_prev = rn
         lin = linearize(problem, u[:n], float(u[n]))
         h = float(np.dot(c, u - u_ref)) - sigma
         rn = max(float(np.max(np.abs(lin[0]))) if n else 0.0, abs(h))
