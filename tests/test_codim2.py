@@ -133,7 +133,7 @@ class TestAugmentedJacobians:
     def test_hopf_jacobian(self, system, free1, free2, params):
         n = system.n_states
         c = np.linspace(1.0, 2.0, n)
-        prob = HopfProblem(system, system.params(**params), free1, free2, c=c)
+        prob = HopfProblem(system, system.params(**params), free1, free2, c=c, sigma=0.7)
         rng = np.random.default_rng(2)
         z = rng.normal(size=prob.n_unknowns) * 0.5
         z[:n] = np.abs(z[:n]) * 0.3
@@ -141,7 +141,9 @@ class TestAugmentedJacobians:
         assert ez < 1e-8 and ep < 1e-8
 
     def test_linearize_matches_parts(self):
-        prob = HopfProblem(BRUSSELATOR, BRUSSELATOR.params(A=1.0, B=2.0), "B", "A", c=[1.0, 0.5])
+        prob = HopfProblem(
+            BRUSSELATOR, BRUSSELATOR.params(A=1.0, B=2.0), "B", "A", c=[1.0, 0.5], sigma=0.3
+        )
         z = np.array([1.1, 1.9, 2.2, 0.9, 0.3, -0.7])
         G, Gz, Gp = prob.linearize(z, 1.1)
         np.testing.assert_allclose(G, prob.residual(z, 1.1), rtol=1e-14, atol=1e-14)

@@ -149,7 +149,7 @@ class AugmentedProblem:
         return np.asarray(self.system.jacobian(self.state(z), self.param_vector(z, p)))
 
     def _c(self) -> FloatArray:
-        return np.zeros(self.n)
+        return np.zeros(self.n + 1)
 
     # ----------------------------------------------------------------- protocol
     def residual(self, z: FloatArray, p: float) -> FloatArray:
@@ -200,6 +200,73 @@ class AugmentedProblem:
         """``{free1: p1}``; subclasses add more."""
         return {self.free1: self.p1(z)}
 
+    # ----------------------------------------------------------------- starting
+    @classmethod
+    def from_state(cls, *args: Any, **kwargs: Any) -> AugmentedProblem:  # pragma: no cover
+        """Build from a state at the codim-1 point (implemented by subclasses)."""
+        raise NotImplementedError
+
+    @classmethod
+    def from_point(
+        cls,
+        branch: Any,
+        sp: Any,
+        free2: str,
+        *,
+        refine: bool = True,
+        newton_settings: NewtonSettings | None = None,
+        sparse: bool | None = None,
+    ) -> AugmentedProblem:
+        """Start the curve at a located special point of a one-parameter branch.
+
+        Parameters
+        ----------
+        branch : Branch
+            A branch of equilibria (its ``problem`` an ``EquilibriumProblem``).
+        sp : SpecialPoint
+            A located point of ``branch`` of this problem's kind (``"fold"`` for
+            :class:`FoldProblem`, ``"hopf"`` for :class:`HopfProblem`).
+        free2 : str
+            The second parameter, continued along the curve; the branch's free
+            parameter becomes ``free1``.
+        refine : bool
+            Newton-correct the augmented system at the start (raises
+            :class:`~continuation.errors.ConvergenceError` on failure).
+        newton_settings : NewtonSettings, optional
+        sparse : bool or None
+
+        Returns
+        -------
+        FoldProblem or HopfProblem
+            With ``z0`` and ``p0 = params[free2]`` set.
+
+        Raises
+        ------
+        ValueError
+            If ``branch`` has no equilibrium problem, ``sp`` is not a located point
+            of this kind on ``branch``, or ``free2`` is unknown or equals the
+            branch's free parameter.
+        """
+        system, params, free1 = _check_start(branch, sp, free2, cls.kind)
+        params = params.replace(**{free1: float(sp.p)})
+        kwargs: dict[str, Any] = {}
+        if cls.kind == "hopf":
+            om = dict(getattr(sp, "data", {}) or {}).get("omega")
+            if om is not None and np.isfinite(om) and om > 0:
+                kwargs["omega"] = float(om)
+        x = np.asarray(sp.x, dtype=float)
+        return cls.from_state(
+            system,
+            params,
+            free1,
+            free2,
+            x,
+            refine=refine,
+            newton_settings=newton_settings,
+            sparse=sparse,
+            **kwargs,
+        )
+
     # ----------------------------------------------------------------- solving
     def solve(
         self,
@@ -243,6 +310,41 @@ class AugmentedProblem:
             settings,
             throw=throw,
         )
+
+
+def _check_start(branch: Any, sp: Any, free2: str, kind: str) -> tuple[Any, Params, str]:
+    """Validate ``(branch, sp, free2)``; return ``(system, params, free1)``."""
+    problem = getattr(branch, "problem", None)
+    if problem is None or not all(hasattr(problem, a) for a in ("system", "params", "free")):
+        raise ValueError(
+            "`branch` must be a branch of equilibria computed in this session "
+            "(its `problem` must be an EquilibriumProblem with `system`, `params`, `free`)"
+        )
+    if not any(s is sp for s in getattr(branch, "special_points", ())):
+        raise ValueError("`sp` is not one of `branch.special_points`")
+    sp_kind = str(getattr(sp.kind, "value", sp.kind))
+    if sp_kind != kind:
+        raise ValueError(f"`sp` must be a {kind} point, got a {sp_kind!r} point")
+    if not sp.located:
+        raise ValueError(
+            f"`sp` ({sp_kind} between p={sp.bracket[0]:.6g} and {sp.bracket[1]:.6g}) was "
+            "not located; locate it first (e.g. tighter `detect.tol`, smaller `ds`)"
+        )
+    system = problem.system
+    names = tuple(system.param_names)
+    if free2 not in names:
+        raise ValueError(f"`free2` must be one of {names}, got {free2!r}")
+    if free2 == problem.free:
+        raise ValueError(f"`free2` must differ from the branch's free parameter {problem.free!r}")
+    if np.asarray(sp.x).shape != (len(system.state_names),):
+        raise ValueError(
+            f"`sp.x` must be a state of shape ({len(system.state_names)},), "
+            f"got {np.asarray(sp.x).shape}"
+        )
+    params = problem.params
+    if not isinstance(params, Params):
+        params = Params(names, np.asarray(params, dtype=float))
+    return system, params, problem.free
 
 
 def null_vector(J: FloatArray) -> FloatArray:

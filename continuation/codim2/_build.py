@@ -8,9 +8,9 @@ Moore-Spence and Roose-Hlavacek systems need). For NumPy-only systems the same
 recipe is evaluated numerically and differentiated by central differences.
 
 ``P`` is the full parameter vector (its entries at the two free positions are
-ignored) and ``c`` the normalisation vector of the Hopf system, so they stay
-inputs of the compiled functions and a problem can change them without a new
-trace.
+ignored) and ``c`` the normalisation data of the Hopf system (vector and target
+value, shape ``(n+1,)``), so they stay inputs of the compiled functions and a
+problem can change them without a new trace.
 """
 
 from __future__ import annotations
@@ -59,6 +59,9 @@ def fold_recipe(n: int, x: Any, z: Any, f: Any, J: Any, c: Any, vo: _VecOps) -> 
     (Moore & Spence 1980, "The calculation of turning points of nonlinear
     equations", SIAM J. Numer. Anal. 17, 567-576; here with the normalisation
     ``|v| = 1``, which never degenerates along the curve.) ``c`` is unused.
+
+    The system is regular at nondegenerate folds, and also at cusp and
+    Bogdanov-Takens points (there ``J`` still has a one-dimensional kernel).
     """
     v = z[n + 1 : 2 * n + 1]
     return vo.vertcat(f, vo.matvec(J, v), 0.5 * (vo.dot(v, v) - 1.0))
@@ -69,21 +72,40 @@ def hopf_recipe(n: int, x: Any, z: Any, f: Any, J: Any, c: Any, vo: _VecOps) -> 
 
     .. math::
 
-        G = \begin{pmatrix} f \\ (J^2 + \kappa I)\, v \\ c^T v - 1 \\ c^T J v
-            \end{pmatrix}
+        G = \begin{pmatrix} f \\ (J^2 + \kappa I)\, v \\ c^T v - 1 \\
+            c^T J v - \sigma + \kappa / \sigma \end{pmatrix}
+
+    with normalisation data ``c = (c_1..c_n, sigma)``, ``sigma > 0``.
 
     At a Hopf point ``J`` has eigenvalues :math:`\pm i\omega`, ``kappa = omega**2``
     and ``v`` spans, with ``J v``, the real critical eigenspace (Roose &
     Hlavacek 1985, "A direct method for the computation of Hopf bifurcation
     points", SIAM J. Appl. Math. 45, 879-894; Kuznetsov 2004, "Elements of
-    Applied Bifurcation Theory", 3rd ed., Sec. 10.2.2). The system stays regular
-    through a Bogdanov-Takens point, where ``kappa`` changes sign and the curve
-    continues as a neutral-saddle curve (real eigenvalues :math:`\pm\sqrt{-\kappa}`).
+    Applied Bifurcation Theory", 3rd ed., Sec. 10.2.2); for ``kappa < 0`` the
+    solutions are neutral saddles (eigenvalues :math:`\pm\mu`, ``mu**2 = -kappa``).
+
+    The target :math:`s(\kappa) = \sigma - \kappa/\sigma` of the second
+    normalisation replaces the usual ``0``, for two reasons:
+
+    * with ``c^T J v = 0`` every fold point (``kappa = 0``, ``J v = 0``) solves the
+      system too, so the fold curve crosses the Hopf curve at each
+      Bogdanov-Takens point and the Jacobian is singular there; ``s(0) = sigma != 0``
+      excludes ``J v = 0``;
+    * on the neutral-saddle side the Jacobian is singular wherever ``v`` is a real
+      eigenvector of ``J``, which for ``v = a e_+ + b e_-`` happens exactly when
+      ``s = ±mu``; ``s(kappa)**2 + kappa = sigma**2 - kappa + kappa**2/sigma**2 > 0``
+      for every ``kappa``, so ``s(kappa) > mu`` and this never occurs.
     """
     kappa = z[n + 1]
     v = z[n + 2 : 2 * n + 2]
+    cv, sigma = c[:n], c[n]
     Jv = vo.matvec(J, v)
-    return vo.vertcat(f, vo.matvec(J, Jv) + kappa * v, vo.dot(c, v) - 1.0, vo.dot(c, Jv))
+    return vo.vertcat(
+        f,
+        vo.matvec(J, Jv) + kappa * v,
+        vo.dot(cv, v) - 1.0,
+        vo.dot(cv, Jv) - sigma + kappa / sigma,
+    )
 
 
 @dataclass(frozen=True)
@@ -91,7 +113,8 @@ class AugmentedFunctions:
     """Compiled residual of one augmented system and its derivatives.
 
     All callables take ``(z, p2, P, c)``: ``z`` shape ``(N,)``, ``p2`` scalar,
-    ``P`` shape ``(m,)`` (full parameter vector), ``c`` shape ``(n,)``.
+    ``P`` shape ``(m,)`` (full parameter vector), ``c`` shape ``(n+1,)``
+    (normalisation data; zeros where unused).
 
     Attributes
     ----------
@@ -148,7 +171,7 @@ def _build_casadi(
     Z = ca.SX.sym("z", n_unknowns)
     p2 = ca.SX.sym("p2")
     P = ca.SX.sym("P", m)
-    C = ca.SX.sym("c", n)
+    C = ca.SX.sym("c", n + 1)
     X = Z[:n]
     Pv = _param_expr(P, Z[n], p2, i1, i2, m)
     F = system.symbolic(X, Pv)

@@ -1,19 +1,30 @@
 r"""Hopf curves in two parameters: the Roose-Hlavacek augmented system.
 
 Unknowns ``z = (x, p1, kappa, v)`` (shape ``(2n+2,)``), continuation parameter
-``p = p2``, fixed normalisation vector ``c`` (shape ``(n,)``)::
+``p = p2``, fixed normalisation data ``c`` (shape ``(n,)``) and ``sigma > 0``::
 
-    G(z, p2) = ( f(x, p1, p2),  (J^2 + kappa I) v,  c.v - 1,  c.(J v) ) = 0
+    G(z, p2) = ( f(x, p1, p2),  (J^2 + kappa I) v,  c.v - 1,
+                 c.(J v) - sigma + kappa / sigma ) = 0
 
 At a Hopf point ``J`` has eigenvalues ``±i omega`` with ``omega = sqrt(kappa)``,
 and ``v``, ``J v`` span the real critical eigenspace (Roose & Hlavacek 1985, SIAM
 J. Appl. Math. 45, 879-894; Kuznetsov 2004, "Elements of Applied Bifurcation
-Theory", 3rd ed., Sec. 10.2.2). The two normalisations fix ``v`` uniquely in that
-plane as long as ``c^T q != 0`` for the complex eigenvector ``q``; ``c`` is chosen
-at the start as the unit vector ``Re q`` with ``Re q ⟂ Im q``. The system stays
-regular through Bogdanov-Takens points, where ``kappa`` changes sign and the curve
-goes on as a neutral-saddle curve (real eigenvalues ``±sqrt(-kappa)``); there
-``omega`` is recorded as NaN.
+Theory", 3rd ed., Sec. 10.2.2). Writing ``v = Re(alpha q)`` with ``J q = i omega q``
+and ``s = sigma - kappa / sigma``, the two normalisations read
+``alpha c^T q = 1 - i s / omega``: they fix ``v`` uniquely in the plane whenever
+``c^T q != 0``. ``c`` and ``sigma`` are chosen at the start by
+:func:`normalisation`, and the curve is restarted with fresh ones when
+:meth:`HopfProblem.normalisation_quality` degrades.
+
+The usual second normalisation ``c^T J v = 0`` has two flaws this module avoids
+(see :func:`~continuation.codim2._build.hopf_recipe`): every fold point
+(``kappa = 0``, ``J v = 0``) solves it too, so the augmented Jacobian is singular
+at Bogdanov-Takens points; and beyond them, on the neutral-saddle curve
+(eigenvalues ``±mu``, ``mu**2 = -kappa``), it is singular wherever ``v`` is a real
+eigenvector, i.e. where ``c^T J v = ±mu``. The target ``sigma - kappa / sigma`` is
+nonzero at ``kappa = 0`` and exceeds ``mu`` for every ``kappa < 0``, so the curve
+passes regularly through Bogdanov-Takens points (``kappa`` changes sign) and goes
+on as a neutral-saddle curve, where ``omega`` is recorded as NaN.
 
 Codim-2 test functions along the curve, each changing sign at the point it
 detects (Kuznetsov 2004, Sec. 10.2.2; Govaerts 2000, Ch. 4):
@@ -54,6 +65,62 @@ def _critical_pair(eigs: np.ndarray, kappa: float) -> tuple[int, int]:
     return int(order[0]), int(order[1])
 
 
+def _plane(J: FloatArray, v: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Orthonormal basis ``E`` (n, 2) of ``span(v, J v)`` and ``J_P = E^T J E`` (2, 2)."""
+    nv = float(np.linalg.norm(v))
+    if not nv > 0:
+        raise ValueError("`v` must be nonzero")
+    e1 = np.asarray(v, dtype=float) / nv
+    Je1 = J @ e1
+    w = Je1 - (e1 @ Je1) * e1
+    nw = float(np.linalg.norm(w))
+    if not nw > 1e-12 * max(1.0, float(np.linalg.norm(Je1))):
+        raise ValueError("`v`: J v is parallel to v, so (v, J v) spans no critical plane")
+    E = np.column_stack([e1, w / nw])
+    return E, E.T @ J @ E
+
+
+def normalisation(
+    J: FloatArray, v: FloatArray, kappa: float
+) -> tuple[FloatArray, FloatArray, float]:
+    """Normalisation data ``(v_new, c, sigma)`` of the Hopf system at a curve point.
+
+    ``v`` is any vector of the critical plane ``P = span(v, J v)`` (invariant under
+    ``J``). With an orthonormal basis ``E`` of ``P`` and ``J_P = E^T J E``, the
+    normalisation matrix of a unit ``c = E c_hat`` is
+    ``N = [c_hat^T; c_hat^T J_P]`` and ``det N = c_hat^T S c_hat`` with
+    ``S = sym([[0, 1], [-1, 0]] J_P^T)``. ``c_hat`` is the eigenvector of ``S`` of
+    largest ``|eigenvalue|``; for the trace-free ``J_P`` of a Hopf point or a
+    neutral saddle this gives ``|det N| >= ||J_P|| / sqrt(2)``. Then
+    ``sigma = ||J_P||_2`` and ``v_new = E N^{-1} (1, sigma - kappa / sigma)``, so
+    ``c^T v_new = 1`` and ``c^T J v_new = sigma - kappa / sigma`` (the Hopf system's
+    normalisation, see :func:`~continuation.codim2._build.hopf_recipe`).
+
+    Returns
+    -------
+    v_new : ndarray, shape (n,)
+    c : ndarray, shape (n,)
+        Unit vector in ``P``.
+    sigma : float
+        Positive.
+
+    Raises
+    ------
+    ValueError
+        If ``v`` is zero or ``J v`` is parallel to ``v``.
+    """
+    J = np.asarray(J, dtype=float)
+    E, JP = _plane(J, v)
+    S = np.array([[0.0, 1.0], [-1.0, 0.0]]) @ JP.T
+    S = 0.5 * (S + S.T)
+    lam, vecs = np.linalg.eigh(S)
+    ch = vecs[:, int(np.argmax(np.abs(lam)))]
+    N = np.vstack([ch, ch @ JP])
+    sigma = float(np.linalg.norm(JP, 2))
+    y = np.linalg.solve(N, np.array([1.0, sigma - kappa / sigma]))
+    return E @ y, E @ ch, sigma
+
+
 @dataclass(frozen=True, eq=False)
 class HopfProblem(AugmentedProblem):
     """Continuation of a Hopf point of equilibria in the parameters ``(free1, free2)``.
@@ -64,11 +131,15 @@ class HopfProblem(AugmentedProblem):
     Parameters
     ----------
     c : ndarray, shape (n,), optional
-        Normalisation vector. If omitted it is taken from ``z0``'s ``v`` as
-        ``v / (v.v)`` (then ``z0`` must be given).
+        Normalisation vector (``c^T v = 1``).
+    sigma : float, optional
+        Normalisation scale, positive: ``c^T J v = sigma - kappa / sigma``. If
+        ``c`` and ``sigma`` are omitted, both come from ``z0`` (whose ``v`` is then
+        replaced by another vector of the same plane) by :func:`normalisation`.
     """
 
     c: FloatArray | None = None
+    sigma: float | None = None
 
     kind: ClassVar[str] = "hopf"
     n_extra: ClassVar[int] = 1
@@ -78,20 +149,31 @@ class HopfProblem(AugmentedProblem):
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if (self.c is None) != (self.sigma is None):
+            raise ValueError("give both `c` and `sigma`, or neither (then `z0` is needed)")
         if self.c is None:
             if self.z0 is None:
-                raise ValueError("`c` is required when `z0` is not given")
-            v = self.vector(self.z0)
-            c = v / max(float(v @ v), 1e-300)
+                raise ValueError("`c` and `sigma` are required when `z0` is not given")
+            z0 = np.array(self.z0)
+            J0 = self.state_jacobian(z0, self.p0 or 0.0)
+            vh, c, sigma = normalisation(J0, self.vector(z0), self.kappa(z0))
+            z0[self.n + 2 :] = vh
+            z0.setflags(write=False)
+            object.__setattr__(self, "z0", z0)
         else:
             c = np.array(self.c, dtype=float).reshape(-1)
+            sigma = float(self.sigma)  # type: ignore[arg-type]
         if c.shape != (self.n,) or not np.all(np.isfinite(c)) or not np.any(c):
             raise ValueError(f"`c` must be a finite nonzero vector of shape ({self.n},)")
+        if not (np.isfinite(sigma) and sigma > 0.0):
+            raise ValueError(f"`sigma` must be finite and positive, got {sigma}")
         c.setflags(write=False)
         object.__setattr__(self, "c", c)
+        object.__setattr__(self, "sigma", sigma)
+        object.__setattr__(self, "_cdata", np.append(c, sigma))
 
     def _c(self) -> FloatArray:
-        return self.c  # type: ignore[return-value]
+        return self._cdata  # type: ignore[attr-defined,no-any-return]
 
     @classmethod
     def from_state(
@@ -153,14 +235,15 @@ class HopfProblem(AugmentedProblem):
         lam = eigs[k]
         q = vecs[:, k]
         # rotate q so that Re q ⟂ Im q and |Re q| >= |Im q| (q^T q real positive)
-        q = q * np.exp(-0.5j * np.angle(q @ q))
-        v = q.real / np.linalg.norm(q.real)
+        q = q * np.exp(-0.5j * np.angle(q @ q))  # now |Re q| >= |Im q| > 0
         kappa = float(-(lam**2).real)
-        z0 = np.concatenate([x, [params[free1]], [kappa], v])
-        prob = cls(system, params, free1, free2, sparse=sparse, z0=z0, p0=params[free2], c=v)
+        vh, c, sigma = normalisation(J, q.real, kappa)
+        z0 = np.concatenate([x, [params[free1]], [kappa], vh])
+        p0 = params[free2]
+        prob = cls(system, params, free1, free2, sparse, z0, p0, c, sigma)
         if refine:
             res = prob.solve(settings=newton_settings, throw=True)
-            prob = cls(system, params, free1, free2, sparse=sparse, z0=res.z, p0=prob.p0, c=v)
+            prob = cls(system, params, free1, free2, sparse, res.z, p0, c, sigma)
         return prob
 
     # ----------------------------------------------------------------- unpacking
@@ -178,27 +261,42 @@ class HopfProblem(AugmentedProblem):
         return {self.free1: self.p1(z), "omega": self.omega(z), "kappa": self.kappa(z)}
 
     def with_normalisation(self, z: FloatArray, p: float) -> HopfProblem:
-        """The same problem with ``c`` refreshed from the curve point ``(z, p)``.
+        """The same problem with ``c``, ``sigma`` refreshed at the curve point ``(z, p)``.
 
-        Use it to restart a long curve on which the eigenspace has turned away
-        from the starting ``c``; ``z`` is corrected within the plane of
-        ``v, J v`` so it satisfies the new normalisation.
+        Use it to restart a long curve on which the critical plane has turned away
+        from the starting ``c``; the returned problem's ``z0`` is ``z`` with ``v``
+        replaced by the one :func:`normalisation` picks in the same plane, and
+        ``p0 = p``.
         """
-        v = self.vector(z)
-        c = v / np.linalg.norm(v)
-        # within span(v, Jv): pick v' = v + t J v with c.(J v') = 0, then scale c.v' = 1
-        J = self.state_jacobian(z, p)
-        Jv = J @ v
-        JJv = J @ Jv
-        denom = float(c @ JJv)
-        t = -float(c @ Jv) / denom if abs(denom) > 1e-300 else 0.0
-        vn = v + t * Jv
-        vn = vn / float(c @ vn)
-        zn = np.array(z, dtype=float)
-        zn[self.n + 2 :] = vn
+        z = np.array(z, dtype=float)
+        vh, c, sigma = normalisation(self.state_jacobian(z, p), self.vector(z), self.kappa(z))
+        z[self.n + 2 :] = vh
         return HopfProblem(
-            self.system, self.params, self.free1, self.free2, self.sparse, zn, float(p), c
+            self.system, self.params, self.free1, self.free2, self.sparse, z, float(p), c, sigma
         )
+
+    def normalisation_quality(self, z: FloatArray, p: float) -> float:
+        """How well ``c``, ``sigma`` fix ``v`` in its plane: about 1 good, 0 singular.
+
+        With ``E`` an orthonormal basis of the critical plane ``span(v, J v)``, the
+        normalisation rows restricted to it form ``N = [c^T E; c^T J E]``; the
+        quality is ``|det N| / (|c|^2 ||E^T J E||_2)``, invariant under scaling of
+        ``c`` and ``J``. It is at least ``1/sqrt(2)`` right after
+        :func:`normalisation` and tends to 0 where the fixed ``c`` loses the plane:
+        ``c^T q -> 0`` on a Hopf curve, ``c`` orthogonal to the null vector at a
+        Bogdanov-Takens point, or to a real eigenvector on a neutral-saddle curve.
+        :func:`~continuation.codim2.curves.continue_codim2` restarts with
+        :meth:`with_normalisation` before that.
+        """
+        J = self.state_jacobian(z, p)
+        try:
+            E, JP = _plane(J, self.vector(z))
+        except ValueError:
+            return 0.0
+        c = self._c()[: self.n]
+        N = np.vstack([c @ E, c @ J @ E])
+        scale = float(c @ c) * float(np.linalg.norm(JP, 2))
+        return float(abs(np.linalg.det(N)) / scale) if scale > 0 else 0.0
 
     # ----------------------------------------------------------------- codim 2
     def eigenvectors(
