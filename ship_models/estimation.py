@@ -1,0 +1,403 @@
+r"""Estimation pipeline: from a vessel file to every coefficient of the model.
+
+:func:`resolve_vessel` fills each coefficient that the file does not give with a
+named method and records it with status ``estimated`` (or ``assumed`` where no
+method exists) and the method in ``source``; coefficients given in the file (or by
+:meth:`VesselData.with_overrides`) are never replaced. :func:`build_forces` turns
+the resolved data into :class:`~ship_models.forces.ShipForces` (strip arrays, GZ
+series, resistance spline), the numbers of Eqs. (4)-(11).
+
+Methods (one module each under :mod:`ship_models.hydro`):
+
+==========================  ==================================================
+quantity                    method
+==========================  ==================================================
+hull sections S, B, d       parametric form-parameter hull (:mod:`.hydro.hull`)
+C_wp                        Schneekluth & Bertram (1998)
+R(u)                        ITTC-1957 + Holtrop & Mennen (1982) / Holtrop (1984)
+K_T(J)                      Wageningen B-series (Oosterveld & van Oossanen 1975)
+w_P, t_P                    Taylor (1933); Holtrop (1984)
+m_x                         Söding (1982) fit of Motora's charts
+m_y, J_zz                   strip theory, Lewis sections at zero frequency
+Y_v, Y_r, N_v, N_r          Inoue, Hirano & Kijima (1981)
+f_alpha                     Fujii & Tsuda (1961)
+I_xx + J_xx                 from T_phi and GM
+K_p(u)                      zeta_0 (assumed) + Ikeda et al. (1978) lift damping
+GZ(phi)                     hull hydrostatics, free sinkage and trim
+X_w, Y_w, N_w, K_w          Froude-Krylov strips + slender-body lift
+==========================  ==================================================
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .forces import ShipForces
+from .hydro.added_mass import lewis_sway_added_mass, soding_surge_added_mass
+from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
+from .hydro.hydrostatics import GZCurve, gz_curve
+from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
+from .hydro.propeller import fit_kt_quadratic, holtrop_thrust_deduction, taylor_wake
+from .hydro.resistance import HoltropHull, ResistanceFit, fit_resistance
+from .hydro.roll import ikeda_lift_damping_per_speed, roll_inertia
+from .hydro.waves import WaveStrips
+from .vessel import Coefficient, VesselData
+
+log = logging.getLogger(__name__)
+
+
+def _est(value: float, unit: str, source: str, status: str = "estimated") -> Coefficient:
+    return Coefficient(float(value), unit, source, status)
+
+
+def _hull(v: VesselData, C_wp: float) -> HullForm:
+    return parametric_hull(
+        L=v.get("particulars.L_pp"),
+        B=v.get("particulars.B"),
+        D=v.get("particulars.D"),
+        d_f=v.get("particulars.d_f"),
+        d_a=v.get("particulars.d_a"),
+        C_b=v.get("particulars.C_b"),
+        lcb=-v.get("particulars.lcb_aft"),
+        C_M=v.get("hull.C_M"),
+        C_wp=C_wp,
+        n_stations=int(v.get("hull.n_stations")),
+        beta_min=v.get("hull.beta_min"),
+        beta_max=v.get("hull.beta_max"),
+    )
+
+
+def _holtrop(v: VesselData, hull: HullForm, C_wp: float, S: float) -> HoltropHull:
+    L = v.get("particulars.L_pp")
+    return HoltropHull(
+        L=L,
+        B=v.get("particulars.B"),
+        T=0.5 * (v.get("particulars.d_f") + v.get("particulars.d_a")),
+        T_F=v.get("particulars.d_f"),
+        volume=hull.volume,
+        C_M=v.get("hull.C_M"),
+        C_wp=C_wp,
+        lcb_percent=-100.0 * v.get("particulars.lcb_aft") / L,
+        S=S,
+        C_stern=v.get("resistance.C_stern"),
+    )
+
+
+@dataclass(frozen=True)
+class VesselModelData:
+    """Everything derived from a vessel file.
+
+    Attributes
+    ----------
+    vessel : VesselData
+        The resolved data (file values plus estimates, with sources).
+    forces : ShipForces
+        Coefficients of the equations of motion.
+    hull : HullForm
+        Strip hull.
+    gz : GZCurve
+        Hydrostatic righting-arm curve and its fit.
+    holtrop : HoltropHull
+        Resistance regression inputs (for reports and checks).
+    info : dict
+        Derived numbers for reports (wetted-surface check, fit errors, ...).
+    """
+
+    vessel: VesselData
+    forces: ShipForces
+    hull: HullForm
+    gz: GZCurve
+    holtrop: HoltropHull
+    info: dict[str, float]
+
+
+def resolve_vessel(vessel: VesselData) -> VesselModelData:
+    """Estimate every coefficient the file does not give and build the force model.
+
+    Parameters
+    ----------
+    vessel : VesselData
+        A validated vessel description.
+
+    Returns
+    -------
+    VesselModelData
+        With ``vessel`` holding file values plus estimates (status ``estimated`` or
+        ``assumed``, method in ``source``).
+    """
+    v = vessel
+    est: dict[str, Coefficient] = {}
+    rho, g, nu = v.get("environment.rho"), v.get("environment.g"), v.get("environment.nu")
+    L, B = v.get("particulars.L_pp"), v.get("particulars.B")
+    d_f, d_a = v.get("particulars.d_f"), v.get("particulars.d_a")
+    d_m = 0.5 * (d_f + d_a)
+    C_b = v.get("particulars.C_b")
+    lcb_aft = v.get("particulars.lcb_aft")
+    GM, T_phi = v.get("loading.GM"), v.get("loading.T_phi")
+
+    # ---- hull ---------------------------------------------------------------
+    if v.has("hull.C_wp"):
+        C_wp = v.get("hull.C_wp")
+    else:
+        C_wp = schneekluth_cwp(C_b)
+        est["hull.C_wp"] = _est(
+            C_wp,
+            "-",
+            "(1 + 2 C_b)/3: Schneekluth & Bertram (1998), Ship Design for Efficiency and Economy",
+        )
+    hull = _hull(v, C_wp)
+    S_hull = hull.wetted_surface()
+    if v.has("particulars.S_f"):
+        S_f = v.get("particulars.S_f")
+    else:
+        S_f = S_hull
+        est["particulars.S_f"] = _est(S_f, "m^2", "girth integral of the parametric hull")
+    volume = hull.volume
+    if v.has("loading.mass"):
+        mass = v.get("loading.mass")
+    else:
+        mass = rho * volume
+        est["loading.mass"] = _est(mass, "kg", "rho C_b L_pp B d_m")
+    x_G = -lcb_aft  # G above B in calm water
+
+    # ---- stability ------------------------------------------------------------
+    gz = gz_curve(
+        hull,
+        GM,
+        heel_step=v.get("stability.heel_step"),
+        n_terms=int(v.get("stability.n_gz_terms")),
+    )
+    zeta_G = gz.zeta_G
+
+    # ---- resistance -----------------------------------------------------------
+    hh = _holtrop(v, hull, C_wp, S_f)
+    if v.has("resistance.form_factor"):
+        k1 = v.get("resistance.form_factor")
+    else:
+        k1 = hh.form_factor()
+        est["resistance.form_factor"] = _est(
+            k1, "-", "1 + k1: Holtrop (1984), A statistical re-analysis of resistance data"
+        )
+    if v.has("resistance.C_A"):
+        C_A = v.get("resistance.C_A")
+    else:
+        C_A = hh.correlation_allowance()
+        est["resistance.C_A"] = _est(C_A, "-", "Holtrop (1984) correlation allowance")
+    u_max = v.get("resistance.Fn_max_fit") * np.sqrt(g * L)
+    knot = v.get("resistance.knot_spacing_Fn") * np.sqrt(g * L)
+
+    def R_formula(u: Any) -> Any:
+        return hh.total_resistance(u, rho=rho, g=g, nu=nu, form_factor=k1, C_A=C_A)
+
+    rfit: ResistanceFit = fit_resistance(R_formula, u_max, knot)
+
+    # ---- propeller -------------------------------------------------------------
+    D_p = v.get("propulsion.D_p")
+    if v.has("propulsion.K_T0"):
+        kt = (v.get("propulsion.K_T0"), v.get("propulsion.K_T1"), v.get("propulsion.K_T2"))
+        kt_err = float("nan")
+    else:
+        Z, PD, AE = (
+            int(v.get("propulsion.n_blades")),
+            v.get("propulsion.P_over_D"),
+            v.get("propulsion.AE_over_A0"),
+        )
+        k0, k1_, k2, kt_err = fit_kt_quadratic(PD, AE, Z, v.get("propulsion.J_max_fit"))
+        kt = (k0, k1_, k2)
+        src = (
+            f"least-squares quadratic in J on [0, {v.get('propulsion.J_max_fit')}] of the "
+            f"Wageningen B{Z}-{AE:.2f} P/D={PD} polynomial (Oosterveld & van Oossanen 1975)"
+        )
+        for name, val in zip(("K_T0", "K_T1", "K_T2"), kt, strict=True):
+            est[f"propulsion.{name}"] = _est(val, "-", src)
+    if v.has("propulsion.w_P"):
+        w_P = v.get("propulsion.w_P")
+    else:
+        w_P = taylor_wake(C_b)
+        est["propulsion.w_P"] = _est(w_P, "-", "0.5 C_b - 0.05: Taylor (1933) single screw")
+    if v.has("propulsion.t_P"):
+        t_P = v.get("propulsion.t_P")
+    else:
+        t_P = holtrop_thrust_deduction(
+            B, L, d_m, D_p, hh.C_P, hh.lcb_percent, v.get("resistance.C_stern")
+        )
+        est["propulsion.t_P"] = _est(t_P, "-", "Holtrop (1984) single-screw thrust deduction")
+
+    # ---- added masses -----------------------------------------------------------
+    m22 = lewis_sway_added_mass(rho, hull.b_wl, hull.d, hull.beta)
+    if v.has("hydrodynamics.m_x"):
+        m_x = v.get("hydrodynamics.m_x")
+    else:
+        m_x = soding_surge_added_mass(rho, volume, L)
+        est["hydrodynamics.m_x"] = _est(
+            m_x, "kg", "2.7 rho V^(5/3)/L^2: Soding (1982) fit of Motora's charts"
+        )
+    if v.has("hydrodynamics.m_y"):
+        m_y = v.get("hydrodynamics.m_y")
+    else:
+        m_y = float(hull.w @ m22)
+        est["hydrodynamics.m_y"] = _est(
+            m_y, "kg", "strip theory, Lewis sections at zero frequency (Lewis 1929)"
+        )
+    if v.has("hydrodynamics.J_zz"):
+        J_zz = v.get("hydrodynamics.J_zz")
+    else:
+        J_zz = float(hull.w @ ((hull.x - x_G) ** 2 * m22))
+        est["hydrodynamics.J_zz"] = _est(
+            J_zz, "kg m^2", "strip theory, Lewis sections at zero frequency (Lewis 1929)"
+        )
+    I_zz = mass * (v.get("particulars.kappa_zz_over_L") * L) ** 2
+    if v.has("hydrodynamics.I_xx_plus_J_xx"):
+        Ixx = v.get("hydrodynamics.I_xx_plus_J_xx")
+    else:
+        Ixx = roll_inertia(mass, g, GM, T_phi)
+        est["hydrodynamics.I_xx_plus_J_xx"] = _est(
+            Ixx, "kg m^2", "m g GM (T_phi / 2 pi)^2 from the given T_phi and GM"
+        )
+
+    # ---- manoeuvring derivatives ------------------------------------------------
+    ino = inoue_hull_derivatives(L, B, d_m, d_a - d_f, C_b)
+    prime: dict[str, float] = {}
+    for name, val in ino.items():
+        key = f"hydrodynamics.{name}"
+        if v.has(key):
+            prime[name] = v.get(key)
+        else:
+            prime[name] = val
+            est[key] = _est(
+                val,
+                "-",
+                "Inoue, Hirano & Kijima (1981), Hydrodynamic derivatives on ship "
+                "manoeuvring, ISP 28(321)",
+            )
+    for name in ("Y_phi_prime", "N_phi_prime", "K_phi_prime"):
+        key = f"hydrodynamics.{name}"
+        if v.has(key):
+            prime[name] = v.get(key)
+        else:
+            prime[name] = 0.0
+            est[key] = _est(
+                0.0,
+                "-",
+                "heel-induced hydrodynamic force neglected (no regression for this hull form)",
+                "assumed",
+            )
+    if v.has("rudder.f_alpha"):
+        f_alpha = v.get("rudder.f_alpha")
+    else:
+        f_alpha = fujii_lift_slope(v.get("rudder.aspect_ratio"))
+        est["rudder.f_alpha"] = _est(
+            f_alpha, "-", "6.13 Lambda/(Lambda + 2.25): Fujii & Tsuda (1961)"
+        )
+
+    # ---- roll damping --------------------------------------------------------------
+    omega_phi = 2.0 * np.pi / T_phi
+    if v.has("hydrodynamics.K_p0"):
+        Kp0 = v.get("hydrodynamics.K_p0")
+    else:
+        Kp0 = 2.0 * v.get("roll.zeta_0") * omega_phi
+        est["hydrodynamics.K_p0"] = _est(
+            Kp0, "-", "2 zeta_0 omega_phi from the assumed zero-speed damping ratio roll.zeta_0"
+        )
+    OG = -zeta_G  # depth of G below the waterline
+    if v.has("hydrodynamics.K_p_lift_prime"):
+        Kp_lift = v.get("hydrodynamics.K_p_lift_prime")
+    else:
+        Kp_lift = ikeda_lift_damping_per_speed(rho, L, B, d_m, v.get("hull.C_M"), OG) / (
+            0.5 * rho * L * d_m**3
+        )
+        est["hydrodynamics.K_p_lift_prime"] = _est(
+            Kp_lift,
+            "-",
+            "hull lift roll damping: Ikeda, Himeno & Tanaka (1978), substitute for Takahashi",
+        )
+
+    # ---- geometry of forces -------------------------------------------------------------
+    z_H = v.get("roll.z_H_over_d") * d_m + zeta_G  # body z (down) of the lateral force below G
+    A_R = v.get("rudder.A_R")
+    h_R = float(np.sqrt(v.get("rudder.aspect_ratio") * A_R))
+    z_R = (d_a - 0.5 * h_R) + zeta_G  # rudder centre: lower edge at the keel line aft
+    eta = min(1.0, D_p / h_R)
+    strips = WaveStrips.from_hull(
+        hull,
+        x_G=x_G,
+        zeta_G=zeta_G,
+        m22=m22,
+        z_H=z_H,
+        rho=rho,
+        g=g,
+        n_depth=int(v.get("hull.n_depth")),
+    )
+    q_speed = 0.5 * rho * L * d_m
+    forces = ShipForces(
+        rho=rho,
+        g=g,
+        L=L,
+        B=B,
+        d_m=d_m,
+        mass=mass,
+        m_x=m_x,
+        m_y=m_y,
+        I_zz=I_zz,
+        J_zz=J_zz,
+        I_xx_J_xx=Ixx,
+        Y_v1=prime["Y_v_prime"] * q_speed,
+        Y_r1=prime["Y_r_prime"] * q_speed * L,
+        N_v1=prime["N_v_prime"] * q_speed * L,
+        N_r1=prime["N_r_prime"] * q_speed * L * L,
+        Y_phi2=prime["Y_phi_prime"] * q_speed,
+        N_phi2=prime["N_phi_prime"] * q_speed * L,
+        K_phi2=prime["K_phi_prime"] * q_speed * d_m,
+        z_H=z_H,
+        K_p0=-Kp0 * Ixx,
+        K_p1=-Kp_lift * 0.5 * rho * L * d_m**3,
+        A_R=A_R,
+        f_alpha=f_alpha,
+        a_H=v.get("rudder.a_H"),
+        x_R=-0.5 * L - x_G,
+        x_H=v.get("rudder.x_H_over_L") * L - x_G,
+        z_R=z_R,
+        gamma_R=v.get("rudder.gamma_R"),
+        l_R=v.get("rudder.l_R_over_L") * L,
+        epsilon=v.get("rudder.epsilon"),
+        kappa=v.get("rudder.kappa"),
+        eta=eta,
+        D_p=D_p,
+        w_P=w_P,
+        t_P=t_P,
+        kt=(float(kt[0]), float(kt[1]), float(kt[2])),
+        resistance=rfit,
+        gz_coeffs=np.array(gz.coeffs),
+        waves=strips,
+        T_E=v.get("autopilot.T_E"),
+        delta_max=v.get("rudder.delta_max"),
+    )
+    phi_m, gz_m = gz.max_gz
+    info = {
+        "volume": volume,
+        "mass": mass,
+        "wetted_surface_hull": S_hull,
+        "wetted_surface_used": S_f,
+        "zeta_G": zeta_G,
+        "KG": zeta_G + d_m,
+        "KM": zeta_G + d_m + GM,
+        "gz_fit_error": gz.fit_error,
+        "phi_gz_max": phi_m,
+        "gz_max": gz_m,
+        "phi_vanishing": gz.vanishing_angle,
+        "resistance_fit_error": rfit.max_rel_error,
+        "kt_fit_error": kt_err,
+        "z_H": z_H,
+        "z_R": z_R,
+        "eta_rudder": eta,
+    }
+    resolved = vessel.with_estimates(est)
+    log.debug("resolved vessel %s with %d estimates", vessel.name, len(est))
+    return VesselModelData(resolved, forces, hull, gz, hh, info)
+
+
+__all__ = ["VesselModelData", "resolve_vessel"]

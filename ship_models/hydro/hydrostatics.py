@@ -1,0 +1,337 @@
+r"""Hydrostatic righting arm GZ(phi) of a strip hull, free to sink and trim.
+
+Each station is a closed convex polygon (bottom from the section shape, vertical
+topsides up to the deck, the deck). At heel :math:`\phi` (starboard down) the
+submerged part of station j is the polygon clipped by the half-plane
+
+.. math::
+
+    \zeta\cos\phi - y\sin\phi \le h_0 + \theta x_j ,
+
+(body axes: y to starboard, zeta up from the calm waterline). Sinkage ``h_0`` and
+trim ``theta`` are solved by Newton's method so that the displaced volume and its
+longitudinal centre equal those of the upright ship (``dV/dh_0`` is the waterline
+chord, which gives the exact Newton matrix). Areas and first moments of the clipped
+polygons come from Green's theorem, :math:`A = \tfrac12\oint (y\,d\zeta - \zeta\,dy)`,
+vectorised over stations. The righting arm is the horizontal distance from G to B,
+
+.. math::
+
+    GZ(\phi) = y_B \cos\phi + (\zeta_B - \zeta_G)\sin\phi ,
+
+with the height of G, :math:`\zeta_G = \zeta_{B0} + I_T/\nabla - GM`, set by the given
+GM; so :math:`GZ'(0) = GM` is a check of the integration (tested), not an input.
+Deck immersion (the purse seiner's freeboard is only 0.27-0.57 m) is included;
+bulwarks, superstructures and water on deck are not.
+
+For the equations of motion, :class:`GZCurve` fits an odd sine series
+:math:`GZ(\phi) \approx \sum_{i=1}^{n} g_i \sin(i\phi)` to the computed curve by
+least squares with the constraint :math:`\sum_i i g_i = GM` (exact initial slope),
+which is smooth, :math:`2\pi`-periodic and odd, and evaluates with CasADi.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from continuation._types import FloatArray
+
+from .hull import HullForm
+
+
+def section_polygons(hull: HullForm, n_side: int = 40) -> FloatArray:
+    """Closed counter-clockwise polygons of all stations, shape ``(J, V, 2)`` as ``(y, zeta)``.
+
+    Vertices: keel centre, starboard bottom curve (clustered near the keel), starboard
+    deck edge, port deck edge, port bottom curve.
+    """
+    s = 1.0 - (1.0 - np.linspace(0.0, 1.0, n_side + 1)) ** 3  # 0 (WL) .. 1 (keel)
+    s = s[::-1]  # keel -> WL
+    d = hull.d[:, None]
+    with np.errstate(over="ignore"):
+        yb = hull.b_wl[:, None] * (1.0 - s[None, :] ** hull.n_exp[:, None])
+    zb = -s[None, :] * d
+    deck = (hull.D - hull.d)[:, None]
+    bw = hull.b_wl[:, None]
+    # starboard: keel (y=0) -> WL, then deck edge; port mirrored back down
+    ys = np.concatenate([yb, bw], axis=1)
+    zs = np.concatenate([zb, deck], axis=1)
+    yp = -ys[:, ::-1]
+    zp = zs[:, ::-1]
+    y = np.concatenate([ys, yp[:, :-1]], axis=1)  # drop duplicated keel point at the end
+    z = np.concatenate([zs, zp[:, :-1]], axis=1)
+    poly = np.stack([y, z], axis=-1)
+    return poly
+
+
+def clipped_moments(
+    poly: FloatArray, cphi: float, sphi: float, h: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    r"""Area, first moments and waterline chord of the submerged part of each polygon.
+
+    Parameters
+    ----------
+    poly : ndarray, shape (J, V, 2)
+        Convex counter-clockwise polygons ``(y, zeta)``.
+    cphi, sphi : float
+        ``cos(phi)``, ``sin(phi)``.
+    h : ndarray, shape (J,)
+        Water level: submerged where :math:`\zeta\cos\phi - y\sin\phi \le h`.
+
+    Returns
+    -------
+    A, My, Mz, chord : ndarray, shape (J,)
+        Area, :math:`\int y\,dA`, :math:`\int \zeta\,dA` and the length of the waterline
+        chord (``dA/dh``).
+    """
+    P = poly
+    Q = np.roll(poly, -1, axis=1)
+    g0 = P[..., 1] * cphi - P[..., 0] * sphi - h[:, None]
+    g1 = Q[..., 1] * cphi - Q[..., 0] * sphi - h[:, None]
+    in0 = g0 <= 0
+    in1 = g1 <= 0
+    denom = np.where(g0 == g1, 1.0, g0 - g1)
+    tx = np.clip(g0 / denom, 0.0, 1.0)[..., None]
+    X = P + tx * (Q - P)
+    a = np.where((in0)[..., None], P, X)
+    b = np.where((in1)[..., None], Q, X)
+    keep = (in0 | in1)[..., None]
+    a = np.where(keep, a, 0.0)
+    b = np.where(keep, b, 0.0)
+    exit_ = (in0 & ~in1)[..., None]
+    entry = (~in0 & in1)[..., None]
+    E = np.sum(np.where(exit_, X, 0.0), axis=1)
+    N = np.sum(np.where(entry, X, 0.0), axis=1)
+
+    def seg(a_: FloatArray, b_: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        cr = a_[..., 0] * b_[..., 1] - a_[..., 1] * b_[..., 0]
+        return cr, (a_[..., 0] + b_[..., 0]) * cr, (a_[..., 1] + b_[..., 1]) * cr
+
+    c1, y1, z1 = seg(a, b)
+    c2, y2, z2 = seg(E, N)
+    A = 0.5 * (np.sum(c1, axis=1) + c2)
+    My = (np.sum(y1, axis=1) + y2) / 6.0
+    Mz = (np.sum(z1, axis=1) + z2) / 6.0
+    chord = np.hypot(E[:, 0] - N[:, 0], E[:, 1] - N[:, 1])
+    return A, My, Mz, chord
+
+
+@dataclass(frozen=True)
+class HeeledState:
+    """Hydrostatic equilibrium at one heel angle.
+
+    Attributes
+    ----------
+    phi, h0, theta : float
+        Heel (rad), sinkage of the water level at midship (m), trim slope (-).
+    volume, y_B, zeta_B, x_B : float
+        Displaced volume and centre of buoyancy (body axes).
+    converged : bool
+        Newton converged.
+    """
+
+    phi: float
+    h0: float
+    theta: float
+    volume: float
+    y_B: float
+    zeta_B: float
+    x_B: float
+    converged: bool
+
+
+def heeled_equilibrium(
+    hull: HullForm,
+    poly: FloatArray,
+    phi: float,
+    volume: float,
+    x_B: float,
+    guess: tuple[float, float] = (0.0, 0.0),
+    *,
+    tol: float = 1e-12,
+    max_iter: int = 50,
+) -> HeeledState:
+    """Solve sinkage and trim at heel ``phi`` for given volume and l.c.b. (Newton)."""
+    c, s = float(np.cos(phi)), float(np.sin(phi))
+    h0, th = guess
+    x, w = hull.x, hull.w
+    ok = False
+    for _ in range(max_iter):
+        A, My, Mz, ch = clipped_moments(poly, c, s, h0 + th * x)
+        V = float(w @ A)
+        Mx = float(w @ (x * A))
+        F = np.array([V - volume, Mx - x_B * volume])
+        J = np.array([[w @ ch, w @ (x * ch)], [w @ (x * ch), w @ (x * x * ch)]], dtype=float)
+        if np.max(np.abs(F)) <= tol * volume * max(1.0, hull.L):
+            ok = True
+            break
+        try:
+            dz = np.linalg.solve(J, F)
+        except np.linalg.LinAlgError:
+            break
+        lam = 1.0
+        # keep the water level inside the hull's height range
+        step = np.max(np.abs(dz[0]) + np.abs(dz[1]) * hull.L / 2)
+        if step > 0.5:
+            lam = 0.5 / step
+        h0 -= lam * dz[0]
+        th -= lam * dz[1]
+    A, My, Mz, _ = clipped_moments(poly, c, s, h0 + th * x)
+    V = float(w @ A)
+    return HeeledState(
+        float(phi),
+        float(h0),
+        float(th),
+        V,
+        float(w @ My) / V,
+        float(w @ Mz) / V,
+        float(w @ (x * A)) / V,
+        ok,
+    )
+
+
+@dataclass(frozen=True)
+class GZCurve:
+    """Righting-arm curve from hydrostatics and its smooth sine-series fit.
+
+    Attributes
+    ----------
+    phi : ndarray, shape (K,)
+        Heel angles of the hydrostatic computation, 0..pi (rad).
+    gz : ndarray, shape (K,)
+        Hydrostatic GZ (m).
+    coeffs : ndarray, shape (n,)
+        Sine-series coefficients ``g_i`` (m), ``GZ = sum g_i sin(i phi)``.
+    GM : float
+        Metacentric height imposed on the fit (m).
+    zeta_G : float
+        Height of G above the calm waterline (m).
+    volume : float
+        Displaced volume of the polygon hull (m^3).
+    """
+
+    phi: FloatArray
+    gz: FloatArray
+    coeffs: FloatArray
+    GM: float
+    zeta_G: float
+    volume: float
+
+    def __call__(self, phi: FloatArray | float) -> FloatArray:
+        """Fitted GZ at ``phi`` (rad), NumPy."""
+        p = np.asarray(phi, dtype=float)
+        i = np.arange(1, self.coeffs.size + 1)
+        return np.sin(np.multiply.outer(p, i)) @ self.coeffs
+
+    def slope0(self) -> float:
+        """``dGZ/dphi`` at 0 of the fit (equals GM by construction)."""
+        return float(np.arange(1, self.coeffs.size + 1) @ self.coeffs)
+
+    @property
+    def fit_error(self) -> float:
+        """Max |fit - hydrostatic| over the computed angles (m)."""
+        return float(np.max(np.abs(self(self.phi) - self.gz)))
+
+    @property
+    def max_gz(self) -> tuple[float, float]:
+        """``(phi_max, GZ_max)`` of the hydrostatic curve (rad, m)."""
+        k = int(np.argmax(self.gz))
+        return float(self.phi[k]), float(self.gz[k])
+
+    @property
+    def vanishing_angle(self) -> float:
+        """Angle of vanishing stability (rad): first zero of the hydrostatic GZ after 0."""
+        g = self.gz
+        idx = np.nonzero((g[1:-1] > 0) & (g[2:] <= 0))[0]
+        if idx.size == 0:
+            return float(self.phi[-1])
+        k = idx[0] + 1
+        return float(self.phi[k] - g[k] * (self.phi[k + 1] - self.phi[k]) / (g[k + 1] - g[k]))
+
+    def area(self, phi_to: float, phi_from: float = 0.0) -> float:
+        """Area under the hydrostatic GZ curve between two angles (m rad), trapezoidal."""
+        m = (self.phi >= phi_from - 1e-12) & (self.phi <= phi_to + 1e-12)
+        return float(np.trapezoid(self.gz[m], self.phi[m]))
+
+
+def fit_sine_series(phi: FloatArray, gz: FloatArray, n_terms: int, slope0: float) -> FloatArray:
+    r"""Least-squares sine series with an exact initial slope.
+
+    Minimises :math:`\sum_k (\sum_i g_i \sin(i\phi_k) - GZ_k)^2` subject to
+    :math:`\sum_i i g_i = GM` (Lagrange multiplier / KKT system).
+    """
+    i = np.arange(1, n_terms + 1)
+    A = np.sin(np.multiply.outer(phi, i))
+    c = i.astype(float)
+    K = np.zeros((n_terms + 1, n_terms + 1))
+    K[:n_terms, :n_terms] = A.T @ A
+    K[:n_terms, n_terms] = c
+    K[n_terms, :n_terms] = c
+    rhs = np.concatenate([A.T @ gz, [slope0]])
+    sol = np.linalg.lstsq(K, rhs, rcond=None)[0]
+    return sol[:n_terms]
+
+
+def gz_curve(
+    hull: HullForm,
+    GM: float,
+    *,
+    heel_step: float = np.deg2rad(1.0),
+    n_terms: int = 40,
+    n_side: int = 40,
+) -> GZCurve:
+    """Hydrostatic GZ over 0..180 deg and its sine-series fit.
+
+    Parameters
+    ----------
+    hull : HullForm
+    GM : float
+        Metacentric height (m); fixes the height of G.
+    heel_step : float
+        Heel increment (rad).
+    n_terms : int
+        Number of sine terms of the fit.
+    n_side : int
+        Polygon vertices per side of each section.
+
+    Raises
+    ------
+    ValueError
+        If ``GM <= 0`` or the hydrostatic equilibrium fails at some angle.
+    """
+    if not GM > 0:
+        raise ValueError(f"`GM` must be positive, got {GM}")
+    poly = section_polygons(hull, n_side)
+    A, My, Mz, ch = clipped_moments(poly, 1.0, 0.0, np.zeros(hull.n_stations))
+    V0 = float(hull.w @ A)
+    xB0 = float(hull.w @ (hull.x * A)) / V0
+    zB0 = float(hull.w @ Mz) / V0
+    I_T = float(hull.w @ (ch**3 / 12.0))
+    zeta_G = zB0 + I_T / V0 - GM
+    n = int(round(np.pi / heel_step))
+    phis = np.linspace(0.0, np.pi, n + 1)
+    gz = np.zeros_like(phis)
+    guess = (0.0, 0.0)
+    for k, ph in enumerate(phis):
+        st = heeled_equilibrium(hull, poly, ph, V0, xB0, guess)
+        if not st.converged:
+            raise ValueError(f"hydrostatic equilibrium failed at heel {np.rad2deg(ph):.1f} deg")
+        guess = (st.h0, st.theta)
+        gz[k] = st.y_B * np.cos(ph) + (st.zeta_B - zeta_G) * np.sin(ph)
+    gz[0] = 0.0
+    gz[-1] = 0.0 if abs(gz[-1]) < 1e-9 else gz[-1]
+    coeffs = fit_sine_series(phis, gz, n_terms, GM)
+    return GZCurve(phis, gz, coeffs, float(GM), float(zeta_G), V0)
+
+
+__all__ = [
+    "GZCurve",
+    "HeeledState",
+    "clipped_moments",
+    "fit_sine_series",
+    "gz_curve",
+    "heeled_equilibrium",
+    "section_polygons",
+]

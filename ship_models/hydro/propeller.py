@@ -1,0 +1,188 @@
+r"""Propeller thrust T(u; n) and the commanded revolution n(Fn).
+
+.. math::
+
+    T(u; n) = (1 - t_P)\,\rho\, n^2 D_p^4\, K_T(J), \qquad
+    J = \frac{u (1 - w_P)}{n D_p}, \qquad K_T(J) = k_0 + k_1 J + k_2 J^2 .
+
+- :math:`K_T(J)`: least-squares quadratic in J (over ``0 <= J <= J_max``) of the
+  Wageningen B-series polynomial of Oosterveld, M.W.C. & van Oossanen, P. (1975),
+  "Further computer-analyzed data of the Wageningen B-screw series", Int.
+  Shipbuilding Progress 22(251):251-262 (Reynolds number 2e6, the 39-term K_T
+  regression, coefficients tabulated below), for the stated blade number, pitch
+  ratio and blade-area ratio.
+- :math:`w_P`: Taylor's single-screw wake :math:`w_P = 0.5 C_b - 0.05` (Taylor, D.W.
+  1933, "The Speed and Power of Ships", 3rd ed., Ransdell, Washington).
+- :math:`t_P`: Holtrop (1984) single-screw thrust deduction
+  :math:`t = 0.25014 (B/L)^{0.28956} (\sqrt{B T}/D_p)^{0.2624} /
+  (1 - C_P + 0.0225\,lcb)^{0.01762} + 0.0015 C_{stern}` (Int. Shipbuilding Progress
+  31(363):272-276).
+
+With the quadratic :math:`K_T`, thrust is a quadratic form in ``(n, u_a)``,
+:math:`T = (1 - t_P)\rho (k_0 D^4 n^2 + k_1 D^3 u_a n + k_2 D^2 u_a^2)`, so the
+revolution that balances resistance at the nominal speed
+:math:`u_0 = Fn\sqrt{g L}`, :math:`T(u_0; n) = R(u_0)`, has the closed form
+
+.. math::
+
+    n = \frac{-b + \sqrt{b^2 - 4 a c}}{2a},\quad a = k_0 D^4,\ b = k_1 D^3 u_{a0},\
+    c = k_2 D^2 u_{a0}^2 - \frac{R(u_0)}{(1 - t_P)\rho},
+
+which stays differentiable in ``Fn`` for CasADi (:func:`revolutions`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from continuation._types import FloatArray
+from continuation.ops import NUMPY_OPS, Ops
+
+# Oosterveld & van Oossanen (1975), K_T = sum C J^s (P/D)^t (AE/A0)^u Z^v.
+# Columns: C, s, t, u, v.
+_BSERIES_KT = np.array(
+    [
+        [0.00880496, 0, 0, 0, 0],
+        [-0.204554, 1, 0, 0, 0],
+        [0.166351, 0, 1, 0, 0],
+        [0.158114, 0, 2, 0, 0],
+        [-0.147581, 2, 0, 1, 0],
+        [-0.481497, 1, 1, 1, 0],
+        [0.415437, 0, 2, 1, 0],
+        [0.0144043, 0, 0, 0, 1],
+        [-0.0530054, 2, 0, 0, 1],
+        [0.0143481, 0, 1, 0, 1],
+        [0.0606826, 1, 1, 0, 1],
+        [-0.0125894, 0, 0, 1, 1],
+        [0.0109689, 1, 0, 1, 1],
+        [-0.133698, 0, 3, 0, 0],
+        [0.00638407, 0, 6, 0, 0],
+        [-0.00132718, 2, 6, 0, 0],
+        [0.168496, 3, 0, 1, 0],
+        [-0.0507214, 0, 0, 2, 0],
+        [0.0854559, 2, 0, 2, 0],
+        [-0.0504475, 3, 0, 2, 0],
+        [0.0104650, 1, 6, 2, 0],
+        [-0.00648272, 2, 6, 2, 0],
+        [-0.00841728, 0, 3, 0, 1],
+        [0.0168424, 1, 3, 0, 1],
+        [-0.00102296, 3, 3, 0, 1],
+        [-0.0317791, 0, 3, 1, 1],
+        [0.0186040, 1, 0, 2, 1],
+        [-0.00410798, 0, 2, 2, 1],
+        [-0.000606848, 0, 0, 0, 2],
+        [-0.00498190, 1, 0, 0, 2],
+        [0.00259830, 2, 0, 0, 2],
+        [-0.000560528, 3, 0, 0, 2],
+        [-0.00163652, 1, 2, 0, 2],
+        [-0.000328787, 1, 6, 0, 2],
+        [0.000116502, 2, 6, 0, 2],
+        [0.000690904, 0, 0, 1, 2],
+        [0.00421749, 0, 3, 1, 2],
+        [0.0000565229, 3, 6, 1, 2],
+        [-0.00146564, 0, 3, 2, 2],
+    ]
+)
+
+
+def bseries_kt(J: FloatArray | float, P_D: float, AE_A0: float, Z: int) -> FloatArray:
+    """Wageningen B-series thrust coefficient K_T(J) (Oosterveld & van Oossanen 1975)."""
+    J = np.asarray(J, dtype=float)
+    C, s, t, u, v = _BSERIES_KT.T
+    coef = C * P_D**t * AE_A0**u * float(Z) ** v
+    return np.power.outer(J, s) @ coef
+
+
+def fit_kt_quadratic(
+    P_D: float, AE_A0: float, Z: int, J_max: float, n: int = 200
+) -> tuple[float, float, float, float]:
+    """Least-squares ``K_T ~ k0 + k1 J + k2 J^2`` on ``[0, J_max]``.
+
+    Returns
+    -------
+    k0, k1, k2 : float
+    max_abs_error : float
+        Max |fit - B-series| on the interval.
+    """
+    J = np.linspace(0.0, J_max, n)
+    kt = bseries_kt(J, P_D, AE_A0, Z)
+    A = np.column_stack([np.ones_like(J), J, J**2])
+    c = np.linalg.lstsq(A, kt, rcond=None)[0]
+    return float(c[0]), float(c[1]), float(c[2]), float(np.max(np.abs(A @ c - kt)))
+
+
+def taylor_wake(C_b: float) -> float:
+    """Taylor's single-screw effective wake fraction ``0.5 C_b - 0.05``."""
+    return 0.5 * C_b - 0.05
+
+
+def holtrop_thrust_deduction(
+    B: float, L: float, T: float, D_p: float, C_P: float, lcb_percent: float, C_stern: float
+) -> float:
+    """Holtrop (1984) single-screw thrust deduction fraction."""
+    return (
+        0.25014
+        * (B / L) ** 0.28956
+        * (np.sqrt(B * T) / D_p) ** 0.2624
+        / (1.0 - C_P + 0.0225 * lcb_percent) ** 0.01762
+        + 0.0015 * C_stern
+    )
+
+
+def thrust(
+    u: Any,
+    n: Any,
+    *,
+    rho: float,
+    D_p: float,
+    w_P: float,
+    t_P: float,
+    k: tuple[float, float, float],
+) -> Any:
+    """Effective thrust ``(1 - t_P) rho (k0 D^4 n^2 + k1 D^3 u_a n + k2 D^2 u_a^2)`` (N).
+
+    Works for NumPy and CasADi operands (no division by ``n``).
+    """
+    ua = u * (1.0 - w_P)
+    return (
+        (1.0 - t_P) * rho * (k[0] * D_p**4 * n**2 + k[1] * D_p**3 * ua * n + k[2] * D_p**2 * ua**2)
+    )
+
+
+def revolutions(
+    u0: Any,
+    R0: Any,
+    *,
+    rho: float,
+    D_p: float,
+    w_P: float,
+    t_P: float,
+    k: tuple[float, float, float],
+    ops: Ops = NUMPY_OPS,
+) -> Any:
+    """Revolutions per second ``n`` solving ``T(u0; n) = R0`` (closed form, see module doc).
+
+    Raises
+    ------
+    ValueError
+        If ``k0 <= 0`` (no thrust at bollard pull).
+    """
+    if not k[0] > 0:
+        raise ValueError(f"K_T(0) = k0 must be positive, got {k[0]}")
+    ua = u0 * (1.0 - w_P)
+    a = k[0] * D_p**4
+    b = k[1] * D_p**3 * ua
+    c = k[2] * D_p**2 * ua**2 - R0 / ((1.0 - t_P) * rho)
+    return (-b + ops.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)
+
+
+__all__ = [
+    "bseries_kt",
+    "fit_kt_quadratic",
+    "holtrop_thrust_deduction",
+    "revolutions",
+    "taylor_wake",
+    "thrust",
+]

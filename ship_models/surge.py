@@ -1,0 +1,172 @@
+r"""Uncoupled surge model: the chi_c = 0 reduction of Umeda's (1999) model.
+
+With the autopilot course along the waves (chi_c = 0), lateral motions vanish
+(v = chi = r = phi = p = delta = 0 is invariant) and Eqs. (4)-(5) reduce to
+
+.. math::
+
+    \dot\xi_G/\lambda = (u - c)/\lambda, \qquad
+    \dot u = \{T(u; n) - R(u) + X_w(\xi_G/\lambda)\}/(m + m_x),
+
+a pendulum-like system on the cylinder :math:`\xi_G/\lambda \in [0, 1)` (Grim 1951,
+Makov 1969, Umeda & Kohyama 1990). It shares the force functions of
+:class:`~ship_models.umeda_4dof.Umeda4DOF` (same :class:`~ship_models.forces.ShipForces`).
+
+Fixed points have ``u = c`` and :math:`X_w(\xi) = R(c) - T(c; n)`; a linear
+:math:`X_w` has two per wavelength when the right-hand side is smaller than its
+amplitude: a saddle near the crest and a stable point near the trough.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.optimize as so
+
+from continuation._types import FloatArray
+from continuation.newton import NewtonResult, newton
+from continuation.ops import Ops
+from continuation.params import Params
+from continuation.settings import NewtonSettings
+from continuation.system import System
+
+from .estimation import VesselModelData
+from .forces import ShipForces
+from .umeda_4dof import _as_vessel
+from .vessel import VesselData
+
+SURGE_STATE_NAMES = ("xi_G", "u")
+SURGE_PARAM_NAMES = ("Fn", "H_over_lambda", "lambda_over_L")
+
+
+@dataclass(frozen=True)
+class SurgeFixedPoint:
+    """A fixed point of the surge model.
+
+    Attributes
+    ----------
+    x : ndarray, shape (2,)
+        ``(xi_G/lambda, u)``.
+    eigenvalues : ndarray, shape (2,)
+        Of the Jacobian.
+    kind : str
+        ``"saddle"``, ``"stable"`` or ``"unstable"``.
+    newton : NewtonResult
+        The verifying Newton solve started from the bracketing root.
+    """
+
+    x: FloatArray
+    eigenvalues: FloatArray
+    kind: str
+    newton: NewtonResult
+
+
+class SurgeModel(System):
+    """Uncoupled surge model (states ``xi_G``, ``u``) as a :class:`continuation.System`.
+
+    Parameters
+    ----------
+    vessel : VesselData, str, Path or VesselModelData
+        As for :class:`~ship_models.umeda_4dof.Umeda4DOF`; pass ``model.data`` to share
+        an already resolved vessel.
+
+    Parameters of the system: ``(Fn, H_over_lambda, lambda_over_L)``.
+    """
+
+    def __init__(self, vessel: VesselData | str | Path | VesselModelData = "purse_seiner") -> None:
+        self.data = _as_vessel(vessel)
+        self.forces: ShipForces = self.data.forces
+        self.vessel = self.data.vessel
+        defaults = {
+            "Fn": 0.3248,
+            "H_over_lambda": self.vessel.get("waves.H_over_lambda"),
+            "lambda_over_L": self.vessel.get("waves.lambda_over_L"),
+        }
+        super().__init__(
+            self._rhs,
+            SURGE_STATE_NAMES,
+            SURGE_PARAM_NAMES,
+            periodic={"xi_G": 1.0},
+            defaults=defaults,
+            name=f"surge[{self.vessel.name}]",
+            backend="casadi",
+        )
+
+    def _rhs(self, x: Any, p: Any, ops: Ops) -> Any:
+        F = self.forces
+        xi, u = x[0], x[1]
+        Fn, Hl, lL = p[0], p[1], p[2]
+        n = F.revolutions(Fn, ops)
+        f1 = (u - F.celerity(lL, ops)) / F.wavelength(lL)
+        f2 = F.surge_acceleration(xi, u, 0.0, n, Hl, lL, ops)
+        return ops.stack([f1, f2])
+
+    def index(self, name: str) -> int:
+        """Index of a state name."""
+        return self.state_index(name)
+
+    def default_params(self) -> Params:
+        """Fn = 0.3248 and the vessel's wave (Umeda 1999)."""
+        return self.params()
+
+    def celerity(self, params: Params | FloatArray) -> float:
+        """Wave celerity (m/s)."""
+        return float(self.forces.celerity(self.check_params(params)[2]))
+
+    def surge_force(
+        self, xi: FloatArray | float, u: float, params: Params | FloatArray
+    ) -> FloatArray:
+        """``T(u; n) - R(u) + X_w(xi)`` (N) at the given xi values, shape like ``xi``."""
+        pv = self.check_params(params)
+        F = self.forces
+        n = F.revolutions(pv[0])
+        xi = np.asarray(xi, dtype=float)
+        X = np.vectorize(lambda s: F.waves.forces(s, u, 0.0, pv[1], pv[2], lift=False)[0])(xi)
+        return F.thrust_force(u, n) - F.resistance_force(u) + X
+
+    def fixed_points(
+        self,
+        params: Params | FloatArray,
+        *,
+        n_grid: int = 400,
+        settings: NewtonSettings | None = None,
+    ) -> list[SurgeFixedPoint]:
+        """All fixed points in one wavelength: brentq on the surge force at u = c, then Newton.
+
+        Returns
+        -------
+        list of SurgeFixedPoint
+            Sorted by ``xi_G``; empty if surf-riding is impossible for ``params``.
+        """
+        pv = self.check_params(params)
+        c = self.celerity(pv)
+        grid = np.linspace(0.0, 1.0, n_grid + 1)
+        f = self.surge_force(grid, c, pv)
+        out: list[SurgeFixedPoint] = []
+        s = settings or NewtonSettings(tol=1e-10, max_iter=30)
+        for i in range(n_grid):
+            if f[i] == 0.0 or f[i] * f[i + 1] < 0:
+                xi0 = so.brentq(
+                    lambda t: float(self.surge_force(t, c, pv)), grid[i], grid[i + 1], xtol=1e-14
+                )
+                res = newton(
+                    lambda z: self.f(z, pv), lambda z: self.jacobian(z, pv), np.array([xi0, c]), s
+                )
+                ev = np.linalg.eigvals(self.jacobian(res.z, pv))
+                re = np.real(ev)
+                if np.all(re < 0):
+                    kind = "stable"
+                elif np.all(re > 0):
+                    kind = "unstable"
+                else:
+                    kind = "saddle"
+                z = res.z.copy()
+                z[0] = np.mod(z[0], 1.0)
+                out.append(SurgeFixedPoint(z, ev, kind, res))
+        return sorted(out, key=lambda fp: fp.x[0])
+
+
+__all__ = ["SURGE_PARAM_NAMES", "SURGE_STATE_NAMES", "SurgeFixedPoint", "SurgeModel"]

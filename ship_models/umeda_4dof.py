@@ -1,0 +1,293 @@
+r"""Surge-sway-yaw-roll model with autopilot of Umeda (1999), Eqs. (1)-(11).
+
+State (Eq. 1) and parameters:
+
+.. code-block:: text
+
+    x = (xi_G, u, v, chi, r, phi, p_roll, delta)
+        xi_G   xi_G / lambda, wave-relative position of G (periodic, period 1;
+               0 = wave trough, 0.5 = crest), dimensionless
+        u, v   surge and sway velocity (m/s)
+        chi    heading from the wave direction (rad, + to starboard)
+        r      yaw rate (rad/s)
+        phi    roll angle (rad, + starboard down), p_roll roll rate (rad/s)
+        delta  rudder angle (rad, + turns the bow to starboard)
+    p = (Fn, chi_c, H_over_lambda, lambda_over_L, K_R, T_D)
+
+Equations (Umeda 1999, Eqs. 4-11; all forces from :class:`~ship_models.forces.ShipForces`):
+
+.. math::
+
+    \dot\xi_G/\lambda &= (u\cos\chi - v\sin\chi - c)/\lambda \\
+    \dot u &= \{T(u; n) - R(u) + X_w\}/(m + m_x) \\
+    \dot v &= \{-(m + m_x) u r + Y_v v + Y_r r + Y_\phi\phi + Y_\delta + Y_w\}/(m + m_y) \\
+    \dot\chi &= r \\
+    \dot r &= \{N_v v + N_r r + N_\phi\phi + N_\delta + N_w\}/(I_{zz} + J_{zz}) \\
+    \dot\phi &= p \\
+    \dot p &= \{m_x z_H u r + K_v v + K_r r + K_p p + K_\phi\phi + K_\delta + K_w
+              - m g\,GZ(\phi)\}/(I_{xx} + J_{xx}) \\
+    \dot\delta &= \{\mathrm{sat}(-K_R(\chi - \chi_c) - K_R T_D r) - \delta\}/T_E
+
+with :math:`c = \sqrt{g\lambda/2\pi}` and the propeller revolution :math:`n(Fn)`
+that balances thrust and resistance in calm water at :math:`u_0 = Fn\sqrt{gL}`.
+``Y_delta`` etc. are the rudder forces (MMG form), linear in the rudder angle.
+
+Rudder saturation (default on): the paper's broaching happens "despite the maximum
+opposite rudder angle", so the commanded angle is limited smoothly,
+:math:`\mathrm{sat}(x) = x / (1 + (x/\delta_{max})^{2m})^{1/(2m)}` with
+``2m = saturation_order`` (16 by default): analytic, slope 1 at 0, within 0.2 % of
+the identity up to 0.8 delta_max and tending to +-delta_max. ``saturation=False``
+gives the linear Eq. (11) of the paper.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.optimize as so
+
+from continuation._types import FloatArray
+from continuation.newton import NewtonResult, newton
+from continuation.ops import NUMPY_OPS, Ops
+from continuation.params import Params
+from continuation.settings import NewtonSettings
+from continuation.system import System
+
+from .estimation import VesselModelData, resolve_vessel
+from .forces import ShipForces
+from .vessel import VesselData, load_vessel
+
+STATE_NAMES = ("xi_G", "u", "v", "chi", "r", "phi", "p_roll", "delta")
+PARAM_NAMES = ("Fn", "chi_c", "H_over_lambda", "lambda_over_L", "K_R", "T_D")
+
+
+def smooth_saturation(x: Any, limit: float, order: int, ops: Ops = NUMPY_OPS) -> Any:
+    r"""``x / (1 + (x/limit)^order)^(1/order)`` for even ``order`` (odd, analytic)."""
+    return x / (1.0 + (x / limit) ** order) ** (1.0 / order)
+
+
+def _as_vessel(vessel: VesselData | str | Path | VesselModelData) -> VesselModelData:
+    if isinstance(vessel, VesselModelData):
+        return vessel
+    if not isinstance(vessel, VesselData):
+        vessel = load_vessel(vessel)
+    return resolve_vessel(vessel)
+
+
+class Umeda4DOF(System):
+    """Umeda's (1999) surge-sway-yaw-roll-rudder model as a :class:`continuation.System`.
+
+    Parameters
+    ----------
+    vessel : VesselData, str or Path
+        A vessel description (or the name/path of a vessel file), resolved with
+        :func:`ship_models.estimation.resolve_vessel`.
+    saturation : bool
+        Smoothly limit the rudder at ``rudder.delta_max`` (default True).
+    saturation_order : int
+        Even exponent of the smooth saturation (default 16).
+    wave_lift : bool
+        Include the slender-body lift due to wave particle velocity (default True).
+
+    Attributes
+    ----------
+    data : VesselModelData
+        Resolved vessel, hull, GZ curve and force coefficients.
+    forces : ShipForces
+        Shortcut for ``data.forces``.
+
+    Examples
+    --------
+    >>> from ship_models import purse_seiner
+    >>> m = purse_seiner()
+    >>> p = m.default_params()
+    >>> x = m.equilibrium_guess(p, where="crest")
+    """
+
+    def __init__(
+        self,
+        vessel: VesselData | str | Path | VesselModelData = "purse_seiner",
+        *,
+        saturation: bool = True,
+        saturation_order: int = 16,
+        wave_lift: bool = True,
+    ) -> None:
+        if saturation_order < 2 or saturation_order % 2:
+            raise ValueError(
+                f"`saturation_order` must be an even integer >= 2, got {saturation_order}"
+            )
+        self.data = _as_vessel(vessel)
+        self.forces: ShipForces = self.data.forces
+        self.vessel = self.data.vessel
+        self.saturation = bool(saturation)
+        self.saturation_order = int(saturation_order)
+        self.wave_lift = bool(wave_lift)
+        v = self.vessel
+        defaults = {
+            "Fn": 0.3248,
+            "chi_c": float(np.deg2rad(10.0)),
+            "H_over_lambda": v.get("waves.H_over_lambda"),
+            "lambda_over_L": v.get("waves.lambda_over_L"),
+            "K_R": v.get("autopilot.K_R"),
+            "T_D": v.get("autopilot.T_D"),
+        }
+        super().__init__(
+            self._rhs,
+            STATE_NAMES,
+            PARAM_NAMES,
+            periodic={"xi_G": 1.0},
+            defaults=defaults,
+            name=f"umeda_4dof[{v.name}]",
+            backend="casadi",
+        )
+
+    # ------------------------------------------------------------------ equations
+    def _rhs(self, x: Any, p: Any, ops: Ops) -> Any:
+        F = self.forces
+        xi, u, v, chi, r, phi, pr, delta = (x[i] for i in range(8))
+        Fn, chi_c, Hl, lL, K_R, T_D = (p[i] for i in range(6))
+        lam = F.wavelength(lL)
+        c = F.celerity(lL, ops)
+        n = F.revolutions(Fn, ops)
+        Xw, Yw, Nw, Kw = F.waves.forces(xi, u, chi, Hl, lL, ops, lift=self.wave_lift)
+        FN = F.rudder_normal_force(u, v, r, delta, n, ops)
+        YR = -(1.0 + F.a_H) * FN
+        NR = -(F.x_R + F.a_H * F.x_H) * FN
+        KR = (F.z_R + F.a_H * F.z_H) * FN
+        Yv, Yr = F.Y_v1 * u, F.Y_r1 * u
+        Nv, Nr = F.N_v1 * u, F.N_r1 * u
+        u2 = u * u
+        f1 = (u * ops.cos(chi) - v * ops.sin(chi) - c) / lam
+        f2 = F.surge_acceleration(xi, u, chi, n, Hl, lL, ops, X_w=Xw)
+        f3 = (-(F.mass + F.m_x) * u * r + Yv * v + Yr * r + F.Y_phi2 * u2 * phi + YR + Yw) / (
+            F.mass + F.m_y
+        )
+        f4 = r
+        f5 = (Nv * v + Nr * r + F.N_phi2 * u2 * phi + NR + Nw) / (F.I_zz + F.J_zz)
+        f6 = pr
+        f7 = (
+            F.m_x * F.z_H * u * r
+            - F.z_H * Yv * v
+            - F.z_H * Yr * r
+            + F.roll_damping(u) * pr
+            + F.K_phi2 * u2 * phi
+            + KR
+            + Kw
+            - F.mass * F.g * F.gz(phi, ops)
+        ) / F.I_xx_J_xx
+        cmd = -K_R * (chi - chi_c) - K_R * T_D * r
+        if self.saturation:
+            cmd = smooth_saturation(cmd, F.delta_max, self.saturation_order, ops)
+        f8 = (cmd - delta) / F.T_E
+        return ops.stack([f1, f2, f3, f4, f5, f6, f7, f8])
+
+    # ------------------------------------------------------------------ helpers
+    def index(self, name: str) -> int:
+        """Index of a state name (``"xi_G"``, ``"u"``, ...)."""
+        return self.state_index(name)
+
+    def default_params(self) -> Params:
+        """Fn = 0.3248, chi_c = 10 deg, the vessel's wave and autopilot (Umeda 1999)."""
+        return self.params()
+
+    def celerity(self, params: Params | FloatArray) -> float:
+        """Wave celerity ``c`` (m/s) for these parameters."""
+        pv = self.check_params(params)
+        return float(self.forces.celerity(pv[PARAM_NAMES.index("lambda_over_L")]))
+
+    def revolutions(self, params: Params | FloatArray) -> float:
+        """Propeller revolution ``n(Fn)`` (1/s)."""
+        pv = self.check_params(params)
+        return float(self.forces.revolutions(pv[0]))
+
+    def surge_balance(self, xi: FloatArray | float, params: Params | FloatArray) -> FloatArray:
+        """Surge force ``T - R + X_w`` at ``u = c/cos(chi_c)``, ``chi = chi_c`` (N), vs xi_G."""
+        pv = self.check_params(params)
+        F = self.forces
+        Fn, chi_c, Hl, lL = pv[:4]
+        c = float(F.celerity(lL))
+        u = c / np.cos(chi_c)
+        n = F.revolutions(Fn)
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        X = np.array([F.waves.forces(s, u, chi_c, Hl, lL, lift=False)[0] for s in xi])
+        return F.thrust_force(u, n) - F.resistance_force(u) + X
+
+    def equilibrium_guess(self, params: Params | FloatArray, where: str = "crest") -> FloatArray:
+        """Starting guess for a surf-riding equilibrium near the crest or the trough.
+
+        Lateral states zero, ``chi = chi_c``, ``u = c / cos(chi_c)``, and ``xi_G`` where
+        the surge force balances (bracketing root of :meth:`surge_balance`): on the
+        crest side of the wave (``where="crest"``, 0.25 < xi_G < 0.75) or the trough side.
+
+        Raises
+        ------
+        ValueError
+            If ``where`` is not "crest"/"trough", or the surge force does not change sign
+            (no surf-riding equilibrium for these parameters).
+        """
+        if where not in ("crest", "trough"):
+            raise ValueError(f"`where` must be 'crest' or 'trough', got {where!r}")
+        pv = self.check_params(params)
+        chi_c = pv[1]
+        c = self.celerity(pv)
+        grid = np.linspace(0.0, 1.0, 201)
+        f = self.surge_balance(grid, pv)
+        roots = []
+        for i in range(grid.size - 1):
+            if f[i] == 0.0 or f[i] * f[i + 1] < 0:
+                g = lambda s: float(self.surge_balance(s, pv)[0])  # noqa: E731
+                roots.append(so.brentq(g, grid[i], grid[i + 1], xtol=1e-14))
+        if not roots:
+            raise ValueError(
+                "no surf-riding equilibrium: the surge force T - R + X_w does not vanish at "
+                f"u = c for {dict(zip(PARAM_NAMES, pv, strict=True))}"
+            )
+        roots_a = np.mod(np.array(roots), 1.0)
+        crest_side = np.abs(roots_a - 0.5) < 0.25
+        pick = roots_a[crest_side] if where == "crest" else roots_a[~crest_side]
+        if pick.size == 0:
+            pick = roots_a
+        target = 0.5 if where == "crest" else 0.0
+        dist = np.abs(np.mod(pick - target + 0.5, 1.0) - 0.5)
+        xi0 = float(pick[np.argmin(dist)])
+        x = np.zeros(8)
+        x[0], x[1], x[3] = xi0, c / np.cos(chi_c), chi_c
+        return x
+
+    def find_equilibrium(
+        self,
+        params: Params | FloatArray,
+        where: str = "crest",
+        *,
+        guess: FloatArray | None = None,
+        settings: NewtonSettings | None = None,
+        throw: bool = False,
+    ) -> NewtonResult:
+        """Newton solve of ``f(x, p) = 0`` from :meth:`equilibrium_guess` (or ``guess``)."""
+        pv = self.check_params(params)
+        x0 = self.equilibrium_guess(pv, where) if guess is None else self.check_state(guess)
+        s = settings or NewtonSettings(tol=1e-9, max_iter=50, damping=True)
+        res = newton(lambda z: self.f(z, pv), lambda z: self.jacobian(z, pv), x0, s, throw=throw)
+        return res
+
+    def random_state(self, seed: int | None = None) -> FloatArray:
+        """A random, physically plausible state (for tests), shape (8,)."""
+        rng = np.random.default_rng(seed)
+        c = self.celerity(self.default_params())
+        return np.array(
+            [
+                rng.uniform(0.0, 1.0),
+                rng.uniform(0.5, 1.2) * c,
+                rng.uniform(-0.5, 0.5),
+                rng.uniform(-0.6, 0.6),
+                rng.uniform(-0.1, 0.1),
+                rng.uniform(-0.4, 0.4),
+                rng.uniform(-0.2, 0.2),
+                rng.uniform(-0.4, 0.4),
+            ]
+        )
+
+
+__all__ = ["PARAM_NAMES", "STATE_NAMES", "Umeda4DOF", "smooth_saturation"]
