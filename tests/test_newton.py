@@ -1,0 +1,160 @@
+"""Newton solvers and the bordered linear algebra under the continuation steps."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from continuation.algorithms.base import (
+    BorderedLU,
+    _perm_parity_uncached,
+    assemble_bordered_csc,
+    correct,
+    make_point,
+    theta_norm,
+    theta_weights,
+)
+from continuation.errors import ConvergenceError
+from continuation.newton import newton
+from continuation.settings import NewtonSettings
+from continuation.status import Status
+
+
+def test_newton_converges_quadratically():
+    res = newton(lambda z: z**2 - 2.0, lambda z: np.diag(2 * z), np.array([1.0]))
+    assert res.converged and res.status is Status.SUCCESS
+    assert res.z[0] == pytest.approx(math.sqrt(2.0), abs=1e-15)
+    # from 1.0: errors 8.6e-2, 2.5e-3, 2.1e-6, 1.6e-12, ~0 (quadratic), plus one check step
+    assert res.iterations <= 6
+
+
+def test_newton_sparse_jacobian():
+    n = 50
+    A = sp.diags([-np.ones(n - 1), 4 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1]).tocsc()
+    b = np.arange(n, dtype=float)
+    res = newton(lambda z: A @ z + z**3 - b, lambda z: A + sp.diags(3 * z**2), np.zeros(n))
+    assert res.converged
+    np.testing.assert_allclose(A @ res.z + res.z**3, b, atol=1e-10)
+
+
+def test_newton_failure_status_and_throw():
+    settings = NewtonSettings(max_iter=5)
+    res = newton(lambda z: z**2 + 1.0, lambda z: np.diag(2 * z), np.array([0.5]), settings)
+    assert not res.converged and res.status is Status.NEWTON_FAILED and not res.status.ok
+    with pytest.raises(ConvergenceError):
+        newton(
+            lambda z: z**2 + 1.0, lambda z: np.diag(2 * z), np.array([0.5]), settings, throw=True
+        )
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 40])
+def test_bordered_lu_solve_and_determinant(n):
+    rng = np.random.default_rng(n)
+    for _ in range(10):
+        Gz = rng.standard_normal((n, n))
+        Gp, c = rng.standard_normal(n), rng.standard_normal(n + 1)
+        M = np.block([[Gz, Gp[:, None]], [c[None, :]]])
+        sign, logdet = np.linalg.slogdet(M)
+        b = rng.standard_normal(n + 1)
+        for A in (Gz, sp.csc_matrix(Gz)):
+            lu = BorderedLU(A, Gp, c)
+            assert lu.sparse == sp.issparse(A)
+            assert lu.sign == sign and lu.logabsdet == pytest.approx(logdet, abs=1e-9)
+            np.testing.assert_allclose(M @ lu.solve(b), b, atol=1e-9)
+    with pytest.raises(np.linalg.LinAlgError):
+        BorderedLU(np.zeros((n, n)), np.zeros(n), np.ones(n + 1))
+
+
+def test_assemble_bordered_csc_matches_bmat():
+    rng = np.random.default_rng(0)
+    A = sp.random(30, 30, density=0.1, format="csc", random_state=1)
+    Gp, c = rng.standard_normal(30), rng.standard_normal(31)
+    M = assemble_bordered_csc(A, Gp, c)
+    ref = sp.bmat([[A, Gp[:, None]], [c[None, :30], np.array([[c[30]]])]]).toarray()
+    np.testing.assert_array_equal(M.toarray(), ref)
+
+
+def test_permutation_parity():
+    for perm in itertools.permutations(range(5)):
+        P = np.eye(5)[list(perm)]
+        assert _perm_parity_uncached(np.array(perm)) == round(np.linalg.det(P))
+
+
+class _Circle:
+    """x^2 + p^2 - 1 = 0 as a bare ContinuationProblem."""
+
+    free = "p"
+    n_unknowns = 1
+
+    def residual(self, z, p):
+        return np.array([z[0] ** 2 + p**2 - 1])
+
+    def jacobian(self, z, p):
+        return np.array([[2 * z[0]]])
+
+    def dp(self, z, p):
+        return np.array([2 * p])
+
+    def stability(self, z, p):
+        return None
+
+    def record(self, z, p):
+        return {}
+
+
+def test_bordered_corrector_solves_constraint():
+    # constraint x - p = 0 (c = (1, -1), sigma = 0): solution x = p = 1/sqrt(2)
+    res = correct(
+        _Circle(), np.array([0.9, 0.5]), np.zeros(2), np.array([1.0, -1.0]), 0.0, NewtonSettings()
+    )
+    assert res.converged and res.iters <= 6
+    assert abs(res.lin[0][0]) <= 1e-10  # the residual tolerance
+    # |error| <= |G| / |dG/du| along the constraint line (|dG/du| = 2 sqrt(2) there)
+    assert res.z[0] == pytest.approx(1 / math.sqrt(2), abs=1e-10 / 2.8)
+    assert res.p == pytest.approx(res.z[0], abs=1e-15)  # linear constraint: exact
+
+
+def test_corrector_accepts_round_off_floor():
+    """A residual scaled by 1e8 cannot reach tol = 1e-10; the stagnation rule accepts it
+    once the Newton step is below step_tol, and the solution is exact to round-off."""
+
+    class Scaled(_Circle):
+        def residual(self, z, p):
+            return np.array([1e8 * (z[0] - 1.0 / 3.0)])
+
+        def jacobian(self, z, p):
+            return np.array([[1e8]])
+
+        def dp(self, z, p):
+            return np.array([0.0])
+
+    res = correct(
+        Scaled(),
+        np.array([0.3, 2.0]),
+        np.array([0.3, 2.0]),
+        np.array([0.0, 1.0]),
+        0.0,
+        NewtonSettings(tol=1e-12),
+    )
+    assert res.converged
+    assert res.z[0] == pytest.approx(1 / 3, abs=1e-15)
+
+
+def test_tangent_and_branch_point_test_function():
+    prob = _Circle()
+    x = p = 1 / math.sqrt(2)
+    w = theta_weights(1, 0.5)
+    lin = (prob.residual(np.array([x]), p), prob.jacobian(np.array([x]), p), prob.dp([x], p))
+    border = np.array([-1.0, 1.0])  # orient towards increasing p
+    pt = make_point(np.array([x]), p, lin, border, w)
+    assert theta_norm(pt.tau, w) == pytest.approx(1.0, abs=1e-15)
+    assert pt.tau @ np.array([2 * x, 2 * p]) == pytest.approx(0.0, abs=1e-15)  # tangent
+    assert pt.tau[1] > 0 and border @ pt.tau > 0
+    M = np.block([[lin[1], lin[2][:, None]], [(w * pt.tau)[None, :]]])
+    det = np.linalg.det(M)
+    assert pt.bp_sign == np.sign(det)
+    assert pt.bp_logdet == pytest.approx(math.log(abs(det)), abs=1e-12)

@@ -1,0 +1,232 @@
+"""Pseudo-arclength and natural continuation: geometry, step control, stopping rules."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from conftest import bratu, brusselator, circle, fold_normal_form, hopf_normal_form
+from test_special_points import assert_invariants
+
+import continuation.algorithms.base as base
+from continuation.algorithms import PALC, Natural, StepOutcome, adapt_ds
+from continuation.api import continue_equilibria
+from continuation.driver import continue_branch
+from continuation.errors import ContinuationError
+from continuation.problem import EquilibriumProblem
+from continuation.settings import ContinuationSettings
+from continuation.status import Status
+
+
+def test_circle_closes_with_two_folds():
+    """x^2 + mu^2 = 1 is a closed curve: folds at mu = +-1 (x = 0), loop closes."""
+    br = continue_equilibria(circle(), [1.0], {"mu": 0.0}, "mu", direction="forward")
+    assert br.status is Status.CLOSED_LOOP
+    folds = br.find("fold")
+    assert sorted(round(f.p, 12) for f in folds) == [-1.0, 1.0]
+    for f in folds:
+        assert abs(f.x[0]) < 1e-5 and f.located
+    np.testing.assert_allclose(br.x[:, 0] ** 2 + br.p**2, 1.0, atol=1e-10)
+    # circumference in the theta-norm (theta = 1/2, N = 1): 2 pi sqrt(1/2)
+    circ = 2 * math.pi * math.sqrt(0.5)
+    assert 0.99 * circ < br.arclength[-1] < circ + 0.1
+    assert_invariants(br)
+
+
+@pytest.mark.parametrize("theta", [0.1, 0.5, 0.9])
+def test_theta_does_not_change_the_fold(theta):
+    sys = fold_normal_form()
+    prob = EquilibriumProblem(sys, sys.params(mu=1.0), "mu")
+    st = ContinuationSettings(ds=-0.05, theta=theta, p_min=-1.0, p_max=1.5)
+    br = continue_branch(prob, [1.0], 1.0, PALC(), st)
+    (f,) = br.find("fold")
+    assert abs(f.p) < 1e-8
+    assert br.p[-1] == pytest.approx(1.5, abs=1e-12)
+    assert br.x[-1, 0] == pytest.approx(-math.sqrt(1.5), abs=1e-10)
+
+
+def test_natural_stops_before_fold():
+    sys = fold_normal_form()
+    prob = EquilibriumProblem(sys, sys.params(mu=1.0), "mu")
+    st = ContinuationSettings(ds=-0.05, ds_min=1e-6, ds_max=0.05)
+    br = continue_branch(prob, [1.0], 1.0, Natural(), st)
+    assert br.status is Status.DS_MIN
+    assert np.all(br.x[:, 0] > 0)
+    np.testing.assert_allclose(br.x[:, 0] ** 2 - br.p, 0.0, atol=st.newton.tol)
+    assert 0 < br.p[-1] < 1e-2  # reached close to the fold, not past it
+    # parameter steps are exactly ds while easy (Natural steps the parameter)
+    assert br.p[1] == pytest.approx(0.95, abs=1e-14)
+    with pytest.raises(ContinuationError):
+        continue_branch(prob, [1.0], 1.0, Natural(), st, throw=True)
+
+
+def test_natural_matches_palc_on_monotone_branch():
+    sys = brusselator()
+    prob = EquilibriumProblem(sys, sys.params(A=1.0, B=0.5), "B")
+    st = ContinuationSettings(ds=0.05, ds_max=0.05, p_max=3.0)
+    nat = continue_branch(prob, [1.0, 0.5], 0.5, Natural(), st)
+    pal = continue_branch(prob, [1.0, 0.5], 0.5, PALC(), st)
+    assert nat.status is pal.status is Status.PARAM_BOUND
+    (hn,), (hp,) = nat.find("hopf"), pal.find("hopf")
+    assert hn.p == pytest.approx(2.0, abs=1e-9) and hp.p == pytest.approx(2.0, abs=1e-9)
+    np.testing.assert_allclose(np.interp(nat.p, pal.p, pal.x[:, 1]), nat.x[:, 1], atol=1e-12)
+
+
+def test_step_grows_to_ds_max_and_bounds_are_exact():
+    br = continue_equilibria(
+        brusselator(),
+        [1.0, 0.5],
+        {"A": 1.0, "B": 0.5},
+        "B",
+        p_min=0.2,
+        p_max=3.0,
+        ds=1e-3,
+        ds_max=0.08,
+    )
+    assert br.status is Status.PARAM_BOUND
+    assert br.p[0] == pytest.approx(0.2, abs=1e-12) and br.p[-1] == pytest.approx(3.0, abs=1e-12)
+    assert np.all(np.diff(br.p) > 0)  # ordered from the backward end
+    assert br.ds.max() == pytest.approx(0.08, rel=1e-12)
+    assert br.ds[0] == 0.0 and np.all(br.ds[1:] > 0)
+    assert br.newton_iters.mean() < 4
+
+
+def test_adapt_ds_rules():
+    st = ContinuationSettings(ds=0.1, ds_max=0.2, grow=1.5, shrink=0.5)
+    assert adapt_ds(0.1, StepOutcome(True, 2, 0.0), st) == pytest.approx(0.15)
+    assert adapt_ds(0.19, StepOutcome(True, 1, 0.0), st) == pytest.approx(0.2)
+    assert adapt_ds(0.1, StepOutcome(True, 5, 0.0), st) == pytest.approx(0.1)
+    assert adapt_ds(0.1, StepOutcome(False, 20, 1.0), st) == pytest.approx(0.05)
+
+
+def test_max_steps_and_progress():
+    seen = []
+    br = continue_equilibria(
+        hopf_normal_form(),
+        [0.0, 0.0],
+        {"mu": -1.0},
+        "mu",
+        max_steps=7,
+        direction="forward",
+        progress=seen.append,
+    )
+    assert br.status is Status.MAX_STEPS
+    assert len(br) == 8 == len(seen)
+    assert [bp.index for bp in seen] == list(range(8))
+    np.testing.assert_array_equal([bp.p for bp in seen], br.p)
+    assert seen[3].n_unstable == br.n_unstable[3]
+
+
+def test_keyboard_interrupt_returns_partial_branch():
+    calls = []
+
+    def progress(bp):
+        calls.append(bp)
+        if len(calls) == 5:
+            raise KeyboardInterrupt
+
+    br = continue_equilibria(
+        brusselator(),
+        [1.0, 0.5],
+        {"A": 1.0, "B": 0.5},
+        "B",
+        p_max=3.0,
+        progress=progress,
+        throw=True,
+    )
+    assert br.status is Status.INTERRUPTED
+    assert len(br) == 5  # backward direction interrupted: forward never started
+    assert np.all(np.diff(br.p) > 0)
+
+
+def test_both_directions_single_ordered_branch():
+    sys = fold_normal_form()
+    fwd = continue_equilibria(sys, [1.0], {"mu": 1.0}, "mu", p_max=2.0, direction="forward")
+    bwd = continue_equilibria(sys, [1.0], {"mu": 1.0}, "mu", p_max=2.0, direction="backward")
+    both = continue_equilibria(sys, [1.0], {"mu": 1.0}, "mu", p_max=2.0, direction="both")
+    assert len(both) == len(fwd) + len(bwd) - 1
+    k0 = len(bwd) - 1
+    np.testing.assert_array_equal(both.x[k0], fwd.x[0])
+    np.testing.assert_array_equal(both.p[: k0 + 1], bwd.p[::-1])
+    np.testing.assert_array_equal(both.p[k0:], fwd.p)
+    (f,) = both.find("fold")
+    (fb,) = bwd.find("fold")
+    assert f.index == k0 - fb.index - 1
+    assert f.bracket == (both.p[f.index], both.p[f.index + 1])
+    assert f.delta_unstable == (-fb.delta_unstable[0], -fb.delta_unstable[1])
+    assert both.p[0] == pytest.approx(2.0) and both.x[0, 0] < 0 < both.x[-1, 0]
+    assert both.x[-1, 0] == pytest.approx(math.sqrt(2.0), abs=1e-12)
+    assert_invariants(both)
+
+
+def test_bratu_200_uses_sparse_lu_and_shift_invert(monkeypatch):
+    n = 200
+    calls = {"splu": 0, "getrf": 0}
+    real_splu, real_getrf = base.spla.splu, base._getrf
+
+    def splu(*a, **k):
+        calls["splu"] += 1
+        return real_splu(*a, **k)
+
+    def getrf(*a, **k):
+        calls["getrf"] += 1
+        return real_getrf(*a, **k)
+
+    monkeypatch.setattr(base.spla, "splu", splu)
+    monkeypatch.setattr(base, "_getrf", getrf)
+    br = continue_equilibria(
+        bratu(n),
+        np.zeros(n),
+        {"lam": 0.0},
+        "lam",
+        ds=0.1,
+        ds_max=0.5,
+        max_steps=6,
+        direction="forward",
+    )
+    assert br.problem.sparse
+    assert calls["splu"] > 6 and calls["getrf"] == 0
+    # only n_eigs = 6 eigenvalues (nearest 0) are computed; the rest are NaN
+    assert br.eigenvalues.shape == (len(br), n)
+    assert np.all(np.isfinite(br.eigenvalues[:, :6])) and np.all(np.isnan(br.eigenvalues[:, 6:]))
+    # at lam = 0 the Jacobian is the 3-point Laplacian: lambda_k = -4/h^2 sin^2(k pi h / 2)
+    h = 1.0 / (n + 1)
+    exact = -4 / h**2 * np.sin(np.arange(1, 7) * np.pi * h / 2) ** 2
+    np.testing.assert_allclose(br.eigenvalues[0, :6].real, exact, rtol=1e-10)
+    assert np.all(br.n_unstable == 0)
+
+
+class _PlainFold:
+    """Protocol-only problem (no linearize, no eigenvalues): x^2 - mu = 0 on a parabola."""
+
+    free = "mu"
+    n_unknowns = 1
+
+    def residual(self, z, p):
+        return np.array([z[0] ** 2 - p])
+
+    def jacobian(self, z, p):
+        return np.array([[2 * z[0]]])
+
+    def dp(self, z, p):
+        return np.array([-1.0])
+
+    def stability(self, z, p):
+        return None
+
+    def record(self, z, p):
+        return {"x2": z[0] ** 2}
+
+
+def test_generic_problem_without_stability():
+    br = continue_branch(
+        _PlainFold(), [1.0], 1.0, settings=ContinuationSettings(ds=-0.1, p_max=2.0)
+    )
+    assert br.status is Status.PARAM_BOUND
+    (f,) = br.find("fold")
+    assert abs(f.p) < 1e-8
+    assert br.eigenvalues.shape == (len(br), 0)
+    assert np.all(br.n_unstable == -1)
+    np.testing.assert_allclose(br.records["x2"], br.p, atol=1e-12)
+    assert br.state_names == ("z0",)
