@@ -255,3 +255,267 @@ class TestNormalFormCoefficients:
         prob = HopfProblem.from_state(BT, BT.params(b1=0.0, b2=b2, s=s), "b1", "b2", [0.0, 0.0])
         expected = s / (2 * omega**3 * (1 + omega**2))
         assert abs(prob.lyapunov_coefficient(prob.z0, prob.p0) - expected) < 1e-10
+
+
+# --------------------------------------------------------------------------- curves
+from continuation.api import continue_equilibria  # noqa: E402
+from continuation.branch import SpecialKind  # noqa: E402
+from continuation.codim2 import continue_codim2  # noqa: E402
+from continuation.settings import ContinuationSettings  # noqa: E402
+from continuation.status import Status  # noqa: E402
+
+
+def _branch(system, x0, params, free, **kw):
+    kw.setdefault("direction", "both")
+    return continue_equilibria(system, x0, params, free, **kw)
+
+
+def _only(branch, kind):
+    pts = branch.find(kind)
+    assert len(pts) == 1, pts
+    assert pts[0].located
+    return pts[0]
+
+
+class TestCuspNormalForm:
+    """x' = b1 + b2 x - x^3: fold curve b1 = -2 x^3, b2 = 3 x^2, i.e.
+    b1 = ∓2 (b2/3)^{3/2} (Kuznetsov 2004, Sec. 8.2), with a cusp at the origin."""
+
+    @pytest.fixture(scope="class")
+    def curve(self):
+        br = _branch(CUSP, [-1.5], {"b1": -1.0, "b2": 1.0}, "b1", p_min=-2, p_max=2, ds=0.05)
+        fold = br.find("fold")[0]
+        st = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-0.5, p_max=2.0)
+        return continue_codim2(br, fold, "b2", st)
+
+    def test_fold_curve_closed_form(self, curve):
+        x, b1, b2 = curve.x[:, 0], curve.records["b1"], curve.p
+        assert curve.status.ok and len(curve) > 20
+        np.testing.assert_allclose(b2, 3 * x**2, atol=1e-8)
+        np.testing.assert_allclose(b1, -2 * x**3, atol=1e-8)
+        np.testing.assert_allclose(np.abs(b1), 2 * (b2 / 3) ** 1.5, atol=1e-8)
+        # both sheets of the fold curve are traced, through the cusp
+        assert x.min() < -0.7 and x.max() > 0.7
+        assert curve.p.max() == pytest.approx(2.0, abs=1e-12)
+
+    def test_cusp_at_origin(self, curve):
+        cp = _only(curve, "cusp")
+        assert cp.label == "CP1"
+        assert abs(cp.p) < 1e-8 and abs(cp.data["b1"]) < 1e-8 and abs(cp.x[0]) < 1e-6
+        assert not curve.find("bt") and not curve.find("zh")
+
+    def test_rows_solve_the_augmented_system(self, curve):
+        prob = curve.problem
+        res = [np.abs(prob.residual(z, p)).max() for z, p in zip(curve.x, curve.p, strict=True)]
+        assert max(res) < 1e-9
+        assert curve.newton_iters.mean() < 4
+        assert curve.state_names == ("x", "b1", "v_x")
+
+
+class TestBogdanovTakensNormalForm:
+    """x' = y, y' = b1 + b2 x + x^2 + s x y (Kuznetsov 2004, Sec. 8.4).
+
+    Equilibria y = 0, x^2 + b2 x + b1 = 0: fold curve b1 = b2^2/4 at x = -b2/2; at
+    x = 0 (b1 = 0) trace J = s x = 0 and det J = -b2, so the Hopf curve is b1 = 0,
+    b2 < 0 with omega = sqrt(-b2), continued by the neutral-saddle curve b1 = 0,
+    b2 > 0 (kappa = -b2); both curves meet at the BT point (0, 0)."""
+
+    @pytest.fixture(scope="class", params=[-1.0, 1.0])
+    def branch(self, request):
+        return _branch(
+            BT,
+            [0.0, 0.0],
+            {"b1": 0.1, "b2": -1.0, "s": request.param},
+            "b1",
+            p_min=-1,
+            p_max=1,
+            ds=0.02,
+        )
+
+    def test_fold_curve(self, branch):
+        st = ContinuationSettings(ds=0.02, ds_max=0.05, p_min=-1.5, p_max=1.0)
+        curve = continue_codim2(branch, branch.find("fold")[0], "b2", st)
+        b1, b2, x = curve.records["b1"], curve.p, curve.x[:, 0]
+        assert curve.status is Status.PARAM_BOUND
+        assert b2.min() == pytest.approx(-1.5) and b2.max() == pytest.approx(1.0)
+        np.testing.assert_allclose(b1, b2**2 / 4, atol=1e-8)
+        np.testing.assert_allclose(x, -b2 / 2, atol=1e-8)
+        bt = _only(curve, "bt")
+        assert abs(bt.p) < 1e-8 and abs(bt.data["b1"]) < 1e-8
+        assert not curve.find("cusp")
+
+    def test_hopf_curve_through_bt(self, branch):
+        st = ContinuationSettings(ds=0.02, ds_max=0.05, p_min=-1.5, p_max=0.8)
+        curve = continue_codim2(branch, branch.find("hopf")[0], "b2", st)
+        b1, b2, kappa = curve.records["b1"], curve.p, curve.records["kappa"]
+        assert curve.status is Status.PARAM_BOUND
+        assert b2.min() == pytest.approx(-1.5) and b2.max() == pytest.approx(0.8)
+        np.testing.assert_allclose(b1, 0.0, atol=1e-8)
+        np.testing.assert_allclose(kappa, -b2, atol=1e-8)
+        hopf = b2 < 0
+        np.testing.assert_allclose(curve.records["omega"][hopf], np.sqrt(-b2[hopf]), atol=1e-8)
+        assert np.all(np.isnan(curve.records["omega"][b2 > 0]))
+        bt = _only(curve, "bt")
+        assert abs(bt.p) < 1e-8 and bt.kind is SpecialKind.BOGDANOV_TAKENS
+        # l1 = s / (2 omega^3 (1 + omega^2)) never vanishes: no Bautin point
+        assert not curve.find("gh")
+        assert curve.newton_iters.mean() < 4
+
+
+class TestBrusselator:
+    """Brusselator (Prigogine & Lefever 1968): equilibrium (A, B/A), trace J =
+    B - 1 - A^2, det J = A^2, so the Hopf curve is B = 1 + A^2 with omega = A."""
+
+    def test_hopf_curve(self):
+        br = _branch(BRUSSELATOR, [1.0, 1.0], {"A": 1.0, "B": 1.0}, "B", p_min=0.5, p_max=3)
+        st = ContinuationSettings(ds=0.05, ds_max=0.2, p_min=0.2, p_max=3.0)
+        curve = continue_codim2(br, _only(br, "hopf"), "A", st)
+        A, B = curve.p, curve.records["B"]
+        assert curve.status is Status.PARAM_BOUND
+        assert A.min() == pytest.approx(0.2) and A.max() == pytest.approx(3.0)
+        np.testing.assert_allclose(B, 1 + A**2, atol=1e-8, rtol=0)
+        np.testing.assert_allclose(curve.records["omega"], A, atol=1e-8)
+        np.testing.assert_allclose(curve.x[:, 0], A, atol=1e-8)
+        np.testing.assert_allclose(curve.x[:, 1], B / A, atol=1e-8)
+        assert not curve.special_points
+
+
+def _planar_lyapunov_value(system, x, P):
+    """Guckenheimer & Holmes (1983) eq. (3.4.11) for a planar Hopf point.
+
+    Independent of the engine's l1: the coordinates (u, w) with x = x* + T (u, w),
+    T = [Im q, Re q], turn J into [[0, -omega], [omega, 0]]; then
+    16 a = f_uuu + f_uww + g_uuw + g_www
+           + (f_uw (f_uu + f_ww) - g_uw (g_uu + g_ww) - f_uu g_uu + f_ww g_ww) / omega.
+    a has the sign of Kuznetsov's l1 (both are positive multiples of the first
+    Lyapunov value).
+    """
+    import casadi as ca
+
+    J = system.jacobian(x, P)
+    lam, vec = np.linalg.eig(J)
+    k = int(np.argmax(lam.imag))
+    omega, q = lam[k].imag, vec[:, k]
+    T = np.column_stack([q.imag, q.real])
+    U = ca.SX.sym("u", 2)
+    F = ca.mtimes(ca.DM(np.linalg.inv(T)), system.symbolic(ca.DM(x) + ca.mtimes(ca.DM(T), U), P))
+    d = {}
+    for i, name in enumerate("fg"):
+        Fi = F[i]
+        d[name + "u"] = ca.jacobian(Fi, U[0])
+        d[name + "w"] = ca.jacobian(Fi, U[1])
+        d[name + "uu"] = ca.jacobian(d[name + "u"], U[0])
+        d[name + "ww"] = ca.jacobian(d[name + "w"], U[1])
+        d[name + "uw"] = ca.jacobian(d[name + "u"], U[1])
+        d[name + "uuu"] = ca.jacobian(d[name + "uu"], U[0])
+        d[name + "uuw"] = ca.jacobian(d[name + "uu"], U[1])
+        d[name + "uww"] = ca.jacobian(d[name + "ww"], U[0])
+        d[name + "www"] = ca.jacobian(d[name + "ww"], U[1])
+    ev = {k: float(ca.Function("e", [U], [v])(np.zeros(2))) for k, v in d.items()}
+    np.testing.assert_allclose(
+        [[ev["fu"], ev["fw"]], [ev["gu"], ev["gw"]]], [[0, -omega], [omega, 0]], atol=1e-8
+    )
+    return (
+        ev["fuuu"]
+        + ev["fuww"]
+        + ev["guuw"]
+        + ev["gwww"]
+        + (
+            ev["fuw"] * (ev["fuu"] + ev["fww"])
+            - ev["guw"] * (ev["guu"] + ev["gww"])
+            - ev["fuu"] * ev["guu"]
+            + ev["fww"] * ev["gww"]
+        )
+        / omega
+    ) / 16
+
+
+class TestCSTR:
+    """CSTR of Uppal, Ray & Poore (1974), Chem. Eng. Sci. 29, 967-985, with B = 14.
+
+    At an equilibrium r = Da (1 - x1) e^{x2} = x1 and x2 = B x1 / (1 + beta), and
+    det J = (1 + beta - B x1 (1 - x1)) / (1 - x1),
+    tr J = B x1 - (1 + beta) - 1 / (1 - x1).
+    Fold curve (det J = 0): beta = B x1 (1 - x1) - 1, x2 = 1/(1 - x1),
+    Da = x1 e^{-x2} / (1 - x1); its cusp is at x1 = 1/2: beta = B/4 - 1,
+    Da = e^{-2}, for every B (Uppal, Ray & Poore 1974, Sec. 3, the boundary of the
+    multiplicity region). Hopf curve (tr J = 0): beta = B x1 - 1/(1 - x1) - 1,
+    omega^2 = det J. Bogdanov-Takens points (both): B x1^2 (1 - x1) = 1.
+    """
+
+    B = 14.0
+
+    @pytest.fixture(scope="class")
+    def branch(self):
+        return _branch(
+            CSTR,
+            [0.0, 0.0],
+            {"Da": 0.0, "B": self.B, "beta": 2.0},
+            "Da",
+            p_min=0.0,
+            p_max=0.3,
+            ds=0.01,
+            direction="forward",
+        )
+
+    def _bt_points(self):
+        r = np.roots([-self.B, self.B, 0.0, -1.0])
+        x1 = r.real[(r.real > 0) & (r.real < 1) & (np.abs(r.imag) < 1e-12)]
+        beta, da = self.B * x1 * (1 - x1) - 1, x1 * np.exp(-1 / (1 - x1)) / (1 - x1)
+        order = np.argsort(beta)
+        return beta[order], da[order]
+
+    def test_fold_curve_cusp_and_bt(self, branch):
+        assert len(branch.find("fold")) == 2
+        st = ContinuationSettings(ds=0.05, ds_max=0.05, p_min=0.05, p_max=2.6)
+        curve = continue_codim2(branch, branch.find("fold")[0], "beta", st)
+        x1, x2, Da, beta = curve.x[:, 0], curve.x[:, 1], curve.records["Da"], curve.p
+        assert curve.status.ok
+        np.testing.assert_allclose(beta, self.B * x1 * (1 - x1) - 1, atol=1e-8)
+        np.testing.assert_allclose(x2, 1 / (1 - x1), atol=1e-8)
+        np.testing.assert_allclose(Da, x1 * np.exp(-x2) / (1 - x1), atol=1e-8)
+        cp = _only(curve, "cusp")
+        assert cp.p == pytest.approx(self.B / 4 - 1, abs=1e-8)
+        assert cp.data["Da"] == pytest.approx(np.exp(-2.0), abs=1e-8)
+        beta_bt, da_bt = self._bt_points()
+        bts = curve.find("bt")
+        assert len(bts) == 2 and all(b.located for b in bts)
+        np.testing.assert_allclose(sorted(b.p for b in bts), beta_bt, atol=1e-8)
+        bts = sorted(bts, key=lambda b: b.p)
+        np.testing.assert_allclose([b.data["Da"] for b in bts], da_bt, atol=1e-8)
+
+    def test_hopf_curve_bt_and_bautin(self, branch):
+        hopf = _only(branch, "hopf")
+        st = ContinuationSettings(ds=0.05, ds_max=0.2, p_min=0.05, p_max=6.0)
+        curve = continue_codim2(branch, hopf, "beta", st, detect=("bt", "gh"))
+        x1, x2, Da, beta = curve.x[:, 0], curve.x[:, 1], curve.records["Da"], curve.p
+        kappa = curve.records["kappa"]
+        assert curve.status.ok
+        # the curve turns at beta ~ 5.5 and ends on the neutral-saddle side below BT2
+        assert beta.max() > 5.4 and kappa.min() < -0.5
+        np.testing.assert_allclose(beta, self.B * x1 - 1 / (1 - x1) - 1, atol=1e-8)
+        np.testing.assert_allclose(x2, self.B * x1 / (1 + beta), atol=1e-8)
+        np.testing.assert_allclose(Da, x1 * np.exp(-x2) / (1 - x1), atol=1e-8)
+        det = (self.B * x1**2 - 1 / (1 - x1)) / (1 - x1)
+        np.testing.assert_allclose(kappa, det, atol=1e-8)
+        beta_bt, _ = self._bt_points()
+        bts = curve.find("bt")
+        assert len(bts) == 2 and all(b.located for b in bts)
+        np.testing.assert_allclose(sorted(b.p for b in bts), beta_bt, atol=1e-8)
+        # generalised Hopf points: zeros of l1, checked with the independent planar
+        # formula (Guckenheimer & Holmes 1983)
+        prob = curve.problem
+        ghs = curve.find("gh")
+        assert len(ghs) == 2 and all(g.located for g in ghs)
+        k = int(np.argmax(kappa))
+        a_ref = _planar_lyapunov_value(CSTR, curve.x[k, :2], prob.param_vector(curve.x[k], beta[k]))
+        for gh in ghs:
+            a_gh = _planar_lyapunov_value(CSTR, gh.x[:2], prob.param_vector(gh.x, gh.p))
+            assert abs(a_gh) < 1e-7 * abs(a_ref)
+        for j in range(0, len(curve), 9):
+            if kappa[j] > 0.1:
+                l1 = prob.lyapunov_coefficient(curve.x[j], beta[j])
+                a = _planar_lyapunov_value(
+                    CSTR, curve.x[j, :2], prob.param_vector(curve.x[j], beta[j])
+                )
+                assert np.sign(l1) == np.sign(a)
