@@ -7,12 +7,19 @@ differences.
 
 from __future__ import annotations
 
+import dataclasses
+
+import casadi as ca
 import numpy as np
 import pytest
 
-from continuation.codim2 import FoldProblem, HopfProblem
+from continuation.api import continue_equilibria
+from continuation.branch import SpecialKind
+from continuation.codim2 import FoldProblem, HopfProblem, continue_codim2
 from continuation.differentiation import fd_jacobian
 from continuation.errors import ConvergenceError
+from continuation.settings import ContinuationSettings
+from continuation.status import Status
 from continuation.system import System
 
 # --------------------------------------------------------------------------- systems
@@ -258,11 +265,6 @@ class TestNormalFormCoefficients:
 
 
 # --------------------------------------------------------------------------- curves
-from continuation.api import continue_equilibria  # noqa: E402
-from continuation.branch import SpecialKind  # noqa: E402
-from continuation.codim2 import continue_codim2  # noqa: E402
-from continuation.settings import ContinuationSettings  # noqa: E402
-from continuation.status import Status  # noqa: E402
 
 
 def _branch(system, x0, params, free, **kw):
@@ -390,8 +392,6 @@ def _planar_lyapunov_value(system, x, P):
     a has the sign of Kuznetsov's l1 (both are positive multiples of the first
     Lyapunov value).
     """
-    import casadi as ca
-
     J = system.jacobian(x, P)
     lam, vec = np.linalg.eig(J)
     k = int(np.argmax(lam.imag))
@@ -519,3 +519,169 @@ class TestCSTR:
                     CSTR, curve.x[j, :2], prob.param_vector(curve.x[j], beta[j])
                 )
                 assert np.sign(l1) == np.sign(a)
+
+
+def _check_invariants(curve):
+    """Special points sit between their rows, in arclength and in bracket."""
+    s = curve.arclength
+    for sp in curve.special_points:
+        i = sp.index
+        assert 0 <= i < len(curve) - 1
+        assert sp.bracket == (curve.p[i], curve.p[i + 1])
+        assert s[i] - 1e-9 <= sp.s <= s[i + 1] + 1e-9
+
+
+class TestZeroHopf:
+    """x1' = b1 - x1^2, (x2 + i x3)' = (b2 + x1 + i)(x2 + i x3).
+
+    Equilibria x1 = ±sqrt(b1), x2 = x3 = 0; eigenvalues -2 x1 and b2 + x1 ± i.
+    Fold curve b1 = 0 (x1 = 0) with a zero-Hopf point where b2 = 0; Hopf curve
+    x1 = -b2, b1 = b2^2, omega = 1, with a zero-Hopf point where -2 x1 = 0, b2 = 0."""
+
+    @pytest.fixture(scope="class")
+    def branch(self):
+        return _branch(
+            ZERO_HOPF, [1.0, 0, 0], {"b1": 1.0, "b2": -0.5}, "b1", p_min=-0.5, p_max=1.5, ds=0.02
+        )
+
+    def test_fold_curve(self, branch):
+        st = ContinuationSettings(ds=0.02, ds_max=0.05, p_min=-1.0, p_max=1.0)
+        curve = continue_codim2(branch, _only(branch, "fold"), "b2", st)
+        np.testing.assert_allclose(curve.records["b1"], 0.0, atol=1e-8)
+        np.testing.assert_allclose(curve.x[:, 0], 0.0, atol=1e-8)
+        zh = _only(curve, "zh")
+        assert abs(zh.p) < 1e-8 and zh.kind is SpecialKind.ZERO_HOPF
+        assert not curve.find("bt") and not curve.find("cusp")
+        _check_invariants(curve)
+
+    def test_hopf_curve(self, branch):
+        st = ContinuationSettings(ds=0.02, ds_max=0.05, p_min=-1.0, p_max=1.0)
+        curve = continue_codim2(branch, _only(branch, "hopf"), "b2", st)
+        b2 = curve.p
+        np.testing.assert_allclose(curve.records["b1"], b2**2, atol=1e-8)
+        np.testing.assert_allclose(curve.x[:, 0], -b2, atol=1e-8)
+        np.testing.assert_allclose(curve.records["omega"], 1.0, atol=1e-8)
+        zh = _only(curve, "zh")
+        assert abs(zh.p) < 1e-8 and abs(zh.data["b1"]) < 1e-8
+        assert not curve.find("bt") and not curve.find("gh")
+        _check_invariants(curve)
+
+
+class TestBautinAndDoubleHopf:
+    def test_bautin_normal_form(self):
+        """z' = (b1 + i) z + b2 z|z|^2 - z|z|^4: Hopf curve b1 = 0, omega = 1, and
+        l1 = 2 b2 (see test_first_lyapunov_coefficient_bautin): a generalised Hopf
+        point at b2 = 0 (Kuznetsov 2004, Sec. 8.3)."""
+        br = _branch(BAUTIN, [0, 0], {"b1": -0.5, "b2": -0.5}, "b1", p_min=-1, p_max=1, ds=0.05)
+        st = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-1, p_max=1)
+        curve = continue_codim2(br, _only(br, "hopf"), "b2", st)
+        np.testing.assert_allclose(curve.records["b1"], 0.0, atol=1e-8)
+        np.testing.assert_allclose(curve.records["omega"], 1.0, atol=1e-8)
+        l1 = [
+            curve.problem.lyapunov_coefficient(z, p) for z, p in zip(curve.x, curve.p, strict=True)
+        ]
+        np.testing.assert_allclose(l1, 2 * curve.p, atol=1e-8)
+        gh = _only(curve, "gh")
+        assert abs(gh.p) < 1e-8 and gh.kind is SpecialKind.GENERALIZED_HOPF
+        _check_invariants(curve)
+
+    def test_double_hopf(self):
+        """Two oscillators with frequencies 1 and 2 and growth rates b1, b2: along the
+        Hopf curve b1 = 0 of the first pair the second pair crosses at b2 = 0."""
+
+        def rhs(x, p, ops):
+            b1, b2 = p[0], p[1]
+            r2, s2 = x[0] ** 2 + x[1] ** 2, x[2] ** 2 + x[3] ** 2
+            return ops.stack(
+                [
+                    b1 * x[0] - x[1] - r2 * x[0] + x[0] * s2,
+                    x[0] + b1 * x[1] - r2 * x[1],
+                    b2 * x[2] - 2 * x[3] - s2 * x[2] + r2 * x[2],
+                    2 * x[2] + b2 * x[3] - s2 * x[3],
+                ]
+            )
+
+        sys4 = System(rhs, ("x1", "y1", "x2", "y2"), ("b1", "b2"))
+        br = _branch(sys4, [0, 0, 0, 0], {"b1": -0.5, "b2": -0.5}, "b1", p_min=-1, p_max=1, ds=0.05)
+        st = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-1, p_max=1)
+        curve = continue_codim2(br, _only(br, "hopf"), "b2", st)
+        np.testing.assert_allclose(curve.records["omega"], 1.0, atol=1e-8)
+        hh = curve.find("HH1")
+        assert len(hh) == 1 and hh[0].located and abs(hh[0].p) < 1e-8
+        assert not curve.find("zh")
+
+
+class TestRenormalisation:
+    def test_neutral_saddle_curve_with_restarts(self):
+        """BT normal form, Hopf curve b1 = 0 continued far into the neutral-saddle
+        region b2 > 0 (kappa = -b2): the fixed normalisation vector degrades and the
+        curve is restarted; every row must still be a neutral saddle of the model."""
+        br = _branch(
+            BT, [0.0, 0.0], {"b1": 0.1, "b2": -1.0, "s": -1.0}, "b1", p_min=-1, p_max=1, ds=0.02
+        )
+        st = ContinuationSettings(ds=0.02, ds_max=0.05, p_min=-1.5, p_max=3.0)
+        curve = continue_codim2(br, _only(br, "hopf"), "b2", st, direction="forward")
+        assert curve.status is Status.PARAM_BOUND and "renormalisation" in curve.message
+        assert curve.p.max() == pytest.approx(3.0)
+        np.testing.assert_allclose(curve.records["b1"], 0.0, atol=1e-8)
+        np.testing.assert_allclose(curve.records["kappa"], -curve.p, atol=1e-8)
+        P = curve.problem
+        for z, p in zip(curve.x, curve.p, strict=True):
+            lam = np.linalg.eigvals(P.state_jacobian(z, p))
+            np.testing.assert_allclose(lam**2, -P.kappa(z), atol=1e-8)
+        assert len(curve.find("bt")) == 1
+        _check_invariants(curve)
+
+
+class TestInputValidation:
+    @pytest.fixture(scope="class")
+    def branch(self):
+        return _branch(CUSP, [-1.5], {"b1": -1.0, "b2": 1.0}, "b1", p_min=-2, p_max=2, ds=0.05)
+
+    def test_bad_free2(self, branch):
+        fold = branch.find("fold")[0]
+        with pytest.raises(ValueError, match="free2"):
+            continue_codim2(branch, fold, "b1")
+        with pytest.raises(ValueError, match="free2"):
+            continue_codim2(branch, fold, "nope")
+
+    def test_bad_point(self, branch):
+        fold = branch.find("fold")[0]
+        foreign = dataclasses.replace(fold)
+        with pytest.raises(ValueError, match="`sp`"):
+            continue_codim2(branch, foreign, "b2")
+        with pytest.raises(ValueError, match="`sp`"):
+            HopfProblem.from_point(branch, fold, "b2")
+        unlocated = dataclasses.replace(fold, located=False)
+        br2 = dataclasses.replace(branch, special_points=(unlocated,))
+        with pytest.raises(ValueError, match="not located"):
+            continue_codim2(br2, unlocated, "b2")
+        with pytest.raises(ValueError, match="`sp` must be a fold or hopf"):
+            bp = dataclasses.replace(fold, kind="bp")
+            continue_codim2(dataclasses.replace(branch, special_points=(bp,)), bp, "b2")
+
+    def test_bad_options(self, branch):
+        fold = branch.find("fold")[0]
+        with pytest.raises(ValueError, match="direction"):
+            continue_codim2(branch, fold, "b2", direction="sideways")
+        with pytest.raises(ValueError, match="detect"):
+            continue_codim2(branch, fold, "b2", detect=("gh",))
+        with pytest.raises(ValueError, match="detect"):
+            continue_codim2(branch, fold, "b2", detect="bt")
+        loaded = dataclasses.replace(branch, problem=None)  # e.g. Branch.load without problem
+        with pytest.raises(ValueError, match="`branch`"):
+            continue_codim2(loaded, loaded.special_points[0], "b2")
+
+    def test_interrupt_keeps_finished_rows(self, branch):
+        calls = []
+
+        def progress(row):
+            calls.append(row)
+            if len(calls) == 5:
+                raise KeyboardInterrupt
+
+        st = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-0.5, p_max=2.0)
+        curve = continue_codim2(branch, branch.find("fold")[0], "b2", st, progress=progress)
+        assert curve.status is Status.INTERRUPTED
+        assert 1 <= len(curve) <= 5
+        np.testing.assert_allclose(curve.records["b1"], -2 * curve.x[:, 0] ** 3, atol=1e-8)
