@@ -685,3 +685,20 @@ class TestInputValidation:
         assert curve.status is Status.INTERRUPTED
         assert 1 <= len(curve) <= 5
         np.testing.assert_allclose(curve.records["b1"], -2 * curve.x[:, 0] ** 3, atol=1e-8)
+
+
+def test_numpy_only_hopf_curve():
+    """The finite-difference path (System without a CasADi trace) on the Brusselator
+    Hopf curve B = 1 + A^2, omega = A; accuracy limited by the differences."""
+
+    def brus(x, p):
+        A, B = p
+        return np.array([A - (B + 1) * x[0] + x[0] ** 2 * x[1], B * x[0] - x[0] ** 2 * x[1]])
+
+    sys_np = System(brus, ("x", "y"), ("A", "B"))
+    br = _branch(sys_np, [1.0, 1.0], {"A": 1.0, "B": 1.0}, "B", p_min=0.5, p_max=3)
+    st = ContinuationSettings(ds=0.05, ds_max=0.2, p_min=0.2, p_max=3.0)
+    curve = continue_codim2(br, _only(br, "hopf"), "A", st)
+    assert not curve.problem.functions.exact and curve.status is Status.PARAM_BOUND
+    np.testing.assert_allclose(curve.records["B"], 1 + curve.p**2, atol=1e-7)
+    np.testing.assert_allclose(curve.records["omega"], curve.p, atol=1e-7)

@@ -102,6 +102,7 @@ class AugmentedProblem:
             system, self.kind, type(self)._recipe, self.n_unknowns, self._i1, self._i2
         )
         object.__setattr__(self, "_fns", fns)
+        object.__setattr__(self, "_memo_cache", {})
 
     # ----------------------------------------------------------------- layout
     @property
@@ -150,6 +151,17 @@ class AugmentedProblem:
 
     def _c(self) -> FloatArray:
         return np.zeros(self.n + 1)
+
+    def _memo(self, tag: str, z: FloatArray, p: float, fn: Any) -> Any:
+        """``fn()`` cached on ``(tag, z, p)`` (the driver evaluates several test
+        functions at the same point)."""
+        key = (tag, np.asarray(z, dtype=float).tobytes(), float(p))
+        cache: dict[Any, Any] = self._memo_cache  # type: ignore[attr-defined]
+        if key not in cache:
+            if len(cache) > 32:
+                cache.clear()
+            cache[key] = fn()
+        return cache[key]
 
     # ----------------------------------------------------------------- protocol
     def residual(self, z: FloatArray, p: float) -> FloatArray:

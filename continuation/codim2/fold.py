@@ -152,6 +152,9 @@ class FoldProblem(AugmentedProblem):
 
     def test_functions(self, z: FloatArray, p: float) -> dict[str, float]:
         """Values of the codim-2 test functions ``{"bt", "cusp", "zh"}`` at ``(z, p)``."""
+        return dict(self._memo("tests", z, p, lambda: self._test_functions(z, p)))
+
+    def _test_functions(self, z: FloatArray, p: float) -> dict[str, float]:
         x, v = self.state(z), self.vector(z)
         Pv = self.param_vector(z, p)
         J = self.state_jacobian(z, p)

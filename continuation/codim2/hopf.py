@@ -368,18 +368,21 @@ class HopfProblem(AugmentedProblem):
         val = np.vdot(pv, Cqqqb) - 2 * np.vdot(pv, B(q, h11)) + np.vdot(pv, B(q.conj(), h20))
         return float(val.real / (2 * om))
 
+    def _spectral_tests(self, z: FloatArray, p: float) -> dict[str, float]:
+        def compute() -> dict[str, float]:
+            eigs = np.linalg.eigvals(self.state_jacobian(z, p))
+            i, j = _critical_pair(eigs, self.kappa(z))
+            rest = np.delete(eigs, [i, j])
+            return {
+                "zh": float(np.prod(rest).real) if rest.size else 1.0,
+                "hh": _pair_sum_product(rest),
+            }
+
+        return self._memo("spectral", z, p, compute)  # type: ignore[no-any-return]
+
     def test_functions(self, z: FloatArray, p: float) -> dict[str, float]:
         """Values of the codim-2 test functions ``{"bt", "zh", "hh", "gh"}``."""
-        kappa = self.kappa(z)
-        eigs = np.linalg.eigvals(self.state_jacobian(z, p))
-        i, j = _critical_pair(eigs, kappa)
-        rest = np.delete(eigs, [i, j])
-        return {
-            "bt": kappa,
-            "zh": float(np.prod(rest).real) if rest.size else 1.0,
-            "hh": _pair_sum_product(rest),
-            "gh": self.lyapunov_coefficient(z, p) if kappa > 0 else float("nan"),
-        }
+        return {name: self.test_function(name, z, p) for name in self.test_names}
 
     def test_function(self, name: str, z: FloatArray, p: float) -> float:
         """One codim-2 test function by name (see :attr:`test_names`)."""
@@ -389,7 +392,7 @@ class HopfProblem(AugmentedProblem):
             return self.kappa(z)
         if name == "gh":
             return self.lyapunov_coefficient(z, p)
-        return self.test_functions(z, p)[name]
+        return self._spectral_tests(z, p)[name]
 
     def classify(self, name: str, z: FloatArray, p: float, tol: float = 1e-6) -> str | None:
         """Confirm a located zero of test function ``name``; return its kind or None.
