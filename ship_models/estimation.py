@@ -39,7 +39,7 @@ import numpy as np
 from .forces import ShipForces
 from .hydro.added_mass import lewis_sway_added_mass, soding_surge_added_mass
 from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
-from .hydro.hydrostatics import GZCurve, gz_curve
+from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
 from .hydro.propeller import fit_kt_quadratic, holtrop_thrust_deduction, taylor_wake
 from .hydro.resistance import HoltropHull, ResistanceFit, fit_resistance
@@ -115,7 +115,24 @@ class VesselModelData:
     info: dict[str, float]
 
 
+_CACHE: dict[tuple[Any, ...], VesselModelData] = {}
+_CACHE_SIZE = 8
+
+
 def resolve_vessel(vessel: VesselData) -> VesselModelData:
+    """Cached :func:`build_vessel_model` (keyed by the vessel's name and coefficients)."""
+    key = (vessel.name, tuple(sorted(vessel.coefficients.items())))
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit
+    out = build_vessel_model(vessel)
+    if len(_CACHE) >= _CACHE_SIZE:
+        _CACHE.pop(next(iter(_CACHE)))
+    _CACHE[key] = out
+    return out
+
+
+def build_vessel_model(vessel: VesselData) -> VesselModelData:
     """Estimate every coefficient the file does not give and build the force model.
 
     Parameters
@@ -165,11 +182,23 @@ def resolve_vessel(vessel: VesselData) -> VesselModelData:
     x_G = -lcb_aft  # G above B in calm water
 
     # ---- stability ------------------------------------------------------------
+    if v.has("stability.topside_height"):
+        topside = v.get("stability.topside_height")
+    else:
+        topside = marginal_topside_height(hull, GM)
+        est["stability.topside_height"] = _est(
+            topside,
+            "m",
+            "smallest watertight extension of the sides above D (stand-in for enclosed "
+            "superstructures) for which the GZ curve meets the IMO 2008 IS Code general "
+            "criteria (Part A 2.2): the paper's loading condition 'marginally complies'",
+        )
     gz = gz_curve(
         hull,
         GM,
         heel_step=v.get("stability.heel_step"),
         n_terms=int(v.get("stability.n_gz_terms")),
+        topside_height=topside,
     )
     zeta_G = gz.zeta_G
 
@@ -389,6 +418,8 @@ def resolve_vessel(vessel: VesselData) -> VesselModelData:
         "phi_gz_max": phi_m,
         "gz_max": gz_m,
         "phi_vanishing": gz.vanishing_angle,
+        "topside_height": topside,
+        "is_code_margin": is_code_margin(gz),
         "resistance_fit_error": rfit.max_rel_error,
         "kt_fit_error": kt_err,
         "z_H": z_H,
@@ -400,4 +431,4 @@ def resolve_vessel(vessel: VesselData) -> VesselModelData:
     return VesselModelData(resolved, forces, hull, gz, hh, info)
 
 
-__all__ = ["VesselModelData", "resolve_vessel"]
+__all__ = ["VesselModelData", "build_vessel_model", "resolve_vessel"]

@@ -188,6 +188,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
     "stability": {
         "n_gz_terms": Field("count", True, 4, 80, integer=True, doc="sine terms of GZ fit"),
         "heel_step": _pos("angle", "heel step of the hydrostatic GZ computation", high=0.2),
+        "topside_height": _opt("length", "watertight extension above the deck counted in GZ", 0.0),
     },
     "hydrodynamics": {
         "m_x": _opt("mass", "surge added mass", 0.0),

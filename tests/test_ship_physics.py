@@ -241,3 +241,17 @@ def test_linear_roll_period_reproduces_t_phi(data):
         assert np.min(np.abs(full - e)) < 1e-10
     omega_n = abs(ev[0])
     assert 2 * np.pi / omega_n == pytest.approx(7.4, rel=1e-6)  # Umeda (1999) Table 1
+
+
+def test_loading_condition_marginally_meets_is_code(data):
+    """Umeda (1999): the loading condition 'marginally complies with the IS Code'. The
+    estimated watertight topside extension makes the smallest IS-criterion margin ~ 0."""
+    from ship_models.hydro.hydrostatics import gz_curve, is_code_criteria, is_code_margin
+
+    assert abs(data.info["is_code_margin"]) < 0.01
+    assert data.vessel.coefficient("stability.topside_height").status == "estimated"
+    crit = is_code_criteria(data.gz)
+    assert crit["angle_of_max_gz"][0] == pytest.approx(np.deg2rad(25.0), abs=np.deg2rad(0.5))
+    bare = gz_curve(data.hull, 1.0, heel_step=np.deg2rad(2.0), n_terms=8)
+    assert is_code_margin(bare) < 0  # the bare hull (freeboard 0.27-0.57 m) does not comply
+    assert bare.vanishing_angle < data.gz.vanishing_angle

@@ -153,3 +153,25 @@ def test_bad_file_on_disk(tmp_path: Path):
     broken.write_text("[loading\nGM = 1")
     with pytest.raises(VesselFileError, match="TOML"):
         load_vessel(broken)
+
+
+def test_estimates_are_recorded_and_overrides_reach_the_model():
+    from ship_models.estimation import resolve_vessel
+
+    v = load_vessel("purse_seiner")
+    d = resolve_vessel(v)
+    for key in (
+        "hydrodynamics.m_x",
+        "hydrodynamics.Y_v_prime",
+        "propulsion.w_P",
+        "propulsion.K_T0",
+        "resistance.form_factor",
+    ):
+        c = d.vessel.coefficient(key)
+        assert c.status == "estimated" and c.source, key
+        assert key not in v  # the file itself does not give it
+    m_x = 0.1 * d.forces.mass
+    d2 = resolve_vessel(v.with_overrides({"hydrodynamics.m_x": m_x}))
+    assert d2.forces.m_x == pytest.approx(m_x)
+    assert d2.vessel.coefficient("hydrodynamics.m_x").source == "user override"
+    assert d2.forces.m_y == pytest.approx(d.forces.m_y)  # the rest is unchanged

@@ -35,25 +35,29 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.optimize as so
 
 from continuation._types import FloatArray
 
 from .hull import HullForm
 
 
-def section_polygons(hull: HullForm, n_side: int = 40) -> FloatArray:
+def section_polygons(hull: HullForm, n_side: int = 40, topside_height: float = 0.0) -> FloatArray:
     """Closed counter-clockwise polygons of all stations, shape ``(J, V, 2)`` as ``(y, zeta)``.
 
     Vertices: keel centre, starboard bottom curve (clustered near the keel), starboard
-    deck edge, port deck edge, port bottom curve.
+    deck edge, port deck edge, port bottom curve. ``topside_height`` raises the
+    watertight deck above ``D`` (wall-sided), a stand-in for enclosed superstructures.
     """
+    if topside_height < 0:
+        raise ValueError(f"`topside_height` must be >= 0, got {topside_height}")
     s = 1.0 - (1.0 - np.linspace(0.0, 1.0, n_side + 1)) ** 3  # 0 (WL) .. 1 (keel)
     s = s[::-1]  # keel -> WL
     d = hull.d[:, None]
     with np.errstate(over="ignore"):
         yb = hull.b_wl[:, None] * (1.0 - s[None, :] ** hull.n_exp[:, None])
     zb = -s[None, :] * d
-    deck = (hull.D - hull.d)[:, None]
+    deck = (hull.D + topside_height - hull.d)[:, None]
     bw = hull.b_wl[:, None]
     # starboard: keel (y=0) -> WL, then deck edge; port mirrored back down
     ys = np.concatenate([yb, bw], axis=1)
@@ -210,6 +214,8 @@ class GZCurve:
         Height of G above the calm waterline (m).
     volume : float
         Displaced volume of the polygon hull (m^3).
+    topside_height : float
+        Watertight extension above the deck used (m).
     """
 
     phi: FloatArray
@@ -218,6 +224,7 @@ class GZCurve:
     GM: float
     zeta_G: float
     volume: float
+    topside_height: float = 0.0
 
     def __call__(self, phi: FloatArray | float) -> FloatArray:
         """Fitted GZ at ``phi`` (rad), NumPy."""
@@ -281,6 +288,8 @@ def gz_curve(
     heel_step: float = np.deg2rad(1.0),
     n_terms: int = 40,
     n_side: int = 40,
+    topside_height: float = 0.0,
+    phi_max: float = np.pi,
 ) -> GZCurve:
     """Hydrostatic GZ over 0..180 deg and its sine-series fit.
 
@@ -295,6 +304,11 @@ def gz_curve(
         Number of sine terms of the fit.
     n_side : int
         Polygon vertices per side of each section.
+    topside_height : float
+        Watertight extension of the sides above the deck (m), see
+        :func:`section_polygons`.
+    phi_max : float
+        Largest heel computed (rad); the sine fit needs the full range ``pi``.
 
     Raises
     ------
@@ -303,15 +317,15 @@ def gz_curve(
     """
     if not GM > 0:
         raise ValueError(f"`GM` must be positive, got {GM}")
-    poly = section_polygons(hull, n_side)
+    poly = section_polygons(hull, n_side, topside_height)
     A, My, Mz, ch = clipped_moments(poly, 1.0, 0.0, np.zeros(hull.n_stations))
     V0 = float(hull.w @ A)
     xB0 = float(hull.w @ (hull.x * A)) / V0
     zB0 = float(hull.w @ Mz) / V0
     I_T = float(hull.w @ (ch**3 / 12.0))
     zeta_G = zB0 + I_T / V0 - GM
-    n = int(round(np.pi / heel_step))
-    phis = np.linspace(0.0, np.pi, n + 1)
+    n = int(round(phi_max / heel_step))
+    phis = np.linspace(0.0, phi_max, n + 1)
     gz = np.zeros_like(phis)
     guess = (0.0, 0.0)
     for k, ph in enumerate(phis):
@@ -321,9 +335,92 @@ def gz_curve(
         guess = (st.h0, st.theta)
         gz[k] = st.y_B * np.cos(ph) + (st.zeta_B - zeta_G) * np.sin(ph)
     gz[0] = 0.0
-    gz[-1] = 0.0 if abs(gz[-1]) < 1e-9 else gz[-1]
+    if abs(phi_max - np.pi) < 1e-12:
+        gz[-1] = 0.0
     coeffs = fit_sine_series(phis, gz, n_terms, GM)
-    return GZCurve(phis, gz, coeffs, float(GM), float(zeta_G), V0)
+    return GZCurve(phis, gz, coeffs, float(GM), float(zeta_G), V0, float(topside_height))
+
+
+#: IMO 2008 Intact Stability Code, Part A, 2.2 (general criteria; formerly Res.
+#: A.749(18) 3.1.2): (name, required value). Areas in m rad, GZ in m, angle in rad.
+IS_CODE_GENERAL = (
+    ("area_0_30", 0.055),
+    ("area_0_40", 0.090),
+    ("area_30_40", 0.030),
+    ("gz_at_30_or_more", 0.20),
+    ("angle_of_max_gz", float(np.deg2rad(25.0))),
+    ("GM0", 0.15),
+)
+
+
+def is_code_criteria(gz: GZCurve) -> dict[str, tuple[float, float]]:
+    """IMO IS Code general intact-stability criteria ``{name: (value, required)}``.
+
+    Uses the hydrostatic curve (flooding angle taken above 40 deg; weather
+    criterion not evaluated). The angle of maximum GZ is refined by a parabola
+    through the largest sample and its neighbours.
+    """
+    d30, d40 = np.deg2rad(30.0), np.deg2rad(40.0)
+    if gz.phi[-1] < d40:
+        raise ValueError("the GZ curve must extend to at least 40 deg")
+    k = int(np.argmax(gz.gz))
+    phi_m = float(gz.phi[k])
+    if 0 < k < gz.phi.size - 1:
+        y0, y1, y2 = gz.gz[k - 1], gz.gz[k], gz.gz[k + 1]
+        den = y0 - 2 * y1 + y2
+        if den < 0:
+            phi_m += 0.5 * (y0 - y2) / den * (gz.phi[k + 1] - gz.phi[k])
+    beyond = gz.phi >= d30 - 1e-12
+    values = {
+        "area_0_30": gz.area(d30),
+        "area_0_40": gz.area(d40),
+        "area_30_40": gz.area(d40, d30),
+        "gz_at_30_or_more": float(np.max(gz.gz[beyond])),
+        "angle_of_max_gz": phi_m,
+        "GM0": gz.GM,
+    }
+    return {name: (values[name], req) for name, req in IS_CODE_GENERAL}
+
+
+def is_code_margin(gz: GZCurve) -> float:
+    """Smallest relative margin ``value/required - 1`` over the IS Code general criteria."""
+    return min(v / r - 1.0 for v, r in is_code_criteria(gz).values())
+
+
+def marginal_topside_height(
+    hull: HullForm,
+    GM: float,
+    *,
+    h_max: float = 2.0,
+    tol: float = 1e-3,
+    heel_step: float = np.deg2rad(2.0),
+) -> float:
+    """Smallest watertight topside extension for which the IS Code criteria are met.
+
+    Brent's method on :func:`is_code_margin` (continuous, increasing in the
+    height) of the GZ curve over 0-60 deg. Returns 0 if
+    the bare hull already complies.
+
+    Raises
+    ------
+    ValueError
+        If even ``h_max`` does not make the condition comply.
+    """
+
+    def margin(h: float) -> float:
+        g = gz_curve(
+            hull, GM, heel_step=heel_step, n_terms=4, topside_height=h, phi_max=np.deg2rad(60.0)
+        )
+        return is_code_margin(g)
+
+    if margin(0.0) >= 0:
+        return 0.0
+    if margin(h_max) < 0:
+        raise ValueError(
+            f"the loading condition does not meet the IS Code criteria even with a topside "
+            f"extension of {h_max} m; give `stability.topside_height` explicitly"
+        )
+    return float(so.brentq(margin, 0.0, h_max, xtol=tol))
 
 
 __all__ = [
@@ -333,5 +430,9 @@ __all__ = [
     "fit_sine_series",
     "gz_curve",
     "heeled_equilibrium",
+    "IS_CODE_GENERAL",
+    "is_code_criteria",
+    "is_code_margin",
+    "marginal_topside_height",
     "section_polygons",
 ]
