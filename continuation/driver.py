@@ -59,7 +59,10 @@ def _eig_function(problem: Any, settings: ContinuationSettings) -> Callable[[Poi
             ev = pt.cache.get("eig")
             if ev is None:
                 ev = eigenvalues(
-                    pt.Gz, n_eigs=det.n_eigs, sigma=det.eig_sigma, dense_max=det.dense_eigs_max
+                    pt.Gz,
+                    n_eigs=det.n_eigs,
+                    sigma=det.eig_sigma,
+                    dense_max=det.dense_eigs_max,
                 )
                 pt.cache["eig"] = ev
             return ev
@@ -340,23 +343,31 @@ class _Context:
             return None
         return min(cands, key=lambda c: c[0].sigma)
 
-    def closed(
-        self, start: _Row, a: _Row, b: _Row, w: FloatArray, far: float, sigma: float
-    ) -> bool:
-        """Did the chord ``a -> b`` pass through the start point (modulo periods)?"""
+    def closed(self, start: _Row, a: _Row, b: _Row, w: FloatArray, far: float) -> bool:
+        """Did the chord ``a -> b`` pass through the start point (modulo periods)?
+
+        Only once the branch has been farther than three step lengths from the start
+        (``far``), and only if ``b`` is within one step of the start.
+        """
+        sigma = b.ds
         if far < 3.0 * sigma:
             return False
-        d_ab = np.append(self.diff(b.z, a.z), b.p - a.p)
-        d_a0 = np.append(self.diff(start.z, a.z), start.p - a.p)
-        nn = float(np.dot(w * d_ab, d_ab))
+        d_ab = np.concatenate((self.diff(b.z, a.z), (b.p - a.p,)))
+        d_a0 = np.concatenate((self.diff(start.z, a.z), (start.p - a.p,)))
+        nn = float((w * d_ab).dot(d_ab))
         if nn <= 0:
             return False
-        t = float(np.dot(w * d_a0, d_ab)) / nn
+        t = float((w * d_a0).dot(d_ab)) / nn
         if not (-1e-9 <= t <= 1 + 1e-9):
             return False
         dist = theta_norm(d_a0 - t * d_ab, w)
-        aligned = float(np.dot(w * start.point.tau, b.point.tau)) > 0
+        aligned = float((w * start.point.tau).dot(b.point.tau)) > 0
         return aligned and dist <= 0.25 * sigma
+
+    def distance_to_start(self, start: _Row, b: _Row, w: FloatArray) -> float:
+        """``theta``-distance from ``b`` to the start point, modulo periods."""
+        d = np.concatenate((self.diff(b.z, start.z), (b.p - start.p,)))
+        return theta_norm(d, w)
 
 
 # ---------------------------------------------------------------------------- one run
@@ -375,7 +386,6 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
         ctx.progress(_branch_point(row0, 0))
     w = state.w
     far = 0.0
-    u0 = state.point.u
     p_at_bound = (p0 >= s.p_max and state.direction > 0) or (p0 <= s.p_min and state.direction < 0)
     if p_at_bound:
         run.status, run.message = Status.PARAM_BOUND, "the start point is on the parameter bound"
@@ -423,10 +433,15 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
                     ctx.progress(_branch_point(b, len(run.rows) - 1))
             if stop is not None:
                 break
-            far = max(far, theta_norm(new_state.point.u - u0, w))
-            if ctx.closed(run.rows[0], a, b, w, far, sigma_b):
+            dist0 = ctx.distance_to_start(run.rows[0], b, w)
+            if (
+                far >= 3.0 * sigma_b
+                and dist0 <= 2.0 * sigma_b
+                and ctx.closed(run.rows[0], a, b, w, far)
+            ):
                 run.status, run.message = Status.CLOSED_LOOP, Status.CLOSED_LOOP.value
                 break
+            far = max(far, dist0)
             new_state.ds = adapt_ds(new_state.ds, outcome, s, grow_iters=ctx.grow_iters)
             state = new_state
         else:

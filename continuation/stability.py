@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -91,7 +92,21 @@ def eigenvalues(
                 out[: vals.size] = sort_eigenvalues(vals)
                 return out
         J = J.toarray()
-    return sort_eigenvalues(np.linalg.eigvals(np.asarray(J, dtype=float)))
+    return sort_eigenvalues(_dense_eigvals(np.asarray(J, dtype=float)))
+
+
+_GEEV = la.get_lapack_funcs("geev", (np.zeros(1),))
+
+
+def _dense_eigvals(J: Any) -> ComplexArray:
+    """All eigenvalues of a dense real matrix (LAPACK ``dgeev`` called directly, which
+    avoids the per-call overhead of ``numpy.linalg.eigvals`` on small matrices)."""
+    if not np.all(np.isfinite(J)):
+        raise np.linalg.LinAlgError("Jacobian contains NaN or inf")
+    wr, wi, _, _, info = _GEEV(J, compute_vl=0, compute_vr=0)
+    if info != 0:
+        return np.asarray(np.linalg.eigvals(J), dtype=complex)
+    return wr + 1j * wi
 
 
 def _sparse_eigs(J: Any, k: int, sigma: float, v0: Any) -> ComplexArray | None:
@@ -137,12 +152,13 @@ def count_unstable(eigs: Any, eig_tol: float = 1e-10, imag_tol: float = 1e-8) ->
     ``Im > 0``).
     """
     v = np.asarray(eigs, dtype=complex).reshape(-1)
-    v = v[~np.isnan(v)]
-    unstable = v.real > eig_tol
+    unstable = v.real > eig_tol  # False for NaN
+    if not unstable.any():
+        return 0, 0
+    v = v[unstable]
     cplx = np.abs(v.imag) > imag_tol * np.maximum(1.0, np.abs(v))
-    n_real = int(np.count_nonzero(unstable & ~cplx))
-    n_pairs = int(np.count_nonzero(unstable & cplx & (v.imag > 0)))
-    return n_real, n_pairs
+    n_pairs = int(np.count_nonzero(cplx & (v.imag > 0)))
+    return int(v.size - np.count_nonzero(cplx)), n_pairs
 
 
 def n_unstable(eigs: Any, eig_tol: float = 1e-10) -> int:

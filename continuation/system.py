@@ -100,7 +100,7 @@ class _BufferedFunction:
 
     def __call__(self, *args: Any) -> tuple[FloatArray, ...]:
         for a, v in zip(self._args, args, strict=True):
-            a[:] = np.ravel(v)
+            a[:] = v
         self._eval()
         return tuple(r.copy() for r in self._res)
 

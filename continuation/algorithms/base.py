@@ -64,7 +64,12 @@ def theta_weights(n_unknowns: int, theta: float) -> FloatArray:
 
 def theta_norm(v: FloatArray, w: FloatArray) -> float:
     """``sqrt(sum(w * v**2))``."""
-    return math.sqrt(float(np.dot(w * v, v)))
+    return math.sqrt(float((w * v).dot(v)))
+
+
+def _inf_norm(v: FloatArray) -> float:
+    """``max |v|`` (0 for an empty vector)."""
+    return float(np.abs(v).max()) if v.size else 0.0
 
 
 # ---------------------------------------------------------------------------- linear algebra
@@ -278,11 +283,14 @@ class PointInfo:
     iters: int = 0
     residual_norm: float = 0.0
     cache: dict[str, Any] = field(default_factory=dict)
+    _u: FloatArray | None = field(default=None, repr=False)
 
     @property
     def u(self) -> FloatArray:
-        """``(z, p)``, shape ``(N + 1,)``."""
-        return np.append(self.z, self.p)
+        """``(z, p)``, shape ``(N + 1,)`` (computed once; do not modify)."""
+        if self._u is None:
+            self._u = np.concatenate((self.z, (self.p,)))
+        return self._u
 
 
 def make_point(
@@ -345,7 +353,7 @@ def make_point(
         bp_sign=bp_sign,
         bp_logdet=bp_logdet,
         iters=iters,
-        residual_norm=float(np.max(np.abs(G))) if G.size else 0.0,
+        residual_norm=_inf_norm(G),
     )
 
 
@@ -390,6 +398,11 @@ class CorrectorResult:
     residual_norm: float
     message: str = ""
 
+    @property
+    def u(self) -> FloatArray:
+        """``(z, p)``, shape ``(N + 1,)``."""
+        return np.concatenate((self.z, (self.p,)))
+
 
 def correct(
     problem: Any,
@@ -415,9 +428,18 @@ def correct(
     """
     n = u_pred.size - 1
     u = np.array(u_pred, dtype=float)
-    lin = linearize(problem, u[:n], float(u[n]))
-    h = float(np.dot(c, u - u_ref)) - sigma
-    rn = max(float(np.max(np.abs(lin[0]))) if n else 0.0, abs(h))
+    r = np.empty(n + 1)  # bordered residual (G, h)
+
+    def evaluate() -> tuple[tuple[FloatArray, Any, FloatArray], float]:
+        lin = linearize(problem, u[:n], float(u[n]))
+        r[:n] = lin[0]
+        r[n] = float(c.dot(u - u_ref)) - sigma
+        return lin, _inf_norm(r)
+
+    def result(ok: bool, msg: str = "") -> CorrectorResult:
+        return CorrectorResult(ok, u[:n].copy(), float(u[n]), lin, it, rn, msg)
+
+    lin, rn = evaluate()
     rn0 = rn
     rn_prev = math.inf
     step = math.inf
@@ -425,38 +447,36 @@ def correct(
     lu: BorderedLU | None = None
     while True:
         if not math.isfinite(rn):
-            return CorrectorResult(False, u[:n], float(u[n]), None, it, rn, "non-finite residual")
-        step_ok = newton.step_tol * (1.0 + float(np.max(np.abs(u))))
+            lin = None  # type: ignore[assignment]
+            return result(False, "non-finite residual")
+        step_ok = newton.step_tol * (1.0 + _inf_norm(u))
         if step <= step_ok and (rn <= newton.tol or rn > 0.5 * rn_prev):
-            return CorrectorResult(True, u[:n], float(u[n]), lin, it, rn)
+            return result(True)
         if rn <= newton.tol and lu is not None:
             # the next Newton correction, estimated with the last factorisation (a chord
             # step: first-order accurate), is already below step_tol: converged
             try:
-                est = float(np.max(np.abs(lu.solve(np.append(lin[0], h)))))
+                est = _inf_norm(lu.solve(r))
             except np.linalg.LinAlgError:
                 est = math.inf
             if est <= step_ok:
-                return CorrectorResult(True, u[:n], float(u[n]), lin, it, rn)
+                return result(True)
         if it >= newton.max_iter:
-            return CorrectorResult(False, u[:n], float(u[n]), lin, it, rn, "max_iter reached")
+            return result(False, "max_iter reached")
         if it >= 2 and rn > 1e4 * max(rn0, newton.tol):
-            return CorrectorResult(False, u[:n], float(u[n]), lin, it, rn, "diverging")
+            return result(False, "diverging")
         try:
             lu = BorderedLU(lin[1], lin[2], c)
-            du = lu.solve(np.append(lin[0], h))
+            du = lu.solve(r)
         except np.linalg.LinAlgError as exc:
             # exactly singular at a point that already solves G = 0 (e.g. a trial point
             # landing exactly on a branch point): accept it
-            ok = rn <= newton.tol
-            return CorrectorResult(ok, u[:n], float(u[n]), lin, it, rn, f"singular: {exc}")
+            return result(rn <= newton.tol, f"singular: {exc}")
         u -= du
         it += 1
-        step = float(np.max(np.abs(du)))
+        step = _inf_norm(du)
         rn_prev = rn
-        lin = linearize(problem, u[:n], float(u[n]))
-        h = float(np.dot(c, u - u_ref)) - sigma
-        rn = max(float(np.max(np.abs(lin[0]))) if n else 0.0, abs(h))
+        lin, rn = evaluate()
 
 
 # ---------------------------------------------------------------------------- algorithm API

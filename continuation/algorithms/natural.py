@@ -10,7 +10,6 @@ and simple smooth branches; use :class:`~continuation.algorithms.palc.PALC` othe
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 import numpy as np
@@ -74,7 +73,7 @@ class Natural(ContinuationAlgorithm):
         except np.linalg.LinAlgError as exc:
             return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
         sigma = float(np.dot(state.w * a.tau, b.u - ua))
-        new = dataclasses.replace(state, point=b, n_steps=state.n_steps + 1)
+        new = StepState(b, state.ds, state.w, state.direction, state.n_steps + 1)
         return new, StepOutcome(True, res.iters, res.residual_norm, sigma)
 
 

@@ -25,7 +25,6 @@ or the tangent turns by more than ``max_angle_deg`` (to avoid jumping between br
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import Any
 
@@ -102,7 +101,7 @@ class PALC(ContinuationAlgorithm):
                 0.0,
                 f"tangent turned by {math.degrees(math.acos(max(-1.0, cos_angle))):.1f} deg",
             )
-        new = dataclasses.replace(state, point=b, n_steps=state.n_steps + 1)
+        new = StepState(b, ds, state.w, state.direction, state.n_steps + 1)
         return new, StepOutcome(True, res.iters, res.residual_norm, ds)
 
 
