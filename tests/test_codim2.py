@@ -606,8 +606,8 @@ class TestBautinAndDoubleHopf:
         st = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-1, p_max=1)
         curve = continue_codim2(br, _only(br, "hopf"), "b2", st)
         np.testing.assert_allclose(curve.records["omega"], 1.0, atol=1e-8)
-        hh = curve.find("HH1")
-        assert len(hh) == 1 and hh[0].located and abs(hh[0].p) < 1e-8
+        hh = curve.find("user")
+        assert len(hh) == 1 and hh[0].label == "HH1" and hh[0].located and abs(hh[0].p) < 1e-8
         assert not curve.find("zh")
 
 
@@ -702,3 +702,78 @@ def test_numpy_only_hopf_curve():
     assert not curve.problem.functions.exact and curve.status is Status.PARAM_BOUND
     np.testing.assert_allclose(curve.records["B"], 1 + curve.p**2, atol=1e-7)
     np.testing.assert_allclose(curve.records["omega"], curve.p, atol=1e-7)
+
+
+class TestEmbeddedCSTR:
+    """The CSTR embedded in R^10 and rotated: y = Q u, u = (x1, x2, w), with
+    w' = -D w + g(x1, x2). The (x1, x2) dynamics do not depend on w, so every
+    bifurcation of the 2-D model (Uppal, Ray & Poore 1974) is a bifurcation of the
+    10-D one at the same parameters, with the same centre-manifold coefficients;
+    the dense orthogonal Q couples all coordinates of y."""
+
+    n = 10
+    B = 14.0
+
+    @pytest.fixture(scope="class")
+    def setup(self):
+        n = self.n
+        Q, _ = np.linalg.qr(np.random.default_rng(0).standard_normal((n, n)))
+        D = np.linspace(1.0, 3.0, n - 2)
+
+        def rhs(y, p, ops):
+            Da, B, beta = p[0], p[1], p[2]
+            u = [sum(Q[k, i] * y[k] for k in range(n)) for i in range(n)]
+            x1, x2 = u[0], u[1]
+            r = Da * (1 - x1) * ops.exp(x2)
+            F = [-x1 + r, -x2 + B * r - beta * x2]
+            F += [-D[j] * u[2 + j] + 0.1 * (j + 1) * x1 * x2 + 0.05 * x1**2 for j in range(n - 2)]
+            return ops.stack([sum(Q[i, k] * F[k] for k in range(n)) for i in range(n)])
+
+        sysn = System(rhs, tuple(f"y{i}" for i in range(n)), ("Da", "B", "beta"))
+        br = _branch(
+            sysn,
+            np.zeros(n),
+            {"Da": 0.0, "B": self.B, "beta": 2.0},
+            "Da",
+            p_min=0.0,
+            p_max=0.3,
+            ds=0.01,
+            direction="forward",
+        )
+        return Q, br
+
+    def test_fold_curve(self, setup):
+        Q, br = setup
+        st = ContinuationSettings(ds=0.05, ds_max=0.05, p_min=0.05, p_max=2.6)
+        curve = continue_codim2(br, br.find("fold")[0], "beta", st)
+        u = curve.x[:, : self.n] @ Q
+        x1, x2, beta = u[:, 0], u[:, 1], curve.p
+        np.testing.assert_allclose(beta, self.B * x1 * (1 - x1) - 1, atol=1e-8)
+        np.testing.assert_allclose(x2, 1 / (1 - x1), atol=1e-8)
+        np.testing.assert_allclose(curve.records["Da"], x1 * np.exp(-x2) / (1 - x1), atol=1e-8)
+        cp = _only(curve, "cusp")
+        assert cp.p == pytest.approx(self.B / 4 - 1, abs=1e-8)
+        assert cp.data["Da"] == pytest.approx(np.exp(-2.0), abs=1e-8)
+        beta_bt, _ = TestCSTR._bt_points(self)
+        np.testing.assert_allclose(sorted(b.p for b in curve.find("bt")), beta_bt, atol=1e-8)
+
+    def test_hopf_curve(self, setup):
+        Q, br = setup
+        st = ContinuationSettings(ds=0.05, ds_max=0.2, p_min=0.05, p_max=6.0)
+        curve = continue_codim2(br, _only(br, "hopf"), "beta", st)
+        u = curve.x[:, : self.n] @ Q
+        x1, beta = u[:, 0], curve.p
+        np.testing.assert_allclose(beta, self.B * x1 - 1 / (1 - x1) - 1, atol=1e-8)
+        beta_bt, _ = TestCSTR._bt_points(self)
+        np.testing.assert_allclose(sorted(b.p for b in curve.find("bt")), beta_bt, atol=1e-8)
+        ghs = curve.find("gh")
+        assert len(ghs) == 2
+        prob = curve.problem
+        k = int(np.argmax(curve.records["kappa"]))
+        a_ref = _planar_lyapunov_value(CSTR, u[k, :2], prob.param_vector(curve.x[k], beta[k]))
+        for gh in ghs:
+            ugh = gh.x[: self.n] @ Q
+            a_gh = _planar_lyapunov_value(CSTR, ugh[:2], prob.param_vector(gh.x, gh.p))
+            assert abs(a_gh) < 1e-7 * abs(a_ref)
+        assert not curve.find("zh") and not curve.find("user")
+        assert curve.newton_iters.mean() < 4

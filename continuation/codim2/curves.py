@@ -129,7 +129,8 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
                 tangent=sp.tangent,
             )
         )
-    return dataclasses.replace(branch, special_points=tuple(out))
+    kept = tuple(n for n in getattr(branch, "event_names", ()) if not n.startswith(_PREFIX))
+    return dataclasses.replace(branch, special_points=tuple(out), event_names=kept)
 
 
 def _curve_settings(settings: ContinuationSettings | None) -> ContinuationSettings:
