@@ -153,7 +153,11 @@ class EquilibriumProblem:
         Gz : ndarray (n, n), or SciPy CSC matrix when ``self.sparse``
         Gp : ndarray, shape (n,)
         """
-        f, J, Jp = self.system.linearize(z, self.param_vector(p), sparse=bool(self.sparse))
+        pv = self.param_vector(p)
+        lin = getattr(self.system, "linearize", None)
+        if lin is None:  # a DynamicalSystem that is not a System
+            return self.residual(z, p), self.jacobian(z, p), self.dp(z, p)
+        f, J, Jp = lin(z, pv, sparse=bool(self.sparse))
         return f, J, Jp[:, self._index]
 
     def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
