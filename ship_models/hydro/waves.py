@@ -103,6 +103,19 @@ def sinc(w: Any, ops: Ops = NUMPY_OPS) -> Any:
     return ops.if_else(small, series, ops.sin(w_safe) / w_safe)
 
 
+def sinc_g1(w: Any, ops: Ops = NUMPY_OPS) -> tuple[Any, Any]:
+    """``(sinc(w), g1(w))`` sharing one sine and cosine (smooth, elementwise)."""
+    small = ops.abs(w) < _SMALL
+    w_safe = ops.if_else(small, 1.0, w)
+    inv = 1.0 / w_safe
+    sn = ops.sin(w_safe) * inv
+    g = (sn - ops.cos(w_safe)) * inv
+    w2 = w * w
+    s_series = 1.0 - w2 / 6.0 + w2 * w2 / 120.0 - w2 * w2 * w2 / 5040.0
+    g_series = w / 3.0 - w * w2 / 30.0 + w * w2 * w2 / 840.0
+    return ops.if_else(small, s_series, sn), ops.if_else(small, g_series, g)
+
+
 def g1(w: Any, ops: Ops = NUMPY_OPS) -> Any:
     """``(sin w - w cos w)/w^2`` (odd, ``~ w/3`` near 0), smooth, elementwise."""
     small = ops.abs(w) < _SMALL
@@ -200,12 +213,12 @@ class WaveStrips:
         wz = _const(self.wz, ops)
         b = _const(self.b, ops)
         ekz = ops.exp(k * zeta)
-        arg = k * s * b
         base = wz * ekz * 2.0 * b
-        c_int = base * sinc(arg, ops)
+        sn, gg = sinc_g1(k * s * b, ops)
+        c_int = base * sn
         C = _rowsum(c_int, ops)
         Cz = _rowsum(c_int * zeta, ops)
-        Sy = _rowsum(wz * ekz * 2.0 * b * b * g1(arg, ops), ops)
+        Sy = _rowsum(base * b * gg, ops)
         return C, Cz, Sy
 
     def forces(
@@ -277,4 +290,4 @@ class WaveStrips:
         return X, Y, N, K
 
 
-__all__ = ["WaveStrips", "g1", "sinc"]
+__all__ = ["WaveStrips", "g1", "sinc", "sinc_g1"]
