@@ -306,6 +306,24 @@ class TestCuspNormalForm:
         assert abs(cp.p) < 1e-8 and abs(cp.data["b1"]) < 1e-8 and abs(cp.x[0]) < 1e-6
         assert not curve.find("bt") and not curve.find("zh")
 
+    def test_user_event_and_one_direction(self):
+        from continuation.events import Event
+
+        br = _branch(CUSP, [-1.5], {"b1": -1.0, "b2": 1.0}, "b1", p_min=-2, p_max=2, ds=0.05)
+        fold = min(br.find("fold"), key=lambda s: s.p)  # lower sheet: x > 0, b1 < 0
+        ev = Event("b1_half", lambda z, p: z[1] - 0.5)
+        st = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-0.5, p_max=2.0)
+        curve = continue_codim2(br, fold, "b2", st, direction="backward", events=(ev,))
+        assert curve.event_names == ("b1_half",)
+        # backward (b2 decreasing) from the x > 0 sheet through the cusp onto the x < 0
+        # sheet, where b1 = -2 x^3 > 0 reaches 0.5
+        hit = curve.find("b1_half")
+        assert len(hit) == 1 and hit[0].located
+        x = -(0.25 ** (1 / 3))
+        assert hit[0].p == pytest.approx(3 * x**2, abs=1e-8)
+        assert hit[0].x[0] == pytest.approx(x, abs=1e-8)
+        assert len(curve.find("cusp")) == 1
+
     def test_rows_solve_the_augmented_system(self, curve):
         prob = curve.problem
         res = [np.abs(prob.residual(z, p)).max() for z, p in zip(curve.x, curve.p, strict=True)]
@@ -631,6 +649,20 @@ class TestRenormalisation:
             np.testing.assert_allclose(lam**2, -P.kappa(z), atol=1e-8)
         assert len(curve.find("bt")) == 1
         _check_invariants(curve)
+
+    def test_save_load_roundtrip(self, tmp_path):
+        from continuation.branch import Branch
+
+        br = _branch(
+            BT, [0.0, 0.0], {"b1": 0.1, "b2": -1.0, "s": -1.0}, "b1", p_min=-1, p_max=1, ds=0.02
+        )
+        st = ContinuationSettings(ds=0.02, ds_max=0.05, p_min=-1.5, p_max=0.5)
+        curve = continue_codim2(br, _only(br, "hopf"), "b2", st)
+        back = Branch.load(curve.save(tmp_path / "hopf_curve"))
+        np.testing.assert_array_equal(back.x, curve.x)
+        np.testing.assert_array_equal(back.records["omega"], curve.records["omega"])
+        assert back.state_names == ("x", "y", "b1", "kappa", "v_x", "v_y")
+        assert [s.label for s in back.special_points] == ["BT1"]
 
 
 class TestInputValidation:

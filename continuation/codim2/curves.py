@@ -220,6 +220,23 @@ def _concat(pieces: Sequence[Any], status: Any, message: str) -> Any:
     )
 
 
+def _first_row(br: Any, status: Any) -> Any:
+    """A one-row branch holding the first row of ``br``."""
+    return dataclasses.replace(
+        br,
+        p=br.p[:1],
+        x=br.x[:1],
+        eigenvalues=br.eigenvalues[:1],
+        n_unstable=br.n_unstable[:1],
+        ds=np.zeros(1),
+        newton_iters=br.newton_iters[:1],
+        records={k: v[:1] for k, v in br.records.items()},
+        special_points=(),
+        status=status,
+        message=status.value,
+    )
+
+
 def _relabel_all(br: Any) -> Any:
     """Number the codim-2 labels (BT1, BT2, ...) along the final branch."""
     counters: dict[str, int] = {}
@@ -253,28 +270,33 @@ def _one_direction(
     ds = abs(settings.ds)
     steps_left = settings.max_steps
     status, message = Status.MAX_STEPS, ""
-    while True:
-        st = dataclasses.replace(settings, ds=sign * ds, max_steps=steps_left)
-        br = run(prob, z, p, st)
-        renorm = br.status is Status.EVENT and _RENORM in br.message
-        br = dataclasses.replace(
-            br, special_points=tuple(s for s in br.special_points if s.label != _RENORM)
-        )
-        pieces.append(br)
-        status, message = br.status, br.message
-        steps_left -= max(len(br) - 1, 0)
-        if not renorm or len(br) < 2 or steps_left < 1 or len(pieces) > max_restarts:
-            if renorm:
-                status = Status.MAX_STEPS if steps_left < 1 else Status.SINGULAR
-                message = "normalisation of the Hopf system degenerated (too many restarts)"
-            break
-        z, p = br.x[-1], float(br.p[-1])
-        dp = float(br.p[-1] - br.p[-2])
-        sign = 1.0 if dp > 0 else -1.0 if dp < 0 else sign
-        ds = float(np.clip(abs(br.ds[-1]) or abs(settings.ds), settings.ds_min, settings.ds_max))
-        prob = prob.with_normalisation(z, p)  # type: ignore[attr-defined]
-        z = prob.z0
-        log.info("Hopf curve: new normalisation at %s=%.8g", prob.free, p)
+    try:
+        while True:
+            st = dataclasses.replace(settings, ds=sign * ds, max_steps=steps_left)
+            br = run(prob, z, p, st)
+            renorm = br.status is Status.EVENT and _RENORM in br.message
+            br = dataclasses.replace(
+                br, special_points=tuple(s for s in br.special_points if s.label != _RENORM)
+            )
+            pieces.append(br)
+            status, message = br.status, br.message
+            steps_left -= max(len(br) - 1, 0)
+            if not renorm or len(br) < 2 or steps_left < 1 or len(pieces) > max_restarts:
+                if renorm:
+                    status = Status.MAX_STEPS if steps_left < 1 else Status.SINGULAR
+                    message = "normalisation of the Hopf system degenerated (too many restarts)"
+                break
+            z, p = br.x[-1], float(br.p[-1])
+            dp = float(br.p[-1] - br.p[-2])
+            sign = 1.0 if dp > 0 else -1.0 if dp < 0 else sign
+            ds = float(np.clip(abs(br.ds[-1]) or ds, settings.ds_min, settings.ds_max))
+            prob = prob.with_normalisation(z, p)  # type: ignore[attr-defined]
+            z = prob.z0
+            log.info("Hopf curve: new normalisation at %s=%.8g", prob.free, p)
+    except KeyboardInterrupt:
+        if not pieces:
+            raise
+        status, message = Status.INTERRUPTED, Status.INTERRUPTED.value
     if len(pieces) > 1:
         message = f"{message} ({len(pieces) - 1} renormalisation restart(s))"
     return _concat(pieces, status, message)
@@ -402,28 +424,28 @@ def continue_codim2(
         return relabel_codim2(br, prob)
 
     sgn = 1.0 if st.ds > 0 else -1.0
-    interrupted = False
-    try:
-        if direction == "both":
-            back = _one_direction(problem, -sgn, st, run, max_restarts)
-            if back.status is Status.INTERRUPTED:
-                curve = _reverse(back)
-                interrupted = True
-            else:
-                fwd = _one_direction(problem, sgn, st, run, max_restarts)
-                status = fwd.status
-                for b in (fwd, back):
-                    if not b.status.ok:
-                        status = b.status
-                msg = f"backward: {back.message}; forward: {fwd.message}"
-                curve = _concat([_reverse(back), fwd], status, msg)
+    if direction == "both":
+        back = _one_direction(problem, -sgn, st, run, max_restarts)
+        if back.status is Status.INTERRUPTED:
+            curve = _reverse(back)
         else:
-            s = sgn if direction == "forward" else -sgn
-            curve = _one_direction(problem, s, st, run, max_restarts)
-    except KeyboardInterrupt:  # between pieces: nothing finished to return
-        raise
+            try:
+                fwd = _one_direction(problem, sgn, st, run, max_restarts)
+            except KeyboardInterrupt:  # before the first forward row: keep the backward part
+                fwd = _first_row(back, Status.INTERRUPTED)
+            status = fwd.status
+            for b in (fwd, back):
+                if not b.status.ok:
+                    status = b.status
+            if Status.INTERRUPTED in (back.status, fwd.status):
+                status = Status.INTERRUPTED
+            msg = f"backward: {back.message}; forward: {fwd.message}"
+            curve = _concat([_reverse(back), fwd], status, msg)
+    else:
+        s = sgn if direction == "forward" else -sgn
+        curve = _one_direction(problem, s, st, run, max_restarts)
     curve = dataclasses.replace(_relabel_all(curve), problem=problem)
-    if interrupted or curve.status is Status.INTERRUPTED:
+    if curve.status is Status.INTERRUPTED:
         return curve
     if throw and not curve.status.ok:
         raise ContinuationError(curve.message or curve.status.value)
