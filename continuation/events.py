@@ -121,19 +121,42 @@ def critical_pair(eigs: ComplexArray, imag_tol: float) -> complex | None:
     return complex(c[int(np.argmin(np.abs(c.real)))])
 
 
+def crossing_pair(
+    eig_a: ComplexArray, eig_b: ComplexArray, imag_tol: float
+) -> tuple[complex | None, complex | None]:
+    """Match the complex eigenvalue that crosses the imaginary axis between two rows.
+
+    Among the eigenvalues with ``Im > 0`` at rows ``a`` and ``b``, the pair
+    ``(lambda_a, lambda_b)`` with real parts of opposite signs (or one zero) that are
+    closest to each other; eigenvalues move continuously, so the crossing pair is the
+    nearest such match. ``(None, None)`` if there is none.
+    """
+    va = np.asarray(eig_a, dtype=complex)
+    vb = np.asarray(eig_b, dtype=complex)
+    ca, cb = va[complex_mask(va, imag_tol)], vb[complex_mask(vb, imag_tol)]
+    if ca.size == 0 or cb.size == 0:
+        return None, None
+    dist = np.abs(ca[:, None] - cb[None, :])
+    opposite = ca.real[:, None] * cb.real[None, :] <= 0
+    if not np.any(opposite):
+        return None, None
+    dist[~opposite] = np.inf
+    i, j = np.unravel_index(int(np.argmin(dist)), dist.shape)
+    return complex(ca[i]), complex(cb[j])
+
+
 class HopfTest:
     """Test function for locating a Hopf point between rows ``a`` and ``b``.
 
-    The critical pair is the complex eigenvalue (``Im > 0``) nearest the imaginary axis
-    at each row; at a trial point at fraction ``t`` of the step, the tracked eigenvalue
-    is the complex one nearest ``(1 - t) lambda_a + t lambda_b``, and the test value is
-    its real part. ``omega`` is its imaginary part.
+    The crossing pair ``(lambda_a, lambda_b)`` is chosen by :func:`crossing_pair`; at a
+    trial point at fraction ``t`` of the step, the tracked eigenvalue is the complex one
+    nearest ``(1 - t) lambda_a + t lambda_b``, and the test value is its real part.
+    ``omega`` is its imaginary part.
     """
 
     def __init__(self, eig_a: ComplexArray, eig_b: ComplexArray, imag_tol: float) -> None:
         self.imag_tol = imag_tol
-        self.lam_a = critical_pair(eig_a, imag_tol)
-        self.lam_b = critical_pair(eig_b, imag_tol)
+        self.lam_a, self.lam_b = crossing_pair(eig_a, eig_b, imag_tol)
 
     @property
     def ok(self) -> bool:
@@ -162,6 +185,7 @@ class HopfTest:
 __all__ = [
     "Event",
     "HopfTest",
+    "crossing_pair",
     "bp_test",
     "complex_mask",
     "critical_pair",

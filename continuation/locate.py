@@ -8,7 +8,9 @@ produced row ``b`` from row ``a``. A trial point at ``sigma`` is predicted on th
 branch and strictly inside the step. The zero of the test function ``g(sigma)`` is
 found by the Illinois variant of regula falsi (Dowell & Jarratt 1971, BIT 11:168-174),
 which keeps a sign-changing bracket and converges superlinearly; it stops when the
-bracket or the last secant correction is below ``tol`` (in ``sigma``).
+bracket or the last secant correction is below ``tol`` (in ``sigma``). A point counts
+as located only if ``|g|`` there is below ``1e-6 max(|g_a|, |g_b|)``, so a sign change
+across a jump of ``g`` is reported as bracketed, never as a zero.
 """
 
 from __future__ import annotations
@@ -148,6 +150,7 @@ def locate_zero(
     if not (sigma_b > 0 and g_a * g_b < 0 and math.isfinite(g_a) and math.isfinite(g_b)):
         return LocateResult(0.0, a, g_a, False, 0, "test function does not change sign")
     g_small = 1e-14 * max(abs(g_a), abs(g_b))
+    g_jump = 1e-6  # a located zero must have |g| <= g_jump * max(|g_a|, |g_b|)
     lo, hi, glo, ghi = 0.0, sigma_b, g_a, g_b  # glo/ghi are Illinois-scaled values
     end_lo, end_hi = (0.0, a, g_a), (sigma_b, b, g_b)  # true values at the bracket ends
     side = 0
@@ -181,6 +184,12 @@ def locate_zero(
             side = -1
         if hi - lo <= tol or abs(s - s_prev) <= tol:
             best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
+            if abs(best[2]) > g_jump * max(abs(g_a), abs(g_b)):
+                # converged onto a jump of g, not a zero (e.g. a Hopf test that switched
+                # between eigenvalue pairs): report the bracket only
+                return LocateResult(
+                    best[0], best[1], best[2], False, it, "test function jumps, no zero"
+                )
             return LocateResult(best[0], best[1], best[2], True, it)
         s_prev = s
     best = min(end_lo, end_hi, key=lambda e: abs(e[2]))

@@ -210,3 +210,54 @@ def test_periodic_branch_closes_with_two_folds():
     ps = sorted(f.p for f in folds)
     assert ps[0] == pytest.approx(-1.0, abs=1e-10) and ps[1] == pytest.approx(1.0, abs=1e-10)
     assert_invariants(br)
+
+
+def test_hopf_picks_the_crossing_pair_not_the_nearest():
+    """Two oscillators: pair A stays at Re = -0.01 (omega 3), pair B = mu +- i crosses.
+
+    At the row before the crossing pair A is nearer the axis than pair B; the Hopf must
+    still be located at mu = 0 with omega = 1.
+    """
+    from continuation.system import System
+
+    def rhs(x, p, ops):
+        mu = p[0]
+        r2 = x[2] ** 2 + x[3] ** 2
+        return ops.stack(
+            [
+                -0.01 * x[0] - 3 * x[1],
+                3 * x[0] - 0.01 * x[1],
+                mu * x[2] - x[3] - x[2] * r2,
+                x[2] + mu * x[3] - x[3] * r2,
+            ]
+        )
+
+    sys = System(rhs, ("a1", "a2", "b1", "b2"), ("mu",))
+    br = continue_equilibria(
+        sys, np.zeros(4), {"mu": -0.5}, "mu", p_max=0.5, ds=0.2, ds_max=0.3, direction="forward"
+    )
+    (h,) = br.find("hopf")
+    assert h.located and abs(h.p) < TOL
+    assert h.data["omega"] == pytest.approx(1.0, abs=1e-10)
+    assert_invariants(br)
+
+
+def test_event_on_a_jump_is_bracketed_not_located():
+    jump = Event("jump", lambda x, p: 1.0 if p > 0.3 else -1.0)
+    br = continue_equilibria(
+        fold_normal_form(),
+        [1.0],
+        {"mu": 1.0},
+        "mu",
+        p_min=-1.0,
+        p_max=2.0,
+        events=[jump],
+        direction="forward",
+        ds=-0.01,
+    )
+    jumps = br.find("jump")
+    assert len(jumps) == 2  # mu passes 0.3 on the way down and on the way back up
+    for e in jumps:
+        assert not e.located
+        lo, hi = sorted(e.bracket)
+        assert lo <= 0.3 <= hi
