@@ -397,7 +397,7 @@ class VesselData(Mapping[str, Coefficient]):
         return len(self.coefficients)
 
     def __hash__(self) -> int:
-        return id(self)
+        return hash((self.name, tuple(sorted(self.coefficients.items()))))
 
     def _resolve_key(self, key: str) -> str:
         if key in self.coefficients:

@@ -255,3 +255,20 @@ def test_loading_condition_marginally_meets_is_code(data):
     bare = gz_curve(data.hull, 1.0, heel_step=np.deg2rad(2.0), n_terms=8)
     assert is_code_margin(bare) < 0  # the bare hull (freeboard 0.27-0.57 m) does not comply
     assert bare.vanishing_angle < data.gz.vanishing_angle
+
+
+def test_wave_lift_vanishes_without_speed_or_heading_and_is_linear_in_u(data):
+    """Slender-body lift ~ u * (lateral orbital velocity ~ sin chi): zero at u = 0 and at
+    chi = 0, linear in u, and never a surge force."""
+    w = data.forces.waves
+    for xi in (0.1, 0.6):
+        with_l = np.array(w.forces(xi, 0.0, 0.4, 1 / 9.2, 1.5, lift=True))
+        without = np.array(w.forces(xi, 0.0, 0.4, 1 / 9.2, 1.5, lift=False))
+        np.testing.assert_allclose(with_l, without, rtol=0, atol=0)
+        d1 = np.array(w.forces(xi, 4.0, 0.4, 1 / 9.2, 1.5)) - without
+        d2 = np.array(w.forces(xi, 8.0, 0.4, 1 / 9.2, 1.5)) - without
+        np.testing.assert_allclose(d2, 2 * d1, rtol=1e-12, atol=1e-6)
+        assert d1[0] == 0.0
+        assert abs(d1[3] + w.z_H * d1[1]) < 1e-9 * abs(d1[1])  # K_L = -z_H Y_L
+        zero_heading = np.array(w.forces(xi, 8.0, 0.0, 1 / 9.2, 1.5))
+        assert np.all(np.abs(zero_heading[1:]) < 1e-9)
