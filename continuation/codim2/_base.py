@@ -216,7 +216,7 @@ class AugmentedProblem:
     @classmethod
     def from_state(cls, *args: Any, **kwargs: Any) -> AugmentedProblem:  # pragma: no cover
         """Build from a state at the codim-1 point (implemented by subclasses)."""
-        raise NotImplementedError
+        raise NotImplementedError(f"{cls.__name__} does not implement from_state")
 
     @classmethod
     def from_point(

@@ -87,8 +87,8 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
 
     Zeros that ``problem.classify`` rejects are dropped; the rest get kind ``bt``,
     ``cusp``, ``zh``, ``gh`` (or ``user`` for ``hh``), labels ``BT1``, ``CP1``, ...,
-    and ``data`` with the first parameter (and ``omega``, ``kappa`` on Hopf curves),
-    the test-function value ``g`` and, for ``gh`` points, ``l1``.
+    and ``data`` with the first parameter (and ``omega``, ``kappa`` on Hopf curves)
+    and the test-function value ``g`` at the located point.
     """
     from ..branch import SpecialPoint
 

@@ -152,10 +152,10 @@ class HopfProblem(AugmentedProblem):
         if (self.c is None) != (self.sigma is None):
             raise ValueError("give both `c` and `sigma`, or neither (then `z0` is needed)")
         if self.c is None:
-            if self.z0 is None:
-                raise ValueError("`c` and `sigma` are required when `z0` is not given")
+            if self.z0 is None or self.p0 is None:
+                raise ValueError("`c` and `sigma` are required when `z0`, `p0` are not given")
             z0 = np.array(self.z0)
-            J0 = self.state_jacobian(z0, self.p0 or 0.0)
+            J0 = self.state_jacobian(z0, self.p0)
             vh, c, sigma = normalisation(J0, self.vector(z0), self.kappa(z0))
             z0[self.n + 2 :] = vh
             z0.setflags(write=False)
