@@ -16,6 +16,8 @@ from .errors import ConvergenceError
 from .settings import NewtonSettings
 from .status import Status
 
+_GETRF, _GETRS = la.get_lapack_funcs(("getrf", "getrs"), (np.zeros(1),))
+
 
 @dataclass(frozen=True)
 class NewtonResult:
@@ -51,10 +53,12 @@ def solve_linear(A: Any, b: FloatArray) -> FloatArray:
         lu = spla.splu(sp.csc_matrix(A))
         x = lu.solve(np.asarray(b, dtype=float))
     else:
-        lu_piv = la.lu_factor(np.asarray(A, dtype=float), check_finite=False)
-        if np.any(np.diag(lu_piv[0]) == 0.0):
+        # LAPACK getrf/getrs directly: the factorisation of scipy.linalg.lu_factor without
+        # its per-call overhead and without a LinAlgWarning on exactly singular matrices
+        lu, piv, info = _GETRF(np.asarray(A, dtype=float))
+        if info != 0:
             raise np.linalg.LinAlgError("singular matrix")
-        x = la.lu_solve(lu_piv, b, check_finite=False)
+        x, info = _GETRS(lu, piv, np.asarray(b, dtype=float))
     if not np.all(np.isfinite(x)):
         raise np.linalg.LinAlgError("singular or ill-conditioned matrix")
     return np.asarray(x, dtype=float)

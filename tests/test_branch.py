@@ -109,6 +109,14 @@ def test_save_load_round_trip(cstr_branch, tmp_path):
         Branch.load(tmp_path / "missing.npz")
 
 
+def test_save_load_default_bounds(tmp_path):
+    br = continue_equilibria(fold_normal_form(), [1.0], {"mu": 1.0}, "mu", max_steps=20)
+    assert br.settings.p_min == -np.inf
+    br2 = Branch.load(br.save(tmp_path / "fold.npz"))
+    assert br2.settings == br.settings and br2.status is Status.MAX_STEPS
+    assert br2.event_names == () and len(br2.find("fold")) == len(br.find("fold")) == 1
+
+
 def test_csv_round_trip(cstr_branch, tmp_path):
     br = cstr_branch
     path = br.to_csv(tmp_path / "cstr.csv")
