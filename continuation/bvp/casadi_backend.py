@@ -1,0 +1,338 @@
+r"""CasADi construction of the collocation residual of a connecting orbit, built once.
+
+:func:`build_connection_functions` turns a :class:`~continuation.system.System`
+and an unknown-vector :class:`ConnectionLayout` into compiled ``ca.Function`` s
+
+* ``G(w, P, h, T, Qm, Qp, shift, ref, dref, pin) -> (n_eq,)``, the residual,
+* ``G_w`` (sparse ``(n_eq, n_eq)``), its exact Jacobian in the unknowns ``w``,
+* ``G_P`` (sparse ``(n_eq, n_params)``), its exact Jacobian in the full parameter
+  vector ``P``,
+
+where every quantity that may change without changing the *structure* of the
+problem (mesh spacing ``h``, truncation time ``T``, reference Schur bases
+``Qm``/``Qp``, the periodic ``shift``, the phase-condition reference orbit and the
+pinned value) is a numeric input. Adapting the mesh with a fixed number of
+intervals, changing ``T`` or updating a reference therefore never rebuilds the
+functions. The right-hand side is the system's own CasADi trace, evaluated on all
+``N m`` collocation points at once through ``Function.map``, so the Jacobian
+re-uses the mapped derivative of ``f`` instead of growing an expression per point.
+
+Unknowns, in this order (see :class:`ConnectionLayout`)::
+
+    w = [ vec(X) (n M),  x_-  (n),  [x_+ (n)],  vec(R_-) ((n-k_-) k_-),
+          vec(R_+) ((n-k_+) k_+),  unknown parameters (q) ]
+
+with ``X`` the ``(n, M)`` matrix of values at the ``M = N (m + 1) + 1`` mesh and
+collocation points (interval by interval, so the Jacobian is almost block
+banded). Equations, in this order::
+
+    collocation   (1/(h_j T)) sum_l D[k,l] X_{j,l} - f(X_{j,k}, P)         (n N m)
+    continuity    sum_l e[l] X_{j,l} - x_{j+1}                              (n N)
+    equilibria    f(x_-, P) = 0   [and f(x_+, P) = 0]                       (n or 2n)
+    Riccati (-)   T21 + T22 R - R T11 - R T12 R = 0,  T = Qm^T A_-^T Qm     ((n-k_-) k_-)
+    boundary (-)  (Qm_1 + Qm_2 R_-)^T (x(0) - x_-) = 0                      (k_-)
+    Riccati (+)   same with Qp and A_+^T                                    ((n-k_+) k_+)
+    boundary (+)  (Qp_1 + Qp_2 R_+)^T (x(T) - x_+) = 0                      (k_+)
+    phase         sum_j h_j sum_k b_k <X_{j,k} - ref_{j,k}, dref_{j,k}> = 0   or   pin  (1)
+
+``A_pm = df/dx(x_pm, P)``; ``x_+ = x_- + shift`` when the end point is the start
+point shifted by a period. The Riccati blocks make the projection boundary
+conditions smooth functions of the unknowns (see :mod:`continuation.bvp.connection`).
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from .._types import FloatArray
+from .collocation import CollocationMesh
+
+
+@dataclass(frozen=True)
+class ConnectionLayout:
+    """Sizes and positions of the unknowns of a discretised connection.
+
+    Attributes
+    ----------
+    n : int
+        State dimension.
+    n_intervals, degree : int
+        ``N`` and ``m`` of the mesh.
+    separate_to : bool
+        ``x_+`` is its own unknown (else ``x_+ = x_- + shift``).
+    k_minus : int
+        ``dim E^s(A_-^T) = n - dim W^u(x_-)``: boundary conditions at ``t = 0``.
+    k_plus : int
+        ``dim E^u(A_+^T) = n - dim W^s(x_+)``: boundary conditions at ``t = T``.
+    unknown_param_index : tuple of int
+        Positions, in the full parameter vector, of the parameters solved for.
+    pin : tuple of int or None
+        ``(state index, mesh node index)`` of a pinned-value phase condition, or
+        None for the integral phase condition.
+    """
+
+    n: int
+    n_intervals: int
+    degree: int
+    separate_to: bool
+    k_minus: int
+    k_plus: int
+    unknown_param_index: tuple[int, ...]
+    pin: tuple[int, int] | None
+
+    @property
+    def n_points(self) -> int:
+        """``M = N (m + 1) + 1``."""
+        return self.n_intervals * (self.degree + 1) + 1
+
+    @property
+    def n_stages(self) -> int:
+        """``N m`` collocation points."""
+        return self.n_intervals * self.degree
+
+    def _sizes(self) -> list[tuple[str, int]]:
+        n, km, kp = self.n, self.k_minus, self.k_plus
+        return [
+            ("orbit", n * self.n_points),
+            ("x_from", n),
+            ("x_to", n if self.separate_to else 0),
+            ("R_minus", (n - km) * km),
+            ("R_plus", (n - kp) * kp),
+            ("params", len(self.unknown_param_index)),
+        ]
+
+    def slices(self) -> dict[str, slice]:
+        """Slices of each block in ``w``."""
+        out, pos = {}, 0
+        for name, size in self._sizes():
+            out[name] = slice(pos, pos + size)
+            pos += size
+        return out
+
+    @property
+    def n_unknowns(self) -> int:
+        """Length of ``w``."""
+        return sum(s for _, s in self._sizes())
+
+
+def _stage_columns(N: int, m: int) -> list[int]:
+    return [j * (m + 1) + k for j in range(N) for k in range(1, m + 1)]
+
+
+def _derivative_matrix(N: int, m: int, D: FloatArray) -> sp.csc_matrix:
+    """``Dbig`` (M, N m): ``(X @ Dbig)[:, j m + k - 1] = sum_l D[k-1, l] X[:, j (m+1) + l]``."""
+    rows, cols, vals = [], [], []
+    for j in range(N):
+        for k in range(m):
+            for l in range(m + 1):
+                rows.append(j * (m + 1) + l)
+                cols.append(j * m + k)
+                vals.append(D[k, l])
+    return sp.csc_matrix((vals, (rows, cols)), shape=(N * (m + 1) + 1, N * m))
+
+
+def _continuity_matrix(N: int, m: int, e: FloatArray) -> sp.csc_matrix:
+    """``Cbig`` (M, N): ``(X @ Cbig)[:, j] = sum_l e[l] X_{j,l} - x_{j+1}``."""
+    rows, cols, vals = [], [], []
+    for j in range(N):
+        for l in range(m + 1):
+            rows.append(j * (m + 1) + l)
+            cols.append(j)
+            vals.append(e[l])
+        rows.append((j + 1) * (m + 1))
+        cols.append(j)
+        vals.append(-1.0)
+    return sp.csc_matrix((vals, (rows, cols)), shape=(N * (m + 1) + 1, N))
+
+
+def _to_dm(A: sp.spmatrix) -> ca.DM:
+    A = sp.csc_matrix(A)
+    A.sort_indices()
+    sparsity = ca.Sparsity(A.shape[0], A.shape[1], A.indptr.tolist(), A.indices.tolist())
+    return ca.DM(sparsity, A.data.tolist())
+
+
+def _riccati(A: Any, Q: Any, k: int, R: Any) -> tuple[Any, Any]:
+    """Riccati residual and the basis ``Q_1 + Q_2 R`` of the invariant subspace of ``A^T``."""
+    n = Q.shape[0]
+    M = ca.mtimes([Q.T, A.T, Q])
+    T11, T12 = M[:k, :k], M[:k, k:]
+    T21, T22 = M[k:, :k], M[k:, k:]
+    res = T21 + ca.mtimes(T22, R) - ca.mtimes(R, T11) - ca.mtimes([R, T12, R])
+    Y = Q[:, :k] + ca.mtimes(Q[:, k:], R) if k < n else Q
+    return res, Y
+
+
+class ConnectionFunctions:
+    """Compiled residual and Jacobians of one :class:`ConnectionLayout` (see module doc).
+
+    Build with :func:`build_connection_functions`, which caches per system and layout.
+
+    Attributes
+    ----------
+    layout : ConnectionLayout
+    G, G_w, G_P : casadi.Function
+        Residual, Jacobian in ``w`` (sparse) and Jacobian in ``P`` (sparse).
+    n_equations : int
+    """
+
+    def __init__(self, system: Any, layout: ConnectionLayout) -> None:
+        fns = system.casadi_functions()
+        f_fun, jac_fun = fns["f"], fns["jac"]
+        n, N, m = layout.n, layout.n_intervals, layout.degree
+        M = layout.n_points
+        n_par = system.n_params
+        sl = layout.slices()
+        self.layout = layout
+        mesh = CollocationMesh(N, m, 1.0)
+
+        w = ca.MX.sym("w", layout.n_unknowns)
+        P = ca.MX.sym("P", n_par)
+        h = ca.MX.sym("h", N)
+        T = ca.MX.sym("T")
+        Qm = ca.MX.sym("Qm", n, n)
+        Qp = ca.MX.sym("Qp", n, n)
+        shift = ca.MX.sym("shift", n)
+        ref = ca.MX.sym("ref", n, N * m)
+        dref = ca.MX.sym("dref", n, N * m)
+        pin = ca.MX.sym("pin")
+
+        # effective parameter vector: unknown parameters come from w
+        upar = w[sl["params"]]
+        pos = {i: j for j, i in enumerate(layout.unknown_param_index)}
+        if n_par:
+            P_eff = ca.vertcat(*[upar[pos[i]] if i in pos else P[i] for i in range(n_par)])
+        else:
+            P_eff = P
+
+        X = ca.reshape(w[sl["orbit"]], n, M)
+        x_from = w[sl["x_from"]]
+        x_to = w[sl["x_to"]] if layout.separate_to else x_from + shift
+
+        stage_cols = _stage_columns(N, m)
+        Xs = X[:, stage_cols]
+        # h repeated for each stage: (1, N m)
+        E = sp.kron(sp.eye(N), np.ones((1, m)), format="csc")
+        h_rep = ca.mtimes(h.T, _to_dm(E))
+        Dbig = _to_dm(_derivative_matrix(N, m, mesh.D))
+        Cbig = _to_dm(_continuity_matrix(N, m, mesh.e))
+        fmap = f_fun.map("fmap", "serial", N * m, [1], [])
+        F = fmap(Xs, P_eff)
+        colloc = ca.mtimes(X, Dbig) / ca.repmat(h_rep * T, n, 1) - F
+        cont = ca.mtimes(X, Cbig)
+
+        eqs = [ca.vec(colloc), ca.vec(cont), f_fun(x_from, P_eff)]
+        if layout.separate_to:
+            eqs.append(f_fun(x_to, P_eff))
+        km, kp = layout.k_minus, layout.k_plus
+        if km > 0:
+            A_m = jac_fun(x_from, P_eff)
+            Rm = ca.reshape(w[sl["R_minus"]], n - km, km)
+            ric, Y = _riccati(A_m, Qm, km, Rm)
+            if km < n:
+                eqs.append(ca.vec(ric))
+            eqs.append(ca.mtimes(Y.T, X[:, 0] - x_from))
+        if kp > 0:
+            A_p = jac_fun(x_to, P_eff)
+            Rp = ca.reshape(w[sl["R_plus"]], n - kp, kp)
+            ric, Y = _riccati(A_p, Qp, kp, Rp)
+            if kp < n:
+                eqs.append(ca.vec(ric))
+            eqs.append(ca.mtimes(Y.T, X[:, M - 1] - x_to))
+        if layout.pin is None:
+            b_rep = ca.DM(np.tile(mesh.b, N)).T  # (1, N m)
+            wq = h_rep * b_rep
+            phase = ca.sum2(ca.sum1((Xs - ref) * dref) * wq)
+        else:
+            i_state, i_node = layout.pin
+            phase = X[i_state, i_node * (m + 1)] - pin
+        eqs.append(phase)
+        g = ca.vertcat(*eqs)
+        if g.shape[0] != layout.n_unknowns:
+            raise ValueError(
+                f"internal count mismatch: {g.shape[0]} equations for {layout.n_unknowns} unknowns"
+            )
+        inputs = [w, P, h, T, Qm, Qp, shift, ref, dref, pin]
+        names = ["w", "P", "h", "T", "Qm", "Qp", "shift", "ref", "dref", "pin"]
+        self.G = ca.Function("G", inputs, [g], names, ["G"])
+        self.G_w = ca.Function("G_w", inputs, [ca.jacobian(g, w)], names, ["G_w"])
+        self.G_P = ca.Function("G_P", inputs, [ca.jacobian(g, P)], names, ["G_P"])
+        self.G_all = ca.Function(
+            "G_all",
+            inputs,
+            [g, ca.jacobian(g, w), ca.jacobian(g, P)],
+            names,
+            ["G", "G_w", "G_P"],
+        )
+        self.n_equations = int(g.shape[0])
+        spw = self.G_w.sparsity_out(0)
+        self._w_pattern = (
+            np.array(spw.row(), dtype=np.int32),
+            np.array(spw.colind(), dtype=np.int32),
+            spw.shape,
+        )
+        spp = self.G_P.sparsity_out(0)
+        self._p_pattern = (
+            np.array(spp.row(), dtype=np.int32),
+            np.array(spp.colind(), dtype=np.int32),
+            spp.shape,
+        )
+
+    @staticmethod
+    def _csc(out: ca.DM, pattern: tuple[np.ndarray, np.ndarray, tuple[int, int]]) -> sp.csc_matrix:
+        row, colind, shape = pattern
+        data = np.array(out.nonzeros(), dtype=float)
+        return sp.csc_matrix((data, row, colind), shape=shape)
+
+    def residual(self, args: list[Any]) -> FloatArray:
+        """``G(*args)`` as a flat array, shape ``(n_eq,)``."""
+        return np.asarray(self.G(*args), dtype=float).reshape(-1)
+
+    def jacobian(self, args: list[Any]) -> sp.csc_matrix:
+        """``dG/dw`` as SciPy CSC, shape ``(n_eq, n_eq)``."""
+        return self._csc(self.G_w(*args), self._w_pattern)
+
+    def linearize(self, args: list[Any]) -> tuple[FloatArray, sp.csc_matrix, sp.csc_matrix]:
+        """``(G, dG/dw, dG/dP)`` in one evaluation."""
+        g, jw, jp = self.G_all(*args)
+        return (
+            np.asarray(g, dtype=float).reshape(-1),
+            self._csc(jw, self._w_pattern),
+            self._csc(jp, self._p_pattern),
+        )
+
+    def param_jacobian(self, args: list[Any]) -> sp.csc_matrix:
+        """``dG/dP`` as SciPy CSC, shape ``(n_eq, n_params)``."""
+        return self._csc(self.G_P(*args), self._p_pattern)
+
+
+_CACHE: weakref.WeakKeyDictionary[Any, dict[ConnectionLayout, ConnectionFunctions]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def build_connection_functions(system: Any, layout: ConnectionLayout) -> ConnectionFunctions:
+    """Build (or fetch from a per-system cache) the functions of ``layout``.
+
+    Parameters
+    ----------
+    system : System
+        A system with a CasADi trace (``system.casadi_functions()``).
+    layout : ConnectionLayout
+        Sizes of the discretisation; the cache key together with ``system``.
+    """
+    per_system = _CACHE.setdefault(system, {})
+    fn = per_system.get(layout)
+    if fn is None:
+        fn = ConnectionFunctions(system, layout)
+        per_system[layout] = fn
+    return fn
+
+
+__all__ = ["ConnectionFunctions", "ConnectionLayout", "build_connection_functions"]

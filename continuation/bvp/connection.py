@@ -1,0 +1,678 @@
+r"""Connecting orbits between saddle equilibria as a collocation boundary-value problem.
+
+:class:`HeteroclinicProblem` describes an orbit :math:`x(t)` of :math:`\dot x = f(x, p)`
+that leaves a saddle :math:`x_-` and arrives at a saddle :math:`x_+`, truncated to
+:math:`t \in [0, T]` with the projection boundary conditions of Beyn (1990, "The
+numerical computation of connecting orbits in dynamical systems", IMA J. Numer.
+Anal. 10:379-405)::
+
+    L_s(x_-)^T (x(0) - x_-) = 0      x(0) in the unstable eigenspace of A_- = f_x(x_-, p)
+    L_u(x_+)^T (x(T) - x_+) = 0      x(T) in the stable eigenspace of A_+ = f_x(x_+, p)
+    f(x_-, p) = 0,  f(x_+, p) = 0    the equilibria are unknowns too
+    phase condition                  removes the time-shift invariance
+
+where the columns of ``L_s(x_-)`` span the stable invariant subspace of ``A_-^T`` (the
+orthogonal complement of the unstable eigenspace of ``A_-``) and those of
+``L_u(x_+)`` the unstable invariant subspace of ``A_+^T``. The end point is either a
+separate equilibrium (``saddle_to``) or the start shifted by whole periods of the
+system's periodic states (``shift``; then ``x_+ = x_- + shift`` is not a separate
+unknown), as for a front on a circle or a ship's wave-relative position.
+
+Counting (Beyn 1990, sec. 2): with ``q`` unknown parameters the discretised system is
+square only if ``dim W^u(x_-) + dim W^s(x_+) = n + 1 - q``; the constructor checks
+this at the initial parameters and raises ``ValueError`` naming the numbers.
+
+Projection bases: smooth, by Riccati equations
+-----------------------------------------------
+The bases are not frozen at a reference value: they are unknowns. A real Schur
+decomposition of ``A^T`` at the initial (or last rebased) equilibrium gives an
+orthogonal ``Q = [Q_1 Q_2]`` whose first ``k`` columns span the wanted invariant
+subspace. Nearby, the subspace of the current ``A`` is ``range(Q_1 + Q_2 R)``, where
+``R`` ((n-k) x k) solves the algebraic Riccati equation
+``T21 + T22 R - R T11 - R T12 R = 0`` with ``T = Q^T A^T Q`` (Demmel, Dieci & Friedman
+2000, "Computing connecting orbits via an improved algorithm for continuing
+invariant subspaces", SIAM J. Sci. Comput. 22:81-94; Champneys, Kuznetsov &
+Sandstede 1996, "A numerical toolbox for homoclinic bifurcation analysis", Int. J.
+Bifurcation Chaos 6:867-887). ``R`` is part of the unknowns and the Riccati
+equations part of the residual, so the whole residual is one smooth function of
+``(z, p)`` with an exact CasADi Jacobian: Newton and the pseudo-arclength corrector
+see no basis updates at all, not even between continuation steps. ``Q`` is refreshed
+("rebased", ``R = 0``) only between solves (:meth:`HeteroclinicProblem.rebased`),
+never inside one. The Riccati equation stays solvable while the subspace remains a
+graph over ``Q_1`` (``record`` reports ``riccati_norm`` along a branch).
+
+Phase condition
+---------------
+Default ``phase="integral"``: the discrete form of
+:math:`\int_0^1 \langle x(\tau) - \hat x(\tau), \hat x'(\tau)\rangle d\tau = 0`
+against a reference orbit :math:`\hat x` (the starting guess, or the last solution
+after rebasing), by Gauss quadrature at the collocation points (Doedel & Friedman
+1989, "Numerical computation of heteroclinic orbits", J. Comput. Appl. Math.
+26:155-170). It selects the time shift closest (in L2) to the reference.
+Alternatively :class:`PinPhase` fixes one state at one mesh node.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import scipy.linalg as la
+import scipy.sparse as sp
+
+from .._types import FloatArray
+from ..newton import newton as _newton
+from ..params import Params
+from ..settings import NewtonSettings
+from ..status import Status
+from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
+from .collocation import CollocationMesh
+
+if TYPE_CHECKING:
+    from .result import ConnectionResult
+
+log = logging.getLogger(__name__)
+
+HYPERBOLIC_TOL = 1e-8
+
+
+@dataclass(frozen=True)
+class PinPhase:
+    """Phase condition ``x_state(t_pin) = value`` at the mesh node nearest ``at * T``.
+
+    Parameters
+    ----------
+    state : str
+        Name of the pinned state.
+    value : float or None
+        Pinned value; None takes the guess's value at that node when solving.
+    at : float
+        Position of the node in ``tau = t / T``, in ``[0, 1]`` (default the middle).
+    """
+
+    state: str
+    value: float | None = None
+    at: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not (0.0 <= float(self.at) <= 1.0):
+            raise ValueError(f"`at` of PinPhase must be in [0, 1], got {self.at!r}")
+        if self.value is not None and not np.isfinite(self.value):
+            raise ValueError(f"`value` of PinPhase must be finite, got {self.value!r}")
+
+
+def _count(eigs: np.ndarray, scale: float) -> tuple[int, int, float]:
+    re = eigs.real
+    tol = HYPERBOLIC_TOL * max(1.0, scale)
+    return int(np.sum(re > tol)), int(np.sum(re < -tol)), float(np.min(np.abs(re)))
+
+
+def _schur_basis(A: FloatArray, which: str) -> tuple[FloatArray, int]:
+    """Orthogonal ``Q`` whose first ``k`` columns span the ``which`` subspace of ``A^T``."""
+    sort = "lhp" if which == "stable" else "rhp"
+    _, Q, k = la.schur(np.asarray(A, dtype=float).T, output="real", sort=sort)
+    return np.asarray(Q, dtype=float), int(k)
+
+
+def _refine_equilibrium(system: Any, x0: FloatArray, pvec: FloatArray, name: str) -> FloatArray:
+    res = _newton(
+        lambda x: system.f(x, pvec),
+        lambda x: system.jacobian(x, pvec),
+        x0,
+        NewtonSettings(tol=1e-11, max_iter=30, damping=True),
+    )
+    if not res.converged:
+        raise ValueError(
+            f"`{name}` is not near an equilibrium at the given parameters: {res.message}"
+        )
+    return np.asarray(res.z, dtype=float)
+
+
+@dataclass(frozen=True, eq=False)
+class HeteroclinicProblem:
+    r"""A connecting orbit from saddle ``x_-`` to saddle ``x_+`` (equations: module docstring).
+
+    Implements the :class:`~continuation.problem.ContinuationProblem` protocol with
+    ``z`` the discretised orbit, the equilibria, the Riccati unknowns and the
+    ``unknown_params``; the continuation parameter is ``free``.
+
+    Parameters
+    ----------
+    system : System
+        The dynamical system; it must have a CasADi trace (``rhs(x, p, ops)``).
+    params : Params or mapping or array_like
+        Values of all parameters; the entries of ``unknown_params`` are initial guesses.
+    unknown_params : str or sequence of str
+        Parameters solved for (``q`` of them; the connection count must close).
+    saddle_from : array_like, shape (n,)
+        Guess of the start saddle ``x_-``; refined by Newton at construction.
+    saddle_to : array_like, shape (n,), optional
+        Guess of a separate end saddle ``x_+``.
+    shift : array_like, shape (n,) or mapping of str to float, optional
+        ``x_+ = x_- + shift``; nonzero only on periodic states, as whole multiples of
+        their period (a mapping names states: ``{"theta": 2 * pi}``). Give exactly one
+        of ``saddle_to`` and ``shift``.
+    mesh : CollocationMesh
+        Intervals, degree and truncation time ``T``.
+    free : str or None
+        The continuation parameter (None for one-shot solves).
+    phase : "integral" or PinPhase
+        The phase condition.
+    reference : ndarray, shape (M, n), optional
+        Reference orbit on the mesh's ``M`` points for ``phase="integral"``; set by
+        :func:`~continuation.bvp.solve.solve_connection` from the guess.
+    bases : tuple of ndarray, optional
+        Reference Schur bases ``(Q_minus, Q_plus)``, each ``(n, n)``; computed at the
+        saddles when omitted.
+
+    Raises
+    ------
+    ValueError
+        For unknown parameter or state names, wrong shapes, a saddle guess that is not
+        near an equilibrium, a non-hyperbolic equilibrium, a shift that is not a whole
+        number of periods, or a dimension count that does not close.
+    """
+
+    system: Any
+    params: Params
+    unknown_params: tuple[str, ...]
+    saddle_from: FloatArray
+    saddle_to: FloatArray | None = None
+    shift: FloatArray | None = None
+    mesh: CollocationMesh = field(default_factory=lambda: CollocationMesh(40, 4, 20.0))
+    free: str | None = None  # type: ignore[assignment]
+    phase: str | PinPhase = "integral"
+    reference: FloatArray | None = field(default=None, repr=False)
+    bases: tuple[FloatArray, FloatArray] | None = field(default=None, repr=False)
+    # derived
+    layout: ConnectionLayout = field(init=False, repr=False)
+    dims: dict[str, int] = field(init=False, repr=False)
+    _fns: list[ConnectionFunctions] = field(init=False, repr=False, default_factory=list)
+
+    # ------------------------------------------------------------------ validation
+    def __post_init__(self) -> None:
+        system = self.system
+        if not hasattr(system, "casadi_functions") or not getattr(system, "has_casadi", False):
+            raise ValueError(
+                "`system` must be a continuation.System with a CasADi trace "
+                "(write rhs(x, p, ops) with ops functions)"
+            )
+        n = system.n_states
+        # params
+        params = self.params
+        if not isinstance(params, Params):
+            params = Params(system.param_names, system.check_params(params, "params"))
+        if params.names != system.param_names:
+            raise ValueError(
+                f"`params` names {params.names} do not match the system's {system.param_names}"
+            )
+        object.__setattr__(self, "params", params)
+        # unknown parameters
+        unk = self.unknown_params
+        unk = (unk,) if isinstance(unk, str) else tuple(str(u) for u in unk)
+        for u in unk:
+            if u not in system.param_names:
+                raise ValueError(
+                    f"`unknown_params` names unknown parameter {u!r}; valid names are "
+                    f"{system.param_names}"
+                )
+        if len(set(unk)) != len(unk):
+            raise ValueError(f"`unknown_params` must be unique, got {unk}")
+        object.__setattr__(self, "unknown_params", unk)
+        if self.free is not None:
+            if self.free not in system.param_names:
+                raise ValueError(f"`free` must be one of {system.param_names}, got {self.free!r}")
+            if self.free in unk:
+                raise ValueError(f"`free` {self.free!r} is also in `unknown_params` {unk}")
+        if not isinstance(self.mesh, CollocationMesh):
+            raise ValueError(f"`mesh` must be a CollocationMesh, got {type(self.mesh).__name__}")
+        # phase
+        pin = None
+        if isinstance(self.phase, PinPhase):
+            i_state = system.state_index(self.phase.state)
+            i_node = int(np.argmin(np.abs(self.mesh.nodes - self.phase.at)))
+            pin = (i_state, i_node)
+        elif self.phase != "integral":
+            raise ValueError(f"`phase` must be 'integral' or a PinPhase, got {self.phase!r}")
+        # end point
+        pvec = np.array(params.values, dtype=float)
+        x_from = _refine_equilibrium(
+            system, system.check_state(self.saddle_from, "saddle_from"), pvec, "saddle_from"
+        )
+        if (self.saddle_to is None) == (self.shift is None):
+            raise ValueError("give exactly one of `saddle_to` and `shift`")
+        if self.shift is not None:
+            shift = self._check_shift(self.shift)
+            object.__setattr__(self, "shift", shift)
+            x_to = x_from + shift
+            separate = False
+        else:
+            x_to = _refine_equilibrium(
+                system, system.check_state(self.saddle_to, "saddle_to"), pvec, "saddle_to"
+            )
+            separate = True
+            if np.max(np.abs(x_to - x_from)) < 1e-8 * (1 + np.max(np.abs(x_from))):
+                raise ValueError(
+                    "`saddle_to` converged to the same equilibrium as `saddle_from`; homoclinic "
+                    "orbits are not supported by this problem"
+                )
+        object.__setattr__(self, "saddle_from", x_from)
+        if separate:
+            object.__setattr__(self, "saddle_to", x_to)
+        # hyperbolicity and counting
+        A_m = system.jacobian(x_from, pvec)
+        A_p = system.jacobian(x_to, pvec)
+        ev_m, ev_p = np.linalg.eigvals(A_m), np.linalg.eigvals(A_p)
+        nu_m, ns_m, gap_m = _count(ev_m, float(np.max(np.abs(ev_m))))
+        nu_p, ns_p, gap_p = _count(ev_p, float(np.max(np.abs(ev_p))))
+        if nu_m + ns_m != n:
+            raise ValueError(
+                f"`saddle_from` equilibrium is not hyperbolic (min |Re lambda| = {gap_m:.3g}); "
+                f"eigenvalues {ev_m}"
+            )
+        if nu_p + ns_p != n:
+            raise ValueError(
+                f"end equilibrium is not hyperbolic (min |Re lambda| = {gap_p:.3g}); "
+                f"eigenvalues {ev_p}"
+            )
+        q = len(unk)
+        if nu_m + ns_p != n + 1 - q:
+            raise ValueError(
+                f"connection count does not close: dim W^u(x_-) + dim W^s(x_+) = {nu_m} + {ns_p}"
+                f" = {nu_m + ns_p}, but an orbit with {q} unknown parameter(s) {unk} in "
+                f"dimension n = {n} needs n + 1 - q = {n + 1 - q}"
+            )
+        if nu_m == 0:
+            raise ValueError("`saddle_from` has no unstable direction: no orbit can leave it")
+        if ns_p == 0:
+            raise ValueError("the end equilibrium has no stable direction: no orbit can reach it")
+        object.__setattr__(
+            self,
+            "dims",
+            {"n": n, "unstable_from": nu_m, "stable_to": ns_p, "unknown_params": q},
+        )
+        # bases
+        if self.bases is None:
+            Qm, km = _schur_basis(A_m, "stable")
+            Qp, kp = _schur_basis(A_p, "unstable")
+            object.__setattr__(self, "bases", (Qm, Qp))
+        else:
+            Qm, Qp = (np.asarray(b, dtype=float) for b in self.bases)
+            if Qm.shape != (n, n) or Qp.shape != (n, n):
+                raise ValueError(f"`bases` must be two ({n}, {n}) arrays")
+            object.__setattr__(self, "bases", (Qm, Qp))
+            km, kp = n - nu_m, n - ns_p
+        if km != n - nu_m or kp != n - ns_p:  # pragma: no cover - Schur/eig disagreement
+            raise ValueError("Schur ordering disagrees with the eigenvalue count")
+        object.__setattr__(
+            self,
+            "layout",
+            ConnectionLayout(
+                n=n,
+                n_intervals=self.mesh.n_intervals,
+                degree=self.mesh.degree,
+                separate_to=separate,
+                k_minus=km,
+                k_plus=kp,
+                unknown_param_index=tuple(system.param_index(u) for u in unk),
+                pin=pin,
+            ),
+        )
+        if self.reference is not None:
+            ref = np.asarray(self.reference, dtype=float)
+            if ref.shape != (self.mesh.n_points, n):
+                raise ValueError(
+                    f"`reference` must have shape ({self.mesh.n_points}, {n}), got {ref.shape}"
+                )
+            ref = ref.copy()
+            ref.setflags(write=False)
+            object.__setattr__(self, "reference", ref)
+
+    def _check_shift(self, shift: Any) -> FloatArray:
+        system = self.system
+        n = system.n_states
+        if isinstance(shift, Mapping):
+            vec = np.zeros(n)
+            for k, v in shift.items():
+                vec[system.state_index(k)] = float(v)
+        else:
+            vec = np.asarray(shift, dtype=float).reshape(-1)
+            if vec.shape != (n,):
+                raise ValueError(f"`shift` must have shape ({n},), got {vec.shape}")
+        if not np.all(np.isfinite(vec)):
+            raise ValueError(f"`shift` must be finite, got {vec}")
+        period = np.asarray(system.period, dtype=float)
+        for i in np.flatnonzero(vec):
+            if period[i] <= 0:
+                raise ValueError(
+                    f"`shift` is nonzero on state {system.state_names[i]!r}, which is not "
+                    "periodic (declare it with System(..., periodic={...}))"
+                )
+            ratio = vec[i] / period[i]
+            if abs(ratio - round(ratio)) > 1e-9 * max(1.0, abs(ratio)):
+                raise ValueError(
+                    f"`shift` of state {system.state_names[i]!r} is {vec[i]}, not a whole "
+                    f"multiple of its period {period[i]}"
+                )
+        if not np.any(vec):
+            raise ValueError("`shift` is zero: homoclinic orbits are not supported")
+        vec.setflags(write=False)
+        return vec
+
+    # ------------------------------------------------------------------ structure
+    @property
+    def functions(self) -> ConnectionFunctions:
+        """The compiled CasADi functions (built once per system and layout, cached)."""
+        if not self._fns:
+            self._fns.append(build_connection_functions(self.system, self.layout))
+        return self._fns[0]
+
+    @property
+    def n_unknowns(self) -> int:
+        """Length of ``z``."""
+        return self.layout.n_unknowns
+
+    @property
+    def n_states(self) -> int:
+        """State dimension ``n``."""
+        return int(self.system.n_states)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the states."""
+        return tuple(self.system.state_names)
+
+    def replace(self, **changes: Any) -> HeteroclinicProblem:
+        """A copy with some fields changed (re-validated; derived data recomputed)."""
+        return dataclasses.replace(self, **changes)
+
+    def with_free(self, free: str | None) -> HeteroclinicProblem:
+        """The same problem with continuation parameter ``free``."""
+        return self.replace(free=free)
+
+    # ------------------------------------------------------------------ packing
+    def pack(
+        self,
+        X: FloatArray,
+        x_from: FloatArray | None = None,
+        x_to: FloatArray | None = None,
+        unknown_values: Sequence[float] | None = None,
+        R_minus: FloatArray | None = None,
+        R_plus: FloatArray | None = None,
+    ) -> FloatArray:
+        """Assemble ``z`` from the orbit ``X`` (M, n) and the other blocks.
+
+        Omitted blocks default to the problem's data (saddles, parameter guesses, R = 0).
+        """
+        lay, sl = self.layout, self.layout.slices()
+        n = lay.n
+        X = np.asarray(X, dtype=float)
+        if X.shape != (lay.n_points, n):
+            raise ValueError(f"`X` must have shape ({lay.n_points}, {n}), got {X.shape}")
+        z = np.zeros(lay.n_unknowns)
+        z[sl["orbit"]] = X.reshape(-1)  # row-major (M, n) == column-major (n, M)
+        z[sl["x_from"]] = self.saddle_from if x_from is None else x_from
+        if lay.separate_to:
+            z[sl["x_to"]] = self.saddle_to if x_to is None else x_to
+        if R_minus is not None:
+            z[sl["R_minus"]] = np.asarray(R_minus, dtype=float).reshape(-1, order="F")
+        if R_plus is not None:
+            z[sl["R_plus"]] = np.asarray(R_plus, dtype=float).reshape(-1, order="F")
+        if unknown_values is None:
+            unknown_values = [self.params[u] for u in self.unknown_params]
+        z[sl["params"]] = np.asarray(unknown_values, dtype=float)
+        return z
+
+    def unpack(self, z: FloatArray) -> dict[str, Any]:
+        """Split ``z``: ``X`` (M, n), ``x_from``, ``x_to``, ``R_minus``, ``R_plus``, ``params``."""
+        lay, sl = self.layout, self.layout.slices()
+        z = np.asarray(z, dtype=float)
+        if z.shape != (lay.n_unknowns,):
+            raise ValueError(f"`z` must have shape ({lay.n_unknowns},), got {z.shape}")
+        n = lay.n
+        x_from = z[sl["x_from"]]
+        x_to = z[sl["x_to"]] if lay.separate_to else x_from + np.asarray(self.shift)
+        km, kp = lay.k_minus, lay.k_plus
+        return {
+            "X": z[sl["orbit"]].reshape(lay.n_points, n),
+            "x_from": x_from,
+            "x_to": x_to,
+            "R_minus": z[sl["R_minus"]].reshape((n - km, km), order="F"),
+            "R_plus": z[sl["R_plus"]].reshape((n - kp, kp), order="F"),
+            "params": dict(zip(self.unknown_params, z[sl["params"]].tolist(), strict=True)),
+        }
+
+    def param_vector(self, z: FloatArray, p: float | None = None) -> FloatArray:
+        """Full parameter vector: ``params``, ``free`` set to ``p``, unknowns from ``z``."""
+        v = np.array(self.params.values, dtype=float)
+        if self.free is not None and p is not None:
+            v[self.system.param_index(self.free)] = float(p)
+        sl = self.layout.slices()
+        v[list(self.layout.unknown_param_index)] = np.asarray(z)[sl["params"]]
+        return v
+
+    # ------------------------------------------------------------------ residual
+    def _data(self) -> list[Any]:
+        """The numeric non-unknown inputs (h, T, Qm, Qp, shift, ref, dref, pin)."""
+        lay, mesh = self.layout, self.mesh
+        n = lay.n
+        if lay.pin is None:
+            if self.reference is None:
+                raise ValueError(
+                    "the integral phase condition needs a `reference` orbit; solve with "
+                    "solve_connection(problem, guess) or set problem.replace(reference=...)"
+                )
+            ref_all = np.asarray(self.reference)
+            ref = ref_all[mesh.stage_mask].T
+            dref = mesh.derivative(ref_all).T
+            pin = 0.0
+        else:
+            ref = np.zeros((n, lay.n_stages))
+            dref = ref
+            if not isinstance(self.phase, PinPhase) or self.phase.value is None:
+                raise ValueError("PinPhase value is unresolved; solve with solve_connection")
+            pin = float(self.phase.value)
+        shift = np.zeros(n) if self.shift is None else np.asarray(self.shift)
+        Qm, Qp = self.bases  # type: ignore[misc]
+        return [mesh.h, mesh.T, Qm, Qp, shift, ref, dref, pin]
+
+    def _args(self, z: FloatArray, p: float | None) -> list[Any]:
+        z = np.asarray(z, dtype=float)
+        cache = self.__dict__.get("_data_cache")
+        if cache is None:
+            cache = self._data()
+            object.__setattr__(self, "_data_cache", cache)
+        return [z, self.param_vector(z, p), *cache]
+
+    def residual(self, z: FloatArray, p: float | None = None) -> FloatArray:
+        """``G(z, p)``, shape ``(N_z,)`` (``p``: value of ``free``; ignored if ``free`` is None)."""
+        return self.functions.residual(self._args(z, p))
+
+    def jacobian(self, z: FloatArray, p: float | None = None) -> sp.csc_matrix:
+        """Exact ``dG/dz`` as SciPy CSC, shape ``(N_z, N_z)``."""
+        return self.functions.jacobian(self._args(z, p))
+
+    def dp(self, z: FloatArray, p: float | None = None) -> FloatArray:
+        """Exact ``dG/dp`` for the ``free`` parameter, shape ``(N_z,)``."""
+        if self.free is None:
+            raise ValueError("`free` is None: set a continuation parameter with with_free(name)")
+        J = self.functions.param_jacobian(self._args(z, p))
+        col = J[:, self.system.param_index(self.free)]
+        return np.asarray(col.toarray(), dtype=float).reshape(-1)
+
+    def linearize(
+        self, z: FloatArray, p: float | None = None
+    ) -> tuple[FloatArray, sp.csc_matrix, FloatArray]:
+        """``(G, dG/dz, dG/dp)`` in one CasADi evaluation (used by the PALC driver)."""
+        if self.free is None:
+            raise ValueError("`free` is None: set a continuation parameter with with_free(name)")
+        g, jz, jp = self.functions.linearize(self._args(z, p))
+        col = jp[:, self.system.param_index(self.free)]
+        return g, jz, np.asarray(col.toarray(), dtype=float).reshape(-1)
+
+    def stability(self, z: FloatArray, p: float | None = None) -> None:
+        """Connections carry no stability eigenvalues here; returns None."""
+        return None
+
+    def record(self, z: FloatArray, p: float | None = None) -> dict[str, float]:
+        """Unknown parameters, end distances to the saddles and the Riccati norms."""
+        parts = self.unpack(z)
+        out = {k: float(v) for k, v in parts["params"].items()}
+        X = parts["X"]
+        out["dist_from"] = float(np.linalg.norm(X[0] - parts["x_from"]))
+        out["dist_to"] = float(np.linalg.norm(X[-1] - parts["x_to"]))
+        rm = float(np.max(np.abs(parts["R_minus"]))) if parts["R_minus"].size else 0.0
+        rp = float(np.max(np.abs(parts["R_plus"]))) if parts["R_plus"].size else 0.0
+        out["riccati_norm"] = max(rm, rp)
+        return out
+
+    # ------------------------------------------------------------------ starting data
+    def initial_vector(self, guess: Any) -> tuple[HeteroclinicProblem, FloatArray]:
+        """Interpolate ``guess`` onto the mesh; resolve the phase reference / pinned value.
+
+        Parameters
+        ----------
+        guess : ConnectionResult, (t, x) tuple, object with ``t`` and ``x``, or ndarray (K, n)
+            ``t`` (K,) strictly increasing, ``x`` (K, n). Its time span is mapped linearly
+            onto ``[0, T]`` (give it on an interval of length about ``T``). A bare array is
+            taken as equally spaced on ``[0, T]``. A :class:`ConnectionResult` also gives
+            the unknown parameters and the saddles.
+
+        Returns
+        -------
+        problem : HeteroclinicProblem
+            This problem with ``reference`` (integral phase) or the pin value set.
+        z0 : ndarray, shape (N_z,)
+        """
+        from .result import ConnectionResult
+
+        n = self.n_states
+        mesh = self.mesh
+        x_from = x_to = None
+        unknown_values = None
+        if isinstance(guess, ConnectionResult):
+            if guess.x.shape[1] != n:
+                raise ValueError(f"`guess` has {guess.x.shape[1]} states, expected {n}")
+            X0 = guess.mesh.interpolate(guess.x, mesh.tau)
+            x_from, x_to = guess.x_from, guess.x_to
+            unknown_values = [guess.params[u] for u in self.unknown_params]
+        else:
+            t, x = _as_trajectory(guess, n)
+            tau_g = (t - t[0]) / (t[-1] - t[0])
+            X0 = np.column_stack([np.interp(mesh.tau, tau_g, x[:, i]) for i in range(n)])
+        prob = self
+        if self.layout.pin is None:
+            if self.reference is None:
+                prob = self.replace(reference=X0)
+        elif self.phase.value is None:  # type: ignore[union-attr]
+            i_state, i_node = self.layout.pin
+            value = float(X0[i_node * (mesh.degree + 1), i_state])
+            prob = self.replace(phase=dataclasses.replace(self.phase, value=value))  # type: ignore[type-var]
+        z0 = prob.pack(X0, x_from=x_from, x_to=x_to, unknown_values=unknown_values)
+        return prob, z0
+
+    def rebased(
+        self, z: FloatArray, p: float | None = None
+    ) -> tuple[HeteroclinicProblem, FloatArray]:
+        """Refresh the Schur bases and the phase reference at the solution ``z``.
+
+        Returns a new problem whose ``params`` hold the solved unknown parameters (and
+        ``p`` for ``free``), whose saddle guesses are the solved equilibria, whose bases
+        are the Schur bases at those equilibria (so ``R = 0``) and whose integral-phase
+        reference is the solution itself; and the matching ``z``.
+        """
+        parts = self.unpack(z)
+        pvec = self.param_vector(z, p)
+        params = self.params.with_vector(pvec)
+        A_m = self.system.jacobian(parts["x_from"], pvec)
+        A_p = self.system.jacobian(parts["x_to"], pvec)
+        Qm, _ = _schur_basis(A_m, "stable")
+        Qp, _ = _schur_basis(A_p, "unstable")
+        changes: dict[str, Any] = {
+            "params": params,
+            "saddle_from": parts["x_from"],
+            "bases": (Qm, Qp),
+        }
+        if self.layout.separate_to:
+            changes["saddle_to"] = parts["x_to"]
+        if self.layout.pin is None:
+            changes["reference"] = parts["X"]
+        new = _replace_fast(self, **changes)
+        z_new = new.pack(parts["X"], parts["x_from"], parts["x_to"], list(parts["params"].values()))
+        return new, z_new
+
+    def to_result(
+        self,
+        z: FloatArray,
+        p: float | None = None,
+        *,
+        status: Status = Status.SUCCESS,
+        message: str = "",
+        newton_iters: int = 0,
+        residual_norm: float | None = None,
+    ) -> ConnectionResult:
+        """Wrap ``z`` (at ``free = p``) as a :class:`ConnectionResult`."""
+        from .result import ConnectionResult
+
+        parts = self.unpack(z)
+        if residual_norm is None:
+            residual_norm = float(np.max(np.abs(self.residual(z, p))))
+        return ConnectionResult(
+            params=self.params.with_vector(self.param_vector(z, p)),
+            unknown_params=self.unknown_params,
+            state_names=self.state_names,
+            t=self.mesh.t,
+            x=np.array(parts["X"]),
+            x_from=np.array(parts["x_from"]),
+            x_to=np.array(parts["x_to"]),
+            residual_norm=float(residual_norm),
+            mesh=self.mesh,
+            status=status,
+            message=message or status.value,
+            newton_iters=int(newton_iters),
+            z=np.array(z, dtype=float),
+            problem=self,
+        )
+
+
+def _replace_fast(prob: HeteroclinicProblem, **changes: Any) -> HeteroclinicProblem:
+    """``dataclasses.replace`` that keeps the compiled functions of an unchanged layout."""
+    new = dataclasses.replace(prob, **changes)
+    if new.layout == prob.layout and prob._fns:
+        new._fns.append(prob._fns[0])
+    return new
+
+
+def _as_trajectory(guess: Any, n: int) -> tuple[FloatArray, FloatArray]:
+    """Normalise a guess to ``(t (K,), x (K, n))``; raise ValueError naming ``guess``."""
+    if isinstance(guess, np.ndarray) and guess.ndim == 2:
+        x = np.asarray(guess, dtype=float)
+        t = np.linspace(0.0, 1.0, x.shape[0])
+    elif hasattr(guess, "t") and hasattr(guess, "x"):
+        t, x = np.asarray(guess.t, dtype=float), np.asarray(guess.x, dtype=float)
+    elif isinstance(guess, (tuple, list)) and len(guess) == 2:
+        t, x = np.asarray(guess[0], dtype=float), np.asarray(guess[1], dtype=float)
+    else:
+        raise ValueError(
+            "`guess` must be a ConnectionResult, a (t, x) pair, an object with `t` and `x`, "
+            f"or an (K, n) array; got {type(guess).__name__}"
+        )
+    t = t.reshape(-1)
+    if x.ndim != 2 or x.shape != (t.size, n):
+        raise ValueError(
+            f"`guess` states must have shape (len(t), n) = ({t.size}, {n}), got {x.shape}"
+        )
+    if t.size < 2:
+        raise ValueError("`guess` needs at least two time points")
+    if np.any(np.diff(t) <= 0):
+        raise ValueError("`guess` times must be strictly increasing")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+        raise ValueError("`guess` contains NaN or inf")
+    return t, x
+
+
+__all__ = ["HeteroclinicProblem", "PinPhase"]
