@@ -16,6 +16,11 @@ from types import ModuleType
 #: Sub-command modules, in the order shown by ``broachkit --help``.
 COMMAND_MODULES: tuple[str, ...] = (
     "broachkit_cli.commands.reproduce",
+    "broachkit_cli.commands.vessels",
+    "broachkit_cli.commands.fixed_points",
+    "broachkit_cli.commands.manifold",
+    "broachkit_cli.commands.critical",
+    "broachkit_cli.commands.critical_curve",
     "broachkit_cli.commands.demo",
 )
 
