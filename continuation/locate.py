@@ -97,7 +97,7 @@ def point_at(
             border=c,  # type: ignore[arg-type]
             t_raw=tau,
             bp_sign=0.0,
-            bp_logdet=-math.inf,
+            _bp_logdet=-math.inf,
             iters=res.iters,
             residual_norm=res.residual_norm,
         )

@@ -401,7 +401,7 @@ class System:
         """``x1 - x2`` with periodic components reduced to ``[-period/2, period/2)``."""
         d = np.asarray(x1, dtype=float) - np.asarray(x2, dtype=float)
         mask = self.period > 0
-        if np.any(mask):
+        if mask.any():
             per = self.period[mask]
             d[..., mask] = np.mod(d[..., mask] + per / 2, per) - per / 2
         return d

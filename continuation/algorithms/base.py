@@ -191,30 +191,34 @@ class BorderedLU:
                 raise np.linalg.LinAlgError(f"singular bordered matrix (getrf info={info})")
             self._lu = (lu, piv)
 
-    def _determinant(self) -> tuple[float, float]:
-        if self._det is None:
-            if self.sparse:
-                d = self._lu.U.diagonal()
-                parity = _perm_parity(self._lu.perm_r) * _perm_parity(self._lu.perm_c)
-            else:
-                lu, piv = self._lu
-                d = lu.diagonal()
-                parity = -1 if np.count_nonzero(piv != _arange(self.n)) % 2 else 1
-            sign = float(parity * np.prod(np.sign(d)))
-            with np.errstate(divide="ignore"):
-                logabsdet = float(np.sum(np.log(np.abs(d))))
-            self._det = (sign, logabsdet)
-        return self._det
+    def _diag_parity(self) -> tuple[Any, int]:
+        if self.sparse:
+            d = self._lu.U.diagonal()
+            parity = _perm_parity(self._lu.perm_r) * _perm_parity(self._lu.perm_c)
+        else:
+            lu, piv = self._lu
+            d = lu.diagonal()
+            parity = -1 if np.count_nonzero(piv != _arange(self.n)) % 2 else 1
+        return d, parity
 
     @property
     def sign(self) -> float:
         """Sign of ``det M`` (+1, -1, or 0 if singular)."""
-        return self._determinant()[0]
+        if self._det is None:
+            d, parity = self._diag_parity()
+            self._det = (float(parity * np.sign(d).prod()), math.nan)
+        return self._det[0]
 
     @property
     def logabsdet(self) -> float:
         """``log |det M|``."""
-        return self._determinant()[1]
+        sign = self.sign
+        assert self._det is not None
+        if math.isnan(self._det[1]):
+            d, _ = self._diag_parity()
+            with np.errstate(divide="ignore"):
+                self._det = (sign, float(np.log(np.abs(d)).sum()))
+        return self._det[1]
 
     def solve(self, b: FloatArray) -> FloatArray:
         """Solve ``M x = b``; raises LinAlgError on a non-finite result."""
@@ -261,8 +265,8 @@ class PointInfo:
         ``M^{-1} e_{N+1}`` (un-normalised tangent, sign as solved).
     bp_sign : float
         Sign of ``det [Gz Gp; (w o tau)^T]`` (branch-point test function).
-    bp_logdet : float
-        ``log |det [Gz Gp; (w o tau)^T]|``.
+    ctau : float
+        ``border . tau`` (for the determinant identity above).
     iters : int
         Corrector iterations spent on this point.
     residual_norm : float
@@ -279,11 +283,19 @@ class PointInfo:
     border: FloatArray
     t_raw: FloatArray
     bp_sign: float
-    bp_logdet: float
+    ctau: float = 1.0
     iters: int = 0
     residual_norm: float = 0.0
     cache: dict[str, Any] = field(default_factory=dict)
     _u: FloatArray | None = field(default=None, repr=False)
+    _bp_logdet: float | None = field(default=None, repr=False)
+
+    @property
+    def bp_logdet(self) -> float:
+        """``log |det [Gz Gp; (w o tau)^T]| = log |det M| - log |border . tau|`` (lazy)."""
+        if self._bp_logdet is None:
+            self._bp_logdet = self.lu.logabsdet - math.log(abs(self.ctau))
+        return self._bp_logdet
 
     @property
     def u(self) -> FloatArray:
@@ -339,7 +351,6 @@ def make_point(
     if ctau == 0.0:
         raise np.linalg.LinAlgError("border orthogonal to the tangent")
     bp_sign = lu.sign * math.copysign(1.0, ctau)
-    bp_logdet = lu.logabsdet - math.log(abs(ctau))
     return PointInfo(
         z=np.asarray(z, dtype=float),
         p=float(p),
@@ -351,7 +362,7 @@ def make_point(
         border=border,
         t_raw=t,
         bp_sign=bp_sign,
-        bp_logdet=bp_logdet,
+        ctau=ctau,
         iters=iters,
         residual_norm=_inf_norm(G),
     )
