@@ -585,6 +585,30 @@ class TestZeroHopf:
         _check_invariants(curve)
 
 
+def test_lyapunov_pole_at_zero_hopf_is_not_a_bautin_point():
+    """Fold-Hopf normal form x1' = b1 - x1^2 + x2^2 + x3^2 with the oscillator of
+    ZERO_HOPF: same equilibria and Hopf curve b1 = b2^2, but now B(q, qbar) has a
+    component along the null vector at the zero-Hopf point, so l1 ~ 1/x1 changes
+    sign through a pole there (Kuznetsov 2004, Sec. 8.5). Only the ZH point is real."""
+
+    def rhs(x, p, ops):
+        b1, b2 = p[0], p[1]
+        mu = b2 + x[0]
+        return ops.stack(
+            [b1 - x[0] ** 2 + x[1] ** 2 + x[2] ** 2, mu * x[1] - x[2], x[1] + mu * x[2]]
+        )
+
+    sys3 = System(rhs, ("x1", "x2", "x3"), ("b1", "b2"))
+    br = _branch(sys3, [1.0, 0, 0], {"b1": 1.0, "b2": -0.5}, "b1", p_min=-0.5, p_max=1.5, ds=0.02)
+    st = ContinuationSettings(ds=0.02, ds_max=0.05, p_min=-1.0, p_max=1.0)
+    curve = continue_codim2(br, _only(br, "hopf"), "b2", st)
+    P = curve.problem
+    l1 = np.array([P.lyapunov_coefficient(z, p) for z, p in zip(curve.x, curve.p, strict=True)])
+    assert np.any(l1 > 0) and np.any(l1 < 0)  # the sign change the filter must reject
+    assert abs(_only(curve, "zh").p) < 1e-8
+    assert not curve.find("gh")
+
+
 class TestBautinAndDoubleHopf:
     def test_bautin_normal_form(self):
         """z' = (b1 + i) z + b2 z|z|^2 - z|z|^4: Hopf curve b1 = 0, omega = 1, and

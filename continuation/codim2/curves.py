@@ -19,7 +19,8 @@ hopf        generalised Hopf ``gh``        first Lyapunov coefficient ``l1``
 =========== ============================== ===========================================
 
 Each located zero is confirmed by the problem's ``classify`` (a ``zh``/``hh`` zero
-without an imaginary pair is a neutral saddle and is dropped) and stored as a
+without an imaginary pair is a neutral saddle and is dropped; a sign change
+through a pole, as of ``l1`` where ``J`` becomes singular, is dropped) and stored as a
 :class:`~continuation.branch.SpecialPoint` of kind ``bt``, ``cusp``, ``zh``, ``gh``
 (``hh`` has no dedicated kind yet and is stored as ``user`` with label ``HH<k>``).
 
@@ -82,6 +83,25 @@ def codim2_events(problem: AugmentedProblem, names: Sequence[str] | None = None)
     return tuple(Event(_PREFIX + n, make(n)) for n in chosen)
 
 
+def _is_pole(branch: Any, problem: AugmentedProblem, name: str, sp: Any) -> bool:
+    """True when the sign change of test function ``name`` is a pole, not a zero.
+
+    ``l1`` contains ``J^{-1}`` and changes sign through infinity where the Hopf
+    curve meets a zero eigenvalue. A located zero has ``|g|`` well below the
+    values at the two rows around it; an unlocated one (best trial point) at
+    least no larger than both.
+    """
+    i = sp.index
+    if not 0 <= i < len(branch) - 1:
+        return False
+    g = abs(problem.test_function(name, np.asarray(sp.x, dtype=float), sp.p))  # type: ignore[attr-defined]
+    ga = abs(problem.test_function(name, branch.x[i], branch.p[i]))  # type: ignore[attr-defined]
+    gb = abs(problem.test_function(name, branch.x[i + 1], branch.p[i + 1]))  # type: ignore[attr-defined]
+    if sp.located:
+        return bool(g > 0.5 * min(ga, gb))
+    return bool(g > 2.0 * max(ga, gb))
+
+
 def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
     """Turn the driver's ``codim2:<name>`` user events into codim-2 special points.
 
@@ -101,6 +121,8 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
         name = sp.label[len(_PREFIX) :]
         z = np.asarray(sp.x, dtype=float)
         kind = problem.classify(name, z, sp.p) if sp.located else name  # type: ignore[attr-defined]
+        if kind is not None and _is_pole(branch, problem, name, sp):
+            kind = None
         if kind is None:
             log.debug("dropped %s zero at %s=%g (not a codim-2 point)", name, branch.free, sp.p)
             continue
