@@ -233,6 +233,14 @@ class _Context:
             and a.counts[1] != b.counts[1]
         ):
             assert a.eig is not None and b.eig is not None
+            if abs(b.counts[1] - a.counts[1]) > 1:
+                log.warning(
+                    "%d complex pairs crossed between p=%.8g and p=%.8g; only one Hopf point "
+                    "is located: reduce ds_max to separate them",
+                    abs(b.counts[1] - a.counts[1]),
+                    pa.p,
+                    pb.p,
+                )
             ht = HopfTest(a.eig, b.eig, det.imag_tol)
             if ht.ok:
 

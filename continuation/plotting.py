@@ -98,8 +98,6 @@ def plot_branch(
     artists: list[Any] = []
     if len(branch) == 0:
         return artists
-    if color is None:
-        color = ax._get_lines.get_next_color() if hasattr(ax, "_get_lines") else "C0"
     kind = np.where(branch.n_unstable < 0, 2, np.where(branch.n_unstable == 0, 0, 1))
     styles = {0: "-", 1: "--", 2: ":"}
     start = 0
@@ -116,6 +114,7 @@ def plot_branch(
                 label=label if first else None,
                 **kwargs,
             )
+            color = line.get_color()  # the first segment picks the colour of the cycle
             artists.append(line)
             first = False
             start = k
