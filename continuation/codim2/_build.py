@@ -135,6 +135,12 @@ class AugmentedFunctions:
     cvvv : callable
         ``cvvv(x, Pv, v)``: the third directional derivative
         :math:`C(v, v, v) = \frac{d^3}{dt^3} f(x + t v)|_{t=0}`, shape ``(n,)``.
+    bmap : callable
+        ``bmap(x, Pv, U, W)``: the bilinear form :math:`B(u_j, w_j)` for the columns
+        of ``U``, ``W`` (shape ``(n, k)``), in one evaluation; shape ``(n, k)``.
+    cmap : callable
+        ``cmap(x, Pv, V)``: :math:`C(v_j, v_j, v_j)` for the columns of ``V``;
+        shape ``(n, k)``.
     exact : bool
         True when built from a CasADi trace.
     """
@@ -146,6 +152,8 @@ class AugmentedFunctions:
     linearize: Callable[..., tuple[Any, Any, Any]]
     bvv: Callable[..., FloatArray]
     cvvv: Callable[..., FloatArray]
+    bmap: Callable[..., FloatArray]
+    cmap: Callable[..., FloatArray]
     exact: bool
 
 
@@ -191,6 +199,15 @@ def _build_casadi(
     Bvv = ca.jtimes(Jv, Xb, Vb)
     fB = ca.Function("bvv", [Xb, Pb, Vb], [Bvv])
     fC = ca.Function("cvvv", [Xb, Pb, Vb], [ca.jtimes(Bvv, Xb, Vb)])
+    Wb = ca.SX.sym("w", n)
+    fB2 = ca.Function("buw", [Xb, Pb, Vb, Wb], [ca.jtimes(Jv, Xb, Wb)])
+    maps: dict[tuple[str, int], ca.Function] = {}
+
+    def mapped(fn: ca.Function, k: int) -> ca.Function:
+        key = (fn.name(), k)
+        if key not in maps:
+            maps[key] = fn.map(k)
+        return maps[key]
 
     def G_(z: FloatArray, p: float, Pf: FloatArray, c: FloatArray) -> FloatArray:
         return np.asarray(fG(z, p, Pf, c), dtype=float).reshape(-1)
@@ -219,7 +236,15 @@ def _build_casadi(
     def C3(x: FloatArray, Pv_: FloatArray, v: FloatArray) -> FloatArray:
         return np.asarray(fC(x, Pv_, v), dtype=float).reshape(-1)
 
-    return AugmentedFunctions(G_, Jz, Jz_sparse, Jp, lin, B, C3, True)
+    def Bmap(x: FloatArray, Pv_: FloatArray, U: FloatArray, W: FloatArray) -> FloatArray:
+        k = np.shape(U)[1]
+        return np.asarray(mapped(fB2, k)(x, Pv_, U, W), dtype=float).reshape(n, k)
+
+    def Cmap(x: FloatArray, Pv_: FloatArray, V: FloatArray) -> FloatArray:
+        k = np.shape(V)[1]
+        return np.asarray(mapped(fC, k)(x, Pv_, V), dtype=float).reshape(n, k)
+
+    return AugmentedFunctions(G_, Jz, Jz_sparse, Jp, lin, B, C3, Bmap, Cmap, True)
 
 
 def _build_numpy(
@@ -264,7 +289,17 @@ def _build_numpy(
         fs = [system.f(x + k * h * v, Pv) for k in (2, 1, -1, -2)]
         return (fs[0] - 2 * fs[1] + 2 * fs[2] - fs[3]) / (2 * h**3)
 
-    return AugmentedFunctions(G_, Jz, Jz_sparse, Jp, lin, B, C3, False)
+    def Bmap(x: FloatArray, Pv: FloatArray, U: FloatArray, W: FloatArray) -> FloatArray:
+        cols = [
+            0.25 * (B(x, Pv, U[:, j] + W[:, j]) - B(x, Pv, U[:, j] - W[:, j]))
+            for j in range(np.shape(U)[1])
+        ]
+        return np.column_stack(cols)
+
+    def Cmap(x: FloatArray, Pv: FloatArray, V: FloatArray) -> FloatArray:
+        return np.column_stack([C3(x, Pv, V[:, j]) for j in range(np.shape(V)[1])])
+
+    return AugmentedFunctions(G_, Jz, Jz_sparse, Jp, lin, B, C3, Bmap, Cmap, False)
 
 
 _CACHE: weakref.WeakKeyDictionary[System, dict[tuple[str, int, int], AugmentedFunctions]] = (

@@ -344,28 +344,27 @@ class HopfProblem(AugmentedProblem):
         x = self.state(z)
         Pv = self.param_vector(z, p)
         J = self.state_jacobian(z, p)
-        bvv, cvvv = self.functions.bvv, self.functions.cvvv
-
-        def Bre(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-            return 0.25 * (bvv(x, Pv, a + b) - bvv(x, Pv, a - b))
-
-        def B(u: np.ndarray, w: np.ndarray) -> np.ndarray:
-            ur, ui, wr, wi = u.real, u.imag, w.real, w.imag
-            return Bre(ur, wr) - Bre(ui, wi) + 1j * (Bre(ur, wi) + Bre(ui, wr))
-
+        fns = self.functions
         a, b = q.real, q.imag
-        c3 = {
-            "aaa": cvvv(x, Pv, a),
-            "bbb": cvvv(x, Pv, b),
-            "apb": cvvv(x, Pv, a + b),
-            "amb": cvvv(x, Pv, a - b),
-        }
-        C_aab = (c3["apb"] - c3["amb"] - 2 * c3["bbb"]) / 6
-        C_abb = (c3["apb"] + c3["amb"] - 2 * c3["aaa"]) / 6
-        Cqqqb = c3["aaa"] + C_abb + 1j * (C_aab + c3["bbb"])
-        h11 = np.linalg.solve(J, B(q, q.conj()))
-        h20 = np.linalg.solve(2j * om * np.eye(self.n) - J, B(q, q))
-        val = np.vdot(pv, Cqqqb) - 2 * np.vdot(pv, B(q, h11)) + np.vdot(pv, B(q.conj(), h20))
+        # stage 1: B(a,a), B(b,b), B(a,b) and C(v,v,v) for v = a, b, a+b, a-b
+        Baa, Bbb, Bab = fns.bmap(x, Pv, np.column_stack([a, b, a]), np.column_stack([a, b, b])).T
+        Caaa, Cbbb, Capb, Camb = fns.cmap(x, Pv, np.column_stack([a, b, a + b, a - b])).T
+        C_aab = (Capb - Camb - 2 * Cbbb) / 6
+        C_abb = (Capb + Camb - 2 * Caaa) / 6
+        Cqqqb = Caaa + C_abb + 1j * (C_aab + Cbbb)  # C(q, q, conj q)
+        Bqqb = Baa + Bbb  # B(q, conj q), real
+        Bqq = Baa - Bbb + 2j * Bab  # B(q, q)
+        h11 = np.linalg.solve(J, Bqqb)
+        h20 = np.linalg.solve(2j * om * np.eye(self.n) - J, Bqq)
+        # stage 2: B(q, h11) = B(a,h11) + i B(b,h11);
+        # B(conj q, h20) = B(a,hr) + B(b,hi) + i (B(a,hi) - B(b,hr))
+        hr, hi = h20.real, h20.imag
+        U = np.column_stack([a, b, a, b, a, b])
+        W = np.column_stack([h11, h11, hr, hi, hi, hr])
+        B1, B2, B3, B4, B5, B6 = fns.bmap(x, Pv, U, W).T
+        Bq_h11 = B1 + 1j * B2
+        Bqb_h20 = B3 + B4 + 1j * (B5 - B6)
+        val = np.vdot(pv, Cqqqb) - 2 * np.vdot(pv, Bq_h11) + np.vdot(pv, Bqb_h20)
         return float(val.real / (2 * om))
 
     def _spectral_tests(self, z: FloatArray, p: float) -> dict[str, float]:
