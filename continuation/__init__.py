@@ -6,6 +6,7 @@ Knows nothing of ships. The public API is exactly what this module exports.
 from .algorithms import PALC, ContinuationAlgorithm, Natural
 from .api import continue_equilibria
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
+from .codim2 import FoldProblem, HopfProblem, continue_codim2
 from .driver import continue_branch
 from .equilibria import EquilibriumResult, solve_equilibrium, unique_equilibria
 from .errors import ContinuationError, ConvergenceError, ModelError
@@ -30,7 +31,10 @@ __all__ = [
     "Natural",
     "SpecialKind",
     "SpecialPoint",
+    "FoldProblem",
+    "HopfProblem",
     "continue_branch",
+    "continue_codim2",
     "continue_equilibria",
     "count_unstable",
     "eigen",

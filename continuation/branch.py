@@ -61,6 +61,7 @@ class SpecialKind(enum.StrEnum):
     CUSP = "cusp"
     ZERO_HOPF = "zh"
     GENERALIZED_HOPF = "gh"
+    DOUBLE_HOPF = "hh"
     USER = "user"
 
 

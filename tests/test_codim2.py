@@ -648,7 +648,7 @@ class TestBautinAndDoubleHopf:
         st = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-1, p_max=1)
         curve = continue_codim2(br, _only(br, "hopf"), "b2", st)
         np.testing.assert_allclose(curve.records["omega"], 1.0, atol=1e-8)
-        hh = curve.find("user")
+        hh = curve.find("hh")
         assert len(hh) == 1 and hh[0].label == "HH1" and hh[0].located and abs(hh[0].p) < 1e-8
         assert not curve.find("zh")
 

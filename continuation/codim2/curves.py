@@ -47,7 +47,7 @@ from .hopf import HopfProblem
 log = logging.getLogger(__name__)
 
 _PREFIX = "codim2:"
-_KIND = {"bt": "bt", "cusp": "cusp", "zh": "zh", "gh": "gh", "hh": "user"}
+_KIND = {"bt": "bt", "cusp": "cusp", "zh": "zh", "gh": "gh", "hh": "hh"}
 _LABEL = {"bt": "BT", "cusp": "CP", "zh": "ZH", "gh": "GH", "hh": "HH"}
 
 
