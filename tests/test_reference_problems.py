@@ -215,3 +215,42 @@ def test_bratu_fold_converges_at_second_order():
     np.testing.assert_allclose(orders, 2.0, atol=2e-3)
     richardson = (4 * lam[-1] - lam[-2]) / 3
     assert richardson == pytest.approx(BRATU_LAMBDA_STAR, rel=1e-8)  # O(h^4) remainder
+
+
+def test_discrete_bratu_symmetry_breaking_branch_point():
+    """Far up the branch (lam ~ 1.5e-6, max u ~ 20) the N = 20 discrete Bratu problem
+    loses its reflection symmetry u_i <-> u_{N+1-i} in a pitchfork (a spurious solution
+    of the discretisation). Independent check of the located branch point: the Jacobian
+    there has an eigenvalue ~0 whose eigenvector is antisymmetric."""
+    n = 20
+    stop = Event("far", lambda x, p: float(np.max(x)) - 21.0, terminal=True)
+    found = []
+    for ds_max in (0.5, 0.05):  # a large step makes the locator work near the BP
+        br = continue_equilibria(
+            bratu(n),
+            np.zeros(n),
+            {"lam": 0.0},
+            "lam",
+            p_min=0.0,
+            p_max=4.0,
+            ds=ds_max,
+            ds_max=ds_max,
+            direction="forward",
+            events=[stop],
+            max_steps=2000,
+        )
+        assert br.status is Status.EVENT
+        (bp,) = br.find("bp")
+        assert bp.located and bp.delta_unstable == (1, 0)
+        J = bratu(n).jacobian(bp.x, np.array([bp.p]))
+        vals, vecs = np.linalg.eig(J)
+        k = int(np.argmin(np.abs(vals)))
+        assert abs(vals[k]) < 1e-8 * np.max(np.abs(vals))
+        v = vecs[:, k].real / np.linalg.norm(vecs[:, k].real)
+        assert np.max(np.abs(v + v[::-1])) < 1e-5  # antisymmetric kernel
+        # on the symmetric branch, up to the corrector's accuracy next to a branch point
+        # (|G| <= 1e-10 over a smallest singular value that vanishes at the point)
+        assert np.max(np.abs(bp.x - bp.x[::-1])) < 1e-6 * np.max(np.abs(bp.x))
+        assert_invariants(br, tol=1e-8)
+        found.append(bp.p)
+    assert found[0] == pytest.approx(found[1], rel=1e-7)
