@@ -252,24 +252,23 @@ class ConnectionFunctions:
         else:
             i_state, i_node = layout.pin
             phase = X[i_state, i_node * (m + 1)] - pin
-        eqs.append(phase)
-        g = ca.vertcat(*eqs)
+        g_main = ca.vertcat(*eqs)
+        g = ca.vertcat(g_main, phase)
         if g.shape[0] != layout.n_unknowns:
             raise ValueError(
                 f"internal count mismatch: {g.shape[0]} equations for {layout.n_unknowns} unknowns"
             )
         inputs = [w, P, h, T, Qm, Qp, shift, ref, dref, pin]
         names = ["w", "P", "h", "T", "Qm", "Qp", "shift", "ref", "dref", "pin"]
+        # The integral phase row is dense in the orbit unknowns; a dense row defeats the
+        # column colouring of a forward-mode Jacobian, so it is differentiated on its own
+        # (one reverse sweep) and stacked under the sparse rest.
+        Jw = ca.vertcat(ca.jacobian(g_main, w), ca.jacobian(phase, w))
+        Jp = ca.vertcat(ca.jacobian(g_main, P), ca.jacobian(phase, P))
         self.G = ca.Function("G", inputs, [g], names, ["G"])
-        self.G_w = ca.Function("G_w", inputs, [ca.jacobian(g, w)], names, ["G_w"])
-        self.G_P = ca.Function("G_P", inputs, [ca.jacobian(g, P)], names, ["G_P"])
-        self.G_all = ca.Function(
-            "G_all",
-            inputs,
-            [g, ca.jacobian(g, w), ca.jacobian(g, P)],
-            names,
-            ["G", "G_w", "G_P"],
-        )
+        self.G_w = ca.Function("G_w", inputs, [Jw], names, ["G_w"])
+        self.G_P = ca.Function("G_P", inputs, [Jp], names, ["G_P"])
+        self.G_all = ca.Function("G_all", inputs, [g, Jw, Jp], names, ["G", "G_w", "G_P"])
         self.n_equations = int(g.shape[0])
         spw = self.G_w.sparsity_out(0)
         self._w_pattern = (

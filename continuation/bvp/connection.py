@@ -119,6 +119,8 @@ def _schur_basis(A: FloatArray, which: str) -> tuple[FloatArray, int]:
 
 
 def _refine_equilibrium(system: Any, x0: FloatArray, pvec: FloatArray, name: str) -> FloatArray:
+    if np.max(np.abs(system.f(x0, pvec))) <= 1e-13 * (1.0 + np.max(np.abs(x0))):
+        return np.asarray(x0, dtype=float)  # already an equilibrium (maybe non-hyperbolic)
     res = _newton(
         lambda x: system.f(x, pvec),
         lambda x: system.jacobian(x, pvec),
