@@ -1,0 +1,241 @@
+"""Figs. 2-5 of Umeda (1999): fixed points against the autopilot course, Fn = 0.3248.
+
+The two ``chi_c = 0`` fixed points of the uncoupled surge model (Brent's method on the
+surge force, the paper's "regula falsi") are lifted to the 8-state model and traced
+by pseudo-arclength continuation in ``chi_c`` from 0 to 50 deg
+(:func:`ship_models.analysis.trace_in_chi_c`). Also traces both points in ``Fn`` at
+``chi_c = 10 deg``.
+
+Writes to ``--out`` (default ``out/fig02_05``):
+
+- ``fig02_position.png``  xi_G/lambda against chi_c (paper Fig. 2)
+- ``fig03_speed.png``     u/c and v/c against chi_c (paper Fig. 3)
+- ``fig04_angles.png``    heading chi and rudder delta (deg) against chi_c (paper Fig. 4)
+- ``fig05_roll.png``      roll phi (deg) against chi_c (paper Fig. 5)
+- ``fixed_points_vs_fn.png`` xi_G/lambda and u/c against Fn at chi_c = 10 deg
+- ``fixed_points_chi_c.csv``, ``fixed_points_fn.csv``: every branch row, all states
+- ``branch_chi_c_<crest|trough>.npz`` (+ ``.json``): the branches (``Branch.load``)
+- ``summary.json``
+
+At a fixed point ``r = chi' = 0`` and ``p_roll = phi' = 0``; they are in the CSV but
+not plotted. Run: ``python studies/fig02_05_fixed_points.py [--out DIR]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+FN = 0.3248
+CHI_C_DEG = 10.0
+CHI_C_MAX_DEG = 50.0
+COLORS = {"crest": "tab:red", "trough": "tab:blue"}
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _primary_end(br: Any) -> int:
+    """Last row index before the first fold (the whole branch if none)."""
+    folds = br.find("fold")
+    return folds[0].index if folds else len(br) - 1
+
+
+def _rows(br: Any, label: str, c: float, free: str) -> list[dict[str, Any]]:
+    k_end = _primary_end(br)
+    rows = []
+    for k in range(len(br)):
+        x = br.x[k]
+        rows.append(
+            {
+                "branch": label,
+                "segment": "primary" if k <= k_end else "past_fold",
+                free: float(np.degrees(br.p[k])) if free == "chi_c_deg" else float(br.p[k]),
+                "xi_G": float(np.mod(x[0], 1.0)),
+                "u": float(x[1]),
+                "u_over_c": float(x[1] / c),
+                "v": float(x[2]),
+                "v_over_c": float(x[2] / c),
+                "chi_deg": float(np.degrees(x[3])),
+                "r": float(x[4]),
+                "phi_deg": float(np.degrees(x[5])),
+                "p_roll": float(x[6]),
+                "delta_deg": float(np.degrees(x[7])),
+                "saddle_index": int(br.n_unstable[k]),
+            }
+        )
+    return rows
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
+def _plot_vs_course(plt: Any, branches: dict[str, Any], c: float, out: Path) -> list[str]:
+    """Figs. 2-5: one PNG per group of states, primary segments (up to a fold)."""
+    specs = [
+        (
+            "fig02_position.png",
+            "Fig. 2",
+            [("xi_G", r"$\xi_G/\lambda$", lambda x: np.mod(x[:, 0], 1))],
+        ),
+        (
+            "fig03_speed.png",
+            "Fig. 3",
+            [("u/c", "$u/c$", lambda x: x[:, 1] / c), ("v/c", "$v/c$", lambda x: x[:, 2] / c)],
+        ),
+        (
+            "fig04_angles.png",
+            "Fig. 4",
+            [
+                ("chi", r"heading $\chi$ (deg)", lambda x: np.degrees(x[:, 3])),
+                ("delta", r"rudder $\delta$ (deg)", lambda x: np.degrees(x[:, 7])),
+            ],
+        ),
+        (
+            "fig05_roll.png",
+            "Fig. 5",
+            [("phi", r"roll $\phi$ (deg)", lambda x: np.degrees(x[:, 5]))],
+        ),
+    ]
+    written = []
+    for fname, tag, quantities in specs:
+        fig, axes = plt.subplots(
+            len(quantities), 1, figsize=(6, 2.6 * len(quantities) + 0.6), sharex=True, squeeze=False
+        )
+        for ax, (_, ylabel, fn) in zip(axes[:, 0], quantities, strict=True):
+            for label, br in branches.items():
+                k = _primary_end(br) + 1
+                chi = np.degrees(br.p[:k])
+                ax.plot(
+                    chi,
+                    fn(br.x[:k]),
+                    "-",
+                    color=COLORS.get(label, "k"),
+                    label=f"near the {label} (saddle index {int(br.n_unstable[min(1, k - 1)])})",
+                )
+                for sp in br.find("fold")[:1]:
+                    xs = np.asarray(sp.x)[None, :]
+                    ax.plot(np.degrees(sp.p), fn(xs)[0], "kx", ms=8)
+                    ax.annotate(
+                        f"fold {np.degrees(sp.p):.1f} deg",
+                        (np.degrees(sp.p), fn(xs)[0]),
+                        textcoords="offset points",
+                        xytext=(-80, -14),
+                        fontsize=8,
+                    )
+            ax.set_ylabel(ylabel)
+            ax.grid(alpha=0.3)
+            ax.axhline(0.0, color="0.6", lw=0.6)
+        axes[0, 0].legend(fontsize=8)
+        axes[-1, 0].set_xlabel("autopilot course $\\chi_c$ (deg)")
+        axes[0, 0].set_title(f"{tag}: fixed points for Fn = {FN} (our vessel)")
+        axes[-1, 0].set_xlim(0, CHI_C_MAX_DEG)
+        fig.tight_layout()
+        fig.savefig(out / fname, dpi=120)
+        plt.close(fig)
+        written.append(fname)
+    return written
+
+
+def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Trace the fixed points, write figures and data into ``out``; return a summary."""
+    from ship_models import purse_seiner
+    from ship_models.analysis import find_fixed_point, trace_in_chi_c, trace_in_fn
+
+    say = progress or (lambda msg: None)
+    out.mkdir(parents=True, exist_ok=True)
+    plt = _plt()
+    t0 = time.perf_counter()
+    model = purse_seiner()
+    params = model.default_params().replace(Fn=FN, chi_c=math.radians(CHI_C_DEG))
+    c = model.celerity(params)
+    say("tracing the chi_c = 0 fixed points in chi_c from 0 to 50 deg")
+    branches = trace_in_chi_c(model, params, chi_c_max=math.radians(CHI_C_MAX_DEG))
+    rows: list[dict[str, Any]] = []
+    for label, br in branches.items():
+        br.save(out / f"branch_chi_c_{label}.npz")
+        rows += _rows(br, label, c, "chi_c_deg")
+    _write_csv(out / "fixed_points_chi_c.csv", rows)
+    figures = _plot_vs_course(plt, branches, c, out)
+
+    say("tracing both fixed points in Fn at chi_c = 10 deg")
+    fn_rows: list[dict[str, Any]] = []
+    fig, axes = plt.subplots(2, 1, figsize=(6, 5.6), sharex=True)
+    fn_branches = {}
+    for label in ("crest", "trough"):
+        fp = find_fixed_point(model, params, label)
+        br = trace_in_fn(model, fp.x, params, fn_min=0.05, fn_max=0.48)
+        fn_branches[label] = br
+        fn_rows += _rows(br, label, c, "Fn")
+        for ax, y in zip(axes, (np.mod(br.state("xi_G"), 1), br.state("u") / c), strict=True):
+            ax.plot(br.p, y, "-", color=COLORS[label], label=f"near the {label}")
+    _write_csv(out / "fixed_points_fn.csv", fn_rows)
+    axes[0].set_ylabel(r"$\xi_G/\lambda$")
+    axes[1].set_ylabel("$u/c$")
+    axes[1].set_xlabel("nominal Froude number Fn")
+    axes[0].set_title(f"fixed points for $\\chi_c$ = {CHI_C_DEG:g} deg against Fn (our vessel)")
+    axes[0].legend(fontsize=8)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "fixed_points_vs_fn.png", dpi=120)
+    plt.close(fig)
+    figures.append("fixed_points_vs_fn.png")
+
+    summary: dict[str, Any] = {"Fn": FN, "figures": figures, "branches": {}}
+    for label, br in branches.items():
+        k = _primary_end(br)
+        folds = br.find("fold")
+        summary["branches"][label] = {
+            "start_xi_G": float(br.x[0, 0]),
+            "start_u_over_c": float(br.x[0, 1] / c),
+            "status": br.status.name,
+            "first_fold_chi_c_deg": float(np.degrees(folds[0].p)) if folds else None,
+            "primary_end_chi_c_deg": float(np.degrees(br.p[k])),
+            "saddle_index_primary": sorted({int(s) for s in br.n_unstable[1 : k + 1]}),
+            "chi_sign_primary": float(np.sign(np.median(br.state("chi")[1 : k + 1]))),
+            "delta_sign_primary": float(np.sign(np.median(br.state("delta")[1 : k + 1]))),
+        }
+    summary["fn_branches"] = {
+        label: {
+            "Fn_range": [float(br.p.min()), float(br.p.max())],
+            "saddle_index": sorted({int(s) for s in br.n_unstable}),
+            "folds_Fn": [float(sp.p) for sp in br.find("fold")],
+        }
+        for label, br in fn_branches.items()
+    }
+    summary["seconds"] = round(time.perf_counter() - t0, 2)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return summary
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry: ``python studies/fig02_05_fixed_points.py --out DIR``."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("out/fig02_05"))
+    args = ap.parse_args(argv)
+    s = compute(args.out, progress=lambda m: print(m, flush=True))
+    print(json.dumps(s, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
