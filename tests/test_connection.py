@@ -423,3 +423,20 @@ def test_bad_input_raises_value_error_naming_the_argument():
         solve_connection(prob, front_guess(20.0), adapt=-1)
     with pytest.raises(ValueError, match="problem"):
         solve_connection("not a problem", front_guess(20.0))
+
+
+def test_interrupt_during_adaptation_keeps_the_last_solution():
+    calls = []
+
+    def progress(res):
+        calls.append(res)
+        if len(calls) == 2:  # after the first adaptation round
+            raise KeyboardInterrupt
+
+    res = solve_connection(
+        nagumo_problem(0.25, N=40), front_guess(40.0), adapt=3, progress=progress
+    )
+    assert res.status is Status.INTERRUPTED and not res.success
+    assert len(calls) == 2
+    assert res.value("c") == calls[1].value("c")
+    assert res.value("c") == pytest.approx(SQ2 * 0.25, abs=1e-8)

@@ -7,6 +7,28 @@ Public names:
 * :class:`ConnectionResult` — orbit, equilibria, parameters, status; ``save``/``load``/``plot``;
 * :func:`solve_connection`, :func:`check_convergence`, :func:`continue_connection`,
   :func:`connection_at`.
+
+Example: the Nagumo front ``u'' + c u' + u (1 - u)(u - a) = 0`` from ``u = 1`` to
+``u = 0`` has ``c = sqrt(2) (1/2 - a)`` (McKean 1970)::
+
+    def rhs(x, p, ops):
+        return ops.stack([x[1], -p[1] * x[1] - x[0] * (1 - x[0]) * (x[0] - p[0])])
+
+    s = System(rhs, ("u", "v"), ("a", "c"))
+    prob = HeteroclinicProblem(s, s.params(a=0.25, c=0.2), unknown_params="c",
+                               saddle_from=[1, 0], saddle_to=[0, 0],
+                               mesh=CollocationMesh(80, 4, T=40.0))
+    t = np.linspace(0, 40, 200)
+    u = 1 / (1 + np.exp(t - 20))
+    res = solve_connection(prob, (t, np.column_stack([u, np.gradient(u, t)])))
+    res.value("c")                                   # 0.35355339059...
+    check_convergence(res).delta_mesh                # change of c on the halved mesh
+    br = continue_connection(res, "a", ContinuationSettings(p_min=0.1, p_max=0.4))
+    br.records["c"]                                  # c along the branch
+
+A connection to the same equilibrium shifted by a period (a front on a circle, the
+ship's wave-relative position ``xi_G`` with period 1) uses ``shift={"xi_G": -1.0}``
+instead of ``saddle_to``; the state must be declared periodic in the System.
 """
 
 from .collocation import CollocationMesh

@@ -137,7 +137,19 @@ def solve_connection(
         raise ValueError(f"`adapt` must be an integer >= 0, got {adapt!r}")
     settings = DEFAULT_NEWTON if newton is None else newton
     prob, z0 = problem.initial_vector(guess)
-    result = _finish(prob, _newton_solve(prob, z0, settings), settings)
+    try:
+        result = _finish(prob, _newton_solve(prob, z0, settings), settings)
+    except KeyboardInterrupt:
+        p = prob.params[prob.free] if prob.free is not None else None
+        result = prob.to_result(
+            z0,
+            p,
+            status=Status.INTERRUPTED,
+            message=(f"{Status.INTERRUPTED.value} Nothing converged: the result holds the guess."),
+        )
+        if throw:
+            raise ConvergenceError(result.message) from None
+        return result
     if progress is not None:
         progress(result)
     try:
