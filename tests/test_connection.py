@@ -325,7 +325,7 @@ def test_convergence_check_estimates_the_error():
     assert ck.ok
     err = abs(res.value("c") - SQ2 * 0.25)
     assert ck.delta_mesh["c"] == pytest.approx(err, rel=0.05)
-    assert ck.delta_T["c"] < 1e-11  # truncation error exp(-2 mu T) is negligible at T = 40
+    assert ck.delta_T["c"] < 1e-11  # truncation error, exponentially small in T
     assert ck.extended.T == pytest.approx(60.0)
     assert ck.refined.mesh.n_intervals == 80
     assert ck.converged(1e-8) and not ck.converged(1e-12)
@@ -419,6 +419,8 @@ def test_bad_input_raises_value_error_naming_the_argument():
         solve_connection(prob, (np.linspace(1, 0, 5), np.zeros((5, 2))))
     with pytest.raises(ValueError, match="guess"):
         solve_connection(prob, "front")
+    with pytest.raises(ValueError, match="newton"):
+        solve_connection(prob, front_guess(20.0), newton={"tol": 1e-8})
     with pytest.raises(ValueError, match="adapt"):
         solve_connection(prob, front_guess(20.0), adapt=-1)
     with pytest.raises(ValueError, match="problem"):

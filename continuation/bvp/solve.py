@@ -135,6 +135,8 @@ def solve_connection(
         raise ValueError(f"`problem` must be a HeteroclinicProblem, got {type(problem).__name__}")
     if isinstance(adapt, bool) or not isinstance(adapt, int) or adapt < 0:
         raise ValueError(f"`adapt` must be an integer >= 0, got {adapt!r}")
+    if newton is not None and not isinstance(newton, NewtonSettings):
+        raise ValueError(f"`newton` must be a NewtonSettings, got {type(newton).__name__}")
     settings = DEFAULT_NEWTON if newton is None else newton
     prob, z0 = problem.initial_vector(guess)
     try:
@@ -226,10 +228,11 @@ def check_convergence(
 
     The longer interval keeps the interval length in ``t`` (``ceil(T_factor N)``
     uniform intervals); its guess is the old orbit placed in the middle and held at
-    its end values outside. Beyn (1990) shows the truncation error of projection
-    boundary conditions decays like ``exp(-2 mu T)``, with ``mu`` the weakest rate at
-    the saddles, so ``delta_T`` measures the truncation error and ``delta_mesh`` the
-    discretisation error.
+    its end values outside. The truncation error of projection boundary conditions
+    decays exponentially with ``T``, at a rate set by the weakest eigenvalues at the
+    saddles (Beyn 1990), so ``delta_T`` measures the truncation error and
+    ``delta_mesh`` the discretisation error (for order ``2 m`` it is the error of the
+    coarser solution to a factor ``1 - 2^{-2m}``).
 
     Raises
     ------
