@@ -11,6 +11,10 @@ References
   41:835-840). The speed is not isolated here (``W^s`` of the node is 2-D), so the
   connection needs no free parameter: the count ``1 + 2 = n + 1 - 0`` closes with
   ``q = 0``.
+* Homoclinic orbit of ``u'' = u - u^2 + mu u'``: the KdV solitary wave
+  ``u = (3/2) sech^2(t/2)`` at ``mu = 0`` (Korteweg & de Vries 1895; Drazin & Johnson
+  1989, "Solitons: an introduction", ch. 2); ``mu`` is a regular unfolding parameter
+  (the Melnikov integral ``int u'^2 dt`` is nonzero), so it is solved for.
 * Damped driven pendulum / Josephson junction ``theta'' + gamma theta' + sin theta = F``:
   the saddle connects to itself shifted by ``2 pi`` on a curve ``F(gamma)`` with
   ``F = 4 gamma / pi + O(gamma^3)`` (Melnikov / energy balance along the separatrix
@@ -442,3 +446,32 @@ def test_interrupt_during_adaptation_keeps_the_last_solution():
     assert len(calls) == 2
     assert res.value("c") == calls[1].value("c")
     assert res.value("c") == pytest.approx(SQ2 * 0.25, abs=1e-8)
+
+
+def test_homoclinic_kdv_solitary_wave():
+    """shift = 0: homoclinic to the saddle (0, 0); mu = 0 and u = (3/2) sech^2(t/2)."""
+
+    def rhs(x, p, ops):
+        return ops.stack([x[1], x[0] - x[0] ** 2 + p[0] * x[1]])
+
+    s = System(rhs, ("u", "v"), ("mu",))
+    T = 40.0
+    prob = HeteroclinicProblem(
+        s,
+        s.params(mu=0.05),
+        "mu",
+        saddle_from=[0.0, 0.0],
+        shift=[0.0, 0.0],
+        mesh=CollocationMesh(80, 4, T),
+        phase=PinPhase("v", 0.0),  # the crest at the middle node
+    )
+    t = np.linspace(-T / 2, T / 2, 300)
+    u = 1.6 / np.cosh(t / 2.2) ** 2  # a sloppy soliton
+    res = solve_connection(prob, (t, np.column_stack([u, np.gradient(u, t)])))
+    assert res.success, res.message
+    assert abs(res.value("mu")) < 1e-12
+    assert np.array_equal(res.x_from, res.x_to)
+    ue = 1.5 / np.cosh((res.t - T / 2) / 2) ** 2
+    err = np.abs(res.state("u") - ue)
+    assert err[res.mesh.mesh_mask].max() < 1e-8
+    assert res.state("u").max() == pytest.approx(1.5, abs=1e-8)

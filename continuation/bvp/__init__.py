@@ -29,6 +29,7 @@ Example: the Nagumo front ``u'' + c u' + u (1 - u)(u - a) = 0`` from ``u = 1`` t
 A connection to the same equilibrium shifted by a period (a front on a circle, the
 ship's wave-relative position ``xi_G`` with period 1) uses ``shift={"xi_G": -1.0}``
 instead of ``saddle_to``; the state must be declared periodic in the System.
+``shift=0`` gives a homoclinic orbit (``x_+ = x_-``).
 """
 
 from .collocation import CollocationMesh

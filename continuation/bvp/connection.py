@@ -16,7 +16,8 @@ orthogonal complement of the unstable eigenspace of ``A_-``) and those of
 ``L_u(x_+)`` the unstable invariant subspace of ``A_+^T``. The end point is either a
 separate equilibrium (``saddle_to``) or the start shifted by whole periods of the
 system's periodic states (``shift``; then ``x_+ = x_- + shift`` is not a separate
-unknown), as for a front on a circle or a ship's wave-relative position.
+unknown), as for a front on a circle or a ship's wave-relative position; a zero
+shift makes the orbit homoclinic.
 
 Counting (Beyn 1990, sec. 2): with ``q`` unknown parameters the discretised system is
 square only if ``dim W^u(x_-) + dim W^s(x_+) = n + 1 - q``; the constructor checks
@@ -157,7 +158,9 @@ class HeteroclinicProblem:
     shift : array_like, shape (n,) or mapping of str to float, optional
         ``x_+ = x_- + shift``; nonzero only on periodic states, as whole multiples of
         their period (a mapping names states: ``{"theta": 2 * pi}``). Give exactly one
-        of ``saddle_to`` and ``shift``.
+        of ``saddle_to`` and ``shift``. ``shift=0`` asks for a homoclinic orbit
+        (``x_+ = x_-``); then the constant solution ``x = x_-`` also satisfies every
+        equation but the phase condition, so start from a good guess.
     mesh : CollocationMesh
         Intervals, degree and truncation time ``T``.
     free : str or None
@@ -259,8 +262,8 @@ class HeteroclinicProblem:
             separate = True
             if np.max(np.abs(x_to - x_from)) < 1e-8 * (1 + np.max(np.abs(x_from))):
                 raise ValueError(
-                    "`saddle_to` converged to the same equilibrium as `saddle_from`; homoclinic "
-                    "orbits are not supported by this problem"
+                    "`saddle_to` converged to the same equilibrium as `saddle_from`; for a "
+                    "homoclinic orbit give `shift=0` instead"
                 )
         object.__setattr__(self, "saddle_from", x_from)
         if separate:
@@ -360,8 +363,7 @@ class HeteroclinicProblem:
                     f"`shift` of state {system.state_names[i]!r} is {vec[i]}, not a whole "
                     f"multiple of its period {period[i]}"
                 )
-        if not np.any(vec):
-            raise ValueError("`shift` is zero: homoclinic orbits are not supported")
+        # a zero shift is a homoclinic orbit, x_+ = x_-
         vec.setflags(write=False)
         return vec
 
