@@ -6,6 +6,17 @@ Knows nothing of ships. The public API is exactly what this module exports.
 from .algorithms import PALC, ContinuationAlgorithm, Natural
 from .api import continue_equilibria
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
+from .bvp import (
+    CollocationMesh,
+    ConnectionResult,
+    ConvergenceCheck,
+    HeteroclinicProblem,
+    PinPhase,
+    check_convergence,
+    connection_at,
+    continue_connection,
+    solve_connection,
+)
 from .codim2 import FoldProblem, HopfProblem, continue_codim2
 from .driver import continue_branch
 from .equilibria import EquilibriumResult, solve_equilibrium, unique_equilibria
@@ -31,6 +42,15 @@ __all__ = [
     "Natural",
     "SpecialKind",
     "SpecialPoint",
+    "CollocationMesh",
+    "ConnectionResult",
+    "ConvergenceCheck",
+    "HeteroclinicProblem",
+    "PinPhase",
+    "check_convergence",
+    "connection_at",
+    "continue_connection",
+    "solve_connection",
     "FoldProblem",
     "HopfProblem",
     "continue_branch",
