@@ -16,6 +16,14 @@ purse_seiner(**options) -> Umeda4DOF
     The default vessel of the paper, from ``data/purse_seiner.toml``.
 purse_seiner_surge() -> SurgeModel
     Its uncoupled surge model.
+get_model(name, **options), list_models(), register_model(name, factory)
+    Registry of models: packaged vessel files (``"purse_seiner"``,
+    ``"purse_seiner_surge"``, ``"kvlcc2"``, ...), registered factories and plugins of
+    the entry-point group ``broachkit.models``; a path to a ``.toml`` file works too.
+load_model_file(path, kind="4dof") -> Umeda4DOF | SurgeModel
+    The model of a user's vessel file.
+get_vessel_data(name) -> VesselModelData
+    The resolved vessel behind a model name or file (no CasADi model built).
 """
 
 from __future__ import annotations
@@ -23,6 +31,15 @@ from __future__ import annotations
 from typing import Any
 
 from .estimation import VesselModelData, resolve_vessel
+from .registry import (
+    PluginError,
+    get_model,
+    get_vessel_data,
+    list_models,
+    load_model_file,
+    model_info,
+    register_model,
+)
 from .surge import SurgeModel
 from .umeda_4dof import Umeda4DOF
 from .vessel import Coefficient, VesselData, VesselFileError, available_vessels, load_vessel
@@ -40,14 +57,21 @@ def purse_seiner_surge() -> SurgeModel:
 
 __all__ = [
     "Coefficient",
+    "PluginError",
     "SurgeModel",
     "Umeda4DOF",
     "VesselData",
     "VesselFileError",
     "VesselModelData",
     "available_vessels",
+    "get_model",
+    "get_vessel_data",
+    "list_models",
+    "load_model_file",
     "load_vessel",
+    "model_info",
     "purse_seiner",
     "purse_seiner_surge",
+    "register_model",
     "resolve_vessel",
 ]

@@ -14,7 +14,8 @@ quantity                    method
 ==========================  ==================================================
 hull sections S, B, d       parametric form-parameter hull (:mod:`.hydro.hull`)
 C_wp                        Schneekluth & Bertram (1998)
-R(u)                        ITTC-1957 + Holtrop & Mennen (1982) / Holtrop (1984)
+R(u)                        ITTC-1957 + Holtrop & Mennen (1982) / Holtrop (1984),
+                            or the MMG straight-running coefficient R0' if given
 K_T(J)                      Wageningen B-series (Oosterveld & van Oossanen 1975)
 w_P, t_P                    Taylor (1933); Holtrop (1984)
 m_x                         Söding (1982) fit of Motora's charts
@@ -26,6 +27,15 @@ K_p(u)                      zeta_0 (assumed) + Ikeda et al. (1978) lift damping
 GZ(phi)                     hull hydrostatics, free sinkage and trim
 X_w, Y_w, N_w, K_w          Froude-Krylov strips + slender-body lift
 ==========================  ==================================================
+
+Published coefficients can be given instead of estimated (every such key is
+optional in the file): added masses dimensionally (``m_x``) or as MMG primes
+(``m_x_prime = m_x / (rho/2 L^2 d)``, ``J_zz_prime = J_zz / (rho/2 L^4 d)``), the
+resistance as the MMG coefficient ``resistance.R0_prime`` (then
+:math:`R(u) = R'_0\,\tfrac12\rho L d\,u^2`, Yasukawa & Yoshimura 2015),
+the rudder span ``rudder.H_R``. Hull derivatives measured about another origin than G
+(the MMG standard method uses midship) are moved to G when ``hydrodynamics.x_ref``
+names that origin (:func:`derivatives_about_g`).
 """
 
 from __future__ import annotations
@@ -85,6 +95,43 @@ def _holtrop(v: VesselData, hull: HullForm, C_wp: float, S: float) -> HoltropHul
         S=S,
         C_stern=v.get("resistance.C_stern"),
     )
+
+
+def derivatives_about_g(prime: dict[str, float], a_over_L: float) -> dict[str, float]:
+    r"""Move the linear hull derivatives from an origin O to the centre of gravity G.
+
+    With G a distance :math:`a = x_G - x_O` ahead of O, the lateral velocity at O is
+    :math:`v_O = v_G - a r` and the yaw moment about G is :math:`N_G = N_O - a Y`, so
+
+    .. math::
+
+        Y'_v{}^G &= Y'_v, \qquad Y'_r{}^G = Y'_r - a' Y'_v, \qquad
+        N'_v{}^G = N'_v - a' Y'_v, \\
+        N'_r{}^G &= N'_r - a'(Y'_r + N'_v) + a'^2 Y'_v, \qquad a' = a / L,
+
+    (non-dimensionalised as in :mod:`ship_models.hydro.manoeuvring`). The added-mass
+    cross-coupling that the same shift creates (:math:`-a\,m_y\dot r` in the sway
+    equation) is not part of Umeda's (1999) equations and is neglected.
+
+    Parameters
+    ----------
+    prime : dict
+        ``Y_v_prime, Y_r_prime, N_v_prime, N_r_prime`` about O.
+    a_over_L : float
+        :math:`(x_G - x_O)/L`.
+
+    Returns
+    -------
+    dict
+        The same keys, about G (other keys are copied unchanged).
+    """
+    a = float(a_over_L)
+    Yv, Yr, Nv, Nr = (prime[k] for k in ("Y_v_prime", "Y_r_prime", "N_v_prime", "N_r_prime"))
+    out = dict(prime)
+    out["Y_r_prime"] = Yr - a * Yv
+    out["N_v_prime"] = Nv - a * Yv
+    out["N_r_prime"] = Nr - a * (Yr + Nv) + a * a * Yv
+    return out
 
 
 @dataclass(frozen=True)
@@ -204,25 +251,36 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
 
     # ---- resistance -----------------------------------------------------------
     hh = _holtrop(v, hull, C_wp, S_f)
-    if v.has("resistance.form_factor"):
-        k1 = v.get("resistance.form_factor")
-    else:
-        k1 = hh.form_factor()
-        est["resistance.form_factor"] = _est(
-            k1, "-", "1 + k1: Holtrop (1984), A statistical re-analysis of resistance data"
+    rfit: ResistanceFit
+    if v.has("resistance.R0_prime"):
+        # MMG standard method: R(u) = R0' rho/2 L d u^2 (exact, no fit)
+        u_max = (
+            v.get("resistance.Fn_max_fit") * np.sqrt(g * L)
+            if v.has("resistance.Fn_max_fit")
+            else np.sqrt(g * L)
         )
-    if v.has("resistance.C_A"):
-        C_A = v.get("resistance.C_A")
+        r2 = v.get("resistance.R0_prime") * 0.5 * rho * L * d_m * u_max**2
+        rfit = ResistanceFit(np.array([r2, 0.0]), np.zeros(0), np.zeros(0), float(u_max), 0.0)
     else:
-        C_A = hh.correlation_allowance()
-        est["resistance.C_A"] = _est(C_A, "-", "Holtrop (1984) correlation allowance")
-    u_max = v.get("resistance.Fn_max_fit") * np.sqrt(g * L)
-    knot = v.get("resistance.knot_spacing_Fn") * np.sqrt(g * L)
+        if v.has("resistance.form_factor"):
+            k1 = v.get("resistance.form_factor")
+        else:
+            k1 = hh.form_factor()
+            est["resistance.form_factor"] = _est(
+                k1, "-", "1 + k1: Holtrop (1984), A statistical re-analysis of resistance data"
+            )
+        if v.has("resistance.C_A"):
+            C_A = v.get("resistance.C_A")
+        else:
+            C_A = hh.correlation_allowance()
+            est["resistance.C_A"] = _est(C_A, "-", "Holtrop (1984) correlation allowance")
+        u_max = v.get("resistance.Fn_max_fit") * np.sqrt(g * L)
+        knot = v.get("resistance.knot_spacing_Fn") * np.sqrt(g * L)
 
-    def R_formula(u: Any) -> Any:
-        return hh.total_resistance(u, rho=rho, g=g, nu=nu, form_factor=k1, C_A=C_A)
+        def R_formula(u: Any) -> Any:
+            return hh.total_resistance(u, rho=rho, g=g, nu=nu, form_factor=k1, C_A=C_A)
 
-    rfit: ResistanceFit = fit_resistance(R_formula, u_max, knot)
+        rfit = fit_resistance(R_formula, u_max, knot)
 
     # ---- propeller -------------------------------------------------------------
     D_p = v.get("propulsion.D_p")
@@ -258,8 +316,11 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
 
     # ---- added masses -----------------------------------------------------------
     m22 = lewis_sway_added_mass(rho, hull.b_wl, hull.d, hull.beta)
+    half_rho_L2d = 0.5 * rho * L**2 * d_m
     if v.has("hydrodynamics.m_x"):
         m_x = v.get("hydrodynamics.m_x")
+    elif v.has("hydrodynamics.m_x_prime"):
+        m_x = v.get("hydrodynamics.m_x_prime") * half_rho_L2d
     else:
         m_x = soding_surge_added_mass(rho, volume, L)
         est["hydrodynamics.m_x"] = _est(
@@ -267,13 +328,18 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
         )
     if v.has("hydrodynamics.m_y"):
         m_y = v.get("hydrodynamics.m_y")
+    elif v.has("hydrodynamics.m_y_prime"):
+        m_y = v.get("hydrodynamics.m_y_prime") * half_rho_L2d
     else:
         m_y = float(hull.w @ m22)
         est["hydrodynamics.m_y"] = _est(
             m_y, "kg", "strip theory, Lewis sections at zero frequency (Lewis 1929)"
         )
+    J_zz_given = v.has("hydrodynamics.J_zz") or v.has("hydrodynamics.J_zz_prime")
     if v.has("hydrodynamics.J_zz"):
         J_zz = v.get("hydrodynamics.J_zz")
+    elif v.has("hydrodynamics.J_zz_prime"):
+        J_zz = v.get("hydrodynamics.J_zz_prime") * half_rho_L2d * L**2
     else:
         J_zz = float(hull.w @ ((hull.x - x_G) ** 2 * m22))
         est["hydrodynamics.J_zz"] = _est(
@@ -303,6 +369,12 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
                 "Inoue, Hirano & Kijima (1981), Hydrodynamic derivatives on ship "
                 "manoeuvring, ISP 28(321)",
             )
+    if v.has("hydrodynamics.x_ref"):
+        # derivatives (and a given J_zz) measured about x_ref: move them to G
+        a_ref = x_G - v.get("hydrodynamics.x_ref")
+        prime = derivatives_about_g(prime, a_ref / L)
+        if J_zz_given:
+            J_zz = J_zz + a_ref**2 * m_y  # parallel axes, no added-mass cross term
     for name in ("Y_phi_prime", "N_phi_prime", "K_phi_prime"):
         key = f"hydrodynamics.{name}"
         if v.has(key):
@@ -348,7 +420,10 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
     # ---- geometry of forces -------------------------------------------------------------
     z_H = v.get("roll.z_H_over_d") * d_m + zeta_G  # body z (down) of the lateral force below G
     A_R = v.get("rudder.A_R")
-    h_R = float(np.sqrt(v.get("rudder.aspect_ratio") * A_R))
+    if v.has("rudder.H_R"):
+        h_R = v.get("rudder.H_R")
+    else:
+        h_R = float(np.sqrt(v.get("rudder.aspect_ratio") * A_R))
     z_R = (d_a - 0.5 * h_R) + zeta_G  # rudder centre: lower edge at the keel line aft
     eta = min(1.0, D_p / h_R)
     strips = WaveStrips.from_hull(
@@ -425,10 +500,12 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
         "z_H": z_H,
         "z_R": z_R,
         "eta_rudder": eta,
+        "x_G": x_G,
+        "I_zz": I_zz,
     }
     resolved = vessel.with_estimates(est)
     log.debug("resolved vessel %s with %d estimates", vessel.name, len(est))
     return VesselModelData(resolved, forces, hull, gz, hh, info)
 
 
-__all__ = ["VesselModelData", "build_vessel_model", "resolve_vessel"]
+__all__ = ["VesselModelData", "build_vessel_model", "derivatives_about_g", "resolve_vessel"]

@@ -84,6 +84,10 @@ class Field:
         The value must be an integer.
     doc : str
         One-line description.
+    required_unless : str
+        Dotted key of a field that makes this one unnecessary when it is given
+        (e.g. the Holtrop fit range is not needed when ``resistance.R0_prime`` gives
+        the resistance directly). Only meaningful with ``required=True``.
     """
 
     dim: str
@@ -93,6 +97,7 @@ class Field:
     low_open: bool = False
     integer: bool = False
     doc: str = ""
+    required_unless: str = ""
 
 
 def _pos(dim: str, doc: str, required: bool = True, high: float = math.inf) -> Field:
@@ -150,7 +155,14 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "n_blades": Field("count", True, 2, 7, integer=True, doc="number of blades"),
         "P_over_D": Field("none", True, 0.5, 1.4, doc="pitch ratio (B-series range)"),
         "AE_over_A0": Field("none", True, 0.3, 1.05, doc="blade area ratio (B-series range)"),
-        "J_max_fit": _pos("none", "upper end of the J range of the quadratic K_T fit"),
+        "J_max_fit": Field(
+            "none",
+            True,
+            0.0,
+            low_open=True,
+            doc="upper end of the J range of the quadratic K_T fit",
+            required_unless="propulsion.K_T0",
+        ),
         "w_P": _opt("none", "effective wake fraction", 0.0, 0.9),
         "t_P": _opt("none", "thrust deduction fraction", 0.0, 0.9),
         "K_T0": _opt("none", "K_T(J) = K_T0 + K_T1 J + K_T2 J^2"),
@@ -159,10 +171,34 @@ SCHEMA: dict[str, dict[str, Field]] = {
     },
     "resistance": {
         "C_stern": Field("none", True, -25.0, 10.0, doc="Holtrop stern-shape parameter"),
-        "Fn_max_fit": _pos("none", "upper end of the Froude-number range of the R(u) fit"),
-        "knot_spacing_Fn": Field("none", True, 0.005, 0.2, doc="R(u) spline knot spacing in Fn"),
+        "Fn_max_fit": Field(
+            "none",
+            True,
+            0.0,
+            low_open=True,
+            doc="upper end of the Froude-number range of the R(u) fit",
+            required_unless="resistance.R0_prime",
+        ),
+        "knot_spacing_Fn": Field(
+            "none",
+            True,
+            0.005,
+            0.2,
+            doc="R(u) spline knot spacing in Fn",
+            required_unless="resistance.R0_prime",
+        ),
         "form_factor": _opt("none", "1 + k", 1.0, 3.0),
         "C_A": _opt("none", "correlation allowance", -0.01, 0.01),
+        "R0_prime": Field(
+            "none",
+            False,
+            0.0,
+            1.0,
+            True,
+            doc="straight-running resistance R0' = R / (rho/2 L_pp d_m u^2) of the MMG "
+            "standard method; if given, R(u) = R0' rho/2 L_pp d_m u^2 replaces the Holtrop "
+            "estimate",
+        ),
     },
     "rudder": {
         "A_R": _pos("area", "rudder area"),
@@ -175,6 +211,9 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "epsilon": _pos("none", "(1 - w_R) / (1 - w_P)", high=3.0),
         "kappa": _frac("propeller-race factor kappa", high=2.0),
         "f_alpha": _opt("none", "rudder normal-force lift slope per rad", 0.0, 10.0),
+        "H_R": Field(
+            "length", False, 0.0, low_open=True, doc="rudder span; default sqrt(aspect_ratio A_R)"
+        ),
     },
     "autopilot": {
         "K_R": Field("none", True, 0.0, doc="rudder gain"),
@@ -194,6 +233,15 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "m_x": _opt("mass", "surge added mass", 0.0),
         "m_y": _opt("mass", "sway added mass", 0.0),
         "J_zz": _opt("inertia", "yaw added moment of inertia", 0.0),
+        "m_x_prime": _opt("none", "m_x / (rho/2 L_pp^2 d_m) (alternative to m_x)", 0.0),
+        "m_y_prime": _opt("none", "m_y / (rho/2 L_pp^2 d_m) (alternative to m_y)", 0.0),
+        "J_zz_prime": _opt("none", "J_zz / (rho/2 L_pp^4 d_m) (alternative to J_zz)", 0.0),
+        "x_ref": _opt(
+            "length",
+            "x (from midship, + forward) of the origin to which the hull derivatives "
+            "Y_v'..N_r' and J_zz refer (e.g. 0 for the MMG standard method); absent: "
+            "they are used as referred to G",
+        ),
         "I_xx_plus_J_xx": _opt("inertia", "roll moment of inertia incl. added", 0.0),
         "Y_v_prime": _opt("none", "Y_v / (rho/2 L d U)"),
         "Y_r_prime": _opt("none", "Y_r / (rho/2 L^2 d U)"),
@@ -332,6 +380,21 @@ def _check_consistency(coeffs: Mapping[str, Coefficient]) -> None:
         raise VesselFileError(
             "`propulsion.K_T0`, `propulsion.K_T1`, `propulsion.K_T2` must be given together"
         )
+    # an added mass given both dimensionally and as a prime must agree
+    half_rho_L2d = 0.5 * si("environment.rho") * L**2 * 0.5 * (d_f + d_a)
+    for name, scale in (
+        ("m_x", half_rho_L2d),
+        ("m_y", half_rho_L2d),
+        ("J_zz", half_rho_L2d * L**2),
+    ):
+        dim_key, prime_key = f"hydrodynamics.{name}", f"hydrodynamics.{name}_prime"
+        if dim_key in coeffs and prime_key in coeffs:
+            a, b = si(dim_key), si(prime_key) * scale
+            if abs(a - b) > 1e-6 * max(abs(a), abs(b)):
+                raise VesselFileError(
+                    f"`{dim_key}` = {a:.6g} disagrees with `{prime_key}` x rho/2 L^n d_m = "
+                    f"{b:.6g}; give only one of them"
+                )
 
 
 def validate(coeffs: Mapping[str, Coefficient]) -> None:
@@ -348,7 +411,10 @@ def validate(coeffs: Mapping[str, Coefficient]) -> None:
         for name, spec in fields.items():
             key = f"{sec}.{name}"
             if spec.required and key not in coeffs:
-                raise VesselFileError(f"missing required field `{key}` ({spec.doc})")
+                if spec.required_unless and spec.required_unless in coeffs:
+                    continue
+                alt = f" or give `{spec.required_unless}`" if spec.required_unless else ""
+                raise VesselFileError(f"missing required field `{key}` ({spec.doc}){alt}")
     for key, c in coeffs.items():
         if c.status not in STATUSES:
             raise VesselFileError(f"`{key}.status` must be one of {STATUSES}, got {c.status!r}")
