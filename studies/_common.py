@@ -1,0 +1,208 @@
+"""Shared output helpers for the study scripts: output folder, figure style, PNG and CSV.
+
+Study scripts import this module as ``from _common import ...`` (they run as
+``python studies/<script>.py``, which puts this folder on ``sys.path``). Everything
+here is generic: nothing knows about ships.
+
+- :func:`output_dir` -- ``<root>/<name>``, created; root from ``--out``, else the
+  environment variable ``BROACHKIT_OUT``, else ``./out``.
+- :data:`STYLE` / :func:`figure_style` -- one consistent matplotlib look.
+- :func:`new_figure` -- a styled figure that needs no GUI backend.
+- :func:`save_figure` -- PNG at a fixed resolution, figure closed afterwards.
+- :func:`save_csv` / :func:`read_csv` -- numeric columns with ``#`` metadata lines.
+- :func:`save_table` -- rows of text and numbers (e.g. a coefficient table).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import math
+import os
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: Environment variable naming the default output root.
+OUT_ENV = "BROACHKIT_OUT"
+
+#: matplotlib rcParams of all study figures.
+STYLE: dict[str, Any] = {
+    "figure.dpi": 100,
+    "savefig.dpi": 150,
+    "font.size": 9,
+    "axes.titlesize": 10,
+    "axes.labelsize": 9,
+    "legend.fontsize": 8,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "lines.linewidth": 1.4,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+}
+
+
+def output_dir(name: str = "", root: str | os.PathLike[str] | None = None) -> Path:
+    """The folder ``root/name``, created if needed.
+
+    Parameters
+    ----------
+    name : str
+        Sub-folder (e.g. the study name); "" for ``root`` itself.
+    root : path, optional
+        Default: ``$BROACHKIT_OUT`` if set, else ``./out``.
+    """
+    base = Path(root) if root is not None else Path(os.environ.get(OUT_ENV, "out"))
+    out = base / name if name else base
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def use_agg() -> None:
+    """Select the non-interactive Agg backend (call before importing pyplot in scripts)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+
+
+@contextlib.contextmanager
+def figure_style() -> Iterator[None]:
+    """Context in which matplotlib uses :data:`STYLE`."""
+    import matplotlib
+
+    with matplotlib.rc_context(STYLE):
+        yield
+
+
+def new_figure(figsize: tuple[float, float]) -> Any:
+    """A :class:`matplotlib.figure.Figure` in :data:`STYLE`, independent of pyplot.
+
+    It needs no GUI backend (it renders with Agg when saved), so scripts and tests
+    can make figures anywhere.
+    """
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    with matplotlib.rc_context(STYLE):
+        return Figure(figsize=figsize, layout="constrained")
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int | None = None) -> Path:
+    """Save ``fig`` as PNG at ``path`` (suffix ``.png`` added if missing) and close it."""
+    p = Path(path)
+    if p.suffix.lower() != ".png":
+        p = p.with_name(p.name + ".png")
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(p, dpi=dpi or STYLE["savefig.dpi"])
+    if getattr(fig.canvas, "manager", None) is not None:  # a pyplot figure
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+    return p
+
+
+def _meta_lines(meta: Mapping[str, Any] | None) -> list[str]:
+    lines = []
+    for k, v in (meta or {}).items():
+        text = str(v).replace("\n", " ")
+        lines.append(f"# {k}: {text}")
+    return lines
+
+
+def save_csv(
+    path: str | os.PathLike[str],
+    columns: Mapping[str, Any],
+    *,
+    meta: Mapping[str, Any] | None = None,
+) -> Path:
+    """Write numeric columns to CSV, with ``# key: value`` metadata lines on top.
+
+    Parameters
+    ----------
+    path : path
+        Output file (parents created).
+    columns : mapping of str to array_like, each shape (N,)
+        Column name -> values; all of the same length.
+    meta : mapping, optional
+        Written first as comment lines (units, parameters, sources).
+
+    Raises
+    ------
+    ValueError
+        If ``columns`` is empty or the columns differ in length (names the column).
+    """
+    if not columns:
+        raise ValueError("`columns` must not be empty")
+    arrays = {k: np.asarray(v, dtype=float).reshape(-1) for k, v in columns.items()}
+    n = len(next(iter(arrays.values())))
+    for k, a in arrays.items():
+        if a.size != n:
+            raise ValueError(f"`columns[{k!r}]` has {a.size} values, expected {n}")
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    with p.open("w", newline="") as fh:
+        for line in _meta_lines(meta):
+            fh.write(line + "\n")
+        w = csv.writer(fh)
+        w.writerow(list(arrays))
+        data = np.column_stack(list(arrays.values()))
+        for row in data:
+            w.writerow([repr(float(x)) if math.isfinite(x) else "nan" for x in row])
+    return p
+
+
+def read_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Read a file written by :func:`save_csv`: ``{column: ndarray (N,)}``."""
+    with Path(path).open(newline="") as fh:
+        rows = [r for r in csv.reader(line for line in fh if not line.startswith("#"))]
+    if not rows:
+        raise ValueError(f"`path`: {path} has no header row")
+    header, body = rows[0], rows[1:]
+    data = np.array([[float(x) for x in r] for r in body], dtype=float).reshape(-1, len(header))
+    return {name: data[:, i].copy() for i, name in enumerate(header)}
+
+
+def save_table(
+    path: str | os.PathLike[str],
+    header: Sequence[str],
+    rows: Sequence[Sequence[Any]],
+    *,
+    meta: Mapping[str, Any] | None = None,
+) -> Path:
+    """Write rows of mixed text and numbers to CSV (floats at full precision).
+
+    Raises
+    ------
+    ValueError
+        If a row's length differs from ``header`` (names the row index).
+    """
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    with p.open("w", newline="") as fh:
+        for line in _meta_lines(meta):
+            fh.write(line + "\n")
+        w = csv.writer(fh)
+        w.writerow(list(header))
+        for i, r in enumerate(rows):
+            if len(r) != len(header):
+                raise ValueError(f"`rows[{i}]` has {len(r)} fields, expected {len(header)}")
+            w.writerow([repr(float(x)) if isinstance(x, float) else x for x in r])
+    return p
+
+
+__all__ = [
+    "OUT_ENV",
+    "STYLE",
+    "figure_style",
+    "new_figure",
+    "output_dir",
+    "read_csv",
+    "save_csv",
+    "save_figure",
+    "save_table",
+    "use_agg",
+]
