@@ -24,9 +24,9 @@ not plotted. Run: ``python studies/fig02_05_fixed_points.py [--out DIR]``.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -34,19 +34,15 @@ from typing import Any
 
 import numpy as np
 
+if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import new_figure, save_figure, save_table
+
 FN = 0.3248
 CHI_C_DEG = 10.0
 CHI_C_MAX_DEG = 50.0
 COLORS = {"crest": "tab:red", "trough": "tab:blue"}
-
-
-def _plt() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _primary_end(br: Any) -> int:
@@ -81,14 +77,12 @@ def _rows(br: Any, label: str, c: float, free: str) -> list[dict[str, Any]]:
     return rows
 
 
-def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
-    with path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+def _write_csv(path: Path, rows: list[dict[str, Any]], meta: dict[str, Any]) -> None:
+    header = list(rows[0])
+    save_table(path, header, [[r[h] for h in header] for r in rows], meta=meta)
 
 
-def _plot_vs_course(plt: Any, branches: dict[str, Any], c: float, out: Path) -> list[str]:
+def _plot_vs_course(branches: dict[str, Any], c: float, out: Path) -> list[str]:
     """Figs. 2-5: one PNG per group of states, primary segments (up to a fold)."""
     specs = [
         (
@@ -117,9 +111,8 @@ def _plot_vs_course(plt: Any, branches: dict[str, Any], c: float, out: Path) -> 
     ]
     written = []
     for fname, tag, quantities in specs:
-        fig, axes = plt.subplots(
-            len(quantities), 1, figsize=(6, 2.6 * len(quantities) + 0.6), sharex=True, squeeze=False
-        )
+        fig = new_figure((6, 2.6 * len(quantities) + 0.6))
+        axes = fig.subplots(len(quantities), 1, sharex=True, squeeze=False)
         for ax, (_, ylabel, fn) in zip(axes[:, 0], quantities, strict=True):
             for label, br in branches.items():
                 k = _primary_end(br) + 1
@@ -148,9 +141,7 @@ def _plot_vs_course(plt: Any, branches: dict[str, Any], c: float, out: Path) -> 
         axes[-1, 0].set_xlabel("autopilot course $\\chi_c$ (deg)")
         axes[0, 0].set_title(f"{tag}: fixed points for Fn = {FN} (our vessel)")
         axes[-1, 0].set_xlim(0, CHI_C_MAX_DEG)
-        fig.tight_layout()
-        fig.savefig(out / fname, dpi=120)
-        plt.close(fig)
+        save_figure(fig, out / fname)
         written.append(fname)
     return written
 
@@ -162,7 +153,6 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
-    plt = _plt()
     t0 = time.perf_counter()
     model = purse_seiner()
     params = model.default_params().replace(Fn=FN, chi_c=math.radians(CHI_C_DEG))
@@ -173,12 +163,19 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     for label, br in branches.items():
         br.save(out / f"branch_chi_c_{label}.npz")
         rows += _rows(br, label, c, "chi_c_deg")
-    _write_csv(out / "fixed_points_chi_c.csv", rows)
-    figures = _plot_vs_course(plt, branches, c, out)
+    meta = {
+        "study": "Umeda (1999) Figs. 2-5, default vessel",
+        "units": "u, v m/s; r, p_roll rad/s; angles deg; xi_G = xi_G/lambda in [0, 1)",
+        "params": json.dumps(params.as_dict()),
+        "celerity_m_s": c,
+    }
+    _write_csv(out / "fixed_points_chi_c.csv", rows, meta)
+    figures = _plot_vs_course(branches, c, out)
 
     say("tracing both fixed points in Fn at chi_c = 10 deg")
     fn_rows: list[dict[str, Any]] = []
-    fig, axes = plt.subplots(2, 1, figsize=(6, 5.6), sharex=True)
+    fig = new_figure((6, 5.6))
+    axes = fig.subplots(2, 1, sharex=True)
     fn_branches = {}
     for label in ("crest", "trough"):
         fp = find_fixed_point(model, params, label)
@@ -187,7 +184,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         fn_rows += _rows(br, label, c, "Fn")
         for ax, y in zip(axes, (np.mod(br.state("xi_G"), 1), br.state("u") / c), strict=True):
             ax.plot(br.p, y, "-", color=COLORS[label], label=f"near the {label}")
-    _write_csv(out / "fixed_points_fn.csv", fn_rows)
+    _write_csv(out / "fixed_points_fn.csv", fn_rows, meta)
     axes[0].set_ylabel(r"$\xi_G/\lambda$")
     axes[1].set_ylabel("$u/c$")
     axes[1].set_xlabel("nominal Froude number Fn")
@@ -195,9 +192,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     axes[0].legend(fontsize=8)
     for ax in axes:
         ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out / "fixed_points_vs_fn.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, out / "fixed_points_vs_fn.png")
     figures.append("fixed_points_vs_fn.png")
 
     summary: dict[str, Any] = {"Fn": FN, "figures": figures, "branches": {}}

@@ -21,9 +21,9 @@ Run: ``python studies/fig06_09_eigen.py [--out DIR]``.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -31,18 +31,14 @@ from typing import Any
 
 import numpy as np
 
+if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import new_figure, save_figure, save_table
+
 FN = 0.3248
 CHI_C_DEG = 10.0
 LABELS = ("xi_G/lambda", "u'", "v'", "chi", "r'", "phi", "p'", "delta")
-
-
-def _plt() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
@@ -52,7 +48,6 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
-    plt = _plt()
     t0 = time.perf_counter()
     model = purse_seiner()
     params = model.default_params().replace(Fn=FN, chi_c=math.radians(CHI_C_DEG))
@@ -68,18 +63,19 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
             ev_rows.append(
                 {
                     "point": label,
-                    "re": lam.real,
-                    "im": lam.imag,
-                    "re_nondim": lam_n.real,
-                    "im_nondim": lam_n.imag,
+                    "re": float(lam.real),
+                    "im": float(lam.imag),
+                    "re_nondim": float(lam_n.real),
+                    "im_nondim": float(lam_n.imag),
                 }
             )
         vec = es.unstable_vector(0)
         for i, (name, comp) in enumerate(zip(es.state_names, vec, strict=True), 1):
-            vec_rows.append({"point": label, "component": i, "state": name, "value": comp})
+            vec_rows.append({"point": label, "component": i, "state": name, "value": float(comp)})
         n_val, n_vec = fig_no[label]
         # eigenvalues in the complex plane (paper Figs. 6-7)
-        fig, ax = plt.subplots(figsize=(5.2, 4.2))
+        fig = new_figure((5.2, 4.2))
+        ax = fig.subplots()
         z = es.values_nondim
         unstable = z.real > 0
         ax.plot(z.real[~unstable], z.imag[~unstable], "o", color="tab:blue", label="Re < 0")
@@ -94,13 +90,12 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         )
         ax.legend(fontsize=8)
         ax.grid(alpha=0.3)
-        fig.tight_layout()
         name = f"fig{n_val:02d}_eigenvalues_{label}.png"
-        fig.savefig(out / name, dpi=120)
-        plt.close(fig)
+        save_figure(fig, out / name)
         figures.append(name)
         # unstable eigenvector components (paper Figs. 8-9)
-        fig, ax = plt.subplots(figsize=(5.2, 3.8))
+        fig = new_figure((5.2, 3.8))
+        ax = fig.subplots()
         ax.bar(np.arange(1, 9), vec, color=["tab:red" if abs(c) >= 0.5 else "0.6" for c in vec])
         ax.set_xticks(np.arange(1, 9))
         ax.set_xticklabels([f"{i}\n{lab}" for i, lab in enumerate(LABELS, 1)], fontsize=7)
@@ -112,10 +107,8 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
             f"eigenvalue {es.values_nondim[0].real:.3f} (nondim.)"
         )
         ax.grid(alpha=0.3, axis="y")
-        fig.tight_layout()
         name = f"fig{n_vec:02d}_eigenvector_{label}.png"
-        fig.savefig(out / name, dpi=120)
-        plt.close(fig)
+        save_figure(fig, out / name)
         figures.append(name)
         summary["points"][label] = {
             "x": [float(v) for v in fp.x],
@@ -128,11 +121,14 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
             "motion_weights": es.motion_weights(),
             "dominant_motions": list(es.dominant_motions()),
         }
+    meta = {
+        "study": "Umeda (1999) Figs. 6-9, default vessel",
+        "params": json.dumps(params.as_dict()),
+        "nondim": "t' = t c/L; states (xi_G/lambda, u/c, v/c, chi, r L/U, phi, p L/U, delta)",
+    }
     for fname, rows in (("eigenvalues.csv", ev_rows), ("eigenvectors.csv", vec_rows)):
-        with (out / fname).open("w", newline="") as fh:
-            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+        header = list(rows[0])
+        save_table(out / fname, header, [[r[h] for h in header] for r in rows], meta=meta)
     summary["figures"] = figures
     summary["seconds"] = round(time.perf_counter() - t0, 2)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
