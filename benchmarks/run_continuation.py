@@ -69,6 +69,13 @@ def _maxrss_kib(who: int = resource.RUSAGE_SELF) -> int:
     return int(resource.getrusage(who).ru_maxrss)  # KiB on Linux
 
 
+def _cpu_s() -> float:
+    """CPU seconds (user + system) of this process and its finished children."""
+    me = resource.getrusage(resource.RUSAGE_SELF)
+    ch = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + ch.ru_utime + ch.ru_stime
+
+
 def _floor(problem: Any, reps: int) -> dict[str, Any]:
     """Median time of one bordered LU solve + one eigenvalue solve (see module docstring)."""
     import numpy as np
@@ -323,19 +330,29 @@ def worker(
     out["rss_base_kib"] = _maxrss_kib()
     out["setup_s"] = runner.setup_s
     sink = io.StringIO()
+    cpus: list[float] = []
+
+    def timed() -> tuple[float, dict[str, Any]]:
+        c0 = _cpu_s()
+        dt, info = runner.run()
+        cpus.append(_cpu_s() - c0)
+        return dt, info
+
     try:
         with contextlib.redirect_stdout(sink):
             times: list[float] = []
             if not getattr(runner, "warm", False):
-                dt, info = runner.run()
+                dt, info = timed()
                 if dt > warmup_limit:  # too slow to throw away: it counts
                     times.append(dt)
+                else:
+                    cpus.clear()
             first = times[0] if times else None
             n_rep = repeats
             if first is not None:
                 n_rep = max(1, min(repeats, int(budget / first)))
             while len(times) < n_rep:
-                dt, info = runner.run()
+                dt, info = timed()
                 times.append(dt)
                 if len(times) == 1 and dt * repeats > budget:
                     n_rep = max(1, int(budget / dt))
@@ -350,6 +367,9 @@ def worker(
     out["times_s"] = times
     out["median_s"] = statistics.median(times)
     out["per_step_s"] = out["median_s"] / max(out["steps"], 1)
+    out["cpu_s"] = cpus
+    out["cpu_median_s"] = statistics.median(cpus)
+    out["cpu_per_step_s"] = out["cpu_median_s"] / max(out["steps"], 1)
     out["rss_peak_kib"] = max(_maxrss_kib(), _maxrss_kib(resource.RUSAGE_CHILDREN))
     out["rss_note"] = runner.rss_note
     if runner.exe_rss_kib is not None:
@@ -426,6 +446,29 @@ def _mib(kib: int | None) -> str:
     return "-" if kib is None else f"{kib / 1024:.0f}"
 
 
+_FOLD_LIKE = {"fold", "+", "-"}  # bice labels a real eigenvalue crossing "+" or "-"
+
+
+def _special_cell(found: list[Any], expected: Any) -> str:
+    """Found points with their distance to the reference, and the missed references."""
+    parts = []
+    used: set[int] = set()
+    for e in expected:
+        kinds = _FOLD_LIKE if e.kind == "fold" else {e.kind}
+        cand = [(abs(p - e.p), i) for i, (k, p) in enumerate(found) if k in kinds and i not in used]
+        if not cand:
+            parts.append(f"**missed {e.kind} {_fmt_p(e.p)}**")
+            continue
+        d, i = min(cand)
+        used.add(i)
+        k, p = found[i]
+        parts.append(f"{k} {_fmt_p(p)} (err {d:.0e})")
+    for i, (k, p) in enumerate(found):
+        if i not in used:
+            parts.append(f"extra {k} {_fmt_p(p)}")
+    return "; ".join(parts) or "none"
+
+
 def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
     """The results as Markdown tables, one per problem, plus a summary."""
     from benchmarks.problems import all_problems
@@ -433,7 +476,9 @@ def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
     probs = all_problems()
     lines = [
         f"Measured {meta['date']} on {meta['machine']} with `{meta['command']}` "
-        f"({meta['repeats']} timed repeats, median).",
+        f"({meta['repeats']} timed repeats, median). 1-minute load average "
+        f"{meta['loadavg_start'][0]:.1f} at the start, {meta['loadavg_end'][0]:.1f} at the end "
+        "(the machine is shared: other processes inflate every time alike).",
         "",
     ]
     summary = []
@@ -446,15 +491,15 @@ def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
         ours = next((r for r in rows if r["tool"] == "broachkit" and r["ok"]), None)
         floor = ours.get("floor") if ours else None
         lines += [
-            "| tool | special points (p) | steps | median run [ms] | per step [ms] "
-            "| setup [ms] | peak RSS [MiB] (+ over imports) | stop |",
-            "|---|---|---:|---:|---:|---:|---:|---|",
+            "| tool | special points: p (abs. error) | steps | median run [ms] | per step [ms] "
+            "| median CPU [ms] | setup [ms] | peak RSS [MiB] (+ over setup) | stop |",
+            "|---|---|---:|---:|---:|---:|---:|---:|---|",
         ]
         for r in rows:
             if not r["ok"]:
-                lines.append(f"| {r['tool']} | {r.get('reason', 'failed')} | | | | | | |")
+                lines.append(f"| {r['tool']} | {r.get('reason', 'failed')} | | | | | | | |")
                 continue
-            sp = "; ".join(f"{k} {_fmt_p(p)}" for k, p in r["special"]) or "none"
+            sp = _special_cell(r["special"], prob.expected)
             base = r.get("rss_base_kib")
             mem = _mib(r["rss_peak_kib"])
             if base is not None:
@@ -463,7 +508,9 @@ def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
                 mem += " (exe)"
             lines.append(
                 f"| {r['tool']} | {sp} | {r['steps']} | {_ms(r['median_s'])} | "
-                f"{_ms(r['per_step_s'])} | {_ms(r.get('setup_s'))} | {mem} | {r['status']} |"
+                f"{_ms(r['per_step_s'])} | {_ms(r.get('cpu_median_s'))} | "
+                f"{_ms(r.get('setup_s'))} | "
+                f"{mem} | {r['status']} |"
             )
         if floor:
             ratio = ours["per_step_s"] / floor["total_s"]
@@ -482,15 +529,16 @@ def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
         lines += [
             "### Summary against the targets",
             "",
-            "| problem | broachkit run [ms] | fastest peer | its run [ms] | broachkit / peer "
-            "| broachkit per step / floor |",
-            "|---|---:|---|---:|---:|---:|",
+            "| problem | broachkit run [ms] | fastest peer (wall) | its run [ms] "
+            "| broachkit / peer, wall | broachkit / peer, CPU | broachkit per step / floor |",
+            "|---|---:|---|---:|---:|---:|---:|",
         ]
         for name, ours, best, floor in summary:
             fl = f"{ours['per_step_s'] / floor['total_s']:.1f}x" if floor else "-"
+            cpu = ours["cpu_median_s"] / best["cpu_median_s"] if best["cpu_median_s"] else math.nan
             lines.append(
                 f"| {name} | {_ms(ours['median_s'])} | {best['tool']} | {_ms(best['median_s'])} | "
-                f"{ours['median_s'] / best['median_s']:.2f} | {fl} |"
+                f"{ours['median_s'] / best['median_s']:.2f} | {cpu:.2f} | {fl} |"
             )
         lines.append("")
     return "\n".join(lines)
@@ -550,6 +598,7 @@ def main(argv: list[str] | None = None) -> int:
     for t in tools:
         if t not in RUNNERS:
             raise SystemExit(f"unknown tool {t!r}; choose from {TOOLS}")
+    load_start = os.getloadavg()
     results = []
     for prob in problems:
         for tool in tools:
@@ -571,6 +620,8 @@ def main(argv: list[str] | None = None) -> int:
         f"{platform.python_version()} ({_python()})",
         "command": cmd.strip(),
         "repeats": args.repeats,
+        "loadavg_start": load_start,
+        "loadavg_end": os.getloadavg(),
     }
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / "continuation.json").write_text(
