@@ -27,7 +27,10 @@ from .algorithms.base import (
     CorrectorResult,
     PointInfo,
     adapt_ds,
+    bordered_column_max,
+    bordered_rcond,
     correct,
+    make_point,
     theta_norm,
 )
 from .algorithms.palc import PALC
@@ -42,6 +45,11 @@ from .status import Status
 log = logging.getLogger(__name__)
 
 ProgressFn = Callable[[BranchPoint], None]
+
+#: A located branch point must have a reciprocal condition number of the bordered matrix
+#: at most this fraction of the larger of its values at the two rows around it.
+BP_SINGULAR_RATIO = 0.1
+_EPS = float(np.finfo(float).eps)
 
 _PREFIX = {
     SpecialKind.FOLD: "F",
@@ -210,21 +218,9 @@ class _Context:
             )
             found.append((SpecialKind.FOLD, r, {}, ""))
         if det.branch_point and pa.bp_sign != pb.bp_sign:
-            ref = pa.bp_logdet
-
-            def g_bp(pt: PointInfo, t: float) -> float:
-                return bp_test(pt.bp_sign, pt.bp_logdet, ref)
-
-            r = self.locate(
-                a,
-                b,
-                sigma_b,
-                w,
-                g_bp,
-                bp_test(pa.bp_sign, pa.bp_logdet, ref),
-                bp_test(pb.bp_sign, pb.bp_logdet, ref),
-            )
-            found.append((SpecialKind.BRANCH_POINT, r, {}, ""))
+            bp = self.branch_point(a, b, sigma_b, w)
+            if bp is not None:
+                found.append((SpecialKind.BRANCH_POINT, bp[0], bp[1], ""))
         if (
             det.hopf
             and a.counts is not None
@@ -303,13 +299,115 @@ class _Context:
         out.sort(key=lambda sp: sp.s)
         return out
 
+    def branch_point(
+        self, a: _Row, b: _Row, sigma_b: float, w: FloatArray
+    ) -> tuple[LocateResult, dict[str, float]] | None:
+        """Locate and verify a branch point where the BP test changes sign from a to b.
+
+        The test function is the determinant of the bordered matrix
+        ``M = [[G_z, G_p], [c^T]]``; its sign is only meaningful where ``M`` is
+        numerically non-singular. With ``rho(x)`` the reciprocal condition of ``M D``
+        at a point (:func:`~continuation.algorithms.base.bordered_rcond`, one column
+        scaling ``D`` shared by the rows and the located point, so badly scaled
+        unknowns or parameter do not matter):
+
+        * if ``rho <= 10 (N + 1) eps`` at both rows, both signs are round-off and the
+          sign change is ignored;
+        * the located point must be a singular point: ``rho`` there at most
+          ``BP_SINGULAR_RATIO`` (0.1) times the larger of its values at the rows (it
+          vanishes linearly in the arclength at a simple branch point, so a located
+          one is many orders of magnitude below its neighbours);
+        * otherwise, if a row was numerically singular, the sign change was round-off
+          and is dropped; if both rows were regular, ``det M`` must vanish in between
+          (it is continuous), so the point is kept but reported as not located.
+
+        Returns ``(result, data)`` with ``data = {"rcond": rho at the point,
+        "rcond_ratio": rho / max(rho_a, rho_b)}``, or None if dropped.
+        """
+        pa, pb = a.point, b.point
+        col = np.maximum(bordered_column_max(pa), bordered_column_max(pb))
+        rho_a, rho_b = bordered_rcond(pa, col), bordered_rcond(pb, col)
+        noise = 10.0 * pa.u.size * _EPS
+        rho_ab = max(rho_a, rho_b)
+        if rho_ab <= noise:
+            log.info(
+                "branch-point test changed sign between p=%.8g and p=%.8g where the bordered "
+                "Jacobian is numerically singular (rcond %.1e, %.1e): round-off, ignored",
+                pa.p,
+                pb.p,
+                rho_a,
+                rho_b,
+            )
+            return None
+        ref = pa.bp_logdet
+
+        def g_bp(pt: PointInfo, t: float) -> float:
+            return bp_test(pt.bp_sign, pt.bp_logdet, ref)
+
+        r = self.locate(
+            a,
+            b,
+            sigma_b,
+            w,
+            g_bp,
+            bp_test(pa.bp_sign, pa.bp_logdet, ref),
+            bp_test(pb.bp_sign, pb.bp_logdet, ref),
+        )
+        rho = bordered_rcond(r.point, col)
+        ratio = rho / rho_ab
+        data = {"rcond": rho, "rcond_ratio": ratio}
+        if ratio <= BP_SINGULAR_RATIO:
+            return r, data
+        if min(rho_a, rho_b) <= noise:
+            log.info(
+                "branch-point test changed sign between p=%.8g and p=%.8g next to a "
+                "numerically singular row, but no singular point lies between "
+                "(rcond %.1e vs %.1e, %.1e at the rows): round-off, ignored",
+                pa.p,
+                pb.p,
+                rho,
+                rho_a,
+                rho_b,
+            )
+            return None
+        msg = (
+            f"no singular point found (rcond {rho:.1e} vs {rho_a:.1e}, {rho_b:.1e} at the "
+            f"rows){'; ' + r.message if r.message else ''}"
+        )
+        return dataclasses.replace(r, located=False, message=msg), data
+
     # ------------------------------------------------------------------ stopping points
+    def on_bound(self, a: _Row, r: LocateResult, bound: float, w: FloatArray) -> LocateResult:
+        """Move a located bound crossing exactly onto ``p = bound``.
+
+        The locator stops within its tolerance of the bound, on either side; one Newton
+        correction at fixed ``p = bound`` (from that point) puts the row exactly on it.
+        Returns ``r`` unchanged if that correction fails.
+        """
+        u = r.point.u.copy()
+        u[-1] = bound
+        e_p = np.zeros(u.size)
+        e_p[-1] = 1.0
+        res = correct(self.problem, u, np.zeros(u.size), e_p, bound, self.settings.newton)
+        if not res.converged or res.lin is None:
+            return r
+        c = w * a.point.tau
+        try:
+            pt = make_point(res.z, bound, res.lin, c, w, iters=r.point.iters)
+        except np.linalg.LinAlgError:
+            return r
+        sigma = float(c.dot(pt.u - a.point.u))
+        return LocateResult(sigma, pt, 0.0, True, r.iterations, r.message)
+
     def stop_point(
         self, a: _Row, b: _Row, sigma_b: float, w: FloatArray
-    ) -> tuple[LocateResult, Status, str, int | None] | None:
+    ) -> tuple[LocateResult, Status, str, int | None] | None | Literal[False]:
         """The earliest parameter bound or terminal event crossed in this step.
 
-        Returns ``(result, status, message, event_index or None)``.
+        Returns ``(result, status, message, event_index or None)``, None if the step
+        crosses neither, or False if it crosses a parameter bound that could not be
+        located (the step must then be retried shorter: a row is never kept outside
+        ``[p_min, p_max]``).
         """
         s = self.settings
         cands: list[tuple[LocateResult, Status, str, int | None]] = []
@@ -329,8 +427,19 @@ class _Context:
                     tol=s.detect.tol,
                     max_iter=s.detect.max_iter,
                 )
-                if not r.located:
-                    r = LocateResult(sigma_b, b.point, pb - bound, False, r.iterations)
+                if r.located:
+                    r = self.on_bound(a, r, bound, w)
+                if not r.located or not s.p_min <= r.point.p <= s.p_max:
+                    log.debug(
+                        "bound %s=%.10g crossed between p=%.10g and p=%.10g but not located "
+                        "(%s): step retried shorter",
+                        self.problem.free,
+                        bound,
+                        pa,
+                        pb,
+                        r.message,
+                    )
+                    return False
                 msg = f"{Status.PARAM_BOUND.value} ({self.problem.free}={bound:.10g})"
                 cands.append((r, Status.PARAM_BOUND, msg, None))
         for k, e in enumerate(self.events):
@@ -422,6 +531,17 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
             sigma_b = outcome.sigma
             b = ctx.make_row(new_state.point, sigma_b)
             stop = ctx.stop_point(a, b, sigma_b, w)
+            if stop is False:  # a bound crossed but not located: never keep a row outside
+                ds_new = state.ds * s.shrink
+                if ds_new < s.ds_min:
+                    run.status = Status.DS_MIN
+                    run.message = (
+                        f"{Status.DS_MIN.value} Last point p={state.point.p:.10g}; the "
+                        "parameter bound was crossed but could not be located"
+                    )
+                    break
+                state.ds = ds_new
+                continue
             terminal = None
             if stop is not None:
                 r, status, msg, k_event = stop

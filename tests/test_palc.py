@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -230,3 +231,138 @@ def test_generic_problem_without_stability():
     assert np.all(br.n_unstable == -1)
     np.testing.assert_allclose(br.records["x2"], br.p, atol=1e-12)
     assert br.state_names == ("z0",)
+
+
+# ------------------------------------------------------------------ corrector safeguards
+def test_codim2_fold_curve_does_not_jump_to_a_distant_family():
+    """Regression (issue 2): the fold curve of the CSTR (Uppal, Ray & Poore 1974, B = 14)
+    continued in beta from the second fold of the Da branch used to jump, in one step
+    whose corrector "converged" in 10 iterations, from beta = 2.42 to a spurious family
+    at beta = -1 (x2 = -4.87), and kept that row below p_min = -0.99.
+
+    Reference: on the fold curve x2 = 1 / (1 - x1) and beta = B x1 (1 - x1) - 1 (the
+    closed form derived in tests/test_codim2.py::TestCSTR); the curve passes the cusp at
+    beta = B/4 - 1 = 2.5, turns, and reaches p_min = -0.99 as x1 -> 0.
+    """
+    from conftest import cstr
+
+    from continuation.codim2 import continue_codim2
+
+    B = 14.0
+    br = continue_equilibria(
+        cstr(),
+        [0.0, 0.0],
+        {"Da": 0.0, "B": B, "beta": 2.0},
+        "Da",
+        p_min=0.0,
+        p_max=0.3,
+        ds=0.01,
+    )
+    st = ContinuationSettings(ds=0.05, ds_max=0.2, p_min=-0.99, p_max=8)
+    curve = continue_codim2(br, br.find("fold")[1], "beta", st, direction="forward")
+    x1, x2, beta = curve.x[:, 0], curve.x[:, 1], curve.p
+    np.testing.assert_allclose(x2, 1 / (1 - x1), atol=1e-8)
+    np.testing.assert_allclose(beta, B * x1 * (1 - x1) - 1, atol=1e-8)
+    assert curve.status is Status.PARAM_BOUND
+    assert beta.min() == -0.99 and beta[-1] == -0.99  # on the bound, never beyond it
+    (cp,) = curve.find("cusp")  # the curve turns at the cusp
+    assert cp.located and cp.p == pytest.approx(B / 4 - 1, abs=1e-8)
+    assert beta.max() < B / 4 - 1
+    # no step longer than ds_max (theta-norm) between consecutive rows
+    w = base.theta_weights(curve.x.shape[1], st.theta)
+    u = np.column_stack((curve.x, curve.p))
+    steps = np.sqrt((np.diff(u, axis=0) ** 2 * w).sum(axis=1))
+    assert steps.max() < 1.5 * st.ds_max
+
+
+def test_corrector_contraction_safeguard():
+    """Newton on arctan(x) = 0 from x0 = 1.3 (natural constraint p = 0): the iterates
+    1.3 -> -1.16 -> 0.86 -> ... contract by only 0.82 in the second step, i.e. outside
+    the region of quadratic convergence (it still converges, slowly). With the
+    Allgower-Georg contraction test at 0.8 the corrector gives up instead."""
+
+    class Atan:
+        free = "p"
+        n_unknowns = 1
+
+        def residual(self, z, p):
+            return np.array([math.atan(z[0]) + p])
+
+        def jacobian(self, z, p):
+            return np.array([[1.0 / (1.0 + z[0] ** 2)]])
+
+        def dp(self, z, p):
+            return np.array([1.0])
+
+    e_p = np.array([0.0, 1.0])
+    u0 = np.array([1.3, 0.0])
+    newton = ContinuationSettings().newton
+    free = base.correct(Atan(), u0, np.zeros(2), e_p, 0.0, newton)
+    assert free.converged and abs(free.z[0]) < 1e-12
+    guarded = base.correct(Atan(), u0, np.zeros(2), e_p, 0.0, newton, max_contraction=0.8)
+    assert not guarded.converged and "contracts too slowly" in guarded.message
+    assert guarded.iters == 2
+    # from a good predictor the guard never triggers (quadratic convergence)
+    near = base.correct(
+        Atan(), np.array([0.3, 0.0]), np.zeros(2), e_p, 0.0, newton, max_contraction=0.8
+    )
+    assert near.converged and abs(near.z[0]) < 1e-12
+
+
+def test_palc_distance_safeguard_rejects_far_corrections(monkeypatch):
+    """A corrected point farther than max_distance * ds from the predictor is rejected."""
+    sys = fold_normal_form()
+    prob = EquilibriumProblem(sys, sys.params(mu=1.0), "mu")
+    st = ContinuationSettings(ds=-0.1, ds_max=0.1, p_min=-1.0, p_max=2.0)
+    alg = PALC()
+    state = alg.init(prob, np.array([1.0]), 1.0, st)
+    real = base.correct
+
+    def far(*args, **kw):  # the corrector lands 3 ds away, on the same curve
+        res = real(*args, **kw)
+        x = -math.sqrt(0.4)
+        return base.CorrectorResult(True, np.array([x]), 0.4, res.lin, res.iters, 0.0)
+
+    monkeypatch.setattr("continuation.algorithms.palc.correct", far)
+    _, out = alg.step(prob, state, st)
+    assert not out.converged and "away from the predictor" in out.message
+    with pytest.raises(ValueError, match="max_distance"):
+        PALC(max_distance=0.0)
+    with pytest.raises(ValueError, match="max_contraction"):
+        PALC(max_contraction=1.0)
+
+
+def test_unlocatable_bound_never_leaves_a_row_outside():
+    """Regression (issue 2): x = p on [0, 1] with a model that cannot be evaluated for
+    0.95 < p < 1.1. The step 0.9 -> 1.2 crosses p_max = 1 but the bound cannot be
+    located; the row at 1.2 used to be kept. Now the step is retried shorter, the
+    retries fail inside the hole, and the branch ends (DS_MIN) inside its bounds."""
+
+    class Hole:
+        free = "p"
+        n_unknowns = 1
+
+        def residual(self, z, p):
+            return np.array([z[0] - p]) if not 0.95 < p < 1.1 else np.array([math.nan])
+
+        def jacobian(self, z, p):
+            return np.array([[1.0]])
+
+        def dp(self, z, p):
+            return np.array([-1.0])
+
+        def stability(self, z, p):
+            return None
+
+        def record(self, z, p):
+            return {}
+
+    st = ContinuationSettings(ds=0.3, ds_max=0.3, ds_min=1e-3, p_min=0.0, p_max=1.0, theta=0.5)
+    br = continue_branch(Hole(), [0.0], 0.0, settings=st)
+    assert br.p.max() <= 1.0
+    assert br.status is Status.DS_MIN and br.p[-1] <= 0.95
+    np.testing.assert_allclose(br.x[:, 0], br.p, atol=1e-12)
+    # the same model with a reachable bound stops exactly on it
+    st2 = dataclasses.replace(st, p_max=0.8)
+    br2 = continue_branch(Hole(), [0.0], 0.0, settings=st2)
+    assert br2.status is Status.PARAM_BOUND and br2.p[-1] == 0.8

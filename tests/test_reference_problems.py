@@ -254,3 +254,100 @@ def test_discrete_bratu_symmetry_breaking_branch_point():
         assert_invariants(br, tol=1e-8)
         found.append(bp.p)
     assert found[0] == pytest.approx(found[1], rel=1e-7)
+
+
+def _bratu_symmetric_pitchfork(n: int, m_lo: float, m_hi: float) -> tuple[float, float]:
+    """Symmetry-breaking pitchfork of the discrete Bratu problem (even ``n``), computed
+    without any continuation code: the symmetric solution with centre value
+    ``m = u_{n/2} = u_{n/2+1}`` is shot outwards, ``u_{i-1} = 2 u_i - u_{i+1} - h^2 lam
+    e^{u_i}``, and ``lam(m)`` solves ``u_0 = 0`` (Brent in ``log lam``); the Jacobian
+    restricted to antisymmetric vectors (``v_i = -v_{n+1-i}``) is symmetric tridiagonal,
+    and the pitchfork is where its largest eigenvalue vanishes (Brent in ``m``).
+
+    Returns ``(lam*, max u*)``.
+    """
+    from scipy.linalg import eigvalsh_tridiagonal
+    from scipy.optimize import brentq
+
+    h2 = 1.0 / (n + 1) ** 2
+    half = n // 2
+
+    def shoot(m, lam):
+        nodes = np.empty(half)
+        prev = cur = m
+        for i in range(half - 1, -1, -1):
+            nodes[i] = cur
+            prev, cur = cur, 2 * cur - prev - h2 * lam * np.exp(cur)
+        return nodes, cur  # cur = u_0, the boundary value
+
+    def lam_of(m):
+        f = lambda ll: shoot(m, np.exp(ll))[1]  # noqa: E731
+        grid = np.linspace(-2 * m - 10, 5.0, 200)
+        vals = [f(x) for x in grid]
+        k = next(i for i in range(len(grid) - 1) if vals[i] * vals[i + 1] < 0)
+        return float(np.exp(brentq(f, grid[k], grid[k + 1], xtol=1e-14, rtol=1e-15)))
+
+    def mu(m):
+        lam = lam_of(m)
+        nodes, _ = shoot(m, lam)
+        d = -2.0 / h2 + lam * np.exp(nodes)
+        d[-1] -= 1.0 / h2  # v_{n/2+1} = -v_{n/2}
+        return eigvalsh_tridiagonal(d, np.full(half - 1, 1.0 / h2))[-1]
+
+    m_star = brentq(mu, m_lo, m_hi, xtol=1e-13)
+    return lam_of(m_star), m_star
+
+
+def test_bratu_50_branch_point_near_lambda_zero_is_genuine():
+    """The ``broachkit demo``-like run (N = 50, ds = 0.05, ds_max = 0.5) reports a branch
+    point at lam ~ 1e-16, max u ~ 45: it was suspected to be a round-off sign flip of the
+    determinant. It is the symmetry-breaking pitchfork of the discretisation (as for
+    N = 20 above): checked against an independent shooting/tridiagonal-eigenvalue
+    computation, and the located point's bordered Jacobian is numerically singular
+    relative to its neighbours (it is verified by the driver)."""
+    n = 50
+    lam_ref, m_ref = _bratu_symmetric_pitchfork(n, 44.0, 46.0)
+    stop = Event("far", lambda x, p: float(np.max(x)) - 50.0, terminal=True)
+    br = continue_equilibria(
+        bratu(n),
+        np.zeros(n),
+        {"lam": 0.0},
+        "lam",
+        p_min=0.0,
+        p_max=4.0,
+        ds=0.05,
+        ds_max=0.5,
+        direction="forward",
+        events=[stop],
+    )
+    assert br.status is Status.EVENT
+    (bp,) = br.find("bp")
+    assert bp.located and bp.delta_unstable == (1, 0)
+    assert bp.p == pytest.approx(lam_ref, rel=1e-6)
+    assert float(np.max(bp.x)) == pytest.approx(m_ref, abs=1e-6)
+    assert bp.data["rcond_ratio"] < 1e-3
+    assert_invariants(br, tol=1e-8)
+
+
+def test_bratu_20_branch_point_against_shooting():
+    """The N = 20 symmetry-breaking pitchfork (see above) against the independent
+    shooting computation."""
+    n = 20
+    lam_ref, m_ref = _bratu_symmetric_pitchfork(n, 19.0, 21.0)
+    stop = Event("far", lambda x, p: float(np.max(x)) - 21.0, terminal=True)
+    br = continue_equilibria(
+        bratu(n),
+        np.zeros(n),
+        {"lam": 0.0},
+        "lam",
+        p_min=0.0,
+        p_max=4.0,
+        ds=0.5,
+        ds_max=0.5,
+        direction="forward",
+        events=[stop],
+    )
+    (bp,) = br.find("bp")
+    assert bp.located
+    assert bp.p == pytest.approx(lam_ref, rel=1e-7)
+    assert float(np.max(bp.x)) == pytest.approx(m_ref, abs=1e-5)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from conftest import (
@@ -261,3 +263,61 @@ def test_event_on_a_jump_is_bracketed_not_located():
         assert not e.located
         lo, hi = sorted(e.bracket)
         assert lo <= 0.3 <= hi
+
+
+class _RoundOffBlock:
+    """x0 = mu on a branch, plus two states (y1, y2) = 0 whose 2x2 Jacobian block
+    ``[[1, 1], [1, 1 + d(mu)]]`` is singular to working precision: ``1 + d`` is the
+    floating-point neighbour of 1 above or below it, alternating with
+    ``sign(sin(40 mu))``. The determinant of the bordered matrix is then one rounding
+    unit whose sign flips every ``pi / 40`` in ``mu``: a sign change of the branch-point
+    test that is pure round-off (the block is not near a singular point of the
+    branch; it is singular everywhere to working precision). The residual does not see
+    ``d`` on the branch (``y = 0``)."""
+
+    free = "mu"
+    n_unknowns = 3
+
+    def _d(self, p):
+        return np.nextafter(1.0, 2.0 if math.sin(40.0 * p) >= 0 else 0.0)
+
+    def residual(self, z, p):
+        return np.array([z[0] - p, z[1] + z[2], z[1] + self._d(p) * z[2]])
+
+    def jacobian(self, z, p):
+        return np.array([[1.0, 0, 0], [0, 1.0, 1.0], [0, 1.0, self._d(p)]])
+
+    def dp(self, z, p):
+        return np.array([-1.0, 0.0, 0.0])
+
+    def stability(self, z, p):
+        return None
+
+    def record(self, z, p):
+        return {}
+
+
+def test_round_off_sign_flips_of_the_bp_test_are_ignored():
+    """Regression (issue 2): the determinant's sign flips from round-off where the
+    bordered Jacobian is numerically singular at both rows; these used to be reported
+    as (unlocated) branch points."""
+    st = ContinuationSettings(ds=0.05, ds_max=0.05, p_min=0.0, p_max=1.0)
+    br = continue_branch(_RoundOffBlock(), [0.0, 0.0, 0.0], 0.0, settings=st)
+    assert br.status is Status.PARAM_BOUND
+    signs = [math.sin(40 * p) >= 0 for p in br.p]
+    assert sum(s != t for s, t in zip(signs, signs[1:], strict=False)) >= 5  # flips happen
+    assert not br.find("bp")
+    np.testing.assert_allclose(br.x[:, 0], br.p, atol=1e-12)
+    assert np.all(br.x[:, 1:] == 0.0)
+
+
+def test_located_branch_points_are_verified_singular():
+    """Every located BP of the normal forms carries the reciprocal condition of its
+    bordered Jacobian relative to the rows around it: at the exact pitchfork and
+    transcritical points it is at round-off level."""
+    for factory in (transcritical, pitchfork):
+        br = continue_equilibria(
+            factory(), [0.0], {"mu": -1.0}, "mu", p_min=-1.0, p_max=1.0, direction="forward"
+        )
+        (bp,) = br.find("bp")
+        assert bp.located and bp.data["rcond_ratio"] < 1e-12
