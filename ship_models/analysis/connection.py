@@ -153,6 +153,35 @@ class CrestSaddle:
     n_unstable: int
 
 
+def _crest_equilibrium(model: Any, params: Params, step: float = math.radians(2.0)) -> FloatArray:
+    """The crest equilibrium followed from ``chi_c = 0`` (where it is the surge root).
+
+    Natural-parameter continuation in ``chi_c`` with Newton at each step: a guess with
+    zero lateral states (``model.find_equilibrium``) can converge to another root at
+    large courses, the continued branch cannot (unless it folds: then it fails).
+    """
+    target = float(params["chi_c"])
+    n_steps = max(int(math.ceil(abs(target) / step)), 1)
+    settings = NewtonSettings(tol=1e-11, max_iter=30, damping=True)
+    res = model.find_equilibrium(params.replace(chi_c=0.0), "crest", settings=settings)
+    x, x_prev = np.asarray(res.z, dtype=float), None
+    for k in range(1, n_steps + 1):
+        if not res.converged:
+            break
+        chi = target * k / n_steps
+        guess = x if x_prev is None else 2 * x - x_prev  # secant predictor
+        res = model.find_equilibrium(
+            params.replace(chi_c=chi), "crest", guess=guess, settings=settings
+        )
+        x_prev, x = x, np.asarray(res.z, dtype=float)
+    if not res.converged:
+        raise ContinuationError(
+            f"no crest equilibrium at {dict(params.items())} (followed from chi_c = 0): "
+            f"{res.message}"
+        )
+    return x
+
+
 def crest_saddle(model: Any, params: Params) -> CrestSaddle:
     """Solve the crest equilibrium and orient its unstable eigenvector upslope.
 
@@ -162,10 +191,7 @@ def crest_saddle(model: Any, params: Params) -> CrestSaddle:
         If no crest equilibrium is found or it is not a saddle of index 1.
     """
     pv = np.asarray(params.values, dtype=float)
-    res = model.find_equilibrium(params, "crest")
-    if not res.converged:
-        raise ContinuationError(f"no crest equilibrium at {dict(params.items())}: {res.message}")
-    x = np.asarray(res.z, dtype=float)
+    x = _crest_equilibrium(model, params)
     w, V = np.linalg.eig(model.jacobian(x, pv))
     n_unst = int(np.sum(w.real > 0))
     if n_unst != 1:
@@ -194,8 +220,9 @@ class UpslopeRun:
     saddle : CrestSaddle
     fate : str
         ``"periodic"`` (passed the next crest: ``xi_G < xi_s - 1.5``), ``"captured"``
-        (capsized, or turned back down the slope: ``xi_G`` rose again above
-        ``xi_s - 0.8``), or ``"undecided"`` (``t_max`` reached first, or failure).
+        (capsized, turned back down the slope of the next wave: ``xi_G`` rose again
+        above ``xi_s - 0.8``, or went down the slope of the same wave:
+        ``xi_G > xi_s + 0.2``), or ``"undecided"`` (``t_max`` reached first, or failure).
     """
 
     trajectory: Trajectory
@@ -243,18 +270,25 @@ def upslope_branch(
         direction=1,
         vectorized=True,
     )
+    downslope = SimEvent(
+        "downslope",
+        lambda t, x: x[..., i_xi] - (xi_s + 0.2),
+        terminal=True,
+        direction=1,
+        vectorized=True,
+    )
     sim = Simulator(model, np.asarray(params.values, dtype=float), rtol=rtol, atol=atol)
     traj = sim.run(
         s.x + eps * s.direction,
         (0.0, t_max),
-        events=[capsize_event(model), passed, returned],
+        events=[capsize_event(model), passed, returned, downslope],
         dt=dt,
     )
     if traj.status is Status.INTERRUPTED:
         raise KeyboardInterrupt
     if traj.terminal_event == "passed":
         fate = PERIODIC
-    elif traj.terminal_event in ("capsize", "returned"):
+    elif traj.terminal_event in ("capsize", "returned", "downslope"):
         fate = CAPTURED
     else:
         fate = UNDECIDED
@@ -646,7 +680,11 @@ def critical_fn_bvp(
         start = base.replace(Fn=Fn0)
         if guess is None or isinstance(guess, UpslopeRun):
             # a loose integrator tolerance suffices for a starting guess
-            run = upslope_branch(m, start, rtol=1e-6, atol=1e-8) if guess is None else guess
+            run = (
+                upslope_branch(m, start, eps=1e-5, rtol=1e-8, atol=1e-10)
+                if guess is None
+                else guess
+            )
             saddle = run.saddle
             t_g, x_g = connection_guess(run, start_distance=start_distance)
             guess_Fn = Fn0
@@ -731,6 +769,9 @@ class CriticalCurve:
         ``max |G|`` of the connection at each course.
     converged : ndarray of bool, shape (K,)
         Whether the point was corrected to the requested course.
+    n_unstable : ndarray of int, shape (K,)
+        Unstable eigenvalues of the crest saddle at each course (1 for a valid
+        codimension-one connection; -1 where not computed).
     branch : Branch or None
         The pseudo-arclength branch of connections in ``chi_c``.
     start : CriticalConnection
@@ -745,6 +786,7 @@ class CriticalCurve:
     Fn: FloatArray
     residual_norm: FloatArray
     converged: np.ndarray
+    n_unstable: np.ndarray
     branch: Any
     start: CriticalConnection
     status: Status
@@ -769,6 +811,7 @@ class CriticalCurve:
             "Fn": [None if not np.isfinite(f) else float(f) for f in self.Fn],
             "residual_norm": [float(r) for r in self.residual_norm],
             "converged": [bool(c) for c in self.converged],
+            "n_unstable": [int(k) for k in self.n_unstable],
             "status": self.status.name,
             "message": self.message,
             "elapsed_s": self.elapsed,
@@ -861,7 +904,7 @@ def critical_curve(
         if throw:
             raise ContinuationError(msg)
         return CriticalCurve(
-            chis, nan, nan.copy(), np.zeros(chis.size, bool), None, start,
+            chis, nan, nan.copy(), np.zeros(chis.size, bool), np.full(chis.size, -1), None, start,
             start.status, msg, time.perf_counter() - t_start,
         )  # fmt: skip
     margin = max(0.25 * (hi_c - lo_c) / max(chis.size - 1, 1), 1e-3)
@@ -885,6 +928,7 @@ def critical_curve(
     Fn = nan.copy()
     res_n = nan.copy()
     ok = np.zeros(chis.size, dtype=bool)
+    n_unst = np.full(chis.size, -1, dtype=int)
     orbits: list[FloatArray] = []
     status = branch.status if branch.status is Status.INTERRUPTED else Status.SUCCESS
     corr = NewtonSettings(tol=tol, step_tol=1e-8, max_iter=15, damping=True)
@@ -902,6 +946,15 @@ def critical_curve(
                 log.warning("course %.3g deg did not converge: %s", math.degrees(c), r.message)
                 continue
             parts = prob.unpack(r.z)
+            pv = prob.param_vector(r.z, float(c))
+            n_unst[k] = int(np.sum(np.linalg.eigvals(m.jacobian(parts["x_from"], pv)).real > 0))
+            if n_unst[k] != 1:
+                log.warning(
+                    "course %.3g deg: the crest saddle has %d unstable eigenvalues",
+                    math.degrees(c),
+                    n_unst[k],
+                )
+                continue
             Fn[k] = float(parts["params"]["Fn"])
             res_n[k] = float(r.residual_norm)
             ok[k] = True
@@ -916,7 +969,7 @@ def critical_curve(
     if throw and status is not Status.SUCCESS and status is not Status.INTERRUPTED:
         raise ContinuationError(f"critical curve incomplete: {message}")
     return CriticalCurve(
-        chis, Fn, res_n, ok, branch, start, status, message,
+        chis, Fn, res_n, ok, n_unst, branch, start, status, message,
         time.perf_counter() - t_start, tuple(orbits),
     )  # fmt: skip
 
