@@ -181,6 +181,14 @@ def test_bvp_independent_of_guess_fn(model, bvp10):
     assert abs(r.Fn - bvp10.Fn) < 1e-6
 
 
+def test_unusable_guess_fn_falls_back_to_coarse_bisection(model, curve):
+    """At chi_c = 0 and Fn = 0.45 the upslope branch never nears the shifted saddle."""
+    r = critical_fn_bvp(0.0, model=model, Fn_guess=0.45)
+    assert r.success
+    assert abs(r.guess_Fn - r.Fn) < 5e-3  # the guess came from the coarse bisection
+    assert abs(r.Fn - curve.Fn[0]) < 1e-6
+
+
 # ------------------------------------------------------------------ the curve
 def test_curve_complete(curve):
     assert curve.success, curve.message

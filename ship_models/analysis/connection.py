@@ -144,6 +144,9 @@ class CrestSaddle:
         ``min |Re lambda|`` over the stable eigenvalues (1/s): the slowest approach.
     n_unstable : int
         Number of eigenvalues with positive real part (1 for a saddle of index 1).
+    eigenvalues : ndarray, shape (8,), complex
+    eigenvectors : ndarray, shape (8, 8), complex
+        Columns are the eigenvectors of ``f_x`` at the saddle.
     """
 
     x: FloatArray
@@ -151,6 +154,27 @@ class CrestSaddle:
     direction: FloatArray
     weakest_stable: float
     n_unstable: int
+    eigenvalues: np.ndarray = field(default_factory=lambda: np.zeros(0, complex), repr=False)
+    eigenvectors: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), complex), repr=False)
+
+    def approach_rate(self, offset: FloatArray, rel: float = 1e-3) -> float:
+        """Slowest stable decay rate present in ``offset`` (a state minus the saddle).
+
+        The offset is expanded in the eigenvectors; modes whose coefficient is below
+        ``rel`` times the largest are ignored (e.g. the lateral modes at ``chi_c = 0``,
+        which the symmetric motion never excites). Falls back to ``weakest_stable``.
+        """
+        if self.eigenvectors.size == 0:
+            return self.weakest_stable
+        try:
+            c = np.abs(np.linalg.solve(self.eigenvectors, np.asarray(offset, dtype=complex)))
+        except np.linalg.LinAlgError:
+            return self.weakest_stable
+        stable = self.eigenvalues.real < 0
+        present = stable & (c > rel * np.max(c[stable], initial=0.0))
+        if not np.any(present):
+            return self.weakest_stable
+        return float(np.min(-self.eigenvalues.real[present]))
 
 
 def _crest_equilibrium(model: Any, params: Params, step: float = math.radians(2.0)) -> FloatArray:
@@ -206,7 +230,7 @@ def crest_saddle(model: Any, params: Params) -> CrestSaddle:
     if v[i_xi] > 0:
         v = -v
     stable = w.real[w.real < 0]
-    return CrestSaddle(x, float(w[k].real), v, float(np.min(-stable)), n_unst)
+    return CrestSaddle(x, float(w[k].real), v, float(np.min(-stable)), n_unst, w, V)
 
 
 @dataclass(frozen=True)
@@ -573,14 +597,60 @@ def _pads(
 ) -> tuple[float, float, float, float]:
     """Extra times before/after the orbit for end distances ``d_start``, ``d_end``.
 
-    ``log(d / d_target) / rate`` with the unstable rate at the start and the weakest
-    stable rate at the end (the slowest possible approach: conservative).
+    ``log(d / d_target) / rate`` with the unstable rate at the start and, at the end,
+    the slowest stable rate among the modes present in the end offset
+    (:meth:`CrestSaddle.approach_rate`).
     """
     d0 = float(np.linalg.norm(x[0] - x_from))
     d1 = float(np.linalg.norm(x[-1] - x_to))
     pad0 = math.log(d0 / d_start) / saddle.rate if d0 > d_start else 0.0
-    pad1 = math.log(d1 / d_end) / saddle.weakest_stable if d1 > d_end else 0.0
+    pad1 = math.log(d1 / d_end) / saddle.approach_rate(x[-1] - x_to) if d1 > d_end else 0.0
     return pad0, pad1, d0, d1
+
+
+#: Largest distance (2-norm of the state) of a usable guess from the shifted saddle.
+_GUESS_REACH = 0.5
+
+
+def _try_guess(model: Any, params: Params) -> tuple[UpslopeRun | None, str]:
+    """The upslope branch at ``params`` and its fate; the run is None if unusable as a guess."""
+    try:
+        run = upslope_branch(model, params, eps=1e-5, rtol=1e-8, atol=1e-10)
+    except ContinuationError:
+        return None, UNDECIDED
+    x = np.asarray(run.trajectory.x, dtype=float)
+    target = run.saddle.x.copy()
+    target[model.state_index("xi_G")] += UPSLOPE_SHIFT
+    if run.fate == UNDECIDED or np.min(np.linalg.norm(x - target, axis=1)) > _GUESS_REACH:
+        return None, run.fate
+    return run, run.fate
+
+
+def _guess_run(model: Any, params: Params, bracket: tuple[float, float]) -> UpslopeRun:
+    """A simulated upslope branch near the critical ``Fn`` (see :func:`critical_fn_bvp`)."""
+    run, _ = _try_guess(model, params)
+    if run is not None:
+        return run
+    lo, hi = (float(b) for b in bracket)
+    if not (0 < lo < hi and math.isfinite(hi)):
+        raise ValueError(f"`guess_bracket` must be (Fn_lo, Fn_hi) with 0 < lo < hi, got {bracket}")
+    best: UpslopeRun | None = None
+    while hi - lo > 5e-3:
+        mid = 0.5 * (lo + hi)
+        r, fate = _try_guess(model, params.replace(Fn=mid))
+        best = r or best
+        if fate == PERIODIC:
+            lo = mid
+        elif fate == CAPTURED:
+            hi = mid
+        else:
+            break
+    if best is None:
+        raise ContinuationError(
+            f"no usable guess of the connection at {dict(params.items())}: the upslope "
+            f"branch does not approach the shifted crest saddle for Fn in {bracket}"
+        )
+    return best
 
 
 def critical_fn_bvp(
@@ -590,12 +660,14 @@ def critical_fn_bvp(
     params: Any = None,
     guess: Any = None,
     Fn_guess: float | None = None,
+    guess_bracket: tuple[float, float] = (0.2, 0.45),
     n_intervals: int | None = None,
     degree: int = 4,
     interval_length: float = 0.8,
     start_distance: float = 3e-4,
     end_distance: float = 3e-2,
     tol: float = 1e-10,
+    adapt: int = 1,
     check: bool = False,
     throw: bool = False,
     progress: Callable[[ConnectionResult], None] | None = None,
@@ -627,6 +699,11 @@ def critical_fn_bvp(
         or uses the ``Fn`` of ``params``).
     Fn_guess : float, optional
         ``Fn`` of the simulated guess.
+    guess_bracket : (float, float)
+        Fallback when the branch at ``Fn_guess`` is no usable guess (no index-1 crest
+        saddle there, or the branch stays far from the shifted saddle): a coarse
+        bisection on the upslope fate in this range, to a width of ``5e-3``, whose
+        periodic end gives the guess.
     n_intervals : int, optional
         Mesh intervals; default ``ceil(T / interval_length)``.
     degree : int
@@ -635,6 +712,10 @@ def critical_fn_bvp(
         Distances of the orbit's ends from the saddles (2-norm of the state).
     tol : float
         Newton tolerance on ``max |G|``.
+    adapt : int
+        Rounds of mesh equidistribution after the solve (``solve_connection``); one
+        round makes the result independent of the guess to a few 1e-8 in ``Fn`` for
+        the default ship (without: a few 1e-7 on the uniform mesh).
     check : bool
         Also run :func:`continuation.bvp.check_convergence` (halved mesh, 1.5 T).
     throw : bool
@@ -680,11 +761,12 @@ def critical_fn_bvp(
         start = base.replace(Fn=Fn0)
         if guess is None or isinstance(guess, UpslopeRun):
             # a loose integrator tolerance suffices for a starting guess
-            run = (
-                upslope_branch(m, start, eps=1e-5, rtol=1e-8, atol=1e-10)
-                if guess is None
-                else guess
-            )
+            if guess is None:
+                run = _guess_run(m, start, guess_bracket)
+                Fn0 = float(run.trajectory.params[m.param_index("Fn")])
+                start = base.replace(Fn=Fn0)
+            else:
+                run = guess
             saddle = run.saddle
             t_g, x_g = connection_guess(run, start_distance=start_distance)
             guess_Fn = Fn0
@@ -721,8 +803,9 @@ def critical_fn_bvp(
     )
     if res.success:
         # the solved orbit may end farther from the saddles than the guess did
-        s_end = crest_saddle(m, res.params)
-        pad0, pad1, d0, d1 = _pads(res.x, res.x_from, res.x_to, s_end, start_distance, end_distance)
+        pad0, pad1, d0, d1 = _pads(
+            res.x, res.x_from, res.x_to, saddle, start_distance, end_distance
+        )
         if d0 > 3 * start_distance or d1 > 3 * end_distance:
             t2, x2 = _pad_ends(
                 res.t, res.x, res.x_from, res.x_to, pad0, pad1, 0.5 * interval_length
@@ -734,6 +817,8 @@ def critical_fn_bvp(
                 "lengthening T from %.2f to %.2f (end distances %.2e, %.2e)", res.T, T2, d0, d1
             )
             res = solve_connection(prob2, (t2, x2), newton=settings, progress=progress)
+    if res.success and adapt:
+        res = solve_connection(res.problem, res, newton=settings, adapt=adapt, progress=progress)
     conv = None
     if res.success and check:
         conv = check_convergence(res, newton=settings)
