@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .algorithms.base import PointInfo, correct, make_point, theta_norm
+from .algorithms.base import PointInfo, _inf_norm, correct, make_point, theta_norm
 from .settings import NewtonSettings
 
 log = logging.getLogger(__name__)
@@ -82,16 +82,25 @@ def point_at(
     ua, ub = a.u, b.u
     c = w * a.tau
     u_pred = ua + (sigma / sigma_b) * (ub - ua)
+    u_base = ua
     if near is not None:
         s_q, q = near
         ct = float(c.dot(q.tau))
         if 0.0 < s_q < sigma_b and abs(sigma - s_q) < min(sigma, sigma_b - sigma) and ct > 0.1:
             u_pred = q.u + ((sigma - s_q) / ct) * q.tau
+            u_base = q.u
     res = correct(problem, u_pred, ua, c, sigma, newton)
     if not res.converged or res.lin is None:
         return None
+    # the corrector must stay on the branch it started from: its correction may not
+    # exceed the predictor step (as in PALC), up to the corrector's own tolerance. Next
+    # to a branch point Newton otherwise drifts, along the near-null vector of the
+    # bordered matrix, onto the crossing branch.
+    noise = 2.0 * newton.step_tol * (1.0 + _inf_norm(res.u))
+    if _inf_norm(res.u - u_pred) > max(_inf_norm(u_pred - u_base), noise):
+        return None
     try:
-        return make_point(res.z, res.p, res.lin, c, w, iters=res.iters)
+        return make_point(res.z, res.p, res.lin, c, w, iters=res.iters, lu=res.lu, u=res.u_full)
     except np.linalg.LinAlgError:
         # exactly singular bordered matrix: an exact branch point; the tangent is not
         # unique there, so take the chord direction, and set the BP test to zero

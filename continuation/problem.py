@@ -160,6 +160,22 @@ class EquilibriumProblem:
         f, J, Jp = lin(z, pv, sparse=bool(self.sparse))
         return f, J, Jp[:, self._index]
 
+    def linearizer(self) -> Any:
+        """Fast ``(z, p) -> (G, G_z, G_p)`` evaluator for the continuation corrector.
+
+        Same values as :meth:`linearize`, from a CasADi function specialised to the free
+        parameter, with its own buffers (built once per problem and cached on it); None
+        when the system has no CasADi trace (then :meth:`linearize` is used).
+        """
+        fn = self.__dict__.get("_linearizer", False)
+        if fn is False:
+            make = getattr(self.system, "linearizer", None)
+            fn = None
+            if make is not None:
+                fn = make(self._index, self.params.values, sparse=bool(self.sparse))
+            object.__setattr__(self, "_linearizer", fn)
+        return fn
+
     def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
         """``z1 - z2`` with periodic states reduced modulo their period."""
         return self.system.difference(z1, z2)

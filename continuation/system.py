@@ -357,6 +357,93 @@ class System:
             "indices": np.asarray(spy.row(), dtype=np.int32),
         }
 
+    def linearizer(
+        self, index: int, params: Any, *, sparse: bool = False
+    ) -> Callable[[FloatArray, float], tuple[FloatArray, Any, FloatArray]] | None:
+        """A fast evaluator of ``(f, df/dx, df/dp_index)`` with the other parameters fixed.
+
+        Parameters
+        ----------
+        index : int
+            Position of the varying parameter in ``param_names``.
+        params : array_like, shape (m,)
+            Values of all parameters (the entry ``index`` is overwritten at each call).
+        sparse : bool
+            Return ``df/dx`` as a SciPy CSC matrix.
+
+        Returns
+        -------
+        callable or None
+            ``lin(x, p_index) -> (f (n,), J, Jp (n,))`` with fresh arrays at every call
+            (``J`` dense ``(n, n)``, Fortran-ordered, or CSC), evaluated by one call of a
+            compiled CasADi function through its buffer API into memory owned by this
+            evaluator (so every evaluator is independent; not thread-safe); None
+            without a CasADi trace. This is the hot path of continuation steps: it
+            avoids the per-call conversions of :meth:`linearize`.
+        """
+        if self._ca is None:
+            return None
+        n, m = self.n_states, self.n_params
+        if not 0 <= int(index) < m:
+            raise ValueError(f"`index` must be in [0, {m}), got {index!r}")
+        key = (int(index), bool(sparse))
+        cache = self.__dict__.setdefault("_ca_lin_free", {})
+        built = cache.get(key)
+        if built is None:
+            X = ca.SX.sym("x", n)
+            P = ca.SX.sym("p", m)
+            F = self.symbolic(X, P)
+            J = ca.jacobian(F, X)
+            Jq = ca.densify(ca.jacobian(F, P[int(index)]))
+            if sparse:
+                nz = ca.vertcat(*J.nonzeros()) if J.nnz() else ca.SX(0, 1)
+                spy = J.sparsity()
+                built = (
+                    ca.Function("lin_free_nz", [X, P], [F, nz, Jq]),
+                    np.asarray(spy.row(), dtype=np.int32),
+                    np.asarray(spy.colind(), dtype=np.int32),
+                )
+            else:
+                built = (ca.Function("lin_free", [X, P], [F, ca.densify(ca.horzcat(J, Jq))]),)
+            cache[key] = built
+        fn = built[0]
+        buf, run = fn.buffer()
+        x_in = np.zeros(n)
+        p_in = np.array(np.asarray(params, dtype=float).reshape(m), dtype=float)
+        f_out = np.zeros(n)
+        buf.set_arg(0, memoryview(x_in))
+        buf.set_arg(1, memoryview(p_in))
+        buf.set_res(0, memoryview(f_out))
+        k = int(index)
+        if sparse:
+            rows, colind = built[1], built[2]
+            nz_out = np.zeros(fn.nnz_out(1))
+            q_out = np.zeros(n)
+            buf.set_res(1, memoryview(nz_out))
+            buf.set_res(2, memoryview(q_out))
+
+            def lin_sparse(x: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
+                x_in[:] = x
+                p_in[k] = p
+                run()
+                J = sp.csc_matrix((nz_out.copy(), rows, colind), shape=(n, n))
+                return f_out.copy(), J, q_out.copy()
+
+            lin_sparse.buffers = (buf, x_in, p_in, f_out, nz_out, q_out)  # type: ignore[attr-defined]
+            return lin_sparse
+        a_out = np.zeros(n * (n + 1))
+        buf.set_res(1, memoryview(a_out))
+
+        def lin_dense(x: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
+            x_in[:] = x
+            p_in[k] = p
+            run()
+            A = a_out.reshape(n + 1, n).T.copy(order="F")  # [J, Jp], column-major
+            return f_out.copy(), A[:, :n], A[:, n]
+
+        lin_dense.buffers = (buf, x_in, p_in, f_out, a_out)  # type: ignore[attr-defined]
+        return lin_dense
+
     def casadi_functions(self) -> dict[str, ca.Function]:
         """The compiled CasADi functions ``{"f", "jac", "dfdp"}`` (x, p) -> value."""
         if self._ca is None:

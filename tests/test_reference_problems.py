@@ -323,8 +323,11 @@ def test_bratu_50_branch_point_near_lambda_zero_is_genuine():
     assert br.status is Status.EVENT
     (bp,) = br.find("bp")
     assert bp.located and bp.delta_unstable == (1, 0)
-    assert bp.p == pytest.approx(lam_ref, rel=1e-6)
-    assert float(np.max(bp.x)) == pytest.approx(m_ref, abs=1e-6)
+    # accuracy limited by conditioning: the residual's round-off floor (~1e-10 here,
+    # entries ~ 45 / h^2) is amplified by the bordered matrix, singular at the point
+    assert bp.p == pytest.approx(lam_ref, rel=1e-7)
+    assert float(np.max(bp.x)) == pytest.approx(m_ref, abs=1e-5)
+    assert np.max(np.abs(bp.x - bp.x[::-1])) < 1e-5  # on the symmetric branch
     assert bp.data["rcond_ratio"] < 1e-3
     assert_invariants(br, tol=1e-8)
 

@@ -40,11 +40,14 @@ from __future__ import annotations
 import abc
 import logging
 import math
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
 import scipy.linalg as la
+import scipy.linalg.blas as sla_blas
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -67,9 +70,23 @@ def theta_norm(v: FloatArray, w: FloatArray) -> float:
     return math.sqrt(float((w * v).dot(v)))
 
 
+_idamax = sla_blas.idamax
+
+
 def _inf_norm(v: FloatArray) -> float:
-    """``max |v|`` (0 for an empty vector)."""
-    return float(np.abs(v).max()) if v.size else 0.0
+    """``max |v|`` (0 for an empty vector; BLAS ``idamax``, no temporary array).
+
+    Not reliable for vectors containing NaN: check finiteness separately.
+    """
+    return abs(float(v[_idamax(v)])) if v.size else 0.0
+
+
+def _finite(v: FloatArray) -> bool:
+    """True when every entry of ``v`` is finite (one dot product; entries beyond
+    ``1e154`` in magnitude also count as non-finite, which only ever happens for
+    diverging iterates)."""
+    s = float(v.dot(v))
+    return s < math.inf  # False for inf and NaN
 
 
 # ---------------------------------------------------------------------------- linear algebra
@@ -168,65 +185,69 @@ class BorderedLU:
         If ``M`` is exactly singular or the factorisation fails.
     """
 
-    __slots__ = ("sparse", "_lu", "_det", "n")
+    __slots__ = ("sparse", "_lu", "_piv", "_sign", "_logdet", "n")
 
     def __init__(self, Gz: Any, Gp: FloatArray, c: FloatArray) -> None:
         n = Gz.shape[0]
         self.n = n + 1
-        self.sparse = sp.issparse(Gz)
-        self._det: tuple[float, float] | None = None
-        if self.sparse:
+        self._sign = 2.0  # not computed yet
+        self._logdet = math.nan
+        if isinstance(Gz, np.ndarray):
+            self.sparse = False
+            # Fortran order: LAPACK factorises it in place, no copy
+            M = np.empty((n + 1, n + 1), order="F")
+            M[:n, :n] = Gz
+            M[:n, n] = Gp
+            M[n, :] = c
+            lu, piv, info = _getrf(M, overwrite_a=1)
+            if info != 0:
+                raise np.linalg.LinAlgError(f"singular bordered matrix (getrf info={info})")
+            self._lu, self._piv = lu, piv
+        else:
+            self.sparse = True
             M = assemble_bordered_csc(Gz, Gp, c)
             try:
                 self._lu = spla.splu(M)
             except RuntimeError as exc:
                 raise np.linalg.LinAlgError(str(exc)) from exc
-        else:
-            M = np.empty((n + 1, n + 1))
-            M[:n, :n] = Gz
-            M[:n, n] = Gp
-            M[n, :] = c
-            lu, piv, info = _getrf(M)
-            if info != 0:
-                raise np.linalg.LinAlgError(f"singular bordered matrix (getrf info={info})")
-            self._lu = (lu, piv)
+            self._piv = None
 
     def _diag_parity(self) -> tuple[Any, int]:
         if self.sparse:
             d = self._lu.U.diagonal()
             parity = _perm_parity(self._lu.perm_r) * _perm_parity(self._lu.perm_c)
         else:
-            lu, piv = self._lu
-            d = lu.diagonal()
-            parity = -1 if np.count_nonzero(piv != _arange(self.n)) % 2 else 1
+            d = self._lu.diagonal()
+            parity = -1 if np.count_nonzero(self._piv != _arange(self.n)) % 2 else 1
         return d, parity
 
     @property
     def sign(self) -> float:
         """Sign of ``det M`` (+1, -1, or 0 if singular)."""
-        if self._det is None:
+        if self._sign == 2.0:
             d, parity = self._diag_parity()
-            self._det = (float(parity * np.sign(d).prod()), math.nan)
-        return self._det[0]
+            if self.sparse and not np.all(d):
+                self._sign = 0.0
+            else:  # the dense factorisation has no zero pivot (getrf info = 0)
+                self._sign = -float(parity) if np.count_nonzero(d < 0) % 2 else float(parity)
+        return self._sign
 
     @property
     def logabsdet(self) -> float:
         """``log |det M|``."""
-        sign = self.sign
-        assert self._det is not None
-        if math.isnan(self._det[1]):
+        if math.isnan(self._logdet):
             d, _ = self._diag_parity()
             with np.errstate(divide="ignore"):
-                self._det = (sign, float(np.log(np.abs(d)).sum()))
-        return self._det[1]
+                self._logdet = float(np.log(np.abs(d)).sum())
+        return self._logdet
 
     def solve(self, b: FloatArray, trans: bool = False) -> FloatArray:
         """Solve ``M x = b`` (``M^T x = b`` if ``trans``); LinAlgError if not finite."""
         if self.sparse:
             x = self._lu.solve(np.asarray(b, dtype=float), trans="T" if trans else "N")
         else:
-            x, info = _getrs(self._lu[0], self._lu[1], b, trans=1 if trans else 0)
-        if not np.all(np.isfinite(x)):
+            x, info = _getrs(self._lu, self._piv, b, trans=1 if trans else 0)
+        if not _finite(x) and not np.all(np.isfinite(x)):
             raise np.linalg.LinAlgError("singular or ill-conditioned bordered matrix")
         return x
 
@@ -320,7 +341,6 @@ def linearize(problem: Any, z: FloatArray, p: float) -> tuple[FloatArray, Any, F
     return G, Gz, Gp
 
 
-@dataclass(eq=False)
 class PointInfo:
     """A converged branch point with its linearisation and tangent.
 
@@ -332,43 +352,96 @@ class PointInfo:
         Unit (``theta``-norm) tangent, oriented so that ``border . tau > 0``.
     G, Gz, Gp
         Residual ``(N,)``, Jacobian ``(N, N)`` (dense or sparse), ``dG/dp (N,)``.
-    lu : BorderedLU
-        Factorisation of ``[[Gz, Gp], [border^T]]``.
+    lu : BorderedLU or None
+        Factorisation of ``[[Gz, Gp], [border^T]]`` (None at an exactly singular point).
+        At points made by a continuation step it may be the factorisation of the last
+        corrector iterate instead, within the corrector's step tolerance of the point.
     border : ndarray, shape (N + 1,)
     t_raw : ndarray, shape (N + 1,)
         ``M^{-1} e_{N+1}`` (un-normalised tangent, sign as solved).
     bp_sign : float
-        Sign of ``det [Gz Gp; (w o tau)^T]`` (branch-point test function).
+        Sign of ``det [Gz Gp; (w o tau)^T]`` (branch-point test function; lazy).
     ctau : float
         ``border . tau`` (for the determinant identity above).
     iters : int
         Corrector iterations spent on this point.
     residual_norm : float
         ``max |G|``.
+    cache : dict
+        Per-point cache of derived quantities (eigenvalues, test functions).
     """
 
-    z: FloatArray
-    p: float
-    tau: FloatArray
-    G: FloatArray
-    Gz: Any
-    Gp: FloatArray
-    lu: BorderedLU
-    border: FloatArray
-    t_raw: FloatArray
-    bp_sign: float
-    ctau: float = 1.0
-    iters: int = 0
-    residual_norm: float = 0.0
-    cache: dict[str, Any] = field(default_factory=dict)
-    _u: FloatArray | None = field(default=None, repr=False)
-    _bp_logdet: float | None = field(default=None, repr=False)
+    __slots__ = (
+        "z",
+        "p",
+        "tau",
+        "G",
+        "Gz",
+        "Gp",
+        "lu",
+        "border",
+        "t_raw",
+        "ctau",
+        "iters",
+        "residual_norm",
+        "cache",
+        "_u",
+        "_bp_sign",
+        "_bp_logdet",
+    )
+
+    def __init__(
+        self,
+        z: FloatArray,
+        p: float,
+        tau: FloatArray,
+        G: FloatArray,
+        Gz: Any,
+        Gp: FloatArray,
+        lu: BorderedLU | None,
+        border: FloatArray,
+        t_raw: FloatArray,
+        bp_sign: float | None = None,
+        ctau: float = 1.0,
+        iters: int = 0,
+        residual_norm: float = 0.0,
+        cache: dict[str, Any] | None = None,
+        _u: FloatArray | None = None,
+        _bp_logdet: float | None = None,
+    ) -> None:
+        self.z = z
+        self.p = p
+        self.tau = tau
+        self.G = G
+        self.Gz = Gz
+        self.Gp = Gp
+        self.lu = lu
+        self.border = border
+        self.t_raw = t_raw
+        self.ctau = ctau
+        self.iters = iters
+        self.residual_norm = residual_norm
+        self.cache = {} if cache is None else cache
+        self._u = _u
+        self._bp_sign = bp_sign
+        self._bp_logdet = _bp_logdet
+
+    def __repr__(self) -> str:
+        return f"PointInfo(p={self.p!r}, iters={self.iters}, |G|={self.residual_norm:.2e})"
+
+    @property
+    def bp_sign(self) -> float:
+        """Sign of ``det [Gz Gp; (w o tau)^T] = det M / (border . tau)`` (lazy)."""
+        if self._bp_sign is None:
+            sign = self.lu.sign if self.lu is not None else 0.0
+            self._bp_sign = sign if self.ctau > 0 else -sign
+        return self._bp_sign
 
     @property
     def bp_logdet(self) -> float:
         """``log |det [Gz Gp; (w o tau)^T]| = log |det M| - log |border . tau|`` (lazy)."""
         if self._bp_logdet is None:
-            self._bp_logdet = self.lu.logabsdet - math.log(abs(self.ctau))
+            self._bp_logdet = self.lu.logabsdet - math.log(abs(self.ctau))  # type: ignore[union-attr]
         return self._bp_logdet
 
     @property
@@ -388,6 +461,9 @@ def make_point(
     *,
     iters: int = 0,
     orient: FloatArray | None = None,
+    lu: BorderedLU | None = None,
+    u: FloatArray | None = None,
+    residual_norm: float | None = None,
 ) -> PointInfo:
     """Factorise the bordered matrix at a converged point and compute its tangent.
 
@@ -403,6 +479,19 @@ def make_point(
         ``theta`` weights.
     orient : ndarray, shape (N + 1,), optional
         Orientation: ``tau`` is chosen with ``orient . tau >= 0``; default ``border``.
+    lu : BorderedLU, optional
+        A factorisation of ``[[Gz, Gp], [border^T]]`` to reuse instead of factorising:
+        that of the last corrector iterate, whose distance to the point is below the
+        corrector's step tolerance. This is AUTO's practice (Doedel et al., AUTO-07p
+        manual, Sec. "pseudo-arclength continuation": the new direction vector comes
+        from the Jacobian of the last Newton iteration); it perturbs the tangent by
+        that distance, which only affects the next predictor and the sign of the test
+        functions within that distance of a zero (located special points are always
+        computed with a fresh factorisation).
+    u : ndarray, shape (N + 1,), optional
+        ``(z, p)`` if already available.
+    residual_norm : float, optional
+        ``max |G|`` if already known.
 
     Raises
     ------
@@ -410,35 +499,38 @@ def make_point(
         If the bordered matrix is singular.
     """
     G, Gz, Gp = lin
-    lu = BorderedLU(Gz, Gp, border)
+    if lu is None:
+        lu = BorderedLU(Gz, Gp, border)
     rhs = np.zeros(lu.n)
     rhs[-1] = 1.0
     t = lu.solve(rhs)
-    nrm = theta_norm(t, w)
-    if not (nrm > 0 and math.isfinite(nrm)):
+    nrm2 = float((w * t).dot(t))
+    if not (0.0 < nrm2 < math.inf):
         raise np.linalg.LinAlgError("degenerate tangent")
-    tau = t / nrm
-    ref = border if orient is None else orient
-    if float(np.dot(ref, tau)) < 0:
+    tau = t * (1.0 / math.sqrt(nrm2))
+    if orient is not None and float(orient.dot(tau)) < 0:
         tau = -tau
-    ctau = float(np.dot(border, tau))
+    ctau = float(border.dot(tau))
+    if orient is None and ctau < 0:
+        tau, ctau = -tau, -ctau
     if ctau == 0.0:
         raise np.linalg.LinAlgError("border orthogonal to the tangent")
-    bp_sign = lu.sign * math.copysign(1.0, ctau)
     return PointInfo(
-        z=np.asarray(z, dtype=float),
-        p=float(p),
-        tau=tau,
-        G=G,
-        Gz=Gz,
-        Gp=Gp,
-        lu=lu,
-        border=border,
-        t_raw=t,
-        bp_sign=bp_sign,
-        ctau=ctau,
-        iters=iters,
-        residual_norm=_inf_norm(G),
+        z,
+        float(p),
+        tau,
+        G,
+        Gz,
+        Gp,
+        lu,
+        border,
+        t,
+        None,
+        ctau,
+        iters,
+        _inf_norm(G) if residual_norm is None else residual_norm,
+        None,
+        u,
     )
 
 
@@ -473,7 +565,12 @@ def initial_point(
 
 @dataclass(eq=False)
 class CorrectorResult:
-    """Outcome of :func:`correct`."""
+    """Outcome of :func:`correct`.
+
+    ``lu`` is the factorisation of the bordered matrix at the last Newton iterate (the
+    returned point, or the iterate one step before it, within the step tolerance), or
+    None; ``u_full`` is ``(z, p)`` when known.
+    """
 
     converged: bool
     z: FloatArray
@@ -482,11 +579,24 @@ class CorrectorResult:
     iters: int
     residual_norm: float
     message: str = ""
+    lu: BorderedLU | None = None
+    u_full: FloatArray | None = None
 
     @property
     def u(self) -> FloatArray:
         """``(z, p)``, shape ``(N + 1,)``."""
-        return np.concatenate((self.z, (self.p,)))
+        if self.u_full is None:
+            self.u_full = np.concatenate((self.z, (self.p,)))
+        return self.u_full
+
+
+def _linearizer(problem: Any) -> Callable[[FloatArray, float], tuple[FloatArray, Any, FloatArray]]:
+    """The problem's fast evaluator (``problem.linearizer()``) or :func:`linearize`."""
+    get = getattr(problem, "linearizer", None)
+    fn = get() if get is not None else None
+    if fn is None:
+        return partial(linearize, problem)
+    return fn  # type: ignore[no-any-return]
 
 
 def correct(
@@ -498,6 +608,7 @@ def correct(
     newton: NewtonSettings,
     *,
     max_contraction: float | None = None,
+    exact: bool = True,
 ) -> CorrectorResult:
     r"""Newton's method on the bordered system.
 
@@ -509,9 +620,18 @@ def correct(
     either ``max |G| <= newton.tol`` or the residual has stagnated at its round-off
     floor (it did not decrease by a factor 2 in the last iteration while the step was
     already that small: more iterations cannot improve the point, e.g. for finely
-    discretised PDEs whose Jacobian entries are large). Stops early (not converged) when
-    the residual becomes non-finite, grows by a factor ``1e4`` over its initial value,
-    or the bordered matrix is singular.
+    discretised PDEs whose Jacobian entries are large), or when ``max |G| <= newton.tol``
+    and the Newton correction computed at the current point is below the step
+    tolerance; that last correction is then applied. The result carries ``lin`` and
+    ``lu`` (the factorisation of the bordered matrix, for the caller's tangent): with
+    ``exact=True`` they are re-evaluated at the returned point after that final
+    correction; with ``exact=False`` they are those of the point before it, within the
+    step tolerance of the returned one (usually within round-off, the final correction
+    being quadratically small), which saves one evaluation and factorisation when the
+    predictor is already converged (continuation steps use this; located special
+    points use ``exact=True``). Stops early (not converged) when the residual becomes
+    non-finite, grows by a factor ``1e4`` over its initial value, or the bordered
+    matrix is singular.
 
     With ``max_contraction = kappa`` it also stops (not converged) as soon as a Newton
     step is not at least ``kappa`` times shorter than the previous one,
@@ -523,68 +643,75 @@ def correct(
     ``kappa = 0.8``; Deuflhard 2004, *Newton Methods for Nonlinear Problems*, Sec. 5.1,
     the monotonicity test of the contraction factor).
     """
+    lin_fn = _linearizer(problem)
     n = u_pred.size - 1
     u = np.array(u_pred, dtype=float)
-    r = np.empty(n + 1)  # bordered residual (G, h)
+    h = float(c.dot(u_ref)) + sigma  # the constraint is c . u = h
+    tol, step_tol, max_iter = newton.tol, newton.step_tol, newton.max_iter
+    r = np.empty(n + 1)  # bordered residual (G, c . u - h)
 
-    def evaluate() -> tuple[tuple[FloatArray, Any, FloatArray], float]:
-        lin = linearize(problem, u[:n], float(u[n]))
-        r[:n] = lin[0]
-        r[n] = float(c.dot(u - u_ref)) - sigma
-        return lin, _inf_norm(r)
+    def fail(msg: str, lin: Any = None) -> CorrectorResult:
+        return CorrectorResult(False, u[:n].copy(), float(u[n]), lin, it, rn, msg)
 
-    def result(ok: bool, msg: str = "") -> CorrectorResult:
-        return CorrectorResult(ok, u[:n].copy(), float(u[n]), lin, it, rn, msg)
-
-    lin, rn = evaluate()
-    rn0 = rn
-    rn_prev = math.inf
-    step = math.inf
-    it = 0
-    lu: BorderedLU | None = None
+    lin = lin_fn(u[:n], float(u[n]))
+    r[:n] = lin[0]
+    r[n] = float(c.dot(u)) - h
+    finite = _finite(r)
+    rn = _inf_norm(r)
+    rn0, rn_prev, step, it = rn, math.inf, math.inf, 0
     while True:
-        if not math.isfinite(rn):
-            lin = None  # type: ignore[assignment]
-            return result(False, "non-finite residual")
-        step_ok = newton.step_tol * (1.0 + _inf_norm(u))
-        if step <= step_ok and (rn <= newton.tol or rn > 0.5 * rn_prev):
-            return result(True)
-        if rn <= newton.tol and lu is not None:
-            # the next Newton correction, estimated with the last factorisation (a chord
-            # step: first-order accurate), is already below step_tol: converged
-            try:
-                est = _inf_norm(lu.solve(r))
-            except np.linalg.LinAlgError:
-                est = math.inf
-            if est <= step_ok:
-                return result(True)
-        if it >= newton.max_iter:
-            return result(False, "max_iter reached")
-        if it >= 2 and rn > 1e4 * max(rn0, newton.tol):
-            return result(False, "diverging")
+        if not finite:
+            return fail("non-finite residual")
+        step_ok = step_tol * (1.0 + _inf_norm(u))
         try:
             lu = BorderedLU(lin[1], lin[2], c)
             du = lu.solve(r)
         except np.linalg.LinAlgError as exc:
             # exactly singular at a point that already solves G = 0 (e.g. a trial point
             # landing exactly on a branch point): accept it
-            return result(rn <= newton.tol, f"singular: {exc}")
+            ok = rn <= tol
+            return CorrectorResult(ok, u[:n].copy(), float(u[n]), lin, it, rn,
+                                   f"singular: {exc}", None, u)  # fmt: skip
+        dn = _inf_norm(du)
+        if (rn <= tol and (dn <= step_ok or step <= step_ok)) or (
+            step <= step_ok and rn > 0.5 * rn_prev
+        ):
+            if dn <= step_ok:
+                # final Newton correction, below the step tolerance
+                u -= du
+                if exact:
+                    lin = lin_fn(u[:n], float(u[n]))
+                    r[:n] = lin[0]
+                    r[n] = float(c.dot(u)) - h
+                    rn = _inf_norm(r) if _finite(r) else math.inf
+                    try:
+                        lu = BorderedLU(lin[1], lin[2], c)
+                    except np.linalg.LinAlgError:
+                        lu = None  # type: ignore[assignment]
+            return CorrectorResult(True, u[:n].copy(), float(u[n]), lin, it, rn, "", lu, u)
+        if it >= max_iter:
+            return fail("max_iter reached", lin)
+        if it >= 2 and rn > 1e4 * max(rn0, tol):
+            return fail("diverging", lin)
         u -= du
         it += 1
-        step_prev, step = step, _inf_norm(du)
+        step_prev, step = step, dn
         if (
             max_contraction is not None
             and it >= 2
             and step > max_contraction * step_prev
             and step > step_ok
-            and rn > newton.tol
+            and rn > tol
         ):
-            lin = None  # type: ignore[assignment]
-            return result(
-                False, f"corrector contracts too slowly (rate {step / step_prev:.2g} at step {it})"
+            return fail(
+                f"corrector contracts too slowly (rate {step / step_prev:.2g} at step {it})"
             )
         rn_prev = rn
-        lin, rn = evaluate()
+        lin = lin_fn(u[:n], float(u[n]))
+        r[:n] = lin[0]
+        r[n] = float(c.dot(u)) - h
+        finite = _finite(r)
+        rn = _inf_norm(r)
 
 
 # ---------------------------------------------------------------------------- algorithm API

@@ -69,7 +69,9 @@ class Natural(ContinuationAlgorithm):
         if not res.converged or res.lin is None:
             return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, res.message)
         try:
-            b = make_point(res.z, res.p, res.lin, e_p, state.w, iters=res.iters)
+            b = make_point(
+                res.z, res.p, res.lin, e_p, state.w, iters=res.iters, lu=res.lu, u=res.u_full
+            )
         except np.linalg.LinAlgError as exc:
             return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
         sigma = float(np.dot(state.w * a.tau, b.u - ua))

@@ -132,6 +132,7 @@ class PALC(ContinuationAlgorithm):
             ds,
             settings.newton,
             max_contraction=self.max_contraction if guarded else None,
+            exact=False,
         )
         if not res.converged or res.lin is None:
             return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, res.message)
@@ -147,7 +148,9 @@ class PALC(ContinuationAlgorithm):
                     f"corrected point {dist / ds:.3g} ds away from the predictor",
                 )
         try:
-            b = make_point(res.z, res.p, res.lin, c, state.w, iters=res.iters)
+            b = make_point(
+                res.z, res.p, res.lin, c, state.w, iters=res.iters, lu=res.lu, u=res.u_full
+            )
         except np.linalg.LinAlgError as exc:
             return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
         cos_angle = float(np.dot(c, b.tau))
