@@ -300,3 +300,30 @@ def test_bad_input_curve_and_bisection(model):
         critical_fn_bisection(0.1, model=model, bracket=(0.31, 0.30))
     with pytest.raises(ValueError, match="tol"):
         critical_fn_bisection(0.1, model=model, tol=0.0)
+
+
+# ------------------------------------------------------------------ command line
+def test_cli_parse_courses():
+    from broachkit_cli.commands.critical_curve import parse_courses
+
+    np.testing.assert_allclose(parse_courses("0:30"), np.arange(31.0))
+    np.testing.assert_allclose(parse_courses("0:30:10"), [0, 10, 20, 30])
+    np.testing.assert_allclose(parse_courses("5,7.5"), [5, 7.5])
+    for bad in ("0:abc", "30:0", "0:10:0", "", "0:90"):
+        with pytest.raises(ValueError, match="--chi-c"):
+            parse_courses(bad)
+
+
+def test_cli_critical_curve_json(tmp_path, capsys, curve):
+    import json
+
+    from broachkit_cli.main import main
+
+    rc = main(["critical-curve", "--chi-c", "8:12:2", "--json", "--out", str(tmp_path)])
+    assert rc == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["status"] == "SUCCESS"
+    assert out["chi_c_deg"] == [8.0, 10.0, 12.0]
+    np.testing.assert_allclose(out["Fn"], curve.Fn[[8, 10, 12]], atol=1e-6)
+    assert (tmp_path / "critical_curve.png").stat().st_size > 0
+    assert (tmp_path / "critical_curve.csv").exists()

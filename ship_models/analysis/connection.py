@@ -892,7 +892,7 @@ class CriticalCurve:
     def to_json(self) -> dict[str, Any]:
         """JSON-ready summary."""
         return {
-            "chi_c_deg": self.chi_c_deg.tolist(),
+            "chi_c_deg": [round(float(c), 9) for c in self.chi_c_deg],
             "Fn": [None if not np.isfinite(f) else float(f) for f in self.Fn],
             "residual_norm": [float(r) for r in self.residual_norm],
             "converged": [bool(c) for c in self.converged],

@@ -1,0 +1,176 @@
+"""``broachkit critical-curve``: critical Fn against the autopilot course (Umeda 1999, Fig. 23).
+
+The heteroclinic connection of the crest saddle to the neighbouring crest saddle is
+solved once as a boundary-value problem and continued in ``chi_c``
+(:func:`ship_models.analysis.connection.critical_curve`). Degrees on the command
+line, radians inside.
+
+Examples::
+
+    broachkit critical-curve --chi-c 0:30 --out out/critical_curve
+    broachkit critical-curve --chi-c 0:30:5 --json
+    broachkit critical-curve --chi-c 0,10,20 --vessel my_ship.toml
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+NAME = "critical-curve"
+HELP = "critical Fn against the autopilot course by continuing the heteroclinic connection"
+
+
+def parse_courses(text: str) -> np.ndarray:
+    """Courses in degrees from ``"a:b"`` (step 1), ``"a:b:step"``, ``"a,b,c"`` or ``"a"``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``--chi-c`` for an unreadable, empty or out-of-range list.
+    """
+    try:
+        if ":" in text:
+            parts = [float(s) for s in text.split(":")]
+            if len(parts) not in (2, 3):
+                raise ValueError
+            a, b = parts[0], parts[1]
+            step = parts[2] if len(parts) == 3 else 1.0
+            if not (math.isfinite(step) and step > 0 and b >= a):
+                raise ValueError
+            n = int(math.floor((b - a) / step + 1e-9)) + 1
+            deg = a + step * np.arange(n)
+        else:
+            deg = np.array([float(s) for s in text.split(",")])
+    except ValueError:
+        raise ValueError(
+            f"--chi-c must be 'start:stop[:step]' or a comma list of degrees, got {text!r}"
+        ) from None
+    if deg.size == 0 or not np.all(np.isfinite(deg)) or np.any(np.abs(deg) >= 85.0):
+        raise ValueError(f"--chi-c courses must be finite and within +-85 deg, got {text!r}")
+    if deg.size > 1000:
+        raise ValueError(f"--chi-c gives {deg.size} courses; at most 1000")
+    return deg
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``broachkit critical-curve``."""
+    parser.add_argument(
+        "--chi-c",
+        default="0:30",
+        help="courses in degrees: 'start:stop[:step]' (step 1) or 'a,b,c' (default 0:30)",
+    )
+    parser.add_argument(
+        "--vessel",
+        default="purse_seiner",
+        help="vessel name or path of a vessel TOML file (default: purse_seiner)",
+    )
+    parser.add_argument(
+        "--h-over-lambda", type=float, default=None, help="wave steepness (default: vessel)"
+    )
+    parser.add_argument(
+        "--lambda-over-l",
+        type=float,
+        default=None,
+        help="wavelength / ship length (default: vessel)",
+    )
+    parser.add_argument(
+        "--fn-guess",
+        type=float,
+        default=None,
+        help="Fn of the simulated manifold used as the first guess (default: vessel's Fn)",
+    )
+    parser.add_argument(
+        "--out", type=Path, default=None, help="folder for the CSV, JSON and PNG (optional)"
+    )
+    parser.add_argument("--json", action="store_true", help="print the result as JSON")
+
+
+def _ship(args: argparse.Namespace) -> tuple[Any, Any]:
+    from broachkit_cli.commands.fixed_points import ship_from_args
+
+    ns = argparse.Namespace(**vars(args))
+    ns.chi_c = 0.0
+    ns.fn = args.fn_guess
+    return ship_from_args(ns)
+
+
+def plot_curve(curve: Any, path: Path, *, paper: bool = True) -> Path:
+    """The critical curve ``Fn(chi_c)`` as a PNG (the paper's Fig. 23 line)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.2, 3.6))
+    ok = curve.converged
+    ax.plot(curve.chi_c_deg[ok], curve.Fn[ok], "o-", ms=3, label="BVP, this vessel")
+    if paper:
+        ax.errorbar(
+            [10.0], [0.32475], yerr=[0.00005], fmt="s", color="tab:red", ms=5, capsize=3,
+            label="Umeda (1999), measured coeff.",
+        )  # fmt: skip
+    ax.set_xlabel("autopilot course chi_c (deg)")
+    ax.set_ylabel("critical nominal Froude number Fn")
+    ax.set_title("Critical condition for capsizing due to broaching")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="center left", fontsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def run(args: argparse.Namespace) -> int:
+    """Compute the curve; print it (or JSON); write files under ``--out``. 0 on success."""
+    from ship_models.analysis.connection import critical_curve
+
+    deg = parse_courses(str(args.chi_c))
+    model, params = _ship(args)
+    t0 = time.perf_counter()
+    last = [t0]
+
+    def progress(pt: Any) -> None:
+        now = time.perf_counter()
+        if now - last[0] > 2.0 and not args.json:
+            sys.stderr.write(f"  chi_c = {math.degrees(float(pt.p)):.2f} deg\n")
+            last[0] = now
+
+    curve = critical_curve(np.radians(deg), model=model, params=params, progress=progress)
+    elapsed = time.perf_counter() - t0
+    result = {
+        "vessel": model.vessel.name,
+        "method": "bvp-continuation",
+        "H_over_lambda": params["H_over_lambda"],
+        "lambda_over_L": params["lambda_over_L"],
+        "elapsed_s": elapsed,
+        **curve.to_json(),
+    }
+    if args.out is not None:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        curve.to_csv(out / "critical_curve.csv")
+        (out / "critical_curve.json").write_text(json.dumps(result, indent=2))
+        plot_curve(curve, out / "critical_curve.png")
+        result["files"] = [str(out / n) for n in ("critical_curve.csv", "critical_curve.json",
+                                                  "critical_curve.png")]  # fmt: skip
+    if args.json:
+        sys.stdout.write(json.dumps(result, indent=2) + "\n")
+    else:
+        sys.stdout.write(
+            f"{model.vessel.name}: critical Fn by continuing the heteroclinic connection "
+            f"({curve.status.name}, {elapsed:.1f} s)\n   chi_c (deg)   Fn_critical\n"
+        )
+        for c, f, ok in zip(curve.chi_c_deg, curve.Fn, curve.converged, strict=True):
+            sys.stdout.write(f"   {c:10.3f}   {f:.7f}\n" if ok else f"   {c:10.3f}   failed\n")
+        if args.out is not None:
+            sys.stdout.write(f"wrote {args.out}/critical_curve.{{csv,json,png}}\n")
+    return 0 if curve.success else 1
