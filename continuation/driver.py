@@ -39,6 +39,7 @@ from .errors import ContinuationError, ConvergenceError
 from .events import Event, HopfTest, bp_test, crossed
 from .locate import LocateResult, locate_zero
 from .settings import ContinuationSettings
+from .stability import _dense_eigvals as dense_eigvals
 from .stability import count_unstable, eigenvalues, sort_eigenvalues
 from .status import Status
 
@@ -66,12 +67,15 @@ def _eig_function(problem: Any, settings: ContinuationSettings) -> Callable[[Poi
         def from_jacobian(pt: PointInfo) -> ComplexArray:
             ev = pt.cache.get("eig")
             if ev is None:
-                ev = eigenvalues(
-                    pt.Gz,
-                    n_eigs=det.n_eigs,
-                    sigma=det.eig_sigma,
-                    dense_max=det.dense_eigs_max,
-                )
+                if isinstance(pt.Gz, np.ndarray):  # dense: LAPACK directly
+                    ev = sort_eigenvalues(dense_eigvals(pt.Gz))
+                else:
+                    ev = eigenvalues(
+                        pt.Gz,
+                        n_eigs=det.n_eigs,
+                        sigma=det.eig_sigma,
+                        dense_max=det.dense_eigs_max,
+                    )
                 pt.cache["eig"] = ev
             return ev
 
@@ -110,7 +114,7 @@ def _param_values(problem: Any, p0: float) -> dict[str, float]:
     return out
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class _Row:
     z: FloatArray
     p: float
@@ -151,14 +155,21 @@ class _Context:
         self.eig = _eig_function(problem, settings)
         self.diff = _difference_fn(problem)
         self.grow_iters = int(getattr(algorithm, "grow_iters", 3))
+        self.terminal = any(e.terminal for e in self.events)
+        period = getattr(getattr(problem, "system", None), "period", None)
+        # plain differences (no periodic state): distances without problem.difference
+        self.plain_diff = not callable(getattr(problem, "difference", None)) or (
+            period is not None and not np.any(np.asarray(period) > 0)
+        )
 
     # ------------------------------------------------------------------ rows
     def make_row(self, pt: PointInfo, ds: float) -> _Row:
         det = self.settings.detect
         ev = self.eig(pt)
         counts = None if ev is None else count_unstable(ev, det.eig_tol, det.imag_tol)
-        rec = {str(k): float(v) for k, v in dict(self.problem.record(pt.z, pt.p)).items()}
-        evs = [e.value(pt.z, pt.p) for e in self.events]
+        rec = self.problem.record(pt.z, pt.p)
+        rec = {str(k): float(v) for k, v in dict(rec).items()} if rec else {}
+        evs = [e.value(pt.z, pt.p) for e in self.events] if self.events else []
         return _Row(pt.z, pt.p, ev, counts, ds, pt.iters, rec, evs, pt)
 
     # ------------------------------------------------------------------ location
@@ -253,7 +264,7 @@ class _Context:
                 log.warning("Hopf bracketed near p=%.6g but no critical pair found", pa.p)
                 r = LocateResult(0.0, pa, math.nan, False, 0, "no critical pair")
                 found.append((SpecialKind.HOPF, r, {}, ""))
-        for k, e in enumerate(self.events):
+        for k, e in enumerate(self.events if self.events else ()):
             if terminal is not None and k == terminal[0]:
                 r = terminal[1]
                 found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
@@ -268,6 +279,8 @@ class _Context:
                     b.events[k],
                 )
                 found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
+        if not found:
+            return []
         out = []
         dr = (0, 0)
         if a.counts is not None and b.counts is not None:
@@ -410,8 +423,10 @@ class _Context:
         ``[p_min, p_max]``).
         """
         s = self.settings
-        cands: list[tuple[LocateResult, Status, str, int | None]] = []
         pa, pb = a.point.p, b.point.p
+        if not self.terminal and s.p_min <= pb <= s.p_max:
+            return None
+        cands: list[tuple[LocateResult, Status, str, int | None]] = []
         for bound, outside in ((s.p_max, pb > s.p_max), (s.p_min, pb < s.p_min)):
             if outside and math.isfinite(bound):
                 r = locate_zero(
@@ -483,8 +498,11 @@ class _Context:
 
     def distance_to_start(self, start: _Row, b: _Row, w: FloatArray) -> float:
         """``theta``-distance from ``b`` to the start point, modulo periods."""
-        d = np.concatenate((self.diff(b.z, start.z), (b.p - start.p,)))
-        return theta_norm(d, w)
+        if self.plain_diff:
+            d = b.point.u - start.point.u
+        else:
+            d = np.concatenate((self.diff(b.z, start.z), (b.p - start.p,)))
+        return math.sqrt(float((w * d).dot(d)))
 
 
 # ---------------------------------------------------------------------------- one run

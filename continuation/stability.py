@@ -40,10 +40,9 @@ def sort_eigenvalues(vals: Any) -> ComplexArray:
     ndarray, shape (k,) complex
     """
     v = np.asarray(vals, dtype=complex).reshape(-1)
-    re = np.where(np.isnan(v.real), -np.inf, v.real)
-    im = np.where(np.isnan(v.imag), -np.inf, v.imag)
-    order = np.lexsort((-im, -re))
-    return v[order]
+    # NumPy sorts complex numbers lexicographically (real, then imaginary part) with NaN
+    # entries last; sorting -v ascending is sorting v descending
+    return -np.sort(-v)
 
 
 def _sorted_pairs(vals: ComplexArray, vecs: Any) -> tuple[ComplexArray, Any]:
@@ -101,12 +100,16 @@ _GEEV = la.get_lapack_funcs("geev", (np.zeros(1),))
 def _dense_eigvals(J: Any) -> ComplexArray:
     """All eigenvalues of a dense real matrix (LAPACK ``dgeev`` called directly, which
     avoids the per-call overhead of ``numpy.linalg.eigvals`` on small matrices)."""
-    if not np.all(np.isfinite(J)):
+    flat = J.ravel(order="K")
+    if not float(flat.dot(flat)) < np.inf and not np.all(np.isfinite(J)):
         raise np.linalg.LinAlgError("Jacobian contains NaN or inf")
     wr, wi, _, _, info = _GEEV(J, compute_vl=0, compute_vr=0)
     if info != 0:
         return np.asarray(np.linalg.eigvals(J), dtype=complex)
-    return wr + 1j * wi
+    out = np.empty(wr.size, dtype=complex)
+    out.real = wr
+    out.imag = wi
+    return out
 
 
 def _sparse_eigs(J: Any, k: int, sigma: float, v0: Any) -> ComplexArray | None:
@@ -152,10 +155,14 @@ def count_unstable(eigs: Any, eig_tol: float = 1e-10, imag_tol: float = 1e-8) ->
     ``Im > 0``).
     """
     v = np.asarray(eigs, dtype=complex).reshape(-1)
-    unstable = v.real > eig_tol  # False for NaN
-    if not unstable.any():
+    if v.size == 0 or v.real.max() <= eig_tol:  # (a NaN maximum takes the long way)
         return 0, 0
+    unstable = v.real > eig_tol  # False for NaN
     v = v[unstable]
+    if v.size == 0:
+        return 0, 0
+    if not v.imag.any():  # all real
+        return int(v.size), 0
     cplx = np.abs(v.imag) > imag_tol * np.maximum(1.0, np.abs(v))
     n_pairs = int(np.count_nonzero(cplx & (v.imag > 0)))
     return int(v.size - np.count_nonzero(cplx)), n_pairs
