@@ -653,6 +653,20 @@ def _guess_run(model: Any, params: Params, bracket: tuple[float, float]) -> Upsl
     return best
 
 
+def _guess_mesh(t: FloatArray, x: FloatArray, n_intervals: int, degree: int) -> CollocationMesh:
+    """A mesh of ``n_intervals`` that equidistributes the error monitor of the guess.
+
+    The monitor (:meth:`CollocationMesh.equidistributed`) is evaluated on the guess
+    interpolated onto a uniform mesh twice as fine; the guess of a nearby ``Fn`` has
+    nearly the shape of the solution, so the solve needs no adaptation round.
+    """
+    T = float(t[-1] - t[0])
+    fine = CollocationMesh(2 * n_intervals, degree, T)
+    tau = (np.asarray(t) - t[0]) / T
+    X = np.column_stack([np.interp(fine.tau, tau, x[:, i]) for i in range(x.shape[1])])
+    return fine.equidistributed(X, n_intervals=n_intervals)
+
+
 def critical_fn_bvp(
     chi_c: float,
     *,
@@ -667,7 +681,8 @@ def critical_fn_bvp(
     start_distance: float = 3e-4,
     end_distance: float = 3e-2,
     tol: float = 1e-10,
-    adapt: int = 1,
+    adapt: int = 0,
+    mesh_from_guess: bool = True,
     check: bool = False,
     throw: bool = False,
     progress: Callable[[ConnectionResult], None] | None = None,
@@ -713,9 +728,12 @@ def critical_fn_bvp(
     tol : float
         Newton tolerance on ``max |G|``.
     adapt : int
-        Rounds of mesh equidistribution after the solve (``solve_connection``); one
-        round makes the result independent of the guess to a few 1e-8 in ``Fn`` for
-        the default ship (without: a few 1e-7 on the uniform mesh).
+        Rounds of mesh equidistribution after the solve (``solve_connection``).
+    mesh_from_guess : bool
+        Start from a mesh that equidistributes the error monitor of the simulated
+        guess (default) instead of a uniform one: for the default ship the result is
+        then independent of the guess to a few 1e-8 in ``Fn`` without an adaptation
+        round (a uniform mesh of the same size: a few 1e-7).
     check : bool
         Also run :func:`continuation.bvp.check_convergence` (halved mesh, 1.5 T).
     throw : bool
@@ -790,11 +808,12 @@ def critical_fn_bvp(
         )
     T0 = guess.T if isinstance(guess, ConnectionResult) else float(t_g[-1] - t_g[0])
     N0 = n_intervals or max(int(math.ceil(T0 / interval_length)), 10)
-    mesh = (
-        guess.mesh
-        if isinstance(guess, ConnectionResult) and n_intervals is None
-        else CollocationMesh(N0, degree, T0)
-    )
+    if isinstance(guess, ConnectionResult) and n_intervals is None:
+        mesh = guess.mesh
+    elif t_g is not None and mesh_from_guess:
+        mesh = _guess_mesh(t_g, x_g, N0, degree)
+    else:
+        mesh = CollocationMesh(N0, degree, T0)
     prob = HeteroclinicProblem(
         m, start, "Fn", saddle_from=saddle.x, shift={"xi_G": UPSLOPE_SHIFT}, mesh=mesh
     )

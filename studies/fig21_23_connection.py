@@ -1,0 +1,224 @@
+"""Figs. 21 and 23 of Umeda (1999) by the connecting orbit: critical Fn as a boundary-value problem.
+
+The capsizing boundary is the heteroclinic bifurcation where the upslope branch of
+the crest saddle's unstable manifold lands on the neighbouring crest saddle (one
+wavelength back). Here it is solved directly (:mod:`ship_models.analysis.connection`):
+
+- Fig. 21 idea: the connecting orbit at the critical Fn for ``chi_c = 10 deg`` beside
+  the simulated upslope manifold just below (periodic motion) and just above
+  (broaching/capsize) the critical Fn found by bisection, in the paper's planes
+  (``xi_G/lambda`` vs ``u/c``, heading vs ``u/c``, roll vs heading, roll vs rudder);
+- Fig. 23: the critical Fn against the autopilot course 0-30 deg by continuing the
+  connection in ``chi_c``, with bisection-by-simulation checks at a few courses;
+- the critical Fn at 10 deg by both methods beside the paper's 0.3247-0.3248 (which
+  is for the paper's measured coefficients; ours are estimated, see
+  ``studies/README.md``).
+
+Writes to ``--out`` (default ``out/fig21_23``): ``fig21_connection.png``,
+``fig23_critical_curve.png``, ``critical_curve.csv``, ``connection_orbit_10deg.csv``,
+``methods_10deg.csv``, ``bisection_checks.csv``, ``summary.json``.
+
+Run: ``python studies/fig21_23_connection.py [--out DIR] [--quick]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import new_figure, save_csv, save_figure, save_table
+
+CHI_C_DEG = 10.0
+PAPER_FN = (0.3247, 0.3248)
+CHECK_COURSES_DEG = (0.0, 20.0, 30.0)
+
+
+def _planes(model: Any, c: float) -> list[tuple[str, str, Callable[[np.ndarray], tuple]]]:
+    """The paper's projection planes (Figs. 10-15): (x label, y label, mapping)."""
+    i = {n: model.state_index(n) for n in model.state_names}
+
+    def d(a: np.ndarray) -> np.ndarray:
+        return np.degrees(a)
+
+    def xi_u(x: np.ndarray) -> tuple:
+        return x[:, i["xi_G"]], x[:, i["u"]] / c
+
+    def u_chi(x: np.ndarray) -> tuple:
+        return x[:, i["u"]] / c, d(x[:, i["chi"]])
+
+    def chi_phi(x: np.ndarray) -> tuple:
+        return d(x[:, i["chi"]]), d(x[:, i["phi"]])
+
+    def delta_phi(x: np.ndarray) -> tuple:
+        return d(x[:, i["delta"]]), d(x[:, i["phi"]])
+
+    return [
+        ("xi_G / lambda", "u / c", xi_u),
+        ("u / c", "heading chi (deg)", u_chi),
+        ("heading chi (deg)", "roll phi (deg)", chi_phi),
+        ("rudder delta (deg)", "roll phi (deg)", delta_phi),
+    ]
+
+
+def compute(
+    out: Path, progress: Callable[[str], None] | None = None, *, quick: bool = False
+) -> dict[str, Any]:
+    """Solve the connection, the curve and the bisection checks; write figures and data."""
+    from ship_models import purse_seiner
+    from ship_models.analysis.connection import (
+        critical_curve,
+        critical_fn_bisection,
+        critical_fn_bvp,
+        upslope_branch,
+    )
+
+    say = progress or (lambda msg: None)
+    out.mkdir(parents=True, exist_ok=True)
+    t_all = time.perf_counter()
+    model = purse_seiner()
+    chi10 = math.radians(CHI_C_DEG)
+    summary: dict[str, Any] = {"chi_c_deg": CHI_C_DEG, "paper_Fn_10deg": list(PAPER_FN)}
+
+    say("critical Fn at chi_c = 10 deg by the boundary-value problem")
+    conn = critical_fn_bvp(chi10, model=model)
+    t_bvp = conn.elapsed
+    chk = critical_fn_bvp(chi10, model=model, check=True).convergence
+    say(f"  Fn = {conn.Fn:.8f} ({t_bvp:.2f} s); bisection by simulation to 1e-6")
+    bis = critical_fn_bisection(chi10, model=model, tol=1e-6)
+    say(f"  bisection: Fn in [{bis.bracket[0]:.8f}, {bis.bracket[1]:.8f}] ({bis.elapsed:.2f} s)")
+    summary["bvp"] = conn.to_json()
+    if chk is not None:
+        summary["bvp"]["delta_Fn_mesh"] = chk.delta_mesh["Fn"]
+        summary["bvp"]["delta_Fn_T"] = chk.delta_T["Fn"]
+    summary["bisection"] = {
+        "Fn": bis.Fn,
+        "bracket": list(bis.bracket),
+        "n_runs": bis.n_runs,
+        "elapsed_s": bis.elapsed,
+        "status": bis.status.name,
+    }
+    summary["difference_bvp_minus_bisection"] = conn.Fn - bis.Fn
+    save_table(
+        out / "methods_10deg.csv",
+        ["method", "Fn_critical", "lower", "upper", "seconds"],
+        [
+            ["bvp", conn.Fn, conn.Fn, conn.Fn, t_bvp],
+            ["bisection", bis.Fn, bis.bracket[0], bis.bracket[1], bis.elapsed],
+            ["paper (measured coefficients)", 0.32475, PAPER_FN[0], PAPER_FN[1], math.nan],
+        ],
+        meta={"chi_c_deg": CHI_C_DEG, "source": "Umeda (1999) Figs. 14-15 for the paper row"},
+    )
+    o = conn.orbit
+    save_csv(
+        out / "connection_orbit_10deg.csv",
+        {"t": o.t, **{n: o.state(n) for n in o.state_names}},
+        meta={"Fn_critical": conn.Fn, "chi_c_deg": CHI_C_DEG, "units": "SI, angles rad"},
+    )
+
+    # ---- Fig. 21 idea: the connection beside the manifold on both sides
+    say("upslope manifolds at the ends of the bisection bracket")
+    p10 = model.default_params().replace(chi_c=chi10)
+    runs = {
+        f"manifold, Fn = {bis.bracket[0]:.6f} ({'periodic'})": upslope_branch(
+            model, p10.replace(Fn=bis.bracket[0])
+        ),
+        f"manifold, Fn = {bis.bracket[1]:.6f} ({'capsize'})": upslope_branch(
+            model, p10.replace(Fn=bis.bracket[1])
+        ),
+    }
+    c = model.celerity(p10)
+    fig = new_figure((9.0, 6.6))
+    axes = fig.subplots(2, 2).ravel()
+    for ax, (xl, yl, f) in zip(axes, _planes(model, c), strict=True):
+        for (label, run), col in zip(runs.items(), ("tab:green", "tab:red"), strict=True):
+            x = np.asarray(run.trajectory.x)
+            x = x[x[:, 0] > o.x_to[0] - 0.45]  # the part up to just beyond the next crest
+            ax.plot(*f(x), color=col, lw=0.9, label=label)
+        ax.plot(*f(o.x), color="k", lw=2.0, ls="--", label=f"connection, Fn = {conn.Fn:.6f}")
+        ends = np.vstack([o.x_from, o.x_to])
+        ax.plot(*f(ends), "ko", ms=5, mfc="w", label="crest saddle and its shift")
+        ax.set_xlabel(xl)
+        ax.set_ylabel(yl)
+    axes[0].legend(fontsize=6.5, loc="lower left")
+    fig.suptitle(
+        f"Connecting orbit at the critical Fn, chi_c = {CHI_C_DEG:g} deg "
+        "(cf. Umeda 1999, Figs. 10-15, 21)"
+    )
+    save_figure(fig, out / "fig21_connection.png")
+
+    # ---- Fig. 23: the critical curve
+    say("critical curve 0-30 deg by continuation of the connection")
+    courses = np.radians(np.arange(0.0, 31.0, 5.0 if quick else 1.0))
+    curve = critical_curve(courses, model=model, start=conn)
+    say(f"  {curve.message} ({curve.elapsed:.2f} s)")
+    curve.to_csv(out / "critical_curve.csv")
+    summary["curve"] = {
+        "chi_c_deg": [round(float(v), 9) for v in curve.chi_c_deg],
+        "Fn": [float(v) for v in curve.Fn],
+        "status": curve.status.name,
+        "elapsed_s": curve.elapsed,
+    }
+    checks = []
+    for deg in CHECK_COURSES_DEG if not quick else (30.0,):
+        say(f"  bisection check at {deg:g} deg")
+        b = critical_fn_bisection(math.radians(deg), model=model, bracket=(0.295, 0.315), tol=1e-5)
+        k = int(np.argmin(np.abs(curve.chi_c_deg - deg)))
+        checks.append([deg, b.Fn, b.bracket[0], b.bracket[1], float(curve.Fn[k]), b.status.name])
+    save_table(
+        out / "bisection_checks.csv",
+        ["chi_c_deg", "Fn_bisection", "lower", "upper", "Fn_bvp_curve", "status"],
+        checks,
+    )
+    summary["bisection_checks"] = checks
+    fig = new_figure((5.6, 3.9))
+    ax = fig.subplots()
+    ok = curve.converged
+    ax.plot(curve.chi_c_deg[ok], curve.Fn[ok], "o-", ms=3.5, label="heteroclinic connection (BVP)")
+    ax.plot(
+        [r[0] for r in checks], [r[1] for r in checks], "s", mfc="none", ms=8, color="tab:orange",
+        label="bisection on the manifold's fate (simulation)",
+    )  # fmt: skip
+    ax.errorbar(
+        [CHI_C_DEG], [np.mean(PAPER_FN)], yerr=[0.5 * (PAPER_FN[1] - PAPER_FN[0])], fmt="D",
+        color="tab:red", ms=5, label="Umeda (1999), measured coefficients",
+    )  # fmt: skip
+    ax.set_xlabel("autopilot course chi_c (deg)")
+    ax.set_ylabel("critical nominal Froude number")
+    ax.set_title("Critical condition for capsizing due to broaching (cf. Fig. 23)")
+    ax.legend(fontsize=7, loc="center left")
+    save_figure(fig, out / "fig23_critical_curve.png")
+    summary["figures"] = ["fig21_connection.png", "fig23_critical_curve.png"]
+    summary["seconds"] = round(time.perf_counter() - t_all, 2)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return summary
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry: ``python studies/fig21_23_connection.py --out DIR``."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("out/fig21_23"))
+    ap.add_argument("--quick", action="store_true", help="every 5 deg, one bisection check")
+    args = ap.parse_args(argv)
+    s = compute(args.out, progress=lambda m: print(m, flush=True), quick=args.quick)
+    print(
+        json.dumps(
+            {k: s[k] for k in ("bvp", "bisection", "difference_bvp_minus_bisection", "seconds")},
+            indent=2,
+        )
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
