@@ -155,7 +155,16 @@ def count_unstable(eigs: Any, eig_tol: float = 1e-10, imag_tol: float = 1e-8) ->
     ``Im > 0``).
     """
     v = np.asarray(eigs, dtype=complex).reshape(-1)
-    if v.size == 0 or v.real.max() <= eig_tol:  # (a NaN maximum takes the long way)
+    if v.size <= 32:  # plain Python is faster than NumPy calls on a few values
+        n_real = n_pairs = 0
+        for z in v.tolist():
+            if z.real > eig_tol:  # False for NaN
+                if abs(z.imag) > imag_tol * max(1.0, abs(z)):
+                    n_pairs += z.imag > 0
+                else:
+                    n_real += 1
+        return n_real, n_pairs
+    if v.real.max() <= eig_tol:  # (a NaN maximum takes the long way)
         return 0, 0
     unstable = v.real > eig_tol  # False for NaN
     v = v[unstable]

@@ -106,6 +106,20 @@ def _arange(n: int) -> Any:
 _PARITY_CACHE: dict[bytes, int] = {}
 
 
+_UNIT: dict[int, Any] = {}
+
+
+def _last_unit(n: int) -> FloatArray:
+    """The unit vector ``e_n`` of length ``n`` (cached, read-only)."""
+    e = _UNIT.get(n)
+    if e is None:
+        e = np.zeros(n)
+        e[-1] = 1.0
+        e.setflags(write=False)
+        _UNIT[n] = e
+    return e
+
+
 def _perm_parity(perm: Any) -> int:
     """Sign (+1/-1) of the permutation ``perm`` (array of images of 0..n-1).
 
@@ -518,9 +532,11 @@ def make_point(
     G, Gz, Gp = lin
     if lu is None:
         lu = BorderedLU(Gz, Gp, border)
-    rhs = np.zeros(lu.n)
-    rhs[-1] = 1.0
-    t = lu.solve(rhs)
+    rhs = _last_unit(lu.n)
+    if lu.sparse:
+        t = lu.solve(rhs)
+    else:  # LAPACK directly; a non-finite t fails the norm test below
+        t = _getrs(lu._lu, lu._piv, rhs)[0]
     nrm2 = float((w * t).dot(t))
     if not (0.0 < nrm2 < math.inf):
         raise np.linalg.LinAlgError("degenerate tangent")

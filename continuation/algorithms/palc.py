@@ -136,7 +136,7 @@ class PALC(ContinuationAlgorithm):
         )
         if not res.converged or res.lin is None:
             return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, res.message)
-        if guarded:
+        if guarded and res.iters:  # (no iteration: within the step tolerance of u_pred)
             d = res.u - u_pred
             dist = math.sqrt(float((state.w * d).dot(d)))
             if dist > self.max_distance * ds:
@@ -153,7 +153,7 @@ class PALC(ContinuationAlgorithm):
             )
         except np.linalg.LinAlgError as exc:
             return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
-        cos_angle = float(np.dot(c, b.tau))
+        cos_angle = float(c.dot(b.tau))
         if cos_angle < self._cos_max and guarded:
             return state, StepOutcome(
                 False,
