@@ -176,6 +176,19 @@ class EquilibriumProblem:
             object.__setattr__(self, "_linearizer", fn)
         return fn
 
+    def bordered_evaluator(self) -> Any:
+        """Fused evaluator of the bordered Newton system (dense problems with a CasADi
+        trace; None otherwise), built once and cached; see
+        :meth:`continuation.system.System.bordered_evaluator`."""
+        ev = self.__dict__.get("_bordered", False)
+        if ev is False:
+            make = getattr(self.system, "bordered_evaluator", None)
+            ev = None
+            if make is not None and not self.sparse:
+                ev = make(self._index, self.params.values)
+            object.__setattr__(self, "_bordered", ev)
+        return ev
+
     def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
         """``z1 - z2`` with periodic states reduced modulo their period."""
         return self.system.difference(z1, z2)

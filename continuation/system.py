@@ -105,6 +105,49 @@ class _BufferedFunction:
         return tuple(r.copy() for r in self._res)
 
 
+class BorderedEvaluator:
+    """Buffers and compiled function of :meth:`System.bordered_evaluator`.
+
+    Usage: ``ev.set_border(c, h)``, then write the point into ``ev.u`` (the function's
+    input buffer, shape ``(n + 1,)``) and call ``ev()``; ``ev.r`` (shape ``(n + 1,)``)
+    and ``ev.M`` (shape ``(n + 1, n + 1)``, Fortran order) then hold the bordered
+    residual and matrix, until the next call. ``ev.lin()`` copies ``(f, df/dx,
+    df/dp)`` out of them. Not thread-safe; one evaluator per problem.
+    """
+
+    __slots__ = ("_buf", "run", "u", "p", "c", "h", "r", "M", "n")
+
+    def __init__(self, fn: ca.Function, n: int, params: Any) -> None:
+        self._buf, self.run = fn.buffer()
+        self.n = n
+        self.u = np.zeros(n + 1)
+        self.p = np.array(np.asarray(params, dtype=float).reshape(-1), dtype=float)
+        self.c = np.zeros(n + 1)
+        self.h = np.zeros(1)
+        self.r = np.zeros(n + 1)
+        m_flat = np.zeros((n + 1) * (n + 1))
+        for i, a in enumerate((self.u, self.p, self.c, self.h)):
+            self._buf.set_arg(i, memoryview(a))
+        self._buf.set_res(0, memoryview(self.r))
+        self._buf.set_res(1, memoryview(m_flat))
+        self.M = m_flat.reshape(n + 1, n + 1).T  # column-major buffer: a Fortran view
+
+    def set_border(self, c: FloatArray, h: float) -> None:
+        """Set the border row ``c`` and the level ``h`` of the constraint ``c . u = h``."""
+        self.c[:] = c
+        self.h[0] = h
+
+    def __call__(self) -> None:
+        """Evaluate ``r`` and ``M`` at ``u``."""
+        self.run()
+
+    def lin(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Copies ``(f (n,), df/dx (n, n) Fortran order, df/dp (n,))`` of the last call."""
+        n = self.n
+        top = self.M[:n, :].copy(order="F")
+        return self.r[:n].copy(), top[:, :n], top[:, n]
+
+
 class System:
     r"""An autonomous ODE :math:`\dot x = f(x, p)` with named states and parameters.
 
@@ -443,6 +486,38 @@ class System:
 
         lin_dense.buffers = (buf, x_in, p_in, f_out, a_out)  # type: ignore[attr-defined]
         return lin_dense
+
+    def bordered_evaluator(self, index: int, params: Any) -> BorderedEvaluator | None:
+        """A fused evaluator of the bordered Newton system of pseudo-arclength steps.
+
+        For ``u = (x, p_index)`` (shape ``(n + 1,)``), a border ``c`` (shape
+        ``(n + 1,)``) and a level ``h``, one call of a compiled CasADi function gives the
+        bordered residual ``r = (f(x, p), c . u - h)`` and the bordered matrix
+        ``M = [[df/dx, df/dp_index], [c^T]]`` (dense, Fortran order), the other
+        parameters fixed at ``params``. See :class:`BorderedEvaluator`. None without a
+        CasADi trace.
+        """
+        if self._ca is None:
+            return None
+        n, m = self.n_states, self.n_params
+        k = int(index)
+        if not 0 <= k < m:
+            raise ValueError(f"`index` must be in [0, {m}), got {index!r}")
+        cache = self.__dict__.setdefault("_ca_bordered", {})
+        fn = cache.get(k)
+        if fn is None:
+            U = ca.SX.sym("u", n + 1)
+            P = ca.SX.sym("p", m)
+            C = ca.SX.sym("c", n + 1)
+            H = ca.SX.sym("h")
+            X = U[:n]
+            Pk = ca.vertcat(P[:k], U[n], P[k + 1 :]) if m > 1 else U[n]
+            F = self.symbolic(X, Pk)
+            top = ca.horzcat(ca.jacobian(F, X), ca.jacobian(F, U[n]))
+            M = ca.densify(ca.vertcat(top, C.T))
+            R = ca.vertcat(F, ca.dot(C, U) - H)
+            fn = cache[k] = ca.Function("bordered", [U, P, C, H], [R, M])
+        return BorderedEvaluator(fn, n, params)
 
     def casadi_functions(self) -> dict[str, ca.Function]:
         """The compiled CasADi functions ``{"f", "jac", "dfdp"}`` (x, p) -> value."""
