@@ -1,0 +1,340 @@
+r"""The heteroclinic bifurcation: critical Fn where the upslope branch switches fate.
+
+Umeda (1999), Figs. 10-15: for ``chi_c = 10 deg`` the upslope branch of the unstable
+manifold of the crest saddle "approaches the saddle next to the original one and then
+tends to a periodic attractor" at Fn = 0.3247 but capsizes at Fn = 0.3248, so between
+them "is a nominal Froude number whose unstable manifold of a saddle tends to a
+different saddle": a heteroclinic connection, the paper's critical condition for
+capsizing due to broaching.
+
+:func:`critical_fn` locates it by bisection on the fate of that branch
+(:func:`~ship_models.analysis.manifold.unstable_manifold`): the bracket
+``[Fn_lo, Fn_hi]`` always has ``fate(Fn_lo) != fate(Fn_hi)`` and is halved until its
+width is at most ``tol``. Bisection is robust here because the fate is a step
+function of ``Fn`` near the connection; its cost is one branch simulation per halving
+(``log2(width / tol)`` of them). At every new ``Fn`` the crest saddle is re-solved by
+Newton's method from the saddle at the nearest ``Fn`` already evaluated. Next to the
+connection the periodic attractor passes close to the saddles and the Poincare
+return map contracts slowly, so a fate still undecided at ``t_max`` is retried with
+twice (then four times) the time limit.
+
+``method="bisection"`` is the only method here; a boundary-value (collocation)
+method for the same connection lives in :mod:`ship_models.analysis.connection`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from continuation.params import Params
+from continuation.status import Status
+
+from .fixed_points import FixedPoint, find_fixed_point, fixed_points, polish
+from .manifold import PERIODIC, RECURRENT, ShipFate, unstable_manifold
+
+log = logging.getLogger(__name__)
+
+#: Default search interval of Fn.
+FN_BRACKET = (0.25, 0.40)
+#: Default time limit of one branch simulation (s); doubled on an undecided fate.
+T_MAX = 1500.0
+#: How often an undecided fate is retried with twice the time limit.
+UNDECIDED_RETRIES = 2
+
+
+@dataclass(frozen=True)
+class FateEvaluation:
+    """One simulation of the bisection: ``Fn``, the fate of the branch and the saddle."""
+
+    Fn: float
+    fate: ShipFate
+    saddle_x: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class CriticalResult:
+    """The critical Froude number of one autopilot course.
+
+    Attributes
+    ----------
+    chi_c : float
+        Autopilot course (rad).
+    fn_critical : float
+        Midpoint of the final bracket (NaN when no switch was bracketed).
+    bracket : tuple of float
+        ``(Fn_lo, Fn_hi)`` with different fates; width ``<= tol`` on success.
+    fate_lo, fate_hi : str
+        Outcomes at the bracket ends (:func:`outcome`: ``"periodic"``, ``"capsize"``).
+    branch : str
+        The manifold branch used (``"upslope"``).
+    tol : float
+    n_evaluations : int
+        Branch simulations done.
+    evaluations : tuple of FateEvaluation
+        All of them, in order.
+    status : Status
+        ``SUCCESS``; ``NO_BRACKET`` (same fate at both ends of the search interval);
+        ``UNDECIDED`` (a third fate appeared, or a fate was undecided by ``t_max``);
+        ``NEWTON_FAILED`` (the saddle was lost); ``INTERRUPTED``; ``MAX_ITER``.
+    message : str
+    method : str
+        ``"bisection"``.
+    """
+
+    chi_c: float
+    fn_critical: float
+    bracket: tuple[float, float]
+    fate_lo: str
+    fate_hi: str
+    branch: str
+    tol: float
+    n_evaluations: int
+    evaluations: tuple[FateEvaluation, ...]
+    status: Status
+    message: str
+    method: str = "bisection"
+
+    @property
+    def width(self) -> float:
+        """``Fn_hi - Fn_lo``."""
+        return self.bracket[1] - self.bracket[0]
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready summary."""
+        return {
+            "method": self.method,
+            "chi_c": self.chi_c,
+            "chi_c_deg": math.degrees(self.chi_c),
+            "fn_critical": self.fn_critical,
+            "bracket": list(self.bracket),
+            "width": self.width,
+            "fate_lo": self.fate_lo,
+            "fate_hi": self.fate_hi,
+            "branch": self.branch,
+            "tol": self.tol,
+            "n_evaluations": self.n_evaluations,
+            "evaluations": [
+                {"Fn": e.Fn, "fate": e.fate.label, "outcome": outcome(e.fate)}
+                for e in self.evaluations
+            ],
+            "status": self.status.name,
+            "message": self.message,
+        }
+
+
+def outcome(fate: ShipFate) -> str:
+    """The outcome the bisection compares: the fate label, with ``recurrent`` as ``periodic``.
+
+    Bounded recurrent surging without a settled period (next to the connection the
+    attractor is irregular) is the paper's "periodic motion" as opposed to capsize.
+    """
+    return PERIODIC if fate.kind == RECURRENT else fate.label
+
+
+class _FateAt:
+    """Fate of one manifold branch as a function of Fn, tracking the saddle by Newton."""
+
+    def __init__(
+        self,
+        model: Any,
+        params: Params,
+        start: FixedPoint,
+        branch: str,
+        manifold_options: dict[str, Any],
+    ) -> None:
+        self.model = model
+        self.params = params
+        self.branch = branch
+        self.options = manifold_options
+        self.label = start.label
+        self.known: dict[float, FixedPoint] = {params["Fn"]: start}
+        self.evaluations: list[FateEvaluation] = []
+
+    def saddle(self, fn: float) -> FixedPoint | None:
+        nearest = min(self.known, key=lambda f: abs(f - fn))
+        par = self.params.replace(Fn=fn)
+        fp = polish(self.model, self.known[nearest].x, par)
+        if fp is None or fp.saddle_index != 1:
+            return None
+        fp = FixedPoint(self.label, fp.x, fp.params, fp.eigen, fp.residual_norm)
+        self.known[fn] = fp
+        return fp
+
+    def __call__(self, fn: float) -> ShipFate | None:
+        sp = self.saddle(fn)
+        if sp is None:
+            return None
+        par = self.params.replace(Fn=fn)
+        others = [fp for fp in fixed_points(self.model, par) if fp.label != self.label]
+        opts = dict(self.options)
+        t_max = float(opts.pop("t_max", T_MAX))
+        for _ in range(1 + UNDECIDED_RETRIES):
+            man = unstable_manifold(
+                self.model,
+                par,
+                sp,
+                branches=(self.branch,),
+                points=[sp, *others],
+                t_max=t_max,
+                **opts,
+            )
+            fate = man.branches[self.branch].fate
+            if fate.status is not Status.MAX_STEPS:
+                break
+            t_max *= 2.0  # slow convergence next to the connection: look longer
+        self.evaluations.append(FateEvaluation(fn, fate, tuple(float(v) for v in sp.x)))
+        return fate
+
+
+def critical_fn(
+    model: Any = None,
+    chi_c: float = math.radians(10.0),
+    *,
+    params: Params | None = None,
+    fn_bracket: tuple[float, float] = FN_BRACKET,
+    tol: float = 1e-5,
+    branch: str = "upslope",
+    saddle: str = "crest",
+    method: str = "bisection",
+    max_evaluations: int = 60,
+    progress: Callable[[FateEvaluation], None] | None = None,
+    throw: bool = False,
+    **manifold_options: Any,
+) -> CriticalResult:
+    """Critical ``Fn`` of the heteroclinic bifurcation at autopilot course ``chi_c``.
+
+    Parameters
+    ----------
+    model : Umeda4DOF, optional
+        Default: :func:`ship_models.purse_seiner`.
+    chi_c : float
+        Autopilot course (rad).
+    params : Params, optional
+        Other parameters (wave, autopilot); default the model's defaults.
+    fn_bracket : (float, float)
+        Search interval; its ends must give different fates.
+    tol : float
+        Required bracket width in ``Fn`` (default 1e-5).
+    branch : str
+        Manifold branch whose fate is bisected (``"upslope"``, as in the paper).
+    saddle : str
+        Label of the saddle (``"crest"``).
+    method : {"bisection"}
+        Only bisection is implemented here (see module notes).
+    max_evaluations : int
+        Limit on branch simulations.
+    progress : callable, optional
+        Called with each :class:`FateEvaluation`.
+    throw : bool
+        Raise :class:`~continuation.errors.ContinuationError` unless ``SUCCESS``.
+    **manifold_options
+        Passed to :func:`~ship_models.analysis.manifold.unstable_manifold`
+        (``eps``, ``t_max``, ``capsize_angle``, ``dt``, ``return_tol``...).
+
+    Returns
+    -------
+    CriticalResult
+
+    Raises
+    ------
+    ValueError
+        Bad ``fn_bracket``, ``tol``, ``method``, ``branch``, ``max_evaluations``, or
+        no saddle ``saddle`` at the lower end of the bracket.
+    """
+    from continuation.errors import ContinuationError
+
+    if method != "bisection":
+        raise ValueError(f"`method` must be 'bisection', got {method!r}")
+    if branch not in ("upslope", "downslope"):
+        raise ValueError(f"`branch` must be 'upslope' or 'downslope', got {branch!r}")
+    try:
+        lo, hi = (float(v) for v in fn_bracket)
+    except (TypeError, ValueError):
+        raise ValueError(f"`fn_bracket` must be two numbers, got {fn_bracket!r}") from None
+    if not (0 < lo < hi and math.isfinite(hi)):
+        raise ValueError(f"`fn_bracket` must satisfy 0 < lo < hi, got {fn_bracket!r}")
+    if not (isinstance(tol, (int, float)) and 0 < tol < hi - lo):
+        raise ValueError(f"`tol` must be in (0, {hi - lo:g}), got {tol!r}")
+    if not (isinstance(max_evaluations, int) and max_evaluations >= 2):
+        raise ValueError(f"`max_evaluations` must be an integer >= 2, got {max_evaluations!r}")
+    if model is None:
+        from ship_models import purse_seiner
+
+        model = purse_seiner()
+    base = model.default_params() if params is None else params
+    base = Params(model.param_names, model.check_params(base, "params")).replace(chi_c=chi_c, Fn=lo)
+    start = find_fixed_point(model, base, saddle)
+    fate_at = _FateAt(model, base, start, branch, manifold_options)
+
+    def done(status: Status, message: str, f_lo: str, f_hi: str) -> CriticalResult:
+        crit = 0.5 * (lo + hi) if f_lo != f_hi and status is not Status.NO_BRACKET else math.nan
+        res = CriticalResult(
+            float(chi_c),
+            crit,
+            (lo, hi),
+            f_lo,
+            f_hi,
+            branch,
+            float(tol),
+            len(fate_at.evaluations),
+            tuple(fate_at.evaluations),
+            status,
+            message,
+        )
+        log.info("critical Fn (chi_c=%.4g deg): %s, %s", math.degrees(chi_c), crit, message)
+        if throw and status is not Status.SUCCESS:
+            raise ContinuationError(message)
+        return res
+
+    def evaluate(fn: float) -> ShipFate | None:
+        fate = fate_at(fn)
+        if fate is not None and progress is not None:
+            progress(fate_at.evaluations[-1])
+        return fate
+
+    l_lo = l_hi = ""
+    try:
+        f_lo, f_hi = evaluate(lo), evaluate(hi)
+        if f_lo is None or f_hi is None:
+            return done(Status.NEWTON_FAILED, "lost the saddle at a bracket end", "", "")
+        l_lo, l_hi = outcome(f_lo), outcome(f_hi)
+        if "undecided" in (l_lo, l_hi):
+            return done(Status.UNDECIDED, "a bracket end is undecided; raise t_max", l_lo, l_hi)
+        if l_lo == l_hi:
+            return done(
+                Status.NO_BRACKET,
+                f"same fate {l_lo!r} at Fn = {lo:g} and {hi:g}: no switch bracketed",
+                l_lo,
+                l_hi,
+            )
+        while hi - lo > tol:
+            if len(fate_at.evaluations) >= max_evaluations:
+                return done(Status.MAX_ITER, "max_evaluations reached", l_lo, l_hi)
+            mid = 0.5 * (lo + hi)
+            f_mid = evaluate(mid)
+            if f_mid is None:
+                return done(Status.NEWTON_FAILED, f"lost the saddle at Fn = {mid:g}", l_lo, l_hi)
+            l_mid = outcome(f_mid)
+            if l_mid == l_lo:
+                lo = mid
+            elif l_mid == l_hi:
+                hi = mid
+            else:
+                return done(
+                    Status.UNDECIDED,
+                    f"fate {l_mid!r} at Fn = {mid:g} is neither {l_lo!r} nor {l_hi!r}",
+                    l_lo,
+                    l_hi,
+                )
+    except KeyboardInterrupt:
+        return done(Status.INTERRUPTED, "interrupted; bracket so far", l_lo, l_hi)
+    return done(
+        Status.SUCCESS, f"fate switches from {l_lo!r} to {l_hi!r} within {hi - lo:.2e}", l_lo, l_hi
+    )
+
+
+__all__ = ["FN_BRACKET", "CriticalResult", "FateEvaluation", "critical_fn", "outcome"]
