@@ -205,3 +205,26 @@ def test_failing_start_gives_status_or_raises():
     assert "start point" in br.message
     with pytest.raises(ConvergenceError):
         continue_equilibria(fold, [1.0], {"mu": -1.0}, "mu", throw=True)
+
+
+def test_sort_and_count_eigenvalues():
+    """Sorting (decreasing real part, then imaginary part, NaN last) and the saddle
+    index agree with a direct count, on both the small (pure Python) and the large
+    (NumPy) path."""
+    from continuation.stability import count_unstable, sort_eigenvalues
+
+    rng = np.random.default_rng(0)
+    for n in (3, 12, 40, 80):
+        re = rng.standard_normal(n)
+        im = rng.standard_normal(n) * (rng.random(n) < 0.5)
+        v = np.concatenate([re + 1j * im, re - 1j * im])
+        v[0] = np.nan
+        s = sort_eigenvalues(rng.permutation(v))
+        assert np.isnan(s[-1])
+        fin = s[:-1]
+        assert np.all(np.diff(fin.real) <= 0)
+        ties = np.diff(fin.real) == 0
+        assert np.all(np.diff(fin.imag)[ties] <= 0)
+        nr = int(np.sum((v.real > 1e-10) & (np.abs(v.imag) <= 1e-8 * np.maximum(1, abs(v)))))
+        npairs = int(np.sum((v.real > 1e-10) & (v.imag > 1e-8 * np.maximum(1, abs(v)))))
+        assert count_unstable(v) == count_unstable(s) == (nr, npairs)

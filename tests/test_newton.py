@@ -158,3 +158,76 @@ def test_tangent_and_branch_point_test_function():
     det = np.linalg.det(M)
     assert pt.bp_sign == np.sign(det)
     assert pt.bp_logdet == pytest.approx(math.log(abs(det)), abs=1e-12)
+
+
+class _Generic:
+    """A problem seen only through the ContinuationProblem protocol (no fast paths)."""
+
+    def __init__(self, prob):
+        self._p = prob
+        self.free = prob.free
+        self.n_unknowns = prob.n_unknowns
+
+    def residual(self, z, p):
+        return self._p.residual(z, p)
+
+    def jacobian(self, z, p):
+        return self._p.jacobian(z, p)
+
+    def dp(self, z, p):
+        return self._p.dp(z, p)
+
+
+@pytest.mark.parametrize("exact", [True, False])
+def test_fused_corrector_matches_generic(exact):
+    """The fused CasADi path of the corrector (EquilibriumProblem) and the generic path
+    (protocol methods only) follow the same iteration: same point, iterations, tangent."""
+    from conftest import lorenz84
+
+    from continuation.problem import EquilibriumProblem
+
+    sys = lorenz84()
+    prob = EquilibriumProblem(sys, sys.params(F=2.0, G=1.0), "F")
+    assert prob.bordered_evaluator() is not None
+    w = theta_weights(3, 0.5)
+    u0 = np.array([1.9, 0.2, 0.1, 2.0])  # near an equilibrium at F = 2
+    c = w * np.array([0.3, -0.2, 0.1, 0.9])
+    out = []
+    for problem in (prob, _Generic(prob)):
+        res = correct(problem, u0, u0, c, 0.01, NewtonSettings(), exact=exact)
+        assert res.converged
+        out.append(res)
+        pt = make_point(res.z, res.p, res.lin, c, w, lu=res.lu)
+        out.append(pt)
+    fused, pt_f, generic, pt_g = out
+    assert fused.iters == generic.iters
+    np.testing.assert_allclose(fused.u, generic.u, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(pt_f.tau, pt_g.tau, rtol=0, atol=1e-12)
+    assert pt_f.bp_sign == pt_g.bp_sign
+    G = sys.f(fused.z, prob.param_vector(fused.p))
+    assert np.max(np.abs(G)) <= 1e-10
+    assert float(c @ (fused.u - u0)) == pytest.approx(0.01, abs=1e-15)
+
+
+def test_bordered_rcond_against_exact_condition_number():
+    """Hager-Higham estimate of the column-scaled 1-norm condition (from the existing LU)
+    against the exact value from the explicit inverse; badly scaled columns do not
+    matter."""
+    from continuation.algorithms.base import bordered_rcond
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 5, 20):
+        for _ in range(5):
+            Gz = rng.standard_normal((n, n)) * np.logspace(0, 6, n)[None, :]
+            Gp = rng.standard_normal(n) * 1e9
+            c = rng.standard_normal(n + 1)
+            w = np.ones(n + 1)
+            pt = make_point(np.zeros(n), 0.0, (np.zeros(n), Gz, Gp), c, w)
+            M = np.block([[Gz, Gp[:, None]], [c[None, :]]])
+            S = M / np.abs(M).max(axis=0)
+            exact = 1 / (np.linalg.norm(S, 1) * np.linalg.norm(np.linalg.inv(S), 1))
+            est = bordered_rcond(pt)
+            # Hager's estimate of ||S^-1||_1 is a lower bound, usually exact
+            assert exact <= est * (1 + 1e-9) and est <= 3 * exact
+            pt_s = make_point(np.zeros(n), 0.0, (np.zeros(n), sp.csc_matrix(Gz), Gp), c, w)
+            assert bordered_rcond(pt_s) == pytest.approx(est, rel=1e-6)

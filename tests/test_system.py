@@ -90,3 +90,49 @@ def test_params_from_mapping_and_defaults():
     nodefault = fold_normal_form()
     with pytest.raises(ValueError, match="missing"):
         nodefault.params()
+
+
+@pytest.mark.parametrize("name", sorted(TOY_SYSTEMS))
+def test_fast_evaluators_match_linearize(name):
+    """System.linearizer (per free parameter, dense and sparse) and
+    System.bordered_evaluator give exactly the values of System.linearize."""
+    system = TOY_SYSTEMS[name]()
+    x, p = _sample(system, 3)
+    n = system.n_states
+    f, J, Jp = system.linearize(x, p)
+    rng = np.random.default_rng(5)
+    for k in range(system.n_params):
+        q = p.copy()
+        q[k] = 0.61
+        f_q, J_q, Jp_q = system.linearize(x, q)
+        for sparse in (False, True):
+            lin = system.linearizer(k, p, sparse=sparse)
+            g, Gz, Gp = lin(x, 0.61)
+            Gz = Gz.toarray() if sparse else Gz
+            np.testing.assert_array_equal(g, f_q)
+            np.testing.assert_array_equal(Gz, J_q)
+            np.testing.assert_array_equal(Gp, Jp_q[:, k])
+            g2 = lin(x + 0.1, 0.61)[0]  # fresh output arrays at every call
+            assert not np.array_equal(g2, g)
+        ev = system.bordered_evaluator(k, p)
+        c, h = rng.standard_normal(n + 1), 0.37
+        ev.set_border(c, h)
+        ev.u[:n], ev.u[n] = x, 0.61
+        ev()
+        u = np.append(x, 0.61)
+        np.testing.assert_allclose(ev.r, np.append(f_q, c @ u - h), rtol=1e-15, atol=1e-15)
+        np.testing.assert_array_equal(ev.M, np.block([[J_q, Jp_q[:, k : k + 1]], [c[None, :]]]))
+        g, Gz, Gp = ev.lin()
+        np.testing.assert_array_equal(Gz, J_q)
+        np.testing.assert_array_equal(Gp, Jp_q[:, k])
+    with pytest.raises(ValueError, match="index"):
+        system.linearizer(system.n_params, p)
+
+
+def test_fast_evaluators_absent_without_casadi():
+    system = System(lambda x, p: np.array([p[0] - x[0] ** 2]), ("x",), ("mu",))
+    prob = EquilibriumProblem(system, system.params(mu=1.0), "mu")
+    assert prob.linearizer() is None and prob.bordered_evaluator() is None
+    sparse = EquilibriumProblem(bratu(120), bratu(120).params(lam=1.0), "lam")
+    assert sparse.bordered_evaluator() is None  # sparse problems: linearizer + SuperLU
+    assert sparse.linearizer()(np.zeros(120), 1.0)[1].format == "csc"
