@@ -25,6 +25,16 @@ assembled CSC matrix when ``G_z`` is sparse). The same factorisation gives the t
 ``c . tau > 0`` (with ``c = w o tau_prev`` this keeps the orientation of the branch),
 and the sign of ``det M``.
 
+Evaluation
+----------
+The corrector evaluates ``G``, ``G_z``, ``G_p`` through the fastest interface the
+problem offers: a fused evaluator of the bordered residual and matrix
+(``problem.bordered_evaluator()``: one compiled CasADi call per Newton iteration, dense
+problems), a linearizer specialised to the free parameter (``problem.linearizer()``,
+e.g. sparse problems), or ``problem.linearize`` / the protocol methods. All give the
+same values; the first two only remove Python overhead, which dominates the steps of
+small systems.
+
 Branch-point test function
 --------------------------
 For any row ``c`` with ``c . tau != 0``, linearity of the determinant in its last row
