@@ -142,6 +142,20 @@ def test_corrector_accepts_round_off_floor():
     )
     assert res.converged
     assert res.z[0] == pytest.approx(1 / 3, abs=1e-15)
+    # a start whose Newton correction is already tiny but whose residual is not is never
+    # accepted without an iteration (the quadratic-rate rule needs an observed step)
+    for exact in (True, False):
+        near = correct(
+            Scaled(),
+            np.array([1 / 3 + 1e-11, 2.0]),
+            np.array([0.3, 2.0]),
+            np.array([0.0, 1.0]),
+            0.0,
+            NewtonSettings(tol=1e-12),
+            exact=exact,
+        )
+        assert near.converged and near.iters >= 1
+        assert near.z[0] == pytest.approx(1 / 3, abs=1e-15)
 
 
 def test_tangent_and_branch_point_test_function():

@@ -698,7 +698,7 @@ def _correct_fused(
         if (
             (rn <= tol and (dn <= step_ok or step <= step_ok))
             or (step <= step_ok and rn > 0.5 * rn_prev)
-            or (not exact and dn <= step_ok and 10.0 * rn * dn * dn <= tol * step * step)
+            or (not exact and it and dn <= step_ok and 10.0 * rn * dn * dn <= tol * step * step)
         ):
             lin = ev.lin()
             lu: BorderedLU | None = BorderedLU.from_dense_factors(f_lu, f_piv)
@@ -842,7 +842,7 @@ def correct(
             # without exactness: the final correction is below the step tolerance and,
             # at the observed quadratic rate (residual rn after a step of length
             # `step`), leaves a residual ten times below tol
-            or (not exact and dn <= step_ok and 10.0 * rn * dn * dn <= tol * step * step)
+            or (not exact and it and dn <= step_ok and 10.0 * rn * dn * dn <= tol * step * step)
         ):
             if dense:
                 lu = BorderedLU.from_dense_factors(f_lu, f_piv)
