@@ -3,7 +3,7 @@
 Knows nothing of ships. The public API is exactly what this module exports.
 """
 
-from .algorithms import PALC, ContinuationAlgorithm, Natural
+from .algorithms import PALC, ContinuationAlgorithm, Natural, StepOutcome, StepState
 from .api import continue_equilibria
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .bvp import (
@@ -27,7 +27,14 @@ from .ops import CASADI_OPS, NUMPY_OPS, Ops
 from .params import Params
 from .problem import ContinuationProblem, EquilibriumProblem
 from .settings import ContinuationSettings, DetectionSettings, NewtonSettings
-from .stability import EigenResult, count_unstable, eigen, eigenvalues
+from .stability import (
+    EigenResult,
+    count_unstable,
+    eigen,
+    eigenvalues,
+    n_unstable,
+    sort_eigenvalues,
+)
 from .status import Status
 from .system import DynamicalSystem, System, check_jacobian
 
@@ -40,6 +47,10 @@ __all__ = [
     "EquilibriumResult",
     "Event",
     "Natural",
+    "StepOutcome",
+    "StepState",
+    "n_unstable",
+    "sort_eigenvalues",
     "SpecialKind",
     "SpecialPoint",
     "CollocationMesh",
