@@ -184,8 +184,8 @@ def build_global_graph(
             break
         for br in res.branches:
             fate = br.fate
-            if fate is None:  # pragma: no cover - a FateClassifier always returns a Fate
-                continue
+            if fate is None or fate.status is Status.INTERRUPTED:
+                continue  # an interrupted branch has no fate: no edge
             target = _target(g, clf, fate, match)
             g.add_edge(
                 e.name,

@@ -67,6 +67,24 @@ class ManifoldBranch:
         """Status of the integration (or of the classification)."""
         return self.fate.status if self.fate is not None else self.trajectory.status
 
+    def as_guess(self, target: Any = None) -> tuple[FloatArray, FloatArray]:
+        """``(t (M,), x (M, n))`` of the branch, e.g. as the initial guess of a BVP.
+
+        Parameters
+        ----------
+        target : array_like, shape (n,), optional
+            Cut the branch at its closest sample to ``target`` (Euclidean distance on
+            the unwrapped states: give the target already shifted by whole periods).
+        """
+        t, x = np.array(self.trajectory.t), np.array(self.trajectory.x)
+        if target is not None:
+            xt = np.asarray(target, dtype=float).reshape(-1)
+            if xt.shape != (x.shape[1],):
+                raise ValueError(f"`target` must have shape ({x.shape[1]},), got {xt.shape}")
+            k = int(np.argmin(np.linalg.norm(x - xt, axis=1)))
+            t, x = t[: k + 1], x[: k + 1]
+        return t, x
+
 
 @dataclass(frozen=True, eq=False)
 class ManifoldResult:

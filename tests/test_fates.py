@@ -314,3 +314,39 @@ def test_equilibrium_tracker_follows_and_detects_index_change():
         EquilibriumTracker(PEND, [0.3, 0.2], "Fn", [[0.2, 0.0]])
     with pytest.raises(ValueError, match="index 1"):
         manifold_fate_function(PEND, [0.3, 0.2], "F", [0.2, 0.0])
+
+
+def _melnikov_deviation(g):
+    """Relative deviation of the computed homoclinic F_c(g) from Melnikov's 4 g / pi."""
+    F0 = 4 * g / np.pi
+    fate_at = manifold_fate_function(
+        PEND,
+        [g, F0],
+        "F",
+        [np.pi - np.arcsin(F0), 0.0],
+        branch=1,
+        equilibria={"down": [np.arcsin(F0), 0.0]},
+        t_max=20 / g + 200,
+        tol=1e-5,
+    )
+    res = bisect_fate(fate_at, 0.5 * F0, 1.5 * F0, tol=1e-9 * F0 / 0.1)
+    assert res.status is Status.SUCCESS
+    # below F_c the branch passes the next saddle and falls to the next equilibrium,
+    # above it it passes the next saddle and runs on the periodic (rotating) orbit
+    assert res.fate_lo.label == "equilibrium:down@+1"
+    assert res.fate_hi.kind is FateKind.PERIODIC and res.fate_hi.shift == (1,)
+    for f in (res.fate_lo, res.fate_hi):
+        assert f.visits and f.visits[0].label == "saddle@+1"
+    return abs(res.p_critical / F0 - 1)
+
+
+def test_driven_pendulum_homoclinic_threshold_matches_melnikov():
+    # theta'' + g theta' + sin(theta) = F: the homoclinic loop of the saddle exists at
+    # F_c = 4 g / pi to first order in g (Melnikov's method; Guckenheimer & Holmes 1983,
+    # "Nonlinear Oscillations, Dynamical Systems, and Bifurcations of Vector Fields",
+    # Sec. 4.5). The system is reversible under (t, theta, g, F) -> (-t, -theta, -g, -F),
+    # so F_c is odd in g and the relative deviation is O(g^2): check the order.
+    d1, d2 = _melnikov_deviation(0.1), _melnikov_deviation(0.05)
+    assert d2 < 1e-3
+    order = np.log2(d1 / d2)
+    assert 1.8 < order < 2.2

@@ -121,6 +121,19 @@ def test_orientation_convention():
     assert np.linalg.norm(v3 / [2.0, 0.5]) == pytest.approx(1.0)
 
 
+def test_as_guess_cuts_at_closest_approach():
+    res = unstable_manifold(PEND, [0.0], [np.pi, 0.0], t_max=40.0, eps=1e-7, rtol=1e-12)
+    t, x = res.plus.as_guess(target=[3 * np.pi, 0.0])
+    assert t.shape == (x.shape[0],) and x.shape[1] == 2
+    # the separatrix comes closest to the shifted saddle at its last kept sample
+    d = np.linalg.norm(x - [3 * np.pi, 0.0], axis=1)
+    assert d[-1] == d.min() and d[-1] < 1e-3
+    t_all, _ = res.plus.as_guess()
+    assert t_all.size == len(res.plus.trajectory)
+    with pytest.raises(ValueError, match="target"):
+        res.plus.as_guess(target=[1.0])
+
+
 def test_single_branch_and_refinement():
     # a slightly wrong saddle is refined by Newton; only the requested branch is computed
     res = unstable_manifold(PEND, [0.5], [np.pi + 1e-4, 1e-4], branches=(-1,), t_max=2.0)

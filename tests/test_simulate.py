@@ -8,6 +8,7 @@ from scipy.integrate import quad
 from scipy.linalg import expm
 
 from continuation.errors import ContinuationError
+from continuation.events import Event
 from continuation.simulate import PoincareSection, SimEvent, Simulator, Trajectory, simulate
 from continuation.status import Status
 from continuation.system import System
@@ -233,16 +234,9 @@ def test_interrupt_returns_partial_trajectory():
 
 
 def test_continuation_event_adapter():
-    class Ev:  # duck-typed continuation.events.Event: fn(x, p)
-        name = "level"
-        direction = "down"
-        terminal = True
-
-        @staticmethod
-        def fn(x, p):
-            return x[0] - p[0] / 4
-
-    tr = simulate(OSC, [1.0, 0.0], [2.0], (0.0, 5.0), events=[Ev()])
+    # a continuation.events.Event has fn(x, p); it is watched with p = the parameters
+    ev = Event("level", lambda x, p: x[0] - p[0] / 4, direction="down", terminal=True)
+    tr = simulate(OSC, [1.0, 0.0], [2.0], (0.0, 5.0), events=[ev])
     # cos(2 t) = 0.5 first at t = pi / 6
     assert tr.terminal_event == "level"
     assert tr.t[-1] == pytest.approx(np.pi / 6, abs=1e-8)
