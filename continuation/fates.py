@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from ._types import ComplexArray, FloatArray
+from .errors import ContinuationError
 from .newton import newton
 from .settings import NewtonSettings
 from .simulate import (
@@ -485,9 +486,10 @@ class FateClassifier:
         Parameters
         ----------
         start : array_like (n,) or Trajectory
-            Initial state; or a trajectory, whose samples and section crossings are
-            analysed first and which is then continued from its end (up to ``t_max``
-            after its start).
+            Initial state; or a trajectory, whose samples are analysed first and which
+            is then continued from its end (up to ``t_max`` after its start). Its
+            section crossings are used if recorded under the name of the classifier's
+            section (``self.section.name``; ``"_fate_section"`` for ``"auto"``).
         t0 : float
             Initial time (ignored for a Trajectory).
         progress : callable, optional
@@ -520,7 +522,7 @@ class FateClassifier:
             if traj is not None:
                 fate = st.scan(traj, traj, first=True)
                 if fate is not None:
-                    return fate
+                    return st.truncated(fate, traj)
                 if traj.status is not Status.SUCCESS and traj.status is not Status.EVENT:
                     return st.finish(traj, traj.status)
             while True:
@@ -548,7 +550,8 @@ class FateClassifier:
                     np.array([t_start]), x[None, :], state_names=self.system.state_names
                 )
             return st.finish(traj, Status.INTERRUPTED)
-        assert traj is not None
+        if traj is None:  # pragma: no cover - t_max > 0 means at least one segment
+            raise ContinuationError("no segment was integrated")
         return st.finish(traj, Status.SUCCESS)
 
 

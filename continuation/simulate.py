@@ -699,14 +699,15 @@ class _CvodesBackend:
         self.max_step = max_step
         self.n = len(system.state_names)
         self.n_calls = 0
+        self._local: dict[tuple[Any, ...], Any] = {}
 
     def _integrator(self, n_out: int, span: float) -> Any:
         ms = self.max_step / abs(span) if math.isfinite(self.max_step) else 0.0
         key = (n_out, self.lmm, self.rtol, self.atol, ms)
         try:
             store = self._cache.setdefault(self.system, {})
-        except TypeError:  # system not weak-referenceable
-            store = {}
+        except TypeError:  # system not weak-referenceable: cache on this backend only
+            store = self._local
         integ = store.get(key)
         if integ is None:
             f = self.system.casadi_functions()["f"]

@@ -187,6 +187,9 @@ def test_trajectory_input_is_continued():
     cont = classify_fate(PEND, [0.5, 0.0], head, equilibria=eqs, t_max=200.0)
     assert cont.label == direct.label == "equilibrium:down@+1"
     assert cont.t == pytest.approx(direct.t, abs=0.1)
+    # the returned trajectory starts with the given one
+    assert cont.trajectory.t[0] == 0.0 and cont.trajectory.t[-1] == pytest.approx(cont.t)
+    np.testing.assert_array_equal(cont.trajectory.x[: len(head)], head.x)
 
 
 def test_classifier_bad_input():
