@@ -14,17 +14,23 @@ estimated coefficients, ``H/lambda = 0.1087``, ``lambda/L = 1.5``):
      (0.3248, the paper's value) as the guess, then Newton on the collocation system
      (Fn unknown). Its error is measured against a reference solve on a 2.5x finer,
      longer mesh; it is about 1e-7.
-   * **bisection**: :func:`ship_models.analysis.connection.critical_fn_bisection`,
-     fate of the upslope manifold (periodic vs captured) by CVODES (rtol 1e-9),
-     from the bracket (0.28, 0.33) to a width of 1e-6 (18 simulations).
+   * **bisection (lean)**: :func:`ship_models.analysis.connection.critical_fn_bisection`,
+     fate of the upslope manifold (periodic vs captured, decided by terminal events
+     as soon as the branch passes the next crest or turns back) by CVODES (rtol
+     1e-9), from the bracket (0.28, 0.33) to a width of 1e-6 (18 simulations);
+   * **bisection (project tool)**: :func:`ship_models.analysis.critical.critical_fn`
+     (``broachkit critical --method bisection``), whose fate classifier also
+     identifies the periodic attractor by Poincare returns, from its default
+     bracket (0.25, 0.40) to 1e-6; timed once (it takes seconds per course).
 
 2. The whole curve, ``chi_c = 0, 1, ..., 30 deg``:
 
    * **continuation**: :func:`ship_models.analysis.connection.critical_curve` (one
      BVP solve at 15 deg, pseudo-arclength in ``chi_c``, each course corrected
      exactly);
-   * **31 bisections** as above; by default 4 of them (0, 10, 20, 30 deg) are timed
-     and the total is extrapolated as ``31 x`` their mean (``--full``: all 31).
+   * **31 bisections** (lean) as above; by default 4 of them (0, 10, 20, 30 deg) are
+     timed and the total is extrapolated as ``31 x`` their mean (``--full``: all 31);
+     for the project tool, ``31 x`` its time at 10 deg.
 
 Times are wall-clock (``time.perf_counter``), the median of ``--repeat`` runs after
 one untimed warm-up of each method (CasADi functions are compiled once per process
@@ -108,6 +114,25 @@ def run(repeat: int = 3, full: bool = False) -> dict[str, Any]:
         "speedup": t_bis / t_bvp,
     }
 
+    try:
+        from ship_models.analysis.critical import critical_fn
+    except ImportError:  # the project tool is optional here
+        critical_fn = None
+    if critical_fn is not None:
+        t0 = time.perf_counter()
+        tool = critical_fn(model, chi10, tol=TOL)
+        t_tool = time.perf_counter() - t0
+        res["one_course"].update(
+            {
+                "tool_Fn": tool.fn_critical,
+                "tool_bracket": list(tool.bracket),
+                "tool_runs": tool.n_evaluations,
+                "tool_s": t_tool,
+                "tool_status": tool.status.name,
+                "speedup_vs_tool": t_tool / t_bvp,
+            }
+        )
+
     # ---- 2. the curve
     curve, t_curve, ts_curve = _timed(lambda: critical_curve(model=model), repeat)
     degs = np.arange(31.0) if full else np.array(SUBSET_DEG)
@@ -134,6 +159,9 @@ def run(repeat: int = 3, full: bool = False) -> dict[str, Any]:
         "speedup": t_31 / t_curve,
         "Fn": curve.Fn.tolist(),
     }
+    if "tool_s" in res["one_course"]:
+        res["curve"]["tool_31_s_extrapolated"] = 31.0 * res["one_course"]["tool_s"]
+        res["curve"]["speedup_vs_tool"] = res["curve"]["tool_31_s_extrapolated"] / t_curve
     res["load_average_end"] = list(os.getloadavg())
     return res
 
@@ -161,12 +189,27 @@ def main(argv: list[str] | None = None) -> int:
         f"{o['bisection_bracket'][1]:.8f}], {o['bisection_runs']} runs  {o['bisection_s']:.3f} s",
         f"  difference {o['bvp_minus_bisection']:+.1e};  speed-up bisection/BVP = "
         f"{o['speedup']:.1f}x",
+        *(
+            [
+                f"  project tool (critical_fn) Fn = {o['tool_Fn']:.8f}  bracket "
+                f"[{o['tool_bracket'][0]:.8f}, {o['tool_bracket'][1]:.8f}], {o['tool_runs']} "
+                f"runs  {o['tool_s']:.2f} s;  speed-up tool/BVP = {o['speedup_vs_tool']:.1f}x"
+            ]
+            if "tool_s" in o
+            else []
+        ),
         f"critical curve, {c['courses']} courses 0..30 deg",
         f"  continuation  {c['continuation_s']:.2f} s ({c['status']})",
         f"  31 bisections {c['bisection_31_s']:.2f} s"
         + (" (extrapolated from 0, 10, 20, 30 deg)" if c["bisection_31_extrapolated"] else ""),
         f"  max |curve - bisection| at the timed courses: {c['max_abs_difference']:.1e}",
-        f"  speed-up = {c['speedup']:.1f}x",
+        f"  speed-up = {c['speedup']:.1f}x"
+        + (
+            f";  vs 31 x project tool ({c['tool_31_s_extrapolated']:.0f} s, extrapolated): "
+            f"{c['speedup_vs_tool']:.0f}x"
+            if "tool_31_s_extrapolated" in c
+            else ""
+        ),
         f"load average (1 min) at start/end: {r['load_average_start'][0]:.2f} / "
         f"{r['load_average_end'][0]:.2f} on {r['cpus']} CPUs",
     ]

@@ -148,6 +148,17 @@ def test_bvp_agrees_with_fine_bisection_at_10_deg(model, bvp10):
     assert abs(bvp10.Fn - b.Fn) < 1e-6
 
 
+def test_bvp_inside_the_project_bisection_bracket(model, bvp10):
+    """Against the project's bisection tool (ship_models.analysis.critical, Poincare fates)."""
+    from ship_models.analysis.critical import critical_fn
+
+    b = critical_fn(model, 10 * DEG, fn_bracket=(0.29, 0.31), tol=1e-4)
+    assert b.status is Status.SUCCESS, b.message
+    lo, hi = b.bracket
+    assert hi - lo <= 1e-4
+    assert lo <= bvp10.Fn <= hi
+
+
 def test_orbit_residual_and_end_points(model, bvp10):
     o = bvp10.orbit
     assert bvp10.residual_norm < 1e-10
