@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 from ship_models import purse_seiner
 from ship_models.analysis.events import vanishing_angle
 from ship_models.analysis.fixed_points import find_fixed_point, surge_model_of
-from ship_models.analysis.global_picture import compare_pictures, global_picture
+from ship_models.analysis.global_picture import build_global_picture, compare_pictures
 from ship_models.analysis.manifold import manifold_start, unstable_manifold
 
 
@@ -159,8 +159,8 @@ def test_fates_do_not_depend_on_eps(model, params, above, below):
 
 
 def test_global_picture_changes_across_the_heteroclinic_bifurcation(model, params):
-    g1 = global_picture(model, params.replace(Fn=0.3016))
-    g2 = global_picture(model, params.replace(Fn=0.3017))
+    g1 = build_global_picture(model, params.replace(Fn=0.3016))
+    g2 = build_global_picture(model, params.replace(Fn=0.3017))
     assert g1.nodes["crest"]["saddle_index"] == 1
     assert "periodic" in g1 and "periodic" not in g2
     assert g1.edges["crest", "capsize", "downslope"]["fate"] == "capsize"

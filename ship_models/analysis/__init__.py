@@ -41,7 +41,7 @@ _LAZY = {
     "critical_fn": ".critical",
     "PictureDiff": ".global_picture",
     "compare_pictures": ".global_picture",
-    "global_picture": ".global_picture",
+    "build_global_picture": ".global_picture",
 }
 
 
@@ -67,7 +67,7 @@ __all__ = [
     "eigen_structure",
     "find_fixed_point",
     "fixed_points",
-    "global_picture",
+    "build_global_picture",
     "paper_scales",
     "surge_roots",
     "trace_in_chi_c",

@@ -8,7 +8,8 @@ different saddle": a heteroclinic connection, the paper's critical condition for
 capsizing due to broaching.
 
 :func:`critical_fn` locates it by bisection on the fate of that branch
-(:func:`~ship_models.analysis.manifold.unstable_manifold`): the bracket
+(:func:`~ship_models.analysis.manifold.unstable_manifold`, bisected by the generic
+:func:`continuation.fate_bisection.bisect_fate`): the bracket
 ``[Fn_lo, Fn_hi]`` always has ``fate(Fn_lo) != fate(Fn_hi)`` and is halved until its
 width is at most ``tol``. Bisection is robust here because the fate is a step
 function of ``Fn`` near the connection; its cost is one branch simulation per halving
@@ -30,11 +31,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from continuation.errors import ContinuationError, ConvergenceError
+from continuation.fate_bisection import bisect_fate, fate_label
+from continuation.fates import Fate, FateKind
 from continuation.params import Params
 from continuation.status import Status
 
 from .fixed_points import FixedPoint, find_fixed_point, fixed_points, polish
-from .manifold import PERIODIC, RECURRENT, ShipFate, unstable_manifold
+from .manifold import PERIODIC, RECURRENT, UNDECIDED, ShipFate, unstable_manifold
 
 log = logging.getLogger(__name__)
 
@@ -245,8 +249,6 @@ def critical_fn(
         Bad ``fn_bracket``, ``tol``, ``method``, ``branch``, ``max_evaluations``, or
         no saddle ``saddle`` at the lower end of the bracket.
     """
-    from continuation.errors import ContinuationError
-
     if method != "bisection":
         raise ValueError(f"`method` must be 'bisection', got {method!r}")
     if branch not in ("upslope", "downslope"):
@@ -270,71 +272,42 @@ def critical_fn(
     start = find_fixed_point(model, base, saddle)
     fate_at = _FateAt(model, base, start, branch, manifold_options)
 
-    def done(status: Status, message: str, f_lo: str, f_hi: str) -> CriticalResult:
-        crit = 0.5 * (lo + hi) if f_lo != f_hi and status is not Status.NO_BRACKET else math.nan
-        res = CriticalResult(
-            float(chi_c),
-            crit,
-            (lo, hi),
-            f_lo,
-            f_hi,
-            branch,
-            float(tol),
-            len(fate_at.evaluations),
-            tuple(fate_at.evaluations),
-            status,
-            message,
-        )
-        log.info("critical Fn (chi_c=%.4g deg): %s, %s", math.degrees(chi_c), crit, message)
-        if throw and status is not Status.SUCCESS:
-            raise ContinuationError(message)
-        return res
-
-    def evaluate(fn: float) -> ShipFate | None:
+    def fate_label_at(fn: float) -> Any:
         fate = fate_at(fn)
-        if fate is not None and progress is not None:
-            progress(fate_at.evaluations[-1])
-        return fate
+        if fate is None:
+            raise ConvergenceError(f"lost the {saddle} saddle at Fn = {fn!r}")
+        if fate.kind == UNDECIDED:  # the generic bisection stops on undecided fates
+            return Fate(FateKind.UNDECIDED, "undecided", t=fate.t, message=fate.message)
+        return outcome(fate)
 
-    l_lo = l_hi = ""
-    try:
-        f_lo, f_hi = evaluate(lo), evaluate(hi)
-        if f_lo is None or f_hi is None:
-            return done(Status.NEWTON_FAILED, "lost the saddle at a bracket end", "", "")
-        l_lo, l_hi = outcome(f_lo), outcome(f_hi)
-        if "undecided" in (l_lo, l_hi):
-            return done(Status.UNDECIDED, "a bracket end is undecided; raise t_max", l_lo, l_hi)
-        if l_lo == l_hi:
-            return done(
-                Status.NO_BRACKET,
-                f"same fate {l_lo!r} at Fn = {lo:g} and {hi:g}: no switch bracketed",
-                l_lo,
-                l_hi,
-            )
-        while hi - lo > tol:
-            if len(fate_at.evaluations) >= max_evaluations:
-                return done(Status.MAX_ITER, "max_evaluations reached", l_lo, l_hi)
-            mid = 0.5 * (lo + hi)
-            f_mid = evaluate(mid)
-            if f_mid is None:
-                return done(Status.NEWTON_FAILED, f"lost the saddle at Fn = {mid:g}", l_lo, l_hi)
-            l_mid = outcome(f_mid)
-            if l_mid == l_lo:
-                lo = mid
-            elif l_mid == l_hi:
-                hi = mid
-            else:
-                return done(
-                    Status.UNDECIDED,
-                    f"fate {l_mid!r} at Fn = {mid:g} is neither {l_lo!r} nor {l_hi!r}",
-                    l_lo,
-                    l_hi,
-                )
-    except KeyboardInterrupt:
-        return done(Status.INTERRUPTED, "interrupted; bracket so far", l_lo, l_hi)
-    return done(
-        Status.SUCCESS, f"fate switches from {l_lo!r} to {l_hi!r} within {hi - lo:.2e}", l_lo, l_hi
+    def report(lo_: float, hi_: float, n: int) -> None:
+        if progress is not None and fate_at.evaluations:
+            progress(fate_at.evaluations[-1])
+
+    res = bisect_fate(
+        fate_label_at, lo, hi, tol=tol, max_evaluations=max_evaluations, progress=report
     )
+    f_lo = res.fate_lo if isinstance(res.fate_lo, str) else fate_label(res.fate_lo)
+    f_hi = res.fate_hi if isinstance(res.fate_hi, str) else fate_label(res.fate_hi)
+    out = CriticalResult(
+        float(chi_c),
+        float(res.p_critical),
+        (float(res.bracket[0]), float(res.bracket[1])),
+        "" if f_lo is None else str(f_lo),
+        "" if f_hi is None else str(f_hi),
+        branch,
+        float(tol),
+        len(fate_at.evaluations),
+        tuple(fate_at.evaluations),
+        res.status,
+        res.message,
+    )
+    log.debug(
+        "critical Fn (chi_c=%.4g deg): %s, %s", math.degrees(chi_c), out.fn_critical, res.message
+    )
+    if throw and res.status is not Status.SUCCESS:
+        raise ContinuationError(res.message)
+    return out
 
 
 __all__ = ["FN_BRACKET", "CriticalResult", "FateEvaluation", "critical_fn", "outcome"]

@@ -40,7 +40,7 @@ def _via(fate: Any) -> tuple[str, ...]:
     return tuple(f"{v.label}@{v.shift:+d}" for v in fate.visits)
 
 
-def global_picture(
+def build_global_picture(
     model: Any,
     params: Params | None = None,
     *,
@@ -140,7 +140,7 @@ class PictureDiff:
 
 
 def compare_pictures(g1: nx.MultiDiGraph, g2: nx.MultiDiGraph) -> PictureDiff:
-    """Differences between two pictures from :func:`global_picture`.
+    """Differences between two pictures from :func:`build_global_picture`.
 
     A branch present in only one graph appears in ``changed_edges`` with ``None`` on
     the other side.
@@ -163,4 +163,4 @@ def compare_pictures(g1: nx.MultiDiGraph, g2: nx.MultiDiGraph) -> PictureDiff:
     return PictureDiff(tuple(sorted(n2 - n1)), tuple(sorted(n1 - n2)), tuple(changed), tuple(via))
 
 
-__all__ = ["PictureDiff", "compare_pictures", "global_picture"]
+__all__ = ["PictureDiff", "compare_pictures", "build_global_picture"]

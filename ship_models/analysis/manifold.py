@@ -55,7 +55,6 @@ shift in wavelengths, time and distance of closest approach), e.g. the paper's
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 from collections.abc import Callable, Sequence
@@ -65,12 +64,14 @@ from typing import Any
 import numpy as np
 
 from continuation._types import FloatArray
+from continuation.errors import ContinuationError
+from continuation.fates import Fate, FateClassifier, FateKind
 from continuation.params import Params
-from continuation.simulate import EventHits, PoincareSection, Simulator, Trajectory
+from continuation.simulate import EventHits, PoincareSection, SimEvent, Trajectory
 from continuation.status import Status
 
 from .eigen import paper_scales
-from .events import capsize_event
+from .events import capsize_angle as capsize_angle_of
 from .fixed_points import FixedPoint, find_fixed_point, fixed_points
 
 log = logging.getLogger(__name__)
@@ -171,102 +172,59 @@ class ShipFate:
         }
 
 
-def _scaled_distance(
-    x: FloatArray, ref: FloatArray, scales: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Max-norm nondimensional distance of samples ``x (M, n)`` to ``ref + k e_xi``.
-
-    Returns the distances ``(M,)`` and the nearest whole-wave shifts ``k (M,)``.
-    """
-    k = np.round(x[:, 0] - ref[0])
-    d = x - ref[None, :]
-    d[:, 0] -= k
-    return np.max(np.abs(d) / scales[None, :], axis=1), k
-
-
-def _join(pieces: Sequence[Trajectory]) -> Trajectory:
-    """One trajectory from consecutive pieces (each starts where the previous ends)."""
-    first, last = pieces[0], pieces[-1]
-    n = first.n_states
-    names = list(dict.fromkeys(k for p in pieces for k in p.events))
-    events = {
-        nm: EventHits(
-            np.concatenate([p.events[nm].t for p in pieces if nm in p.events]),
-            np.concatenate([p.events[nm].x.reshape(-1, n) for p in pieces if nm in p.events]),
-        )
-        for nm in names
-    }
-    return Trajectory(
-        np.concatenate([first.t, *(p.t[1:] for p in pieces[1:])]),
-        np.concatenate([first.x, *(p.x[1:] for p in pieces[1:])]),
-        events,
-        last.status,
-        last.message,
-        first.state_names,
-        first.period,
-        last.terminal_event,
-        None,
-        first.params,
-        first.method,
-    )
-
-
-def _return_distance(model: Any, xs: FloatArray, k: int, lag: int, scales: FloatArray) -> float:
-    """Nondimensional distance between section crossings ``k`` and ``k - lag``."""
-    d = model.difference(xs[k], xs[k - lag]) / scales
-    d[0] = 0.0  # both on the section; xi_G differs by whole waves
-    return float(np.max(np.abs(d)))
-
-
-def _periodic_fate(
-    model: Any, hits: Any, scales: FloatArray, tol: float, max_lag: int, t: float
-) -> ShipFate | None:
-    """``periodic`` if crossing ``k`` repeats crossing ``k - m`` (m <= max_lag), contracting."""
-    n = len(hits)
-    for lag in range(1, max_lag + 1):
-        if n < 2 * lag + 1:
-            break
-        d1 = _return_distance(model, hits.x, n - 1, lag, scales)
-        d2 = _return_distance(model, hits.x, n - 1 - lag, lag, scales)
-        if d1 < tol and d1 <= d2:
-            return ShipFate(
-                PERIODIC,
-                t,
-                period=float(hits.t[-1] - hits.t[-1 - lag]),
-                drift=int(round(hits.x[-1, 0] - hits.x[-1 - lag, 0])),
-                returns=lag,
-                message=f"Poincare return {lag} agrees to {d1:.2e} (previous {d2:.2e})",
-            )
-    return None
-
-
-def saddle_visits(
-    traj: Trajectory,
-    saddles: Sequence[FixedPoint],
+def _ship_fate(
+    fate: Fate,
+    hits: Any,
+    n_recurrent: int,
+    max_lag: int,
+    points: Sequence[FixedPoint],
     scales: FloatArray,
-    radius: float,
-) -> tuple[SaddleVisit, ...]:
-    """Close approaches (distance ``< radius``) of ``traj`` to the saddles, in time order.
-
-    An approach is one maximal run of samples inside the radius; the run that contains
-    the first sample (the start, e.g. the saddle the manifold leaves) and one still
-    under way at the last sample are not counted.
-    """
-    visits: list[SaddleVisit] = []
-    for fp in saddles:
-        d, k = _scaled_distance(np.asarray(traj.x), fp.x, scales)
-        inside = d < radius
-        if not inside.any():
-            continue
-        edges = np.diff(np.concatenate([[0], inside.astype(int), [0]]))
-        starts, ends = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]
-        for a, b in zip(starts, ends, strict=True):
-            if a == 0 or b == d.size:  # the start region, or an approach still under way
-                continue
-            j = a + int(np.argmin(d[a:b]))
-            visits.append(SaddleVisit(fp.label, int(k[j]), float(traj.t[j]), float(d[j])))
-    visits.sort(key=lambda v: v.t)
-    return tuple(visits)
+    match_tol: float,
+) -> ShipFate:
+    """Translate a generic :class:`~continuation.fates.Fate` into a :class:`ShipFate`."""
+    visits = tuple(
+        SaddleVisit(v.name, int(v.shift[0]) if v.shift else 0, float(v.t), float(v.distance))
+        for v in fate.visits
+    )
+    shift = int(fate.shift[0]) if fate.shift else 0
+    common = {"t": float(fate.t), "visits": visits, "message": fate.message}
+    kind = fate.kind
+    if kind is FateKind.EVENT and fate.name == CAPSIZE:
+        return ShipFate(CAPSIZE, **common)
+    if kind is FateKind.PERIODIC:
+        return ShipFate(
+            PERIODIC, period=fate.period, drift=shift, returns=fate.multiplicity, **common
+        )
+    if kind in (FateKind.EQUILIBRIUM, FateKind.SADDLE):
+        k = EQUILIBRIUM if kind is FateKind.EQUILIBRIUM else SADDLE
+        name = fate.name
+        if fate.index is None and fate.x_equilibrium is not None:
+            # an equilibrium the classifier found by itself: match it to a known point
+            for fp in points:
+                d = np.asarray(fate.x_equilibrium, dtype=float) - fp.x
+                kk = round(d[0])
+                d[0] -= kk
+                if np.max(np.abs(d) / scales) < match_tol:
+                    name, shift = fp.label, int(kk)
+                    break
+        return ShipFate(k, equilibrium=name, shift=shift, **common)
+    if kind is FateKind.UNDECIDED and fate.status is Status.SUCCESS and len(hits) >= n_recurrent:
+        m = len(hits) - 1
+        return ShipFate(
+            RECURRENT,
+            period=float((hits.t[-1] - hits.t[0]) / m),
+            drift=int(round((hits.x[-1, 0] - hits.x[0, 0]) / m)),
+            t=float(fate.t),
+            visits=visits,
+            message=(
+                f"{len(hits)} section crossings without capsize, equilibrium or a converged "
+                f"periodic orbit (up to {max_lag} returns): bounded recurrent motion"
+            ),
+        )
+    status = fate.status
+    if kind is FateKind.UNDECIDED and status is Status.SUCCESS:
+        status = Status.MAX_STEPS
+    return ShipFate(UNDECIDED, status=status, **common)
 
 
 def classify_ship_fate(
@@ -283,7 +241,6 @@ def classify_ship_fate(
     return_tol: float = 1e-4,
     max_lag: int = 4,
     n_recurrent: int = 30,
-    eq_radius: float = 1e-3,
     visit_radius: float = 0.1,
     progress: Callable[[float], None] | None = None,
     rtol: float = 1e-9,
@@ -291,18 +248,23 @@ def classify_ship_fate(
 ) -> tuple[Trajectory, ShipFate]:
     """Integrate from ``x0`` in segments until the fate is known (see module notes).
 
+    The generic :class:`continuation.fates.FateClassifier` does the work; this function
+    supplies the ship's capsize event, Poincare section, nondimensional distance and
+    fixed points, and adds the ``recurrent`` fate.
+
     Parameters
     ----------
     model : Umeda4DOF
     params : Params
     x0 : ndarray, shape (8,)
     points : sequence of FixedPoint
-        The fixed points at ``params`` (saddles for ``visits``, stable points for the
-        ``equilibrium`` fate), e.g. from :func:`~ship_models.analysis.fixed_points`.
+        The fixed points at ``params`` (saddles for ``visits`` and the ``saddle``
+        fate, stable points for the ``equilibrium`` fate), e.g. from
+        :func:`~ship_models.analysis.fixed_points`.
     capsize_angle : float, optional
         Roll angle (rad) of the capsize event; default: vanishing stability of GZ.
     t_max : float
-        Time limit (s); the fate is ``undecided`` if reached.
+        Time limit (s); the fate is ``undecided`` (or ``recurrent``) if reached.
     segment : float
         Length of one integration segment (s): the fate is checked, and ``progress``
         called with the time reached, after each.
@@ -313,15 +275,13 @@ def classify_ship_fate(
         the first saddle in ``points`` (0 if there is none).
     return_tol : float
         Section crossings ``k`` and ``k - m`` closer than this (nondimensional
-        max-norm), and closer than crossings ``k - m`` and ``k - 2m``, make the fate
-        ``periodic`` (an orbit of ``m`` returns).
+        max-norm) make the fate ``periodic`` (an orbit of ``m`` returns); also the
+        distance to a fixed point that counts as having reached it.
     max_lag : int
         Largest number of returns ``m`` of a periodic orbit looked for.
     n_recurrent : int
-        After this many section crossings without another fate, the fate is
-        ``recurrent``.
-    eq_radius : float
-        Distance to a fixed point that counts as having reached it.
+        With at least this many section crossings by ``t_max`` and no other fate, the
+        fate is ``recurrent``.
     visit_radius : float
         Distance to a saddle that counts as a visit.
     progress : callable, optional
@@ -347,7 +307,6 @@ def classify_ship_fate(
         ("return_tol", return_tol),
         ("max_lag", max_lag),
         ("n_recurrent", n_recurrent),
-        ("eq_radius", eq_radius),
         ("visit_radius", visit_radius),
     ):
         if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
@@ -358,77 +317,43 @@ def classify_ship_fate(
     scales, _ = paper_scales(model, params, saddles[0].x if saddles else x0)
     if section is None:
         section = float(np.mod(saddles[0].x[0] + 0.5, 1.0)) if saddles else 0.0
-    watch = [
-        capsize_event(model, capsize_angle),
-        PoincareSection("xi_G", float(section), name="section"),
-    ]
-    sim = Simulator(model, params, rtol=rtol, atol=atol)
-    pieces: list[Trajectory] = []
-    sec_t: list[float] = []
-    sec_x: list[FloatArray] = []
-    x, t = x0, 0.0
-    fate: ShipFate | None = None
-    near_before: list[tuple[str, int]] = []
-    while fate is None:
-        t1 = min(t + segment, t_max)
-        n = max(1, round((t1 - t) / dt))
-        piece = sim.run(x, (t, t1), events=watch, dt=(t1 - t) / n)
-        pieces.append(piece)
-        sec_t.extend(piece.events["section"].t)
-        sec_x.extend(piece.events["section"].x)
-        t, x = piece.t_final, piece.x_final
-        if progress is not None:
-            progress(t)
-        if piece.status is Status.EVENT and piece.terminal_event == "capsize":
-            fate = ShipFate(CAPSIZE, t, message=f"|phi| reached the capsize angle at t={t:.6g} s")
-            break
-        if piece.status is not Status.SUCCESS:
-            fate = ShipFate(UNDECIDED, t, status=piece.status, message=piece.message)
-            break
-        hits = EventHits(np.array(sec_t), np.array(sec_x).reshape(len(sec_t), x0.size))
-        fate = _periodic_fate(model, hits, scales, return_tol, max_lag, t)
-        if fate is None and len(hits) >= n_recurrent:
-            fate = ShipFate(
-                RECURRENT,
-                t,
-                period=float((hits.t[-1] - hits.t[0]) / (len(hits) - 1)),
-                drift=int(round((hits.x[-1, 0] - hits.x[0, 0]) / (len(hits) - 1))),
-                message=(
-                    f"{len(hits)} section crossings without capsize and without a converged "
-                    f"periodic orbit (up to {max_lag} returns): bounded recurrent motion"
-                ),
-            )
-        if fate is not None:
-            break
-        near_now = []
-        for fp in pts:
-            dist, k = _scaled_distance(x[None, :], fp.x, scales)
-            if dist[0] < eq_radius:
-                near_now.append((fp.label, int(k[0])))
-                if fp.stable or (fp.label, int(k[0])) in near_before:
-                    fate = ShipFate(
-                        EQUILIBRIUM if fp.stable else SADDLE,
-                        t,
-                        equilibrium=fp.label,
-                        shift=int(k[0]),
-                        message=(
-                            f"within {dist[0]:.1e} of the "
-                            f"{'stable point' if fp.stable else 'saddle'} {fp.label} "
-                            f"(shifted {int(k[0])} waves)"
-                        ),
-                    )
-                    break
-        near_before = near_now
-        if fate is None and t >= t_max:
-            fate = ShipFate(
-                UNDECIDED,
-                t,
-                status=Status.MAX_STEPS,
-                message=f"no fate decided by t_max = {t_max:g} s; increase `t_max`",
-            )
-    traj = _join(pieces)
-    fate = dataclasses.replace(fate, visits=saddle_visits(traj, saddles, scales, visit_radius))
-    return traj, fate
+    phi_cap = capsize_angle_of(model, capsize_angle)
+    i_phi = model.state_index("phi")
+    capsize = SimEvent(
+        CAPSIZE,
+        lambda t, x: np.abs(np.asarray(x)[..., i_phi]) - phi_cap,
+        terminal=True,
+        direction=1,
+        vectorized=True,
+    )
+    sec = PoincareSection("xi_G", float(section), name="section")
+    clf = FateClassifier(
+        model,
+        params,
+        equilibria={fp.label: fp.x for fp in pts},
+        events=(capsize,),
+        poincare=sec,
+        tol=return_tol,
+        saddle_radius=visit_radius,
+        scale=scales,
+        t_max=t_max,
+        segment=segment,
+        dt=dt,
+        max_multiplicity=int(max_lag),
+        rtol=rtol,
+        atol=atol,
+    )
+    cb = None if progress is None else (lambda t, x: progress(t))
+    fate = clf.classify(x0, progress=cb)
+    traj = fate.trajectory
+    if traj is None:  # pragma: no cover - the classifier always attaches it
+        raise ContinuationError("fate classification returned no trajectory")
+    hits = traj.events.get("section")
+    if hits is None:
+        hits = EventHits(np.zeros(0), np.zeros((0, x0.size)))
+    return traj, _ship_fate(
+        fate, hits, int(n_recurrent), int(max_lag), pts, scales, 1e3 * return_tol
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -594,7 +519,7 @@ def unstable_manifold(
             **classify,
         )
         out[name] = ManifoldBranch(name, sign, x0, traj, fate)
-        log.info("%s branch of %s: %s (%s)", name, sp.label, fate.label, fate.message)
+        log.debug("%s branch of %s: %s (%s)", name, sp.label, fate.label, fate.message)
         if fate.status is Status.INTERRUPTED:
             break
     return ShipManifold(sp, par, float(eps), out, pts)
@@ -613,6 +538,5 @@ __all__ = [
     "ShipManifold",
     "classify_ship_fate",
     "manifold_start",
-    "saddle_visits",
     "unstable_manifold",
 ]

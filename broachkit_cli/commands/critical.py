@@ -1,0 +1,84 @@
+"""``broachkit critical``: critical Fn of the heteroclinic bifurcation at one autopilot course.
+
+The Fn where the upslope branch of the crest saddle's unstable manifold switches from
+periodic motion to capsize (Umeda 1999, Figs. 10-15 and 23). ``--method bisection``
+bisects Fn on that fate (:func:`ship_models.analysis.critical.critical_fn`) and
+prints the critical Fn and its bracket; other methods (e.g. a boundary-value
+solution of the connection) plug in as further ``--method`` choices.
+Degrees on the command line, radians inside.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable
+from typing import Any
+
+from .fixed_points import add_ship_arguments, ship_from_args
+
+NAME = "critical"
+HELP = "critical Fn of capsizing due to broaching (heteroclinic bifurcation) at one course"
+
+
+def _bisection(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
+    from ship_models.analysis.critical import critical_fn
+
+    def progress(ev: Any) -> None:
+        if not args.json:
+            sys.stderr.write(f"  Fn = {ev.Fn:.8f}: {ev.fate.label}\n")
+
+    res = critical_fn(
+        model,
+        params["chi_c"],
+        params=params,
+        fn_bracket=(args.fn_min, args.fn_max),
+        tol=args.tol,
+        progress=progress,
+        t_max=args.t_max,
+    )
+    return res.to_json()
+
+
+#: ``--method`` choices: name -> function(model, params, args) -> JSON-ready dict.
+METHODS: dict[str, Callable[[Any, Any, argparse.Namespace], dict[str, Any]]] = {
+    "bisection": _bisection,
+}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``broachkit critical``."""
+    add_ship_arguments(parser, fn=False)
+    parser.add_argument(
+        "--method", choices=sorted(METHODS), default="bisection", help="how to locate it"
+    )
+    parser.add_argument("--fn-min", type=float, default=0.25, help="lower end of the Fn search")
+    parser.add_argument("--fn-max", type=float, default=0.40, help="upper end of the Fn search")
+    parser.add_argument("--tol", type=float, default=1e-5, help="bracket width in Fn (1e-5)")
+    parser.add_argument(
+        "--t-max", type=float, default=1500.0, help="time limit per simulation in s (1500)"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Locate the critical Fn; returns 0 on success, 1 otherwise."""
+    for opt in ("fn_min", "fn_max", "tol", "t_max"):
+        val = getattr(args, opt)
+        if not (math.isfinite(val) and val > 0):
+            raise ValueError(f"--{opt.replace('_', '-')} must be positive, got {val}")
+    if not args.fn_min < args.fn_max:
+        raise ValueError(f"--fn-min must be below --fn-max, got {args.fn_min}, {args.fn_max}")
+    model, params = ship_from_args(args)
+    result = {"vessel": model.vessel.name, **METHODS[args.method](model, params, args)}
+    if args.json:
+        sys.stdout.write(json.dumps(result, indent=2) + "\n")
+    else:
+        lo, hi = result["bracket"]
+        sys.stdout.write(
+            f"{model.vessel.name}, chi_c = {args.chi_c:g} deg ({args.method}): "
+            f"critical Fn = {result['fn_critical']:.7f} in [{lo:.7f}, {hi:.7f}] "
+            f"({result['fate_lo']} below, {result['fate_hi']} above); {result['status']}\n"
+        )
+    return 0 if result["status"] == "SUCCESS" else 1
