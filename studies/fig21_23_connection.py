@@ -75,6 +75,7 @@ def compute(
     out: Path, progress: Callable[[str], None] | None = None, *, quick: bool = False
 ) -> dict[str, Any]:
     """Solve the connection, the curve and the bisection checks; write figures and data."""
+    from continuation.simulate import simulate
     from ship_models import purse_seiner
     from ship_models.analysis.connection import (
         critical_curve,
@@ -82,6 +83,7 @@ def compute(
         critical_fn_bvp,
         upslope_branch,
     )
+    from ship_models.analysis.events import capsize_event
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
@@ -129,23 +131,31 @@ def compute(
     # ---- Fig. 21 idea: the connection beside the manifold on both sides
     say("upslope manifolds at the ends of the bisection bracket")
     p10 = model.default_params().replace(chi_c=chi10)
+    lo_run = upslope_branch(model, p10.replace(Fn=bis.bracket[0]))
+    hi_run = upslope_branch(model, p10.replace(Fn=bis.bracket[1]))
+    # the captured branch stops when it turns back; follow it on to capsize
+    hi_more = simulate(
+        model,
+        hi_run.trajectory.x[-1],
+        p10.replace(Fn=bis.bracket[1]),
+        (0.0, 600.0),
+        events=[capsize_event(model)],
+        dt=0.05,
+    )
     runs = {
-        f"manifold, Fn = {bis.bracket[0]:.6f} ({'periodic'})": upslope_branch(
-            model, p10.replace(Fn=bis.bracket[0])
-        ),
-        f"manifold, Fn = {bis.bracket[1]:.6f} ({'capsize'})": upslope_branch(
-            model, p10.replace(Fn=bis.bracket[1])
+        f"manifold, Fn = {bis.bracket[0]:.7f} (periodic)": np.asarray(lo_run.trajectory.x),
+        f"manifold, Fn = {bis.bracket[1]:.7f} ({hi_more.terminal_event or 'captured'})": (
+            np.vstack([hi_run.trajectory.x, hi_more.x])
         ),
     }
     c = model.celerity(p10)
     fig = new_figure((9.0, 6.6))
     axes = fig.subplots(2, 2).ravel()
     for ax, (xl, yl, f) in zip(axes, _planes(model, c), strict=True):
-        for (label, run), col in zip(runs.items(), ("tab:green", "tab:red"), strict=True):
-            x = np.asarray(run.trajectory.x)
+        for (label, x), col in zip(runs.items(), ("tab:green", "tab:red"), strict=True):
             x = x[x[:, 0] > o.x_to[0] - 0.45]  # the part up to just beyond the next crest
             ax.plot(*f(x), color=col, lw=0.9, label=label)
-        ax.plot(*f(o.x), color="k", lw=2.0, ls="--", label=f"connection, Fn = {conn.Fn:.6f}")
+        ax.plot(*f(o.x), color="k", lw=2.0, ls="--", label=f"connection, Fn = {conn.Fn:.8f}")
         ends = np.vstack([o.x_from, o.x_to])
         ax.plot(*f(ends), "ko", ms=5, mfc="w", label="crest saddle and its shift")
         ax.set_xlabel(xl)
@@ -169,7 +179,7 @@ def compute(
         "status": curve.status.name,
         "elapsed_s": curve.elapsed,
     }
-    checks = []
+    checks = [[CHI_C_DEG, bis.Fn, bis.bracket[0], bis.bracket[1], conn.Fn, bis.status.name]]
     for deg in CHECK_COURSES_DEG if not quick else (30.0,):
         say(f"  bisection check at {deg:g} deg")
         b = critical_fn_bisection(math.radians(deg), model=model, bracket=(0.295, 0.315), tol=1e-5)
@@ -195,7 +205,7 @@ def compute(
     )  # fmt: skip
     ax.set_xlabel("autopilot course chi_c (deg)")
     ax.set_ylabel("critical nominal Froude number")
-    ax.set_title("Critical condition for capsizing due to broaching (cf. Fig. 23)")
+    ax.set_title("Critical Fn for capsizing due to broaching (cf. Fig. 23)", fontsize=9)
     ax.legend(fontsize=7, loc="center left")
     save_figure(fig, out / "fig23_critical_curve.png")
     summary["figures"] = ["fig21_connection.png", "fig23_critical_curve.png"]
