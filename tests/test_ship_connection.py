@@ -233,6 +233,12 @@ def test_curve_point_against_bisection(model, curve):
     assert abs(curve.Fn[25] - b.Fn) < 2e-6
 
 
+def test_curve_from_a_start_outside_the_range(model, curve, bvp10):
+    c = critical_curve(np.radians([12.0, 14.0, 16.0]), model=model, start=bvp10)
+    assert c.success, c.message
+    np.testing.assert_allclose(c.Fn, curve.Fn[[12, 14, 16]], atol=1e-6)
+
+
 def test_curve_csv_and_json(curve, tmp_path):
     path = curve.to_csv(tmp_path / "c.csv")
     data = np.loadtxt(path, delimiter=",", skiprows=1)

@@ -1015,8 +1015,8 @@ def critical_curve(
     settings = ContinuationSettings(
         ds=ds,
         ds_max=ds_max,
-        p_min=lo_c - margin,
-        p_max=hi_c + margin,
+        p_min=min(lo_c, start.chi_c) - margin,
+        p_max=max(hi_c, start.chi_c) + margin,
         max_steps=400,
         newton=NewtonSettings(tol=tol, step_tol=1e-8, max_iter=8),
     )
