@@ -27,7 +27,9 @@ shows progress and can be interrupted) and, after each segment, tested for:
     ``t_max`` was reached first.
 
 Along the way every passage within ``saddle_radius`` of a known saddle is recorded as a
-:class:`SaddleVisit` (which saddle, shift in periods, time, closest distance): the
+:class:`SaddleVisit` (which saddle, shift in periods, time, closest distance; a visit
+ends when the distance exceeds ``2 saddle_radius``, and leaving the saddle the start
+lies near is not a visit): the
 sequence matters, e.g. the ship's upslope branch "approaches the next saddle, then tends
 to a periodic attractor or capsizes" (Umeda 1999, Figs. 10-15).
 
@@ -65,6 +67,9 @@ from .simulate import (
 from .status import Status
 
 log = logging.getLogger(__name__)
+
+#: A saddle visit ends when the distance exceeds this multiple of ``saddle_radius``.
+_EXIT = 2.0
 
 
 class FateKind(enum.StrEnum):
@@ -346,7 +351,8 @@ class FateClassifier:
         ``100 * rtol * max|x|``), or a period-1 orbit may be reported with a higher
         multiplicity.
     saddle_radius : float
-        Scaled distance within which a passage near a saddle is recorded as a visit.
+        Scaled distance within which a passage near a saddle is recorded as a visit
+        (which ends beyond ``2 saddle_radius``).
     scale : array_like, shape (n,), optional
         Scale of each state in distances (default ones).
     t_max : float
@@ -609,7 +615,7 @@ class _ScanState:
             # except to the saddle the start lies near, until the trajectory has left it
             conv = D <= c.tol
             for i in self.excluded:
-                out = np.flatnonzero(D[:, i] > c.saddle_radius)
+                out = np.flatnonzero(D[:, i] > _EXIT * c.saddle_radius)
                 conv[: (out[0] if out.size else conv.shape[0]), i] = False
             hit = np.argwhere(conv)
             if hit.size:
@@ -676,19 +682,20 @@ class _ScanState:
         return v
 
     def _track_visits(self, t: FloatArray, x: FloatArray, D: FloatArray) -> None:
+        # hysteresis: a visit starts within r and ends beyond 2 r, so a trajectory that
+        # lingers around the sphere of radius r makes one visit, not many
         r = self.c.saddle_radius
         for i in self.saddles:
             col = D[:, i]
             for k in range(col.size):
-                near = col[k] <= r
-                if near:
-                    cur = self.inside.get(i)
-                    if cur is None:
-                        self.inside[i] = (float(col[k]), float(t[k]), np.array(x[k]))
+                cur = self.inside.get(i)
+                if cur is not None:
+                    if col[k] > _EXIT * r:
+                        self._close_visit(i)
                     elif col[k] < cur[0]:
                         self.inside[i] = (float(col[k]), float(t[k]), np.array(x[k]))
-                elif i in self.inside:
-                    self._close_visit(i)
+                elif col[k] <= r:
+                    self.inside[i] = (float(col[k]), float(t[k]), np.array(x[k]))
         self.visits.sort(key=lambda v: v.t)
 
     def _periodic(self, seg: Trajectory, full: Trajectory) -> Fate | None:

@@ -36,11 +36,12 @@ Sampling and events
 The solution is returned on a uniform grid of spacing ``dt`` (shortened so that it
 divides ``t_span``). Events are *detected* by a sign change of the event function
 between consecutive samples (CVODES) or consecutive internal steps (SciPy), and
-*located* on the continuous solution to ``1e-13`` relative in time: for CVODES the
-root of a cubic Hermite interpolant is refined by Newton/secant steps on the solution
-re-integrated from the left sample, so the located state carries the integrator's
-error, not the interpolant's; for SciPy Brent's method runs on the solver's dense
-output. A function that changes sign twice within one sample
+*located* on the continuous solution: for CVODES the root of a cubic Hermite
+interpolant is refined by Newton/secant steps on the solution re-integrated from the
+left sample, so the located state carries the integrator's error, not the
+interpolant's, to ``max(1e-13 |t|, 10 rtol dt)`` in time (below that the
+re-integration is noise); for SciPy Brent's method runs on the solver's dense output,
+to ``1e-13 |t|``. A function that changes sign twice within one sample
 interval is missed, as with any sampled detection: keep ``dt`` below the shortest
 time scale of the event functions.
 
@@ -81,7 +82,7 @@ METHODS = CVODES_METHODS + SCIPY_METHODS
 DEFAULT_RTOL = 1e-10
 DEFAULT_ATOL = 1e-12
 #: Samples per CVODES call: one call integrates this many output intervals at once.
-_CHUNK = 200
+_CHUNK = 50
 #: Number of halvings used to get as close as possible to an integrator failure.
 _FAILURE_BISECTIONS = 12
 #: CVODES internal steps allowed per output interval before it reports failure.
@@ -284,20 +285,24 @@ def _locate(
     optional cheap interpolant. With ``approx``: the interpolant's root is the first
     guess, one Newton step on the exact ``h`` with the interpolant's slope gives the
     second, then secant steps on exact values, safeguarded by bisection of the
-    sign-change bracket (a Dekker-type iteration). Converged when a secant
-    correction on exact values is below ``xtol`` *and* one more exact value
-    ``2 xtol`` further confirms the sign change: typically three evaluations of
-    ``exact`` instead of about ten for Brent's method from scratch.
+    sign-change bracket. When a secant correction falls below ``xtol`` the sign
+    change is *confirmed* by one more exact value ``2 xtol`` further (expanding
+    geometrically if the root is further, as happens when ``exact`` is noisy), and
+    Brent's method finishes inside the confirmed bracket if it is still wider than
+    ``3 xtol``. Typically three evaluations of ``exact`` instead of about ten for
+    Brent's method from scratch.
     """
     ga = g(ta, xa)
     gb = g(tb, xb)
     if gb == 0.0:
         return tb, xb
+    h = lambda s: g(s, exact(s))  # noqa: E731
     if approx is None or not (ga * gb < 0):
-        tr = brentq(lambda s: g(s, exact(s)), ta, tb, xtol=xtol, rtol=1e-15)
+        tr = brentq(h, ta, tb, xtol=xtol, rtol=1e-15)
         return tr, exact(tr)
     ha = lambda s: g(s, approx(s))  # noqa: E731
-    lo, hi, glo = ta, tb, ga  # invariant: sign(h(lo)) = sign(glo) != sign(h(hi))
+    # invariant: h(lo) has the sign of glo, h(hi) the other sign
+    lo, hi, glo = ta, tb, ga
     try:
         t = brentq(ha, ta, tb, xtol=xtol, rtol=1e-15)
     except ValueError:  # pragma: no cover - the interpolant matches h at both ends
@@ -310,36 +315,56 @@ def _locate(
             return t, xt
         if (gt < 0) == (glo < 0):
             lo, glo = t, gt
+            other = hi
         else:
             hi = t
+            other = lo
         if abs(hi - lo) <= xtol:
             return t, xt
         if t_prev is None:  # Newton step with the interpolant's slope
             d = 1e-7 * abs(tb - ta)
             slope = (ha(t + d) - ha(t - d)) / (2 * d)
             t_new = t - gt / slope if slope != 0 and np.isfinite(slope) else np.nan
-            converged = False
         else:  # secant step on exact values
             t_new = t - gt * (t - t_prev) / (gt - g_prev) if gt != g_prev else np.nan
-            converged = abs(t_new - t) <= xtol
-        if converged:
-            # verify: the sign must change within about 2 xtol of t
-            t_chk = t + 2.0 * xtol * (1.0 if t_new >= t else -1.0)
-            if min(lo, hi) < t_chk < max(lo, hi):
-                g_chk = g(t_chk, exact(t_chk))
-                if (g_chk < 0) != (gt < 0) or g_chk == 0.0:
-                    return t, xt
-                if (g_chk < 0) == (glo < 0):
-                    lo, glo = t_chk, g_chk
-                else:  # pragma: no cover - excluded by the test above
-                    hi = t_chk
-            elif abs(hi - lo) <= 3.0 * xtol:
-                return t, xt
+            if abs(t_new - t) <= xtol:
+                return _confirm(h, exact, t, xt, gt, other, xtol)
         if not (np.isfinite(t_new) and min(lo, hi) < t_new < max(lo, hi)) or it >= 8:
             t_new = 0.5 * (lo + hi)  # safeguard: bisect the bracket
         t_prev, g_prev = t, gt
         t = t_new
     return t, exact(t)  # pragma: no cover - 60 halvings reach xtol
+
+
+def _confirm(
+    h: Callable[[float], float],
+    exact: Callable[[float], FloatArray],
+    t: float,
+    xt: FloatArray,
+    gt: float,
+    other: float,
+    xtol: float,
+) -> tuple[float, FloatArray]:
+    """Confirm a root next to ``t`` (towards the bracket end ``other``), then refine."""
+    s = 1.0 if other > t else -1.0
+    a, step = t, 2.0 * xtol
+    b = other
+    while True:
+        tc = t + s * step
+        if s * (other - tc) <= 0:  # reached the bracket end: root in (a, other)
+            break
+        gc = h(tc)
+        if gc == 0.0:
+            return tc, exact(tc)
+        if (gc < 0) != (gt < 0):
+            b = tc
+            break
+        a, step = tc, 4.0 * step
+    if abs(b - a) <= 3.0 * xtol:
+        return (t, xt) if a == t else (a, exact(a))
+    lo_, hi_ = min(a, b), max(a, b)
+    tr = brentq(h, lo_, hi_, xtol=xtol, rtol=1e-15)
+    return tr, exact(tr)
 
 
 def _hermite(ta: float, tb: float, xa, xb, fa, fb) -> Callable[[float], FloatArray]:
@@ -1031,7 +1056,11 @@ class Simulator:
         x_out: list[FloatArray] = [x0]
         hits: dict[str, tuple[list[float], list[FloatArray]]] = {w.name: ([], []) for w in watches}
         status, message, terminal = Status.SUCCESS, "reached the end of t_span", None
+        # Event times are located to xtol: near machine precision on smooth dense
+        # output (SciPy); for CVODES not below ~10 rtol dt, the noise of re-integration.
         xtol = 1e-13 * max(1.0, abs(t0), abs(t1))
+        if isinstance(self._backend, _CvodesBackend):
+            xtol = max(xtol, 10.0 * self.rtol * abs(t1 - t0) / n_samples)
         g_prev = [
             float(vals[0]) if (vals := w.values(np.array([t0]), x0[None, :])) is not None else 0.0
             for w in watches

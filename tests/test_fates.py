@@ -334,13 +334,18 @@ def _melnikov_deviation(g):
     )
     res = bisect_fate(fate_at, 0.5 * F0, 1.5 * F0, tol=1e-9 * F0 / 0.1)
     assert res.status is Status.SUCCESS
+    Fc = res.p_critical
     # below F_c the branch passes the next saddle and falls to the next equilibrium,
-    # above it it passes the next saddle and runs on the periodic (rotating) orbit
+    # above it it passes the next saddle and runs on the periodic (rotating) orbit;
+    # at the bracket's upper end it may reach the next saddle (the connection) itself
     assert res.fate_lo.label == "equilibrium:down@+1"
-    assert res.fate_hi.kind is FateKind.PERIODIC and res.fate_hi.shift == (1,)
-    for f in (res.fate_lo, res.fate_hi):
+    assert res.fate_hi.label in ("periodic", "saddle:saddle@+1")
+    below, above = fate_at(Fc * (1 - 1e-6)), fate_at(Fc * (1 + 1e-6))
+    assert below.label == "equilibrium:down@+1"
+    assert above.kind is FateKind.PERIODIC and above.shift == (1,)
+    for f in (below, above):
         assert f.visits and f.visits[0].label == "saddle@+1"
-    return abs(res.p_critical / F0 - 1)
+    return abs(Fc / F0 - 1)
 
 
 def test_driven_pendulum_homoclinic_threshold_matches_melnikov():
