@@ -192,6 +192,16 @@ def test_bvp_independent_of_guess_fn(model, bvp10):
     assert abs(r.Fn - bvp10.Fn) < 1e-6
 
 
+def test_guess_as_orbit_or_connection(model, bvp10):
+    o = bvp10.orbit
+    r1 = critical_fn_bvp(10 * DEG, model=model, guess=(o.t, o.x), Fn_guess=bvp10.Fn)
+    r2 = critical_fn_bvp(10 * DEG, model=model, guess=bvp10)
+    assert r1.success and r2.success
+    assert abs(r1.Fn - bvp10.Fn) < 2e-7
+    assert abs(r2.Fn - bvp10.Fn) < 1e-9  # same mesh and orbit: the same solution
+    assert r1.orbit.x_to[0] - r1.orbit.x_from[0] == pytest.approx(UPSLOPE_SHIFT)
+
+
 def test_unusable_guess_fn_falls_back_to_coarse_bisection(model, curve):
     """At chi_c = 0 and Fn = 0.45 the upslope branch never nears the shifted saddle."""
     r = critical_fn_bvp(0.0, model=model, Fn_guess=0.45)
