@@ -474,11 +474,13 @@ def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
     from benchmarks.problems import all_problems
 
     probs = all_problems()
+    cmds = " then ".join(f"`{c}`" for c in meta.get("commands", [meta["command"]]))
     lines = [
-        f"Measured {meta['date']} on {meta['machine']} with `{meta['command']}` "
+        f"Measured {meta['date']} on {meta['machine']} with {cmds} "
         f"({meta['repeats']} timed repeats, median). 1-minute load average "
         f"{meta['loadavg_start'][0]:.1f} at the start, {meta['loadavg_end'][0]:.1f} at the end "
-        "(the machine is shared: other processes inflate every time alike).",
+        "of the last command (the machine is shared with other work, which inflates wall "
+        "times; CPU times suffer less).",
         "",
     ]
     summary = []
@@ -575,6 +577,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--floor-reps", type=int, default=200)
     ap.add_argument("--timeout", type=float, default=1800.0, help="per worker, seconds")
     ap.add_argument("--no-readme", action="store_true", help="do not touch README.md")
+    ap.add_argument(
+        "--update",
+        action="store_true",
+        help="keep the other entries of results/continuation.json, replace only those measured now",
+    )
     ap.add_argument("--worker", nargs=2, metavar=("TOOL", "PROBLEM"), help=argparse.SUPPRESS)
     ap.add_argument("--out", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -623,10 +630,27 @@ def main(argv: list[str] | None = None) -> int:
         "loadavg_start": load_start,
         "loadavg_end": os.getloadavg(),
     }
+    for r in results:
+        r["measured"] = {
+            "date": meta["date"],
+            "command": meta["command"],
+            "loadavg": [meta["loadavg_start"][0], meta["loadavg_end"][0]],
+        }
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "continuation.json").write_text(
-        json.dumps({"meta": meta, "results": results}, indent=1)
-    )
+    out_json = RESULTS / "continuation.json"
+    if args.update and out_json.exists():
+        old = json.loads(out_json.read_text())
+        done = {(r["tool"], r["problem"]) for r in results}
+        kept = [r for r in old["results"] if (r["tool"], r["problem"]) not in done]
+        merged = kept + results
+        order = {name: i for i, name in enumerate(all_problems())}
+        tool_order = {t: i for i, t in enumerate(TOOLS)}
+        merged.sort(key=lambda r: (order.get(r["problem"], 99), tool_order.get(r["tool"], 99)))
+        results = merged
+        meta["commands"] = sorted({r["measured"]["command"] for r in results if "measured" in r})
+    else:
+        meta["commands"] = [meta["command"]]
+    out_json.write_text(json.dumps({"meta": meta, "results": results}, indent=1))
     md = markdown(results, meta)
     (RESULTS / "continuation.md").write_text(md)
     if not args.no_readme:
