@@ -9,7 +9,10 @@ Two systems:
 * ``ship8``: an 8-state surge-sway-yaw-roll-rudder-*like* toy with a periodic wave
   coordinate, a lightly damped roll mode and a fast rudder servo (time constant
   0.2 s, so mildly stiff), t in [0, 300]. It only mimics the size and time scales of
-  the ship model; it is not the paper's model.
+  the ship model; it is not the paper's model;
+* ``purse_seiner`` (if ``ship_models`` is importable): the paper's 8-state model
+  (a CasADi expression of about 12000 operations), t in [0, 50] from next to its
+  crest saddle.
 
 For each: wall time per run of every ``simulate`` method (with a Poincare section and
 a terminal "capsize" event that never fires), the raw ``scipy.integrate.solve_ivp``
@@ -80,6 +83,33 @@ CASES = {
     ),
 }
 
+
+def _ship_case():
+    """The paper's purse seiner (ship_models), from its crest saddle; None if unavailable."""
+    try:
+        from ship_models import purse_seiner
+        from ship_models.analysis.fixed_points import find_fixed_point
+    except ImportError:  # pragma: no cover - the engine does not need ship_models
+        return None
+    model = purse_seiner()
+    par = model.default_params()
+    crest = find_fixed_point(model, par, "crest").x
+    x0 = crest - 1e-4 * np.eye(8)[0]
+    i_phi = model.state_index("phi")
+    return (
+        model,
+        x0,
+        np.asarray(par.values, dtype=float),
+        50.0,
+        PoincareSection("xi_G", 0.0),
+        SimEvent("capsize", lambda t, x: abs(x[i_phi]) - 1.5, terminal=True, direction=1),
+    )
+
+
+_ship = _ship_case()
+if _ship is not None:
+    CASES["purse_seiner"] = _ship
+
 METHODS = ("cvodes", "cvodes_adams", "LSODA", "DOP853", "RK45", "BDF", "Radau")
 TIME_LIMIT = 20.0  # s: a method slower than this once is not repeated or re-run
 
@@ -144,9 +174,10 @@ def run_case(name, case, rtol, too_slow):
         print(f"   {m:14s} {el / fastest:7.1f} x   max|x - x_ref| = {errs[m]:.1e}")
     print(f"   {'cvodes, no events':14s} {el_noev / fastest:7.1f} x")
     print(f"   {'raw solve_ivp DOP853, no events':14s} {el_raw / fastest:7.1f} x")
-    rhs = pendulum_rhs if name == "pendulum" else ship8_rhs
-    t_ca, t_np = rhs_call_cost(sys_, rhs, x0, p)
-    print(f"   one rhs call from Python: CasADi {t_ca * 1e6:.1f} us, NumPy {t_np * 1e6:.1f} us")
+    rhs = {"pendulum": pendulum_rhs, "ship8": ship8_rhs}.get(name)
+    if rhs is not None:
+        t_ca, t_np = rhs_call_cost(sys_, rhs, x0, p)
+        print(f"   one rhs call from Python: CasADi {t_ca * 1e6:.1f} us, NumPy {t_np * 1e6:.1f} us")
 
 
 def main() -> None:

@@ -756,11 +756,25 @@ class _ScanState:
             return None
         if nu != 0 or c.distance(xr, x) > 10 * c.tol:
             return None
+        for i, e in enumerate(c.equilibria):  # a known one, approached slowly
+            if c.distance(xr, e.x) <= c.tol:
+                sh = _shift(c.period, x, e.x)
+                return Fate(
+                    FateKind.EQUILIBRIUM,
+                    e.name,
+                    i,
+                    sh,
+                    t,
+                    np.array(x),
+                    visits=self._open_visits(),
+                    message=f"converging to {e.name} (speed below tol; slowly attracting)",
+                    x_equilibrium=e.x + self._shift_vector(sh) if sh else np.array(e.x),
+                )
         return Fate(
             FateKind.EQUILIBRIUM,
             "unknown",
             None,
-            (),
+            _shift(c.period, x, xr),
             t,
             np.array(x),
             visits=self._open_visits(),

@@ -99,6 +99,15 @@ def test_adler_locked_below_one_goes_to_unknown_stable_equilibrium():
     assert np.mod(fate.x_equilibrium[0], 2 * np.pi) == pytest.approx(np.arcsin(0.5), abs=1e-10)
 
 
+def test_slowly_attracting_known_equilibrium_recognised_by_speed():
+    # x' = -0.01 x: the speed falls below tol (at x < 1e-4, t > 921) long before the
+    # distance does (x < 1e-6, t > 1382); the segment-end speed test names the equilibrium
+    slow = System(lambda x, p, ops: ops.stack([-0.01 * x[0]]), ("x",), ())
+    fate = classify_fate(slow, [], [1.0], equilibria={"O": [0.0]}, t_max=2000.0)
+    assert fate.label == "equilibrium:O" and fate.index == 0
+    assert 921.0 < fate.t < 1382.0
+
+
 def test_driven_pendulum_running_orbit():
     g, F = 0.25, 1.5
     sec = PoincareSection("theta", 0.0, direction=1, name="sec")
