@@ -647,7 +647,10 @@ def main(argv: list[str] | None = None) -> int:
         tool_order = {t: i for i, t in enumerate(TOOLS)}
         merged.sort(key=lambda r: (order.get(r["problem"], 99), tool_order.get(r["tool"], 99)))
         results = merged
-        meta["commands"] = sorted({r["measured"]["command"] for r in results if "measured" in r})
+        cmds = {r["measured"]["command"] for r in results if "measured" in r}
+        if any("measured" not in r for r in results):  # entries of an older file
+            cmds.update(old["meta"].get("commands", [old["meta"].get("command", "?")]))
+        meta["commands"] = sorted(cmds)
     else:
         meta["commands"] = [meta["command"]]
     out_json.write_text(json.dumps({"meta": meta, "results": results}, indent=1))

@@ -31,6 +31,13 @@ if ! command -v gfortran >/dev/null 2>&1; then
     fi
 fi
 
+# GNU time measures the peak RSS of the AUTO-07p executable alone (optional).
+if [ ! -x /usr/bin/time ] && command -v apt-get >/dev/null 2>&1; then
+    SUDO=""
+    [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    $SUDO apt-get install -y -qq time || echo "note: /usr/bin/time missing; AUTO-07p RSS not measured" >&2
+fi
+
 if [ ! -x "$VENV/bin/python" ]; then
     "$PY" -m venv "$VENV" || { echo "ERROR: cannot create venv $VENV" >&2; exit 1; }
 fi
