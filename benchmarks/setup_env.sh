@@ -14,7 +14,7 @@
 set -u
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 ROOT="$(cd "$HERE/.." && pwd)"
-WORK="$HERE/_work"
+WORK="${BENCH_WORK:-$HERE/_work}"   # override only to test a fresh build elsewhere
 VENV="$WORK/venv"
 PY="${PYTHON:-python3}"
 mkdir -p "$WORK"
@@ -62,7 +62,7 @@ install_peer pycont-lite "pycont-lite==0.6.0"
 
 "$VPY" - <<'PYEOF'
 import importlib
-for mod in ("continuation", "bifpy", "bice", "pycont_lite", "pycont"):
+for mod in ("continuation", "bifpy", "bice", "pycont"):  # pycont-lite imports as pycont
     try:
         m = importlib.import_module(mod)
         print(f"  import {mod}: ok ({getattr(m, '__version__', '?')})")
