@@ -488,7 +488,7 @@ def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
         rows = [r for r in results if r["problem"] == name]
         if not rows:
             continue
-        ref = ", ".join(f"{e.kind} {_fmt_p(e.p)}" for e in prob.expected)
+        ref = ", ".join(f"{e.kind} {e.p:.13g} ({e.source})" for e in prob.expected)
         lines += [f"### {prob.title}", "", f"Reference: {ref}.", ""]
         ours = next((r for r in rows if r["tool"] == "broachkit" and r["ok"]), None)
         floor = ours.get("floor") if ours else None
@@ -582,6 +582,11 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="keep the other entries of results/continuation.json, replace only those measured now",
     )
+    ap.add_argument(
+        "--report-only",
+        action="store_true",
+        help="only re-render results/continuation.md and README.md from the existing JSON",
+    )
     ap.add_argument("--worker", nargs=2, metavar=("TOOL", "PROBLEM"), help=argparse.SUPPRESS)
     ap.add_argument("--out", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -600,6 +605,14 @@ def main(argv: list[str] | None = None) -> int:
 
     from benchmarks.problems import all_problems
 
+    if args.report_only:
+        data = json.loads((RESULTS / "continuation.json").read_text())
+        md = markdown(data["results"], data["meta"])
+        (RESULTS / "continuation.md").write_text(md)
+        if not args.no_readme:
+            _update_readme(md)
+        print(md)
+        return 0
     problems = args.problems or list(all_problems())
     tools = args.tools or list(TOOLS)
     for t in tools:
