@@ -202,6 +202,17 @@ def test_guess_as_orbit_or_connection(model, bvp10):
     assert r1.orbit.x_to[0] - r1.orbit.x_from[0] == pytest.approx(UPSLOPE_SHIFT)
 
 
+def test_simplified_newton_equals_full_newton(model, bvp10, monkeypatch):
+    """The simplified-Newton solve and continuation.bvp.solve_connection's Newton agree."""
+    import ship_models.analysis.connection as conn
+
+    monkeypatch.setattr(conn, "_SIMPLIFIED_NEWTON", False)
+    r = critical_fn_bvp(10 * DEG, model=model)
+    assert r.success
+    assert "Newton iterations" in r.message and "simplified" not in r.message
+    assert abs(r.Fn - bvp10.Fn) < 1e-9
+
+
 def test_unusable_guess_fn_falls_back_to_coarse_bisection(model, curve):
     """At chi_c = 0 and Fn = 0.45 the upslope branch never nears the shifted saddle."""
     r = critical_fn_bvp(0.0, model=model, Fn_guess=0.45)
