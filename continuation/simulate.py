@@ -19,17 +19,30 @@ Integrators
     including NumPy-only ones; default for those.
 
 Default tolerances: ``rtol = 1e-10``, ``atol = 1e-12`` (local error per step). The
-*global* error of BDF grows with the integration time: about 1e-8 after 300 s of an
-8-state ship-like model and 1e-5 after 200 s (and 2400 rad) of a rotating pendulum,
-against a DOP853 reference at ``rtol = 1e-13``.
+*global* error grows with the integration time and with the instability of the flow;
+against a DOP853 reference at ``rtol = 1e-13`` the default BDF run is off by about
+1e-8 after 300 s of an 8-state ship-like toy model, 2e-5 after 200 s (2400 rad) of a
+rotating pendulum, and 4e-6 after 50 s of the paper's purse seiner started 1e-4 from
+its crest saddle (errors amplified along the unstable manifold).
 
 Measured by ``benchmarks/simulate_overhead.py`` (wall-time ratios to the fastest, with
-a Poincare section and a terminal event, ``rtol = 1e-10``): on the 8-state model
-CVODES-Adams 1.0, CVODES-BDF 1.6, LSODA 24, DOP853 58, RK45 134, SciPy BDF 79, Radau
-392; raw ``solve_ivp(DOP853)`` without events 74. One CasADi ``f`` call from Python
-costs 20-70 us, so every SciPy method is dominated by call overhead, while CVODES
-calls the compiled function in C. BDF is the default rather than Adams for its
-robustness on stiff models (rudder servo), at about 1.5 times the cost.
+a Poincare section and a terminal event, ``rtol = 1e-10``):
+
+==================  =====  ====  =====  ======  ====  =========  =====  ==========
+case                Adams  BDF   LSODA  DOP853  RK45  SciPy BDF  Radau  solve_ivp*
+==================  =====  ====  =====  ======  ====  =========  =====  ==========
+8-state toy, 300 s  1.0    1.3   17.5   44      77    48         194    31
+purse seiner, 50 s  1.0    1.2   2.7    2.5     4.3   6.5        22     2.1
+==================  =====  ====  =====  ======  ====  =========  =====  ==========
+
+(``*``: raw ``solve_ivp(DOP853)`` without events. CVODES-Adams: 31 ms for the toy,
+54 ms for 50 s of the purse seiner, whose right-hand
+side is a CasADi expression of about 12000 operations.) One CasADi ``f`` call from
+Python costs about 20 us of overhead, so the SciPy methods are dominated by call
+overhead on small models, while CVODES calls the compiled function in C. BDF is the
+default rather than Adams for its robustness on stiff models (on the Van der Pol
+oscillator with ``mu = 1000`` Adams is 3 times slower), at 1.2-1.3 times the cost on
+these non-stiff ones.
 
 Sampling and events
 -------------------
