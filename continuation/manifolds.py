@@ -54,18 +54,19 @@ class ManifoldBranch:
     trajectory : Trajectory
         The integrated branch (``t`` from 0).
     fate : Fate or None
-        Its classification, when a classifier was given.
+        Its classification, when a classifier was given (whatever a plain callable
+        ``classify`` returned).
     """
 
     sign: int
     x0: FloatArray
     trajectory: Trajectory
-    fate: Fate | None = None
+    fate: Fate | Any = None
 
     @property
     def status(self) -> Status:
         """Status of the integration (or of the classification)."""
-        return self.fate.status if self.fate is not None else self.trajectory.status
+        return self.fate.status if isinstance(self.fate, Fate) else self.trajectory.status
 
     def as_guess(self, target: Any = None) -> tuple[FloatArray, FloatArray]:
         """``(t (M,), x (M, n))`` of the branch, e.g. as the initial guess of a BVP.
@@ -336,7 +337,13 @@ def unstable_manifold(
             status = Status.INTERRUPTED
             break
         if traj is None:
-            traj = Trajectory(np.array([0.0]), x0[None, :], state_names=system.state_names)
+            traj = Trajectory(
+                np.array([0.0]),
+                x0[None, :],
+                state_names=tuple(system.state_names),
+                period=_period(system, n),
+                params=p,
+            )
         br = ManifoldBranch(sgn, x0, traj, fate)
         out[sgn] = br
         if not br.status.ok and status is Status.SUCCESS:

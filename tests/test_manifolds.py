@@ -134,6 +134,13 @@ def test_as_guess_cuts_at_closest_approach():
         res.plus.as_guess(target=[1.0])
 
 
+def test_plain_callable_classifier():
+    # any callable x0 -> label works; without a Trajectory the branch keeps its start
+    res = unstable_manifold(PEND, [0.5], [np.pi, 0.0], classify=lambda x0: bool(x0[0] > np.pi))
+    assert res.plus.fate is True and res.minus.fate is False  # noqa: E712
+    assert res.status is Status.SUCCESS and len(res.plus.trajectory) == 1
+
+
 def test_single_branch_and_refinement():
     # a slightly wrong saddle is refined by Newton; only the requested branch is computed
     res = unstable_manifold(PEND, [0.5], [np.pi + 1e-4, 1e-4], branches=(-1,), t_max=2.0)
