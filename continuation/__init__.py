@@ -22,11 +22,21 @@ from .driver import continue_branch
 from .equilibria import EquilibriumResult, solve_equilibrium, unique_equilibria
 from .errors import ContinuationError, ConvergenceError, ModelError
 from .events import Event
+from .fate_bisection import (
+    BisectionResult,
+    EquilibriumTracker,
+    bisect_fate,
+    manifold_fate_function,
+)
+from .fates import Fate, FateClassifier, FateKind, SaddleVisit, classify_fate
+from .global_graph import EdgeChange, GraphDiff, build_global_graph, compare_graphs
+from .manifolds import ManifoldBranch, ManifoldResult, unstable_manifold
 from .newton import NewtonResult, newton
 from .ops import CASADI_OPS, NUMPY_OPS, Ops
 from .params import Params
 from .problem import ContinuationProblem, EquilibriumProblem
 from .settings import ContinuationSettings, DetectionSettings, NewtonSettings
+from .simulate import EventHits, PoincareSection, SimEvent, Simulator, Trajectory, simulate
 from .stability import (
     EigenResult,
     count_unstable,
@@ -39,6 +49,28 @@ from .status import Status
 from .system import DynamicalSystem, System, check_jacobian
 
 __all__ = [
+    "simulate",
+    "Simulator",
+    "SimEvent",
+    "PoincareSection",
+    "Trajectory",
+    "EventHits",
+    "unstable_manifold",
+    "ManifoldResult",
+    "ManifoldBranch",
+    "classify_fate",
+    "FateClassifier",
+    "Fate",
+    "FateKind",
+    "SaddleVisit",
+    "build_global_graph",
+    "compare_graphs",
+    "GraphDiff",
+    "EdgeChange",
+    "bisect_fate",
+    "BisectionResult",
+    "EquilibriumTracker",
+    "manifold_fate_function",
     "PALC",
     "Branch",
     "BranchPoint",
