@@ -42,9 +42,42 @@ def _bisection(model: Any, params: Any, args: argparse.Namespace) -> dict[str, A
     return res.to_json()
 
 
+def _bvp(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
+    from ship_models.analysis.connection import critical_fn_bvp
+
+    res = critical_fn_bvp(
+        params["chi_c"],
+        model=model,
+        params=params,
+        Fn_guess=args.fn_guess,
+        guess_bracket=(args.fn_min, args.fn_max),
+        check=True,
+    )
+    return {"method": "bvp", "fn_critical": res.Fn, **res.to_json()}
+
+
+def _both(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
+    bvp = _bvp(model, params, args)
+    bis = _bisection(model, params, args)
+    ok = bvp["status"] == "SUCCESS" and bis["status"] == "SUCCESS"
+    return {
+        "method": "both",
+        "fn_critical": bvp["fn_critical"],
+        "bracket": bis["bracket"],
+        "difference": bvp["fn_critical"] - bis["fn_critical"],
+        "status": "SUCCESS"
+        if ok
+        else (bvp["status"] if bis["status"] == "SUCCESS" else bis["status"]),
+        "bvp": bvp,
+        "bisection": bis,
+    }
+
+
 #: ``--method`` choices: name -> function(model, params, args) -> JSON-ready dict.
 METHODS: dict[str, Callable[[Any, Any, argparse.Namespace], dict[str, Any]]] = {
     "bisection": _bisection,
+    "bvp": _bvp,
+    "both": _both,
 }
 
 
@@ -53,6 +86,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_ship_arguments(parser, fn=False)
     parser.add_argument(
         "--method", choices=sorted(METHODS), default="bisection", help="how to locate it"
+    )
+    parser.add_argument(
+        "--fn-guess",
+        type=float,
+        default=0.3248,
+        help="bvp: Fn of the unstable-manifold simulation that seeds the orbit (0.3248)",
     )
     parser.add_argument("--fn-min", type=float, default=0.25, help="lower end of the Fn search")
     parser.add_argument("--fn-max", type=float, default=0.40, help="upper end of the Fn search")
@@ -64,7 +103,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Locate the critical Fn; returns 0 on success, 1 otherwise."""
-    for opt in ("fn_min", "fn_max", "tol", "t_max"):
+    for opt in ("fn_min", "fn_max", "tol", "t_max", "fn_guess"):
         val = getattr(args, opt)
         if not (math.isfinite(val) and val > 0):
             raise ValueError(f"--{opt.replace('_', '-')} must be positive, got {val}")
@@ -75,10 +114,24 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(result, indent=2) + "\n")
     else:
-        lo, hi = result["bracket"]
-        sys.stdout.write(
-            f"{model.vessel.name}, chi_c = {args.chi_c:g} deg ({args.method}): "
-            f"critical Fn = {result['fn_critical']:.7f} in [{lo:.7f}, {hi:.7f}] "
-            f"({result['fate_lo']} below, {result['fate_hi']} above); {result['status']}\n"
-        )
+        head = f"{model.vessel.name}, chi_c = {args.chi_c:g} deg ({args.method}): "
+        if args.method == "bisection":
+            lo, hi = result["bracket"]
+            text = (
+                f"critical Fn = {result['fn_critical']:.7f} in [{lo:.7f}, {hi:.7f}] "
+                f"({result['fate_lo']} below, {result['fate_hi']} above)"
+            )
+        elif args.method == "bvp":
+            text = (
+                f"critical Fn = {result['fn_critical']:.8f} (connecting orbit, "
+                f"|G| = {result['residual_norm']:.1e}, mesh change {result.get('delta_Fn_mesh')}, "
+                f"T change {result.get('delta_Fn_T')})"
+            )
+        else:
+            lo, hi = result["bracket"]
+            text = (
+                f"bvp Fn = {result['fn_critical']:.8f}; bisection bracket "
+                f"[{lo:.7f}, {hi:.7f}]; difference {result['difference']:.1e}"
+            )
+        sys.stdout.write(head + text + f"; {result['status']}\n")
     return 0 if result["status"] == "SUCCESS" else 1

@@ -10,6 +10,7 @@ demo       engine demo (Bratu fold, Brusselator Hopf)   ``broachkit demo``
 fig02_05   fixed points against chi_c and Fn           ``studies/fig02_05_fixed_points.py``
 fig06_09   eigenvalues and unstable eigenvectors       ``studies/fig06_09_eigen.py``
 fig10_15   critical Fn, unstable manifolds             ``studies/fig10_15_manifolds.py``
+fig21_23   connecting orbit, critical curve            ``studies/fig21_23_connection.py``
 ========== =========================================== ===================================
 
 A step whose ``summary.json`` is already on disk is skipped unless ``--force``;
@@ -48,6 +49,11 @@ STUDY_STEPS: tuple[tuple[str, str, str], ...] = (
     ),
     ("fig06_09", "Figs. 6-9: eigenvalues and unstable eigenvectors", "fig06_09_eigen.py"),
     ("fig10_15", "Figs. 10-15: critical Fn and unstable manifolds", "fig10_15_manifolds.py"),
+    (
+        "fig21_23",
+        "Figs. 21, 23: connecting orbit and critical Fn against the course",
+        "fig21_23_connection.py",
+    ),
 )
 
 

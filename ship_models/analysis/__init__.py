@@ -12,6 +12,8 @@ model (:mod:`ship_models`); the figure scripts in ``studies/`` and the command l
 - :mod:`.manifold` -- unstable manifolds of a saddle and their fates (Figs. 10-15)
 - :mod:`.global_picture` -- fixed points, attractors and manifolds as a graph
 - :mod:`.critical` -- critical Fn of the heteroclinic bifurcation by bisection
+- :mod:`.connection` -- the same as a connecting orbit by collocation, and its
+  continuation in chi_c (the critical curve, Fig. 23)
 
 The simulation-based names are imported lazily (on first use).
 """
@@ -42,6 +44,11 @@ _LAZY = {
     "PictureDiff": ".global_picture",
     "compare_pictures": ".global_picture",
     "build_global_picture": ".global_picture",
+    "CriticalConnection": ".connection",
+    "CriticalCurve": ".connection",
+    "critical_curve": ".connection",
+    "critical_fn_bisection": ".connection",
+    "critical_fn_bvp": ".connection",
 }
 
 
@@ -53,6 +60,11 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
+    "CriticalConnection",
+    "CriticalCurve",
+    "critical_curve",
+    "critical_fn_bisection",
+    "critical_fn_bvp",
     "CriticalResult",
     "EigenStructure",
     "FixedPoint",
