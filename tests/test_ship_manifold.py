@@ -7,7 +7,9 @@ References used:
 - a detected periodic orbit must close on itself when re-integrated for one period
   by an independent integrator (SciPy DOP853);
 - the paper's statements on the branches, asserted for our vessel at Fn = 0.3248
-  (above our critical Fn) and Fn = 0.3016 (below it; see ``studies/README.md``).
+  (above our critical Fn) and 5e-5 below the critical Fn that the collocation solver
+  (:func:`ship_models.analysis.connection.critical_fn_bvp`) finds, an independent
+  method: the manifold fates must switch across that value.
 """
 
 from __future__ import annotations
@@ -56,9 +58,19 @@ def above(model, params):
 
 
 @pytest.fixture(scope="module")
-def below(model, params):
-    """Fn = 0.3016, below our vessel's critical Fn (about 0.30165)."""
-    return unstable_manifold(model, params.replace(Fn=0.3016))
+def fn_critical(model, params):
+    """Critical Fn at chi_c = 10 deg from the connecting orbit (collocation)."""
+    from ship_models.analysis.connection import critical_fn_bvp
+
+    res = critical_fn_bvp(params["chi_c"], model=model, params=params)
+    assert res.success, res.message
+    return res.Fn
+
+
+@pytest.fixture(scope="module")
+def below(model, params, fn_critical):
+    """5e-5 below our vessel's critical Fn (about 0.3016)."""
+    return unstable_manifold(model, params.replace(Fn=fn_critical - 5e-5))
 
 
 def test_start_points_follow_the_unstable_eigenvector(above):
@@ -95,7 +107,7 @@ def test_upslope_branch_above_critical_capsizes_after_the_next_saddle(above):
 
 def test_upslope_branch_below_critical_tends_to_a_periodic_attractor(model, below):
     """Paper, Fn = 0.3247 for its vessel: 'approaches the saddle next to the original
-    one and then tends to a periodic attractor' -- our vessel at Fn = 0.3016."""
+    one and then tends to a periodic attractor' -- our vessel 5e-5 below its critical Fn."""
     br = below.branches["upslope"]
     fate = br.fate
     assert fate.kind == "periodic"
@@ -158,9 +170,9 @@ def test_fates_do_not_depend_on_eps(model, params, above, below):
             assert other.fates == man.fates
 
 
-def test_global_picture_changes_across_the_heteroclinic_bifurcation(model, params):
-    g1 = build_global_picture(model, params.replace(Fn=0.3016))
-    g2 = build_global_picture(model, params.replace(Fn=0.3017))
+def test_global_picture_changes_across_the_heteroclinic_bifurcation(model, params, fn_critical):
+    g1 = build_global_picture(model, params.replace(Fn=fn_critical - 5e-5))
+    g2 = build_global_picture(model, params.replace(Fn=fn_critical + 5e-5))
     assert g1.nodes["crest"]["saddle_index"] == 1
     assert "periodic" in g1 and "periodic" not in g2
     assert g1.edges["crest", "capsize", "downslope"]["fate"] == "capsize"
