@@ -284,7 +284,8 @@ class TestCuspNormalForm:
     b1 = ∓2 (b2/3)^{3/2} (Kuznetsov 2004, Sec. 8.2), with a cusp at the origin."""
 
     @pytest.fixture(scope="class")
-    def curve(self):
+    @classmethod
+    def curve(cls):
         br = _branch(CUSP, [-1.5], {"b1": -1.0, "b2": 1.0}, "b1", p_min=-2, p_max=2, ds=0.05)
         fold = br.find("fold")[0]
         st = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-0.5, p_max=2.0)
@@ -341,7 +342,8 @@ class TestBogdanovTakensNormalForm:
     b2 > 0 (kappa = -b2); both curves meet at the BT point (0, 0)."""
 
     @pytest.fixture(scope="class", params=[-1.0, 1.0])
-    def branch(self, request):
+    @classmethod
+    def branch(cls, request):
         return _branch(
             BT,
             [0.0, 0.0],
@@ -464,11 +466,12 @@ class TestCSTR:
     B = 14.0
 
     @pytest.fixture(scope="class")
-    def branch(self):
+    @classmethod
+    def branch(cls):
         return _branch(
             CSTR,
             [0.0, 0.0],
-            {"Da": 0.0, "B": self.B, "beta": 2.0},
+            {"Da": 0.0, "B": cls.B, "beta": 2.0},
             "Da",
             p_min=0.0,
             p_max=0.3,
@@ -557,7 +560,8 @@ class TestZeroHopf:
     x1 = -b2, b1 = b2^2, omega = 1, with a zero-Hopf point where -2 x1 = 0, b2 = 0."""
 
     @pytest.fixture(scope="class")
-    def branch(self):
+    @classmethod
+    def branch(cls):
         return _branch(
             ZERO_HOPF, [1.0, 0, 0], {"b1": 1.0, "b2": -0.5}, "b1", p_min=-0.5, p_max=1.5, ds=0.02
         )
@@ -691,7 +695,8 @@ class TestRenormalisation:
 
 class TestInputValidation:
     @pytest.fixture(scope="class")
-    def branch(self):
+    @classmethod
+    def branch(cls):
         return _branch(CUSP, [-1.5], {"b1": -1.0, "b2": 1.0}, "b1", p_min=-2, p_max=2, ds=0.05)
 
     def test_bad_free2(self, branch):
@@ -771,8 +776,9 @@ class TestEmbeddedCSTR:
     B = 14.0
 
     @pytest.fixture(scope="class")
-    def setup(self):
-        n = self.n
+    @classmethod
+    def setup(cls):
+        n = cls.n
         Q, _ = np.linalg.qr(np.random.default_rng(0).standard_normal((n, n)))
         D = np.linspace(1.0, 3.0, n - 2)
 
@@ -789,7 +795,7 @@ class TestEmbeddedCSTR:
         br = _branch(
             sysn,
             np.zeros(n),
-            {"Da": 0.0, "B": self.B, "beta": 2.0},
+            {"Da": 0.0, "B": cls.B, "beta": 2.0},
             "Da",
             p_min=0.0,
             p_max=0.3,
