@@ -113,19 +113,75 @@ def _dense_eigvals(J: Any) -> ComplexArray:
 
 
 def _sparse_eigs(J: Any, k: int, sigma: float, v0: Any) -> ComplexArray | None:
+    out = sparse_eigs_near(J, k, sigma, v0=v0, tol=0.0)
+    return None if out is None else out[0]
+
+
+def sparse_eigs_near(
+    J: Any,
+    k: int,
+    sigma: float = 0.0,
+    *,
+    v0: Any = None,
+    tol: float = 0.0,
+    opinv: Any = None,
+    vectors: bool = False,
+) -> tuple[ComplexArray, Any] | None:
+    r"""The ``k`` eigenvalues of a sparse real matrix nearest a real shift ``sigma``.
+
+    ARPACK's implicitly restarted Arnoldi method in shift-invert mode (Lehoucq,
+    Sorensen & Yang 1998, *ARPACK Users' Guide*, SIAM, Sec. 3.2): the largest
+    eigenvalues ``nu`` of ``(J - sigma I)^{-1}`` give ``lambda = sigma + 1 / nu``.
+
+    Parameters
+    ----------
+    J : SciPy sparse matrix, shape (n, n)
+    k : int
+        Number of eigenvalues, ``k < n - 1``.
+    sigma : float
+        Real shift.
+    v0 : ndarray, shape (n,), optional
+        Start vector of the Arnoldi iteration (default: a fixed vector). A combination
+        of the wanted eigenvectors (e.g. those of a neighbouring point of a branch)
+        cuts the number of iterations several-fold.
+    tol : float
+        ARPACK's relative accuracy of the Ritz values of the shift-inverted operator
+        (0: machine precision).
+    opinv : LinearOperator or callable, optional
+        ``b -> (J - sigma I)^{-1} b`` from an existing factorisation; default:
+        SciPy factorises ``J - sigma I`` with SuperLU.
+    vectors : bool
+        Also return the eigenvectors, shape ``(n, k')``.
+
+    Returns
+    -------
+    (values, vectors) or None
+        ``values`` shape ``(k',)`` complex, ``k' >= k`` when a complex pair cut at the
+        ``k`` boundary is completed by its conjugate (its vector is then conjugated
+        too); ``vectors`` is None unless requested. None if ARPACK fails at ``sigma``
+        and at ``sigma + 1e-6 (1 + |sigma|)``.
+    """
     n = J.shape[0]
     if v0 is None:
         v0 = np.cos(np.arange(n) + 1.0)
-    for shift in (sigma, sigma + 1e-6 * (1.0 + abs(sigma))):
+    A = J if sp.isspmatrix_csc(J) or isinstance(J, sp.csc_array) else sp.csc_matrix(J)
+    vecs = None
+    for attempt, shift in enumerate((sigma, sigma + 1e-6 * (1.0 + abs(sigma)))):
+        op = None
+        if opinv is not None and attempt == 0:
+            op = opinv
+            if not isinstance(op, spla.LinearOperator):
+                op = spla.LinearOperator((n, n), matvec=opinv, dtype=float)
         try:
-            vals = spla.eigs(
-                sp.csc_matrix(J),
+            out = spla.eigs(
+                A,
                 k=k,
                 sigma=shift,
                 which="LM",
                 v0=v0,
-                tol=0,
-                return_eigenvectors=False,
+                tol=tol,
+                OPinv=op,
+                return_eigenvectors=vectors,
             )
             break
         except (RuntimeError, spla.ArpackError, spla.ArpackNoConvergence) as exc:
@@ -133,17 +189,23 @@ def _sparse_eigs(J: Any, k: int, sigma: float, v0: Any) -> ComplexArray | None:
     else:
         log.info("ARPACK failed; falling back to dense eigenvalues (n=%d)", n)
         return None
+    if vectors:
+        vals, vecs = out
+    else:
+        vals = out
     vals = np.asarray(vals, dtype=complex)
     # A real matrix has conjugate pairs: complete a pair cut at the k boundary.
-    tol = 1e-8 * max(1.0, float(np.max(np.abs(vals))))
+    tol_pair = 1e-8 * max(1.0, float(np.max(np.abs(vals))))
     missing = [
-        np.conj(v)
-        for v in vals
-        if abs(v.imag) > tol and np.min(np.abs(vals - np.conj(v))) > tol * 10
+        i
+        for i, v in enumerate(vals)
+        if abs(v.imag) > tol_pair and np.min(np.abs(vals - np.conj(v))) > tol_pair * 10
     ]
     if missing and vals.size + len(missing) <= n:
-        vals = np.concatenate([vals, missing])
-    return vals
+        vals = np.concatenate([vals, np.conj(vals[missing])])
+        if vecs is not None:
+            vecs = np.concatenate([vecs, np.conj(vecs[:, missing])], axis=1)
+    return vals, vecs
 
 
 def count_unstable(eigs: Any, eig_tol: float = 1e-10, imag_tol: float = 1e-8) -> tuple[int, int]:
@@ -271,4 +333,5 @@ __all__ = [
     "eigenvalues",
     "n_unstable",
     "sort_eigenvalues",
+    "sparse_eigs_near",
 ]

@@ -25,6 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._types import FloatArray
+from .algorithms.base import csc_with_data
 from .differentiation import fd_jacobian
 from .errors import ModelError
 from .ops import CASADI_OPS, NUMPY_OPS, Ops
@@ -465,11 +466,15 @@ class System:
             buf.set_res(1, memoryview(nz_out))
             buf.set_res(2, memoryview(q_out))
 
+            template = sp.csc_matrix((nz_out.copy(), rows, colind), shape=(n, n))
+            template.has_canonical_format  # noqa: B018  (checked once, inherited below)
+
             def lin_sparse(x: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
                 x_in[:] = x
                 p_in[k] = p
                 run()
-                J = sp.csc_matrix((nz_out.copy(), rows, colind), shape=(n, n))
+                # same structure every call: share it, skip SciPy's format checks
+                J = csc_with_data(template, nz_out.copy())
                 return f_out.copy(), J, q_out.copy()
 
             lin_sparse.buffers = (buf, x_in, p_in, f_out, nz_out, q_out)  # type: ignore[attr-defined]

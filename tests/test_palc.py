@@ -366,3 +366,79 @@ def test_unlocatable_bound_never_leaves_a_row_outside():
     st2 = dataclasses.replace(st, p_max=0.8)
     br2 = continue_branch(Hole(), [0.0], 0.0, settings=st2)
     assert br2.status is Status.PARAM_BOUND and br2.p[-1] == 0.8
+
+
+# ---------------------------------------------------------------- sparse linear algebra reuse
+def test_bordered_csc_pattern_cache_matches_dense_assembly():
+    """assemble_bordered_csc (pattern built once, data overwritten) equals np.block, for
+    repeated calls on one pattern, a second pattern, and a non-canonical matrix."""
+    import scipy.sparse as sp
+
+    rng = np.random.default_rng(3)
+    for n, density in ((30, 0.2), (12, 0.5)):
+        A = sp.random(n, n, density=density, format="csc", random_state=rng) + sp.eye(n)
+        A = sp.csc_matrix(A)
+        for _ in range(3):
+            B = base.csc_with_data(A, rng.standard_normal(A.nnz))  # same pattern, new data
+            gp, c = rng.standard_normal(n), rng.standard_normal(n + 1)
+            M = base.assemble_bordered_csc(B, gp, c)
+            ref = np.block([[B.toarray(), gp[:, None]], [c[None, :]]])
+            np.testing.assert_array_equal(M.toarray(), ref)
+            assert M.has_canonical_format
+            # a factorisation of the assembled matrix solves the dense system
+            lu = base.BorderedLU(B, gp, c)
+            rhs = rng.standard_normal(n + 1)
+            np.testing.assert_allclose(ref @ lu.solve(rhs), rhs, atol=1e-9)
+            assert lu.sign == np.sign(np.linalg.det(ref))
+    # duplicates (non-canonical): summed like SciPy does, the input left untouched
+    D = sp.csc_matrix((np.array([1.0, 2.0, 3.0]), np.array([0, 0, 1]), np.array([0, 2, 3])),
+                      shape=(2, 2))  # fmt: skip
+    M = base.assemble_bordered_csc(D, np.array([1.0, 1.0]), np.array([0.0, 0.0, 1.0]))
+    np.testing.assert_array_equal(M.toarray(), [[3.0, 0.0, 1.0], [0.0, 3.0, 1.0], [0, 0, 1]])
+    assert D.nnz == 3
+
+
+def test_warm_sparse_eigs_reuse_the_corrector_factorisation():
+    """Along a sparse Bratu branch the eigenvalues near 0 from the warm-started ARPACK with
+    the bordered factorisation as G_z^{-1} equal dense LAPACK eigenvalues of G_z."""
+    import continuation.driver as drv
+
+    n = 150
+    sys = bratu(n)
+    prob = EquilibriumProblem(sys, sys.params(lam=0.0), "lam")
+    st = ContinuationSettings(ds=0.3, ds_max=0.3, max_steps=8, p_max=3.0)
+    used = []
+    real_opinv = drv._WarmSparseEigs._opinv
+
+    def spy(self, pt):
+        op = real_opinv(self, pt)
+        used.append(op is not None)
+        return op
+
+    drv._WarmSparseEigs._opinv = spy
+    try:
+        br = continue_branch(prob, np.zeros(n), 0.0, settings=st)
+    finally:
+        drv._WarmSparseEigs._opinv = real_opinv
+    assert len(br) == 9 and all(used) and len(used) >= 9
+    for k in range(len(br)):
+        J = prob.jacobian(br.x[k], br.p[k]).toarray()
+        dense = np.sort(np.linalg.eigvals(J).real)[::-1][:6]  # symmetric: real spectrum
+        # rows are within the corrector's step tolerance of the point the eigenvalues
+        # were computed at: compare at that level
+        np.testing.assert_allclose(br.eigenvalues[k, :6].real, dense, rtol=1e-8)
+        np.testing.assert_allclose(br.eigenvalues[k, :6].imag, 0.0, atol=1e-8)
+    # a pair near the shift: the warm solver returns both members (conjugates)
+    import scipy.sparse as sp
+
+    from continuation.stability import sparse_eigs_near
+
+    m = n // 2  # 2x2 blocks [[-j, j/2], [-j/2, -j]]: eigenvalues -j +- i j/2
+    j = np.arange(1.0, m + 1)
+    blocks = [np.array([[-a, a / 2], [-a / 2, -a]]) for a in j]
+    T = sp.csc_matrix(sp.block_diag(blocks))
+    vals, vecs = sparse_eigs_near(T, 5, 0.0, tol=1e-12, vectors=True)
+    assert vals.size == 6  # the pair cut at k = 5 is completed by its conjugate
+    ref = np.concatenate([-j[:3] + 0.5j * j[:3], -j[:3] - 0.5j * j[:3]])
+    np.testing.assert_allclose(np.sort_complex(vals), np.sort_complex(ref), rtol=1e-10)
+    np.testing.assert_allclose(T @ vecs, vecs * vals, atol=1e-9)

@@ -165,33 +165,84 @@ def _perm_parity_uncached(perm: Any) -> int:
     return sign
 
 
+def csc_with_data(template: Any, data: FloatArray) -> Any:
+    """A new sparse matrix with the structure of ``template`` (CSC/CSR) and ``data``.
+
+    ``data`` must have the length and dtype of ``template.data``. The index arrays are
+    shared with ``template`` (not copied; never modified by SciPy for a matrix in
+    canonical form) and the format checks of SciPy's constructor, which dominate the
+    cost of assembling small sparse matrices, are skipped: the structure was checked
+    when ``template`` was built.
+    """
+    cls = template.__class__
+    M = cls.__new__(cls)
+    M.__dict__.update(template.__dict__)
+    M.data = data
+    return M
+
+
+class _BorderPattern:
+    """Positions of the entries of ``Gz``, ``Gp`` and ``c`` in the bordered CSC matrix
+    (depends only on the sparsity pattern of ``Gz``; built once per pattern)."""
+
+    __slots__ = ("indptr", "indices", "nnz", "pos", "border_pos", "template")
+
+    def __init__(self, Gz: Any) -> None:
+        n = Gz.shape[0]
+        indptr, indices = Gz.indptr, Gz.indices
+        self.indptr, self.indices = indptr, indices  # references keep the ids valid
+        nnz = int(indptr[-1])
+        self.nnz = nnz
+        counts = np.diff(indptr)
+        total = nnz + n + (n + 1)
+        new_indices = np.empty(total, dtype=np.int32)
+        self.pos = np.arange(nnz) + np.repeat(np.arange(n), counts)
+        new_indices[self.pos] = indices[:nnz]
+        self.border_pos = indptr[1:] + np.arange(n)
+        new_indices[self.border_pos] = n
+        new_indices[nnz + n :] = np.arange(n + 1)
+        new_indptr = np.empty(n + 2, dtype=np.int32)
+        new_indptr[: n + 1] = indptr + np.arange(n + 1)
+        new_indptr[n + 1] = total
+        # one checked construction; later matrices share its (canonical) structure
+        self.template = sp.csc_matrix(
+            (np.ones(total), new_indices, new_indptr), shape=(n + 1, n + 1)
+        )
+        # canonical (sorted, no duplicates) exactly when Gz is: flag computed once here
+        self.template.has_canonical_format  # noqa: B018
+
+    def assemble(self, data: FloatArray, Gp: FloatArray, c: FloatArray) -> sp.csc_matrix:
+        n = self.indptr.size - 1
+        new_data = np.empty(self.template.data.size, dtype=float)
+        new_data[self.pos] = data[: self.nnz]
+        new_data[self.border_pos] = c[:n]
+        start = self.nnz + n
+        new_data[start : start + n] = Gp
+        new_data[-1] = c[n]
+        return csc_with_data(self.template, new_data)
+
+
+_PATTERNS: dict[tuple[int, int, int], _BorderPattern] = {}
+
+
 def assemble_bordered_csc(Gz: Any, Gp: FloatArray, c: FloatArray) -> sp.csc_matrix:
     """CSC matrix ``[[Gz, Gp], [c^T]]`` built directly from the CSC arrays of ``Gz``.
 
-    ``Gp`` is stored as a dense column and ``c`` as a dense row.
+    ``Gp`` is stored as a dense column and ``c`` as a dense row. The positions of the
+    entries depend only on the sparsity pattern of ``Gz``, which is fixed along a
+    branch: they are computed once per pattern (recognised by the identity of
+    ``Gz``'s index arrays, as handed out by the problem's evaluator) and reused.
     """
     Gz = Gz if sp.isspmatrix_csc(Gz) or isinstance(Gz, sp.csc_array) else sp.csc_matrix(Gz)
-    n = Gz.shape[0]
-    indptr, indices, data = Gz.indptr, Gz.indices, Gz.data
-    nnz = indptr[-1]
-    counts = np.diff(indptr)
-    total = nnz + n + (n + 1)
-    new_indices = np.empty(total, dtype=np.int32)
-    new_data = np.empty(total, dtype=float)
-    pos = np.arange(nnz) + np.repeat(np.arange(n), counts)
-    new_indices[pos] = indices[:nnz]
-    new_data[pos] = data[:nnz]
-    border_pos = indptr[1:] + np.arange(n)
-    new_indices[border_pos] = n
-    new_data[border_pos] = c[:n]
-    start = nnz + n
-    new_indices[start:] = np.arange(n + 1)
-    new_data[start : start + n] = Gp
-    new_data[-1] = c[n]
-    new_indptr = np.empty(n + 2, dtype=np.int32)
-    new_indptr[: n + 1] = indptr + np.arange(n + 1)
-    new_indptr[n + 1] = total
-    return sp.csc_matrix((new_data, new_indices, new_indptr), shape=(n + 1, n + 1))
+    if not Gz.has_canonical_format:  # (SciPy may sort / sum it in place: no sharing)
+        return _BorderPattern(Gz).assemble(Gz.data, Gp, c)
+    key = (id(Gz.indptr), id(Gz.indices), Gz.shape[0])
+    pat = _PATTERNS.get(key)
+    if pat is None or pat.indptr is not Gz.indptr or pat.indices is not Gz.indices:
+        if len(_PATTERNS) >= 16:
+            _PATTERNS.clear()
+        pat = _PATTERNS[key] = _BorderPattern(Gz)
+    return pat.assemble(Gz.data, Gp, c)
 
 
 class BorderedLU:
