@@ -161,7 +161,7 @@ class PeriodicOrbit:
     @property
     def success(self) -> bool:
         """Converged."""
-        return self.status.ok
+        return self.status is Status.SUCCESS
 
     @property
     def attracting(self) -> bool:
@@ -303,7 +303,7 @@ def periodic_orbit(
     tol : float
         Newton tolerance (nondimensional).
     max_returns : int
-        Returns simulated at most before giving up (``Status.MAX_STEPS``).
+        Returns simulated at most before giving up (``Status.MAX_ITER``).
     max_newton : int
     capsize_angle : float, optional
         Roll angle (rad) of capsize; default the vanishing angle of GZ. A capsize
@@ -379,20 +379,22 @@ def periodic_orbit(
         x, t_now = tr.x[-1], float(tr.t[-1])
     assert last is not None
     if not converged:
-        return fail(Status.MAX_STEPS, f"returns did not settle in {len(hits_t)} returns", last)
+        return fail(Status.MAX_ITER, f"returns did not settle in {len(hits_t)} returns", last)
     n_transient = len(hits_t)
     xa, xb = hits_x[-2], hits_x[-1]
     drift = int(round(xb[i_xi] - xa[i_xi]))
     if drift == 0:
         return fail(
-            Status.FAILED, "the motion does not drift through the waves (no section returns)", last
+            Status.UNDECIDED,
+            "the motion does not drift through the waves",
+            last,
         )
     period_est = hits_t[-1] - hits_t[-2]
     pmap = _ReturnMap(model, par, section, 1 if drift > 0 else -1, 3.0 * period_est * abs(drift))
 
     # ---- 2. Newton on P(y) - y
     y = np.asarray(xb[others], dtype=float)
-    status, msg = Status.MAX_STEPS, f"Newton did not converge in {max_newton} iterations"
+    status, msg = Status.NEWTON_FAILED, f"Newton did not converge in {max_newton} iterations"
     J = np.eye(len(others))
     res = math.inf
     try:
@@ -415,9 +417,9 @@ def periodic_orbit(
                 status, msg = Status.SUCCESS, f"converged in {it + 1} Newton iterations"
                 break
     except ContinuationError as exc:
-        status, msg = Status.FAILED, str(exc)
+        status, msg = Status.NEWTON_FAILED, str(exc)
     except np.linalg.LinAlgError:
-        status, msg = Status.FAILED, "singular return-map Jacobian (a multiplier equal to 1)"
+        status, msg = Status.SINGULAR, "singular return-map Jacobian (a multiplier equal to 1)"
     py, period, tr = pmap(y)
     closure = float(np.max(np.abs(py - y) / s7))
     mult = np.linalg.eigvals(J)
@@ -425,7 +427,7 @@ def periodic_orbit(
         model, par, pmap.full(y), section, period, drift, mult, closure, tr, status, msg,
         n_transient, time.perf_counter() - t_start,
     )  # fmt: skip
-    if throw and not status.ok:
+    if throw and status is not Status.SUCCESS:
         raise ContinuationError(f"periodic_orbit: {msg}")
     log.debug("periodic orbit: %s, period %.6g s, closure %.2e", msg, period, closure)
     return orbit
@@ -653,7 +655,7 @@ class SuddenChangeBoundary:
     @property
     def success(self) -> bool:
         """Converged to the tolerance."""
-        return self.status.ok
+        return self.status is Status.SUCCESS
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -698,7 +700,7 @@ def sudden_change_boundary(
 
     The outcome at the lower end of ``fn_bracket`` must be "no capsize" and at the
     upper end "capsize"; otherwise (or with an ``undecided`` run) the result carries
-    ``Status.FAILED`` (``ContinuationError`` with ``throw=True``). Each step halves the
+    ``Status.UNDECIDED`` (``ContinuationError`` with ``throw=True``). Each step halves the
     bracket, keeping ends with different outcomes, until it is shorter than ``tol``.
 
     Parameters
@@ -753,6 +755,15 @@ def sudden_change_boundary(
         nonlocal n_runs
         r = sudden_change(model, None, base.replace(Fn=fn), xi_0, orbit=orb, t_max=t_max, **options)
         n_runs += 1
+        if r.outcome == UNDECIDED and r.fate.status is not Status.INTERRUPTED:
+            # close to the boundary the transient lingers near the crest saddle and the
+            # attractor below it has several returns: one more try with twice the time
+            r = sudden_change(
+                model, None, base.replace(Fn=fn), xi_0, orbit=orb, t_max=2 * t_max, **options
+            )
+            n_runs += 1
+        if r.fate.status is Status.INTERRUPTED:
+            raise KeyboardInterrupt
         if progress is not None:
             progress(f"Fn = {fn:.7f}: {r.outcome}")
         return r.outcome
@@ -770,7 +781,7 @@ def sudden_change_boundary(
         o_lo, o_hi = run(lo), run(hi)
         if UNDECIDED in (o_lo, o_hi) or (o_lo == CAPSIZE) == (o_hi == CAPSIZE) or o_lo == CAPSIZE:
             return done(
-                Status.FAILED,
+                Status.NO_BRACKET,
                 f"bracket ends must be 'no capsize' below and 'capsize' above; got {o_lo!r} "
                 f"at Fn = {lo:g} and {o_hi!r} at Fn = {hi:g}",
                 (o_lo, o_hi),
@@ -779,7 +790,7 @@ def sudden_change_boundary(
             mid = 0.5 * (lo + hi)
             o = run(mid)
             if o == UNDECIDED:
-                return done(Status.FAILED, f"undecided outcome at Fn = {mid:.8f}", (o_lo, o_hi))
+                return done(Status.UNDECIDED, f"undecided outcome at Fn = {mid:.8f}", (o_lo, o_hi))
             if o == CAPSIZE:
                 hi, o_hi = mid, o
             else:
