@@ -13,6 +13,14 @@ at every new parameter value with :class:`EquilibriumTracker`.
 Bisection needs only a sign (here: a label) at each point, so it is robust to the
 non-smooth dependence of the fate on ``p``; it halves the bracket per evaluation, so
 ``log2((b - a) / tol)`` evaluations reach ``tol``.
+
+First passage. The *final* fate of a manifold branch may switch not only at the
+connection sought (branch of ``W^u(A)`` on ``W^s(B)``) but also at secondary ones
+(the branch passes ``B``, then lands on ``W^s`` of a further saddle), which can
+accumulate on the primary connection; bisection on the final fate may then lock onto
+one of them. The side on which the branch leaves ``B`` on its first passage
+(:func:`continuation.fates.passage_side`) switches only at the primary connection:
+``manifold_fate_function(..., passage="B")`` bisects that instead.
 """
 
 from __future__ import annotations
@@ -27,7 +35,7 @@ import numpy as np
 
 from ._types import FloatArray
 from .errors import ContinuationError, ConvergenceError
-from .fates import Fate, FateClassifier, FateKind, refine_equilibrium
+from .fates import Fate, FateClassifier, FateKind, passage_side, refine_equilibrium
 from .manifolds import unstable_manifold
 from .newton import newton
 from .params import Params
@@ -365,8 +373,10 @@ def manifold_fate_function(
     eps: float = 1e-6,
     orient: str | int | None = None,
     tracker_options: Mapping[str, Any] | None = None,
+    passage: str | None = None,
+    passage_labels: Mapping[int, Hashable] | None = None,
     **classifier_options: Any,
-) -> Callable[[float], Fate]:
+) -> Callable[[float], Any]:
     """``fate_at(p)`` for one branch of the unstable manifold of a tracked saddle.
 
     At each ``p`` the saddle and the other ``equilibria`` are re-solved by an
@@ -392,6 +402,17 @@ def manifold_fate_function(
         As for :func:`~continuation.manifolds.unstable_manifold`.
     tracker_options : mapping, optional
         Options of :class:`EquilibriumTracker`.
+    passage : str, optional
+        Name of a saddle in ``equilibria`` (or ``"saddle"`` for copies of the start
+        shifted by whole periods): ``fate_at`` then returns the side on which the branch
+        leaves its first visit of that saddle (:func:`continuation.fates.passage_side`),
+        as ``passage_labels[side]``; the plain fate when there is no such visit or
+        its side is unknown (far from the connection, or converging onto it). See the
+        module notes.
+    passage_labels : mapping of {+1, -1} to label, optional
+        Labels of the two sides; default ``"passage:<name>:+1"`` / ``":-1"``. Name them
+        after the final fates on each side (e.g. ``{+1: "event:y_up", -1:
+        "event:y_down"}``) so that evaluations without a visit compare consistently.
     **classifier_options
         Options of :class:`~continuation.fates.FateClassifier` (``events``,
         ``poincare``, ``tol``, ``t_max``, ...).
@@ -399,7 +420,8 @@ def manifold_fate_function(
     Returns
     -------
     callable
-        ``fate_at(p) -> Fate``, to pass to :func:`bisect_fate`. It raises
+        ``fate_at(p) -> Fate`` (or a side label, with ``passage``), to pass to
+        :func:`bisect_fate`. It raises
         :class:`~continuation.errors.ConvergenceError` if the equilibria are lost.
     """
     if branch not in (1, -1):
@@ -411,11 +433,18 @@ def manifold_fate_function(
     if "saddle" in others:
         raise ValueError("`equilibria` may not use the name 'saddle' (reserved)")
     points = {"saddle": x_saddle, **others}
+    if passage is not None and passage not in points:
+        raise ValueError(f"`passage` must be one of {tuple(points)}, got {passage!r}")
+    labels: dict[int, Hashable] = {s: f"passage:{passage}:{s:+d}" for s in (1, -1)}
+    if passage_labels is not None:
+        if not isinstance(passage_labels, Mapping) or set(passage_labels) != {1, -1}:
+            raise ValueError(f"`passage_labels` must map +1 and -1, got {passage_labels!r}")
+        labels = {int(k): v for k, v in passage_labels.items()}
     tracker = EquilibriumTracker(system, params, free, points, **dict(tracker_options or {}))
     if tracker.index[0] != 1:
         raise ValueError(f"`x_saddle` must be a saddle of index 1, got index {tracker.index[0]}")
 
-    def fate_at(value: float) -> Fate:
+    def fate_at(value: float) -> Any:
         eqs = tracker.at(value)
         pv = tracker.param_vector(value)
         clf = FateClassifier(system, pv, equilibria=eqs, **classifier_options)
@@ -434,6 +463,10 @@ def manifold_fate_function(
         fate = res.branch(branch).fate
         if fate is None:  # pragma: no cover - a classifier always returns a Fate
             raise ContinuationError("no fate computed")
+        if passage is not None:
+            side = passage_side(fate, passage, shifted=passage == "saddle")
+            if side:
+                return labels[side]
         return fate
 
     return fate_at

@@ -33,6 +33,25 @@ lies near is not a visit): the
 sequence matters, e.g. the ship's upslope branch "approaches the next saddle, then tends
 to a periodic attractor or capsizes" (Umeda 1999, Figs. 10-15).
 
+Passage side. For a saddle of index 1 with a real unstable eigenvalue, a visit also
+records on which side of the saddle's stable manifold :math:`W^s` the trajectory
+left (:attr:`SaddleVisit.side`): the sign of the unstable coordinate
+
+.. math::
+
+    c_u = \frac{w_u^T\, d}{w_u^T v_u}, \qquad d = x_{exit} - (x_s + k P),
+
+at the first sample beyond ``2 saddle_radius`` (``w_u`` the left and ``v_u`` the right
+unstable eigenvector, ``v_u`` oriented as in :mod:`continuation.manifolds`: its first
+periodic component positive if not negligible, else its largest component). Near a
+hyperbolic saddle, :math:`W^s_{loc}` is the graph :math:`c_u = h(c_s)` with
+:math:`h = O(|c_s|^2)` (stable manifold theorem; Guckenheimer & Holmes 1983,
+*Nonlinear Oscillations, Dynamical Systems, and Bifurcations of Vector Fields*,
+Thm. 3.2.1), and a trajectory never crosses it; on leaving, :math:`|c_s|` has decayed
+and :math:`|c_u| \approx 2` ``saddle_radius``, so the sign of :math:`c_u` is the side.
+It is the quantity that switches exactly at a heteroclinic connection to that saddle,
+whatever happens later (:func:`passage_side`).
+
 Distances use the scaled max-norm :math:`\max_i |d_i| / s_i` with ``d`` the periodic
 difference (:meth:`System.difference`) and ``s`` = ``scale`` (default ones).
 """
@@ -103,11 +122,22 @@ class KnownEquilibrium:
     x: FloatArray
     eigenvalues: ComplexArray
     n_unstable: int
+    w_unstable: FloatArray | None = None
 
     @property
     def stable(self) -> bool:
         """No eigenvalue with positive real part."""
         return self.n_unstable == 0
+
+    def unstable_coordinate(self, d: FloatArray) -> float:
+        """Coordinate ``c_u = w_u . d`` of an offset ``d (n,)`` along the oriented ``v_u``.
+
+        ``w_unstable`` is the left unstable eigenvector scaled so that ``w_u . v_u = 1``;
+        only saddles of index 1 with a real unstable eigenvalue have one (NaN otherwise).
+        """
+        if self.w_unstable is None:
+            return math.nan
+        return float(np.dot(self.w_unstable, np.asarray(d, dtype=float)))
 
 
 @dataclass(frozen=True)
@@ -127,6 +157,11 @@ class SaddleVisit:
         Time of closest approach (at the samples).
     distance : float
         Closest scaled distance.
+    side : int
+        Side of the saddle's stable manifold on which the trajectory left: the sign
+        (``+1``/``-1``) of its unstable coordinate on leaving (module notes); ``0`` if
+        unknown (the visit has not ended, or the saddle is not of index 1 with a real
+        unstable eigenvalue).
     """
 
     index: int
@@ -134,6 +169,7 @@ class SaddleVisit:
     shift: tuple[int, ...]
     t: float
     distance: float
+    side: int = 0
 
     @property
     def label(self) -> str:
@@ -219,6 +255,17 @@ class Fate:
     def decided(self) -> bool:
         """False for ``undecided`` (and interrupted) classifications."""
         return self.kind is not FateKind.UNDECIDED
+
+    def first_visit(self, name: str | None = None, *, shifted: bool = False) -> SaddleVisit | None:
+        """The first visit (of the saddle ``name``, if given; at a nonzero shift if
+        ``shifted``), or ``None``."""
+        for v in self.visits:
+            if name is not None and v.name != name:
+                continue
+            if shifted and not any(k != 0 for k in v.shift):
+                continue
+            return v
+        return None
 
     def __repr__(self) -> str:
         via = " -> ".join(v.label for v in self.visits)
@@ -462,8 +509,30 @@ class FateClassifier:
                         f"`equilibria` {other.name!r} and {name!r} are the same point (modulo "
                         "the periods); pass each equilibrium once"
                     )
-            out.append(KnownEquilibrium(name, xr, vals, nu))
+            out.append(KnownEquilibrium(name, xr, vals, nu, self._left_unstable(xr, vals, nu)))
         return tuple(out)
+
+    def _left_unstable(self, x: FloatArray, vals: ComplexArray, nu: int) -> FloatArray | None:
+        """Left unstable eigenvector ``w_u`` with ``w_u . v_u = 1`` (see module notes)."""
+        if nu != 1:
+            return None
+        J = np.asarray(self.system.jacobian(x, self.p), dtype=float)
+        lam, V = _eig_sorted(J)
+        if abs(lam[0].imag) > 1e-12 * max(1.0, abs(lam[0])):
+            return None
+        v = np.real(V[:, 0])
+        big = float(np.max(np.abs(v)))
+        cand = [k for k in np.flatnonzero(self.period > 0) if abs(v[k]) >= 1e-3 * big]
+        i = int(cand[0]) if cand else int(np.argmax(np.abs(v)))
+        if v[i] < 0:
+            v = -v
+        lamL, W = _eig_sorted(J.T)  # left eigenvectors: same eigenvalues
+        k = int(np.argmin(np.abs(lamL - lam[0])))
+        w = np.real(W[:, k])
+        wv = float(np.dot(w, v))
+        if not math.isfinite(wv) or abs(wv) <= 1e-12 * np.linalg.norm(w) * np.linalg.norm(v):
+            return None
+        return w / wv
 
     # ------------------------------------------------------------------ distances
     def _distances(self, x: FloatArray) -> FloatArray:
@@ -583,13 +652,17 @@ class _ScanState:
         self.hits_x: list[FloatArray] = []
 
     # ------------------------------------------------------------------ helpers
-    def _close_visit(self, i: int) -> None:
+    def _close_visit(self, i: int, x_exit: FloatArray) -> None:
         dmin, tmin, xmin = self.inside.pop(i)
         if i in self.excluded:
             self.excluded.discard(i)
             return
         e = self.c.equilibria[i]
-        self.visits.append(SaddleVisit(i, e.name, _shift(self.c.period, xmin, e.x), tmin, dmin))
+        c_u = e.unstable_coordinate(_difference(self.c.period, x_exit, e.x))
+        side = int(np.sign(c_u)) if math.isfinite(c_u) else 0
+        self.visits.append(
+            SaddleVisit(i, e.name, _shift(self.c.period, xmin, e.x), tmin, dmin, side)
+        )
 
     def _open_visits(self) -> tuple[SaddleVisit, ...]:
         out = list(self.visits)
@@ -691,7 +764,7 @@ class _ScanState:
                 cur = self.inside.get(i)
                 if cur is not None:
                     if col[k] > _EXIT * r:
-                        self._close_visit(i)
+                        self._close_visit(i, x[k])
                     elif col[k] < cur[0]:
                         self.inside[i] = (float(col[k]), float(t[k]), np.array(x[k]))
                 elif col[k] <= r:
@@ -829,6 +902,38 @@ class _ScanState:
         )
 
 
+def passage_side(fate: Fate, name: str | None = None, *, shifted: bool = False) -> int:
+    """Side of the stable manifold on which ``fate``'s trajectory left its first saddle visit.
+
+    A heteroclinic connection from a saddle ``A`` to a saddle ``B`` is where a branch
+    of :math:`W^u(A)` lies on :math:`W^s(B)`; on either side of it the branch passes
+    ``B`` on opposite sides of :math:`W^s(B)`. So the side of the *first* passage near
+    ``B`` switches exactly at the connection, whereas the final fate (the attractor)
+    may also switch at later, secondary connections (e.g. from the first passage to
+    a saddle shifted by a further period), which accumulate on the primary one and
+    make "final fate" a non-monotone function of the parameter there.
+
+    Parameters
+    ----------
+    fate : Fate
+    name : str, optional
+        Only visits of this saddle count (default: any saddle).
+    shifted : bool
+        Only visits at a nonzero shift in periods count (e.g. the neighbouring copy
+        of the saddle a manifold starts from).
+
+    Returns
+    -------
+    int
+        ``+1`` or ``-1`` (the sign of the unstable coordinate on leaving; see the
+        module notes), or ``0`` if there is no such visit or its side is unknown.
+    """
+    if not isinstance(fate, Fate):
+        raise ValueError(f"`fate` must be a Fate, got {type(fate).__name__}")
+    v = fate.first_visit(name, shifted=shifted)
+    return 0 if v is None else int(v.side)
+
+
 def classify_fate(
     system: Any,
     params: Any,
@@ -898,5 +1003,6 @@ __all__ = [
     "KnownEquilibrium",
     "SaddleVisit",
     "classify_fate",
+    "passage_side",
     "refine_equilibrium",
 ]

@@ -32,7 +32,7 @@ from continuation.fate_bisection import (
     fate_label,
     manifold_fate_function,
 )
-from continuation.fates import FateClassifier, FateKind, classify_fate
+from continuation.fates import FateClassifier, FateKind, classify_fate, passage_side
 from continuation.manifolds import unstable_manifold
 from continuation.simulate import PoincareSection, SimEvent, simulate
 from continuation.status import Status
@@ -367,3 +367,65 @@ def test_driven_pendulum_homoclinic_threshold_matches_melnikov():
     assert d2 < 1e-3
     order = np.log2(d1 / d2)
     assert 1.8 < order < 2.2
+
+
+# ---------------------------------------------------------------------- first passage
+@pytest.mark.parametrize("dmu", [1e-4, -1e-4, 1e-6, -1e-6])
+def test_passage_side_of_the_neighbouring_saddle(dmu):
+    """The side on which the branch leaves R is the sign of mu - c/2 (closed form above).
+
+    At R = (1, c - mu) the unstable eigenvector is (0, 1) (eigenvalue 1; the stable one
+    is -2), so leaving R upwards is side +1, the y_up fate, and downwards side -1.
+    """
+    mu = C / 2 + dmu
+    clf = FateClassifier(
+        SWITCH, [mu, C], equilibria=_switch_eqs(mu), events=SWITCH_EVENTS, t_max=60.0
+    )
+    fate = unstable_manifold(SWITCH, [mu, C], [-1.0, mu - C], classify=clf).plus.fate
+    expected = 1 if dmu > 0 else -1
+    assert fate.label == ("event:y_up" if expected > 0 else "event:y_down")
+    assert [v.name for v in fate.visits] == ["R"]
+    assert fate.visits[0].side == expected
+    assert passage_side(fate, "R") == expected
+    assert passage_side(fate, "L") == 0  # leaving the start is not a visit
+    r = clf.equilibria[1]
+    assert r.name == "R" and r.unstable_coordinate(np.array([0.0, 0.3])) == pytest.approx(0.3)
+    # left eigenvector of J(R) = [[-2, 0], [-(c + mu), 1]] for eigenvalue 1: (-(c + mu)/3, 1)
+    assert r.unstable_coordinate(np.array([0.3, 0.0])) == pytest.approx(-0.1 * (C + mu))
+    with pytest.raises(ValueError, match="fate"):
+        passage_side("event:y_up")
+
+
+def test_bisect_first_passage_finds_exact_heteroclinic_parameter():
+    fate_at = manifold_fate_function(
+        SWITCH,
+        [0.2, C],
+        "mu",
+        [-1.0, 0.2 - C],
+        branch=1,
+        equilibria={"R": [1.0, C - 0.2]},
+        events=SWITCH_EVENTS,
+        t_max=60.0,
+        passage="R",
+        passage_labels={1: "event:y_up", -1: "event:y_down"},
+    )
+    res = bisect_fate(fate_at, 0.1, 1.25, tol=1e-7)
+    assert res.status is Status.SUCCESS
+    lo, hi = res.bracket
+    assert hi - lo <= 1e-7 and lo <= C / 2 + 1e-6 and hi >= C / 2 - 1e-6
+    assert res.fate_lo == "event:y_down"
+    assert fate_label(res.fate_hi) in ("event:y_up", "saddle:R")
+    with pytest.raises(ValueError, match="passage"):
+        manifold_fate_function(
+            SWITCH, [0.2, C], "mu", [-1.0, 0.2 - C], equilibria={"R": [1.0, 1.1]}, passage="Q"
+        )
+    with pytest.raises(ValueError, match="passage_labels"):
+        manifold_fate_function(
+            SWITCH,
+            [0.2, C],
+            "mu",
+            [-1.0, 0.2 - C],
+            equilibria={"R": [1.0, 1.1]},
+            passage="R",
+            passage_labels={1: "up"},
+        )

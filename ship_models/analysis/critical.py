@@ -11,13 +11,41 @@ capsizing due to broaching.
 (:func:`~ship_models.analysis.manifold.unstable_manifold`, bisected by the generic
 :func:`continuation.fate_bisection.bisect_fate`): the bracket
 ``[Fn_lo, Fn_hi]`` always has ``fate(Fn_lo) != fate(Fn_hi)`` and is halved until its
-width is at most ``tol``. Bisection is robust here because the fate is a step
-function of ``Fn`` near the connection; its cost is one branch simulation per halving
-(``log2(width / tol)`` of them). At every new ``Fn`` the crest saddle is re-solved by
-Newton's method from the saddle at the nearest ``Fn`` already evaluated. Next to the
-connection the periodic attractor passes close to the saddles and the Poincare
-return map contracts slowly, so a fate still undecided at ``t_max`` is retried with
-twice (then four times) the time limit.
+width is at most ``tol``; its cost is one branch simulation per halving
+(``log2(width / tol)`` of them).
+
+Which fate is bisected (``criterion``). The connection is where the upslope branch
+lies on the stable manifold :math:`W^s` of the crest saddle one wave back
+(``crest@-1``); on either side of it the branch passes that saddle on opposite sides
+of :math:`W^s`: below, it goes on upslope (the wave overtakes the ship), above, it
+turns back down the slope. The *final* fate (the attractor reached) is not a step
+function of ``Fn`` next to the connection: just below it the branch leaves
+``crest@-1`` upslope so close to :math:`W^u(crest)` that it approaches ``crest@-2``
+next, and may leave *that* one on the capsize side; these secondary switches (branch
+-> ``crest@-1`` -> ``crest@-2`` connections, and so on) accumulate on the primary
+one from below, at distances in ``Fn`` that shrink geometrically. Bisection on the
+final fate can lock onto one of them (measured for the purse seiner with midship
+derivatives, ``x_ref = 0``, chi_c = 10 deg: final-fate bracket [0.301595, 0.301596],
+1.6e-5 below the collocation connection 0.3016117; at Fn = 0.3016016 the branch
+passes ``crest@-1`` upslope, then capsizes after ``crest@-2``).
+
+``criterion="first_passage"`` (default) therefore classifies the branch by the side
+on which it leaves the *first* neighbouring crest saddle it visits
+(:attr:`SaddleVisit.side <ship_models.analysis.manifold.SaddleVisit>`, the sign of
+its coordinate along that saddle's unstable eigenvector on leaving, see
+:func:`continuation.fates.passage_side`): continuing upslope is ``"periodic"``,
+turning back is named after the final fate (``"capsize"``, or stable surf-riding
+``"equilibrium:..."``; ``"returned"`` should it still end periodic). This switches
+exactly at the primary connection. A branch that visits no shifted crest saddle
+within ``visit_radius`` (far from the connection) is classified by its final fate;
+one whose first visit is ``crest@-2`` or further upslope passed ``crest@-1`` upslope.
+``criterion="final"`` bisects the final fate (:func:`outcome`) as before.
+
+At every new ``Fn`` the crest saddle is re-solved by Newton's method from the saddle
+at the nearest ``Fn`` already evaluated. Next to the connection the periodic
+attractor passes close to the saddles and the Poincare return map contracts slowly,
+so a fate still undecided at ``t_max`` is retried with twice (then four times) the
+time limit (not needed when the first passage already decides the outcome).
 
 ``method="bisection"`` is the only method here; a boundary-value (collocation)
 method for the same connection lives in :mod:`ship_models.analysis.connection`.
@@ -38,7 +66,14 @@ from continuation.params import Params
 from continuation.status import Status
 
 from .fixed_points import FixedPoint, find_fixed_point, fixed_points, polish
-from .manifold import PERIODIC, RECURRENT, UNDECIDED, ShipFate, unstable_manifold
+from .manifold import (
+    BRANCH_SIGNS,
+    PERIODIC,
+    RECURRENT,
+    UNDECIDED,
+    ShipFate,
+    unstable_manifold,
+)
 
 log = logging.getLogger(__name__)
 
@@ -52,11 +87,17 @@ UNDECIDED_RETRIES = 2
 
 @dataclass(frozen=True)
 class FateEvaluation:
-    """One simulation of the bisection: ``Fn``, the fate of the branch and the saddle."""
+    """One simulation of the bisection.
+
+    ``Fn``, the fate of the branch, the saddle, and the outcome the bisection compared
+    (:func:`first_passage` or :func:`outcome`, by the ``criterion`` of
+    :func:`critical_fn`; ``""`` if undecided).
+    """
 
     Fn: float
     fate: ShipFate
     saddle_x: tuple[float, ...]
+    outcome: str = ""
 
 
 @dataclass(frozen=True)
@@ -87,6 +128,8 @@ class CriticalResult:
     message : str
     method : str
         ``"bisection"``.
+    criterion : str
+        ``"first_passage"`` or ``"final"`` (see the module notes).
     """
 
     chi_c: float
@@ -101,6 +144,7 @@ class CriticalResult:
     status: Status
     message: str
     method: str = "bisection"
+    criterion: str = "first_passage"
 
     @property
     def width(self) -> float:
@@ -111,6 +155,7 @@ class CriticalResult:
         """JSON-ready summary."""
         return {
             "method": self.method,
+            "criterion": self.criterion,
             "chi_c": self.chi_c,
             "chi_c_deg": math.degrees(self.chi_c),
             "fn_critical": self.fn_critical,
@@ -122,7 +167,12 @@ class CriticalResult:
             "tol": self.tol,
             "n_evaluations": self.n_evaluations,
             "evaluations": [
-                {"Fn": e.Fn, "fate": e.fate.label, "outcome": outcome(e.fate)}
+                {
+                    "Fn": e.Fn,
+                    "fate": e.fate.label,
+                    "outcome": e.outcome,
+                    "via": [f"{v.label}@{v.shift:+d}:{v.side:+d}" for v in e.fate.visits],
+                }
                 for e in self.evaluations
             ],
             "status": self.status.name,
@@ -139,6 +189,53 @@ def outcome(fate: ShipFate) -> str:
     return PERIODIC if fate.kind == RECURRENT else fate.label
 
 
+#: Outcome of a branch that turned back at the neighbouring saddle yet ended periodic.
+RETURNED = "returned"
+#: Bisection criteria of :func:`critical_fn`.
+CRITERIA = ("first_passage", "final")
+
+
+def first_passage(fate: ShipFate, saddle: str = "crest", branch: str = "upslope") -> str | None:
+    """The outcome on the first passage of a neighbouring copy of ``saddle`` (module notes).
+
+    Parameters
+    ----------
+    fate : ShipFate
+        Fate of a manifold branch of ``saddle`` (with its ``visits``).
+    saddle : str
+        Label of the saddle the branch starts from.
+    branch : {"upslope", "downslope"}
+        The branch: ``upslope`` heads for the copy one wave back (``shift < 0``).
+
+    Returns
+    -------
+    str or None
+        ``"periodic"`` if the branch leaves the first shifted copy of ``saddle`` it
+        visits in its own direction (or first visits a copy two or more waves on);
+        otherwise (it turned back) :func:`outcome` of the final fate, or
+        ``"returned"`` if that is periodic. Without such a visit: :func:`outcome` of
+        the final fate. ``None`` if undecided (side unknown, or no visit and an
+        undecided final fate).
+    """
+    if branch not in BRANCH_SIGNS:
+        raise ValueError(f"`branch` must be one of {tuple(BRANCH_SIGNS)}, got {branch!r}")
+    sign = int(BRANCH_SIGNS[branch])
+    final = None if fate.kind == UNDECIDED else outcome(fate)
+    for v in fate.visits:
+        if v.label != saddle or v.shift == 0:
+            continue
+        if v.shift * sign >= 2:  # the first copy was passed outside the visit radius
+            return PERIODIC
+        if v.shift * sign < 0:  # a copy in the other direction: not the connection sought
+            continue
+        if v.side == 0:  # still near it, or no side known
+            return None
+        if v.side == sign:
+            return PERIODIC
+        return RETURNED if final in (None, PERIODIC) else final
+    return final
+
+
 class _FateAt:
     """Fate of one manifold branch as a function of Fn, tracking the saddle by Newton."""
 
@@ -149,8 +246,10 @@ class _FateAt:
         start: FixedPoint,
         branch: str,
         manifold_options: dict[str, Any],
+        criterion: str = "first_passage",
     ) -> None:
         self.model = model
+        self.criterion = criterion
         self.params = params
         self.branch = branch
         self.options = manifold_options
@@ -167,6 +266,12 @@ class _FateAt:
         fp = FixedPoint(self.label, fp.x, fp.params, fp.eigen, fp.residual_norm)
         self.known[fn] = fp
         return fp
+
+    def outcome_of(self, fate: ShipFate) -> str | None:
+        """The compared outcome (``None`` if undecided)."""
+        if self.criterion == "final":
+            return None if fate.kind == UNDECIDED else outcome(fate)
+        return first_passage(fate, self.label, self.branch)
 
     def __call__(self, fn: float) -> ShipFate | None:
         sp = self.saddle(fn)
@@ -187,10 +292,11 @@ class _FateAt:
                 **opts,
             )
             fate = man.branches[self.branch].fate
-            if fate.status is not Status.MAX_STEPS:
+            if fate.status is not Status.MAX_STEPS or self.outcome_of(fate) is not None:
                 break
             t_max *= 2.0  # slow convergence next to the connection: look longer
-        self.evaluations.append(FateEvaluation(fn, fate, tuple(float(v) for v in sp.x)))
+        out = self.outcome_of(fate)
+        self.evaluations.append(FateEvaluation(fn, fate, tuple(float(v) for v in sp.x), out or ""))
         return fate
 
 
@@ -204,6 +310,7 @@ def critical_fn(
     branch: str = "upslope",
     saddle: str = "crest",
     method: str = "bisection",
+    criterion: str = "first_passage",
     max_evaluations: int = 60,
     progress: Callable[[FateEvaluation], None] | None = None,
     throw: bool = False,
@@ -229,6 +336,11 @@ def critical_fn(
         Label of the saddle (``"crest"``).
     method : {"bisection"}
         Only bisection is implemented here (see module notes).
+    criterion : {"first_passage", "final"}
+        Which outcome is bisected: the side on which the branch leaves the first
+        neighbouring saddle (default; switches exactly at the primary connection), or
+        the final fate (may lock onto a secondary switch just below it). See the
+        module notes.
     max_evaluations : int
         Limit on branch simulations.
     progress : callable, optional
@@ -246,11 +358,14 @@ def critical_fn(
     Raises
     ------
     ValueError
-        Bad ``fn_bracket``, ``tol``, ``method``, ``branch``, ``max_evaluations``, or
+        Bad ``fn_bracket``, ``tol``, ``method``, ``criterion``, ``branch``,
+        ``max_evaluations``, or
         no saddle ``saddle`` at the lower end of the bracket.
     """
     if method != "bisection":
         raise ValueError(f"`method` must be 'bisection', got {method!r}")
+    if criterion not in CRITERIA:
+        raise ValueError(f"`criterion` must be one of {CRITERIA}, got {criterion!r}")
     if branch not in ("upslope", "downslope"):
         raise ValueError(f"`branch` must be 'upslope' or 'downslope', got {branch!r}")
     try:
@@ -270,15 +385,16 @@ def critical_fn(
     base = model.default_params() if params is None else params
     base = Params(model.param_names, model.check_params(base, "params")).replace(chi_c=chi_c, Fn=lo)
     start = find_fixed_point(model, base, saddle)
-    fate_at = _FateAt(model, base, start, branch, manifold_options)
+    fate_at = _FateAt(model, base, start, branch, manifold_options, criterion)
 
     def fate_label_at(fn: float) -> Any:
         fate = fate_at(fn)
         if fate is None:
             raise ConvergenceError(f"lost the {saddle} saddle at Fn = {fn!r}")
-        if fate.kind == UNDECIDED:  # the generic bisection stops on undecided fates
+        out = fate_at.outcome_of(fate)
+        if out is None:  # the generic bisection stops on undecided fates
             return Fate(FateKind.UNDECIDED, "undecided", t=fate.t, message=fate.message)
-        return outcome(fate)
+        return out
 
     def report(lo_: float, hi_: float, n: int) -> None:
         if progress is not None and fate_at.evaluations:
@@ -301,6 +417,7 @@ def critical_fn(
         tuple(fate_at.evaluations),
         res.status,
         res.message,
+        criterion=criterion,
     )
     log.debug(
         "critical Fn (chi_c=%.4g deg): %s, %s", math.degrees(chi_c), out.fn_critical, res.message
@@ -310,4 +427,13 @@ def critical_fn(
     return out
 
 
-__all__ = ["FN_BRACKET", "CriticalResult", "FateEvaluation", "critical_fn", "outcome"]
+__all__ = [
+    "CRITERIA",
+    "FN_BRACKET",
+    "RETURNED",
+    "CriticalResult",
+    "FateEvaluation",
+    "critical_fn",
+    "first_passage",
+    "outcome",
+]

@@ -98,12 +98,19 @@ class SaddleVisit:
         Time of closest approach (s).
     distance : float
         Nondimensional max-norm distance there.
+    side : int
+        Side of that saddle's stable manifold on which the trajectory left it: the
+        sign of its coordinate along the saddle's unstable eigenvector (oriented with
+        ``xi_G`` increasing) on leaving, so ``-1`` continues upslope (the wave
+        overtakes the ship) and ``+1`` turns back down the slope; ``0`` if unknown
+        (:class:`continuation.fates.SaddleVisit`).
     """
 
     label: str
     shift: int
     t: float
     distance: float
+    side: int = 0
 
 
 @dataclass(frozen=True)
@@ -164,7 +171,13 @@ class ShipFate:
             "equilibrium": self.equilibrium,
             "shift": self.shift,
             "visits": [
-                {"label": v.label, "shift": v.shift, "t": v.t, "distance": v.distance}
+                {
+                    "label": v.label,
+                    "shift": v.shift,
+                    "t": v.t,
+                    "distance": v.distance,
+                    "side": v.side,
+                }
                 for v in self.visits
             ],
             "status": self.status.name,
@@ -183,7 +196,9 @@ def _ship_fate(
 ) -> ShipFate:
     """Translate a generic :class:`~continuation.fates.Fate` into a :class:`ShipFate`."""
     visits = tuple(
-        SaddleVisit(v.name, int(v.shift[0]) if v.shift else 0, float(v.t), float(v.distance))
+        SaddleVisit(
+            v.name, int(v.shift[0]) if v.shift else 0, float(v.t), float(v.distance), int(v.side)
+        )
         for v in fate.visits
     )
     shift = int(fate.shift[0]) if fate.shift else 0
