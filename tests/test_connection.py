@@ -475,3 +475,92 @@ def test_homoclinic_kdv_solitary_wave():
     err = np.abs(res.state("u") - ue)
     assert err[res.mesh.mesh_mask].max() < 1e-8
     assert res.state("u").max() == pytest.approx(1.5, abs=1e-8)
+
+
+# ---------------------------------------------------------------- simplified Newton methods
+@pytest.mark.parametrize("method", ["broyden", "chord"])
+def test_simplified_methods_reach_the_closed_form(method):
+    """Nagumo front speed c = sqrt2 (1/2 - a) (McKean 1970) to 1e-10 with the
+    Jacobian-saving methods, from the same guess as Newton, same solution to 1e-12."""
+    a = 0.25
+    ref = solve_connection(nagumo_problem(a), front_guess(40.0))
+    res = solve_connection(nagumo_problem(a), front_guess(40.0), method=method)
+    assert res.success, res.message
+    assert res.residual_norm < 1e-10
+    assert res.value("c") == pytest.approx(SQ2 * (0.5 - a), abs=1e-10)
+    # both stop at max |G| <= 1e-10: the same solution to that level
+    assert res.value("c") == pytest.approx(ref.value("c"), abs=1e-10)
+    assert {"broyden": "Newton-Broyden", "chord": "chord-Newton"}[method] in res.message
+
+
+def test_simplified_method_on_the_pendulum_against_shooting():
+    """Damped pendulum F(gamma = 0.3): Broyden solve equals shooting to 1e-9."""
+    res = solve_connection(pendulum_problem(0.3), separatrix_guess(), method="broyden")
+    assert res.success, res.message
+    assert res.value("F") == pytest.approx(shooting_F(0.3), abs=1e-9)
+
+
+def test_simplified_newton_counts_and_rates():
+    """On G(z) = A z + z^3 / 3 - b (root known by construction) Broyden converges to tol
+    with one Jacobian and fewer residuals than the chord method; Newton's quadratic
+    convergence needs a Jacobian per step."""
+    from continuation.bvp.simplified import simplified_newton
+    from continuation.newton import newton
+    from continuation.settings import NewtonSettings
+
+    rng = np.random.default_rng(7)
+    n = 12
+    A = np.eye(n) * 4 + rng.standard_normal((n, n)) * 0.3
+    z_star = rng.standard_normal(n) * 0.5
+    b = A @ z_star + z_star**3 / 3
+    n_res = {"k": 0}
+    n_jac = {"k": 0}
+
+    def G(z):
+        n_res["k"] += 1
+        return A @ z + z**3 / 3 - b
+
+    def J(z):
+        n_jac["k"] += 1
+        return A + np.diag(z**2)
+
+    st = NewtonSettings(tol=1e-12, max_iter=60)
+    counts = {}
+    z0 = z_star + 0.2 * rng.standard_normal(n)
+    for name, fn in (
+        ("broyden", lambda z0: simplified_newton(G, J, z0, st, broyden=True, refresh=0.5)),
+        ("chord", lambda z0: simplified_newton(G, J, z0, st, broyden=False, refresh=0.5)),
+        ("newton", lambda z0: newton(G, J, z0, st)),
+    ):
+        n_res["k"] = n_jac["k"] = 0
+        r = fn(z0)
+        assert r.converged, (name, r.message)
+        np.testing.assert_allclose(r.z, z_star, atol=1e-11)
+        counts[name] = (n_res["k"], n_jac["k"])
+    assert counts["broyden"][1] == 1 and counts["chord"][1] == 1
+    # superlinear (Broyden) against linear (chord) convergence from the same Jacobian
+    assert counts["broyden"][0] < counts["chord"][0] - 2
+    assert counts["newton"][1] >= 3
+
+
+def test_simplified_newton_failures_and_bad_input():
+    from continuation.bvp.simplified import simplified_newton
+    from continuation.errors import ConvergenceError
+    from continuation.status import Status
+
+    def G(z):
+        return z**2 + 1.0  # no real root
+
+    def J(z):
+        return np.diag(2 * z)
+
+    r = simplified_newton(G, J, np.array([0.5]), NewtonSettings(max_iter=20))
+    assert not r.converged and r.status in (Status.NEWTON_FAILED, Status.SINGULAR)
+    with pytest.raises(ConvergenceError):
+        simplified_newton(G, J, np.array([0.5]), NewtonSettings(max_iter=20), throw=True)
+    with pytest.raises(ValueError, match="refresh"):
+        simplified_newton(G, J, np.array([0.5]), refresh=1.5)
+    with pytest.raises(ValueError, match="z0"):
+        simplified_newton(G, J, np.array([np.nan]))
+    with pytest.raises(ValueError, match="method"):
+        solve_connection(nagumo_problem(0.25, N=20), front_guess(20.0), method="secant")

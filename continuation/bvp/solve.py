@@ -29,21 +29,40 @@ from ..status import Status
 from .collocation import CollocationMesh
 from .connection import HeteroclinicProblem, _replace_fast
 from .result import ConnectionResult
+from .simplified import simplified_newton
 
 log = logging.getLogger(__name__)
 
 DEFAULT_NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=True)
 
 
+#: Nonlinear solvers of :func:`solve_connection` (see its ``method`` argument).
+METHODS = ("newton", "broyden", "chord")
+
+
 def _newton_solve(
-    prob: HeteroclinicProblem, z0: FloatArray, settings: NewtonSettings
+    prob: HeteroclinicProblem, z0: FloatArray, settings: NewtonSettings, method: str = "newton"
 ) -> NewtonResult:
     p = prob.params[prob.free] if prob.free is not None else None
-    return newton(lambda z: prob.residual(z, p), lambda z: prob.jacobian(z, p), z0, settings)
+
+    def res(z: FloatArray) -> FloatArray:
+        return prob.residual(z, p)
+
+    def jac(z: FloatArray) -> Any:
+        return prob.jacobian(z, p)
+
+    if method == "newton":
+        return newton(res, jac, z0, settings)
+    out = simplified_newton(res, jac, z0, settings, broyden=method == "broyden")
+    if not out.converged:  # e.g. far from the solution: the damped Newton method
+        log.info("%s iteration failed (%s); falling back to Newton", method, out.message)
+        full = newton(res, jac, z0, settings)
+        return dataclasses.replace(full, iterations=full.iterations + out.iterations)
+    return out
 
 
 def _finish(
-    prob: HeteroclinicProblem, res: NewtonResult, settings: NewtonSettings
+    prob: HeteroclinicProblem, res: NewtonResult, settings: NewtonSettings, method: str = "newton"
 ) -> ConnectionResult:
     """Rebase at a converged solution (one more Newton if needed) and wrap as a result."""
     p = prob.params[prob.free] if prob.free is not None else None
@@ -69,7 +88,7 @@ def _finish(
     rn = float(np.max(np.abs(new.residual(z, p))))
     iters = res.iterations
     if rn > settings.tol:
-        res2 = _newton_solve(new, z, settings)
+        res2 = _newton_solve(new, z, settings, method)
         iters += res2.iterations
         if not res2.converged:
             return new.to_result(
@@ -85,10 +104,13 @@ def _finish(
         z,
         p,
         status=Status.SUCCESS,
-        message=f"converged in {iters} Newton iterations (|G|={rn:.2e})",
+        message=f"converged in {iters} {_KIND[method]} iterations (|G|={rn:.2e})",
         newton_iters=iters,
         residual_norm=rn,
     )
+
+
+_KIND = {"newton": "Newton", "broyden": "Newton-Broyden", "chord": "chord-Newton"}
 
 
 def solve_connection(
@@ -99,6 +121,7 @@ def solve_connection(
     throw: bool = False,
     adapt: int = 0,
     progress: Callable[[ConnectionResult], None] | None = None,
+    method: str = "newton",
 ) -> ConnectionResult:
     r"""Solve the collocation system of a connecting orbit once.
 
@@ -122,6 +145,16 @@ def solve_connection(
         solves again (the compiled functions are reused: same number of intervals).
     progress : callable, optional
         Called with each intermediate :class:`ConnectionResult` (after every solve).
+    method : {"newton", "broyden", "chord"}
+        ``"newton"``: damped Newton (:func:`continuation.newton.newton`), one
+        Jacobian per iteration. ``"broyden"``: the Jacobian of the guess is kept
+        while the residual contracts fast and corrected by Broyden rank-one updates,
+        refreshed otherwise (:func:`continuation.bvp.simplified.simplified_newton`);
+        ``"chord"``: the same without the updates (Shamanskii). Both save time when
+        the guess is good and the Jacobian costs several residuals (collocation of
+        an expensive model: about five); both fall back to Newton if they fail. The
+        convergence test is the same (``max |G| <= newton.tol``), so all three give
+        the same solution to that tolerance.
 
     Returns
     -------
@@ -137,10 +170,12 @@ def solve_connection(
         raise ValueError(f"`adapt` must be an integer >= 0, got {adapt!r}")
     if newton is not None and not isinstance(newton, NewtonSettings):
         raise ValueError(f"`newton` must be a NewtonSettings, got {type(newton).__name__}")
+    if method not in METHODS:
+        raise ValueError(f"`method` must be one of {METHODS}, got {method!r}")
     settings = DEFAULT_NEWTON if newton is None else newton
     prob, z0 = problem.initial_vector(guess)
     try:
-        result = _finish(prob, _newton_solve(prob, z0, settings), settings)
+        result = _finish(prob, _newton_solve(prob, z0, settings, method), settings, method)
     except KeyboardInterrupt:
         p = prob.params[prob.free] if prob.free is not None else None
         result = prob.to_result(
@@ -158,7 +193,7 @@ def solve_connection(
         for _ in range(adapt):
             if not result.success:
                 break
-            result = _adapt_once(result, settings)
+            result = _adapt_once(result, settings, method)
             if progress is not None:
                 progress(result)
     except KeyboardInterrupt:
@@ -172,7 +207,9 @@ def _with_status(result: ConnectionResult, status: Status, message: str) -> Conn
     return dataclasses.replace(result, status=status, message=message)
 
 
-def _adapt_once(result: ConnectionResult, settings: NewtonSettings) -> ConnectionResult:
+def _adapt_once(
+    result: ConnectionResult, settings: NewtonSettings, method: str = "newton"
+) -> ConnectionResult:
     prob: HeteroclinicProblem = result.problem
     new_mesh = prob.mesh.equidistributed(result.x)
     X = prob.mesh.interpolate(result.x, new_mesh.tau)
@@ -186,7 +223,7 @@ def _adapt_once(result: ConnectionResult, settings: NewtonSettings) -> Connectio
     new = _replace_fast(prob, **changes)
     parts = prob.unpack(result.z)
     z0 = new.pack(X, parts["x_from"], parts["x_to"], list(parts["params"].values()))
-    return _finish(new, _newton_solve(new, z0, settings), settings)
+    return _finish(new, _newton_solve(new, z0, settings, method), settings, method)
 
 
 @dataclass(frozen=True)

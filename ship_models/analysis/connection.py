@@ -685,56 +685,9 @@ def _guess_mesh(t: FloatArray, x: FloatArray, n_intervals: int, degree: int) -> 
     return fine.equidistributed(X, n_intervals=n_intervals)
 
 
-#: Solve by :func:`_shamanskii` (True) or by :func:`solve_connection`'s Newton (False).
+#: Solve by the simplified Newton method with Broyden updates (True:
+#: ``solve_connection(..., method="broyden")``) or by plain Newton (False).
 _SIMPLIFIED_NEWTON = True
-
-
-def _shamanskii(
-    prob: HeteroclinicProblem, z0: FloatArray, tol: float, max_iter: int = 60
-) -> tuple[FloatArray, bool, int, float]:
-    """Newton's method with the Jacobian kept while the residual contracts fast.
-
-    The Jacobian (and its sparse LU) is refreshed only when an iteration reduces
-    ``max |G|`` by less than a factor 0.3 (Shamanskii's modification of Newton's
-    method; Kelley 2003, "Solving Nonlinear Equations with Newton's Method", SIAM,
-    sec. 2.3.3); a step that increases the residual is halved (up to 10 times).
-    For the ship the collocation Jacobian costs about five residuals, and from a
-    guess simulated at the paper's Fn = 0.3248 one Jacobian usually suffices.
-
-    Returns
-    -------
-    z, converged, iterations, residual max-norm
-    """
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
-
-    z = np.array(z0, dtype=float)
-    g = np.asarray(prob.residual(z, None), dtype=float)
-    rn = float(np.max(np.abs(g)))
-    lu, rn_prev, it = None, math.inf, 0
-    while it < max_iter and math.isfinite(rn) and rn > tol:
-        if lu is None or rn > 0.3 * rn_prev:
-            try:
-                lu = spla.splu(sp.csc_matrix(prob.jacobian(z, None)))
-            except RuntimeError:  # exactly singular
-                return z, False, it, rn
-        dz = lu.solve(g)
-        lam = 1.0
-        z_new = z - dz
-        g_new = np.asarray(prob.residual(z_new, None), dtype=float)
-        rn_new = float(np.max(np.abs(g_new)))
-        tries = 0
-        while (not math.isfinite(rn_new) or rn_new > rn) and tries < 10:
-            lam *= 0.5
-            z_new = z - lam * dz
-            g_new = np.asarray(prob.residual(z_new, None), dtype=float)
-            rn_new = float(np.max(np.abs(g_new)))
-            tries += 1
-        if tries == 10 and rn_new > rn:
-            return z, False, it, rn
-        rn_prev, z, g, rn = rn, z_new, g_new, rn_new
-        it += 1
-    return z, bool(math.isfinite(rn) and rn <= tol), it, rn
 
 
 def _solve(
@@ -743,42 +696,15 @@ def _solve(
     settings: NewtonSettings,
     progress: Callable[[ConnectionResult], None] | None,
 ) -> ConnectionResult:
-    """Solve the connection by :func:`_shamanskii`; :func:`solve_connection` as fallback.
+    """Solve the connection by :func:`continuation.bvp.solve_connection`.
 
-    On success the problem is rebased at the solution (Schur bases, phase
-    reference) exactly as :func:`continuation.bvp.solve_connection` does, and the
-    residual is re-checked (and re-converged if needed) with the rebased problem.
+    With ``method="broyden"`` (the default here): the collocation Jacobian of the ship
+    model costs about five residuals, and from a guess simulated near the critical Fn
+    one Jacobian plus a few Broyden-updated steps usually suffice (the solver falls
+    back to Newton by itself when they do not).
     """
-    if not _SIMPLIFIED_NEWTON:
-        return solve_connection(prob, guess, newton=settings, progress=progress)
-    prob1, z0 = prob.initial_vector(guess)
-    try:
-        z, ok, iters, rn = _shamanskii(prob1, z0, settings.tol, settings.max_iter)
-        if ok:
-            try:
-                new, z = prob1.rebased(z)
-            except ValueError:
-                ok = False
-        if ok:
-            rn = float(np.max(np.abs(new.residual(z, None))))
-            if rn > settings.tol:
-                z, ok, more, rn = _shamanskii(new, z, settings.tol, settings.max_iter)
-                iters += more
-    except KeyboardInterrupt:
-        return prob1.to_result(z0, status=Status.INTERRUPTED, message=Status.INTERRUPTED.value)
-    if not ok:
-        log.info("simplified Newton failed (|G| = %.2e); falling back to Newton", rn)
-        return solve_connection(prob, guess, newton=settings, progress=progress)
-    res = new.to_result(
-        z,
-        status=Status.SUCCESS,
-        message=f"converged in {iters} simplified-Newton iterations (|G|={rn:.2e})",
-        newton_iters=iters,
-        residual_norm=rn,
-    )
-    if progress is not None:
-        progress(res)
-    return res
+    method = "broyden" if _SIMPLIFIED_NEWTON else "newton"
+    return solve_connection(prob, guess, newton=settings, progress=progress, method=method)
 
 
 def critical_fn_bvp(
