@@ -564,3 +564,37 @@ def test_simplified_newton_failures_and_bad_input():
         simplified_newton(G, J, np.array([np.nan]))
     with pytest.raises(ValueError, match="method"):
         solve_connection(nagumo_problem(0.25, N=20), front_guess(20.0), method="secant")
+
+
+def test_jacobian_cache_serves_a_sequence_of_nearby_solves():
+    """Roots of A z + z^3/3 = b(mu) (known by construction) along mu: one factorisation
+    serves neighbouring solves; a far jump refreshes it; every root to 1e-11."""
+    from continuation.bvp.simplified import JacobianCache, simplified_newton
+
+    rng = np.random.default_rng(11)
+    n = 10
+    A = np.eye(n) * 4 + rng.standard_normal((n, n)) * 0.3
+    z_a, z_b = rng.standard_normal(n) * 0.5, rng.standard_normal(n) * 0.5
+    cache = JacobianCache()
+    st = NewtonSettings(tol=1e-12, max_iter=40)
+    z_prev = z_a
+    for mu in np.linspace(0.0, 0.1, 6):
+        z_star = (1 - mu) * z_a + mu * z_b
+        b = A @ z_star + z_star**3 / 3
+        r = simplified_newton(
+            lambda z, b=b: A @ z + z**3 / 3 - b, lambda z: A + np.diag(z**2), z_prev, st,
+            cache=cache,
+        )  # fmt: skip
+        assert r.converged, r.message
+        np.testing.assert_allclose(r.z, z_star, atol=1e-11)
+        z_prev = r.z
+    assert cache.n_factorisations == 1
+    z_star = 3.0 * z_b  # far away: the old Jacobian stalls and is refreshed
+    b = A @ z_star + z_star**3 / 3
+    r = simplified_newton(
+        lambda z: A @ z + z**3 / 3 - b, lambda z: A + np.diag(z**2), z_prev, st, cache=cache
+    )
+    assert r.converged and cache.n_factorisations > 1
+    np.testing.assert_allclose(r.z, z_star, atol=1e-10)
+    with pytest.raises(ValueError, match="cache"):
+        simplified_newton(lambda z: z, lambda z: np.eye(1), np.zeros(1), cache=object())

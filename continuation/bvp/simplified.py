@@ -45,6 +45,27 @@ from ..status import Status
 MAX_UPDATES = 30
 
 
+class JacobianCache:
+    """The last factorised Jacobian of :func:`simplified_newton`, kept between calls.
+
+    Pass the same instance to a sequence of solves of nearby problems (the points of a
+    curve, one after the other): each starts from the factorisation the previous one
+    ended with instead of evaluating and factorising a new Jacobian, and refreshes it
+    only when the residual stops contracting fast. ``n_factorisations`` counts the
+    Jacobians factorised through this cache.
+    """
+
+    __slots__ = ("solve", "n_factorisations")
+
+    def __init__(self) -> None:
+        self.solve: Callable[[FloatArray], FloatArray] | None = None
+        self.n_factorisations = 0
+
+    def clear(self) -> None:
+        """Forget the factorisation (the next solve evaluates a fresh Jacobian)."""
+        self.solve = None
+
+
 def _factorise(J: Any) -> Callable[[FloatArray], FloatArray]:
     if sp.issparse(J):
         lu = spla.splu(sp.csc_matrix(J))
@@ -64,6 +85,7 @@ def simplified_newton(
     broyden: bool = True,
     refresh: float = 0.3,
     throw: bool = False,
+    cache: JacobianCache | None = None,
 ) -> NewtonResult:
     r"""Solve ``G(z) = 0`` with few Jacobian evaluations (see the module docstring).
 
@@ -84,6 +106,9 @@ def simplified_newton(
         by less than this factor.
     throw : bool
         Raise :class:`~continuation.errors.ConvergenceError` on failure.
+    cache : JacobianCache, optional
+        Start from its factorisation (if any) instead of a fresh Jacobian; on return
+        it holds the factorisation in use at the end (see :class:`JacobianCache`).
 
     Returns
     -------
@@ -101,12 +126,18 @@ def simplified_newton(
         raise ValueError(f"`settings` must be a NewtonSettings, got {type(settings).__name__}")
     if not (isinstance(refresh, float | int) and 0.0 < refresh < 1.0):
         raise ValueError(f"`refresh` must be in (0, 1), got {refresh!r}")
+    if cache is not None and not isinstance(cache, JacobianCache):
+        raise ValueError(f"`cache` must be a JacobianCache, got {type(cache).__name__}")
     z = np.array(z0, dtype=float)
     if z.ndim != 1 or not np.all(np.isfinite(z)):
         raise ValueError("`z0` must be a finite 1-D array")
     tol, max_iter = settings.tol, settings.max_iter
+    # a factorisation handed over by the cache counts as old (refreshed on stagnation)
+    solve: Callable[[FloatArray], FloatArray] | None = None if cache is None else cache.solve
 
     def fail(status: Status, msg: str, it: int, rn: float) -> NewtonResult:
+        if cache is not None:
+            cache.solve = solve
         if throw:
             raise ConvergenceError(msg)
         return NewtonResult(z, False, it, rn, status, msg)
@@ -115,7 +146,6 @@ def simplified_newton(
     rn = float(np.max(np.abs(g))) if g.size else 0.0
     if not math.isfinite(rn):
         return fail(Status.NONFINITE, "non-finite residual at the initial guess", 0, rn)
-    solve: Callable[[FloatArray], FloatArray] | None = None
     steps: list[FloatArray] = []  # Broyden history s_j and their squared norms
     norms: list[float] = []
     n_jac, it = 0, 0
@@ -134,6 +164,8 @@ def simplified_newton(
             except (RuntimeError, np.linalg.LinAlgError, ValueError) as exc:
                 return fail(Status.SINGULAR, f"singular Jacobian: {exc}", it, rn)
             n_jac += 1
+            if cache is not None:
+                cache.n_factorisations += 1
             steps.clear()
             norms.clear()
         assert solve is not None
@@ -178,6 +210,8 @@ def simplified_newton(
         elif broyden:
             steps.append(s if lam == 1.0 else lam * s)
             norms.append(float(steps[-1].dot(steps[-1])))
+    if cache is not None:
+        cache.solve = solve if solve is not None else cache.solve
     return NewtonResult(
         z,
         True,
@@ -188,4 +222,4 @@ def simplified_newton(
     )
 
 
-__all__ = ["MAX_UPDATES", "simplified_newton"]
+__all__ = ["MAX_UPDATES", "JacobianCache", "simplified_newton"]

@@ -56,6 +56,7 @@ from continuation.bvp import (
     continue_connection,
     solve_connection,
 )
+from continuation.bvp.simplified import JacobianCache, simplified_newton
 from continuation.errors import ContinuationError, ConvergenceError
 from continuation.newton import newton
 from continuation.params import Params
@@ -1097,13 +1098,23 @@ def critical_curve(
     orbits: list[FloatArray] = []
     status = branch.status if branch.status is Status.INTERRUPTED else Status.SUCCESS
     corr = NewtonSettings(tol=tol, step_tol=1e-8, max_iter=15, damping=True)
+    chord_settings = NewtonSettings(tol=tol, step_tol=1e-8, max_iter=12)
+    jac_cache = JacobianCache()
     try:
         for k, c in enumerate(chis):
             z0 = _predict(P, Z, float(c))
             if z0 is None:
                 continue
-            r = _chord(prob, z0, float(c), tol)
+            # one factorised Jacobian serves neighbouring courses while it contracts fast
+            r = simplified_newton(
+                lambda z, c=c: prob.residual(z, c),
+                lambda z, c=c: prob.jacobian(z, c),
+                z0,
+                chord_settings,
+                cache=jac_cache,
+            )
             if not r.converged:
+                jac_cache.clear()
                 r = newton(
                     lambda z, c=c: prob.residual(z, c), lambda z, c=c: prob.jacobian(z, c), z0, corr
                 )
@@ -1137,43 +1148,6 @@ def critical_curve(
         chis, Fn, res_n, ok, n_unst, branch, start, status, message,
         time.perf_counter() - t_start, tuple(orbits),
     )  # fmt: skip
-
-
-@dataclass(frozen=True)
-class _ChordResult:
-    z: FloatArray
-    converged: bool
-    residual_norm: float
-    message: str = ""
-
-
-def _chord(prob: Any, z0: FloatArray, p: float, tol: float, max_iter: int = 12) -> _ChordResult:
-    """Chord iterations ``z <- z - J(z0)^{-1} G(z)`` with one sparse LU of ``J(z0)``.
-
-    A good predictor (a branch row one or two degrees away) makes the contraction
-    fast; Newton's method is the fallback when it does not converge.
-    """
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
-
-    z = np.array(z0, dtype=float)
-    try:
-        lu = spla.splu(sp.csc_matrix(prob.jacobian(z, p)))
-    except RuntimeError as exc:  # exactly singular
-        return _ChordResult(z, False, math.inf, str(exc))
-    rn_prev = math.inf
-    for _ in range(max_iter):
-        g = np.asarray(prob.residual(z, p), dtype=float)
-        rn = float(np.max(np.abs(g)))
-        if not math.isfinite(rn):
-            return _ChordResult(z, False, rn, "non-finite residual")
-        if rn <= tol:
-            return _ChordResult(z, True, rn)
-        if rn > 0.5 * rn_prev:  # not contracting fast enough
-            return _ChordResult(z, False, rn, "chord iterations stalled")
-        rn_prev = rn
-        z = z - lu.solve(g)
-    return _ChordResult(z, False, rn_prev, "chord iteration limit")
 
 
 def _predict(P: FloatArray, Z: FloatArray, c: float) -> FloatArray | None:
