@@ -627,7 +627,10 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
             a = run.rows[-1]
             sigma_b = outcome.sigma
             b = ctx.make_row(new_state.point, sigma_b)
-            stop = ctx.stop_point(a, b, sigma_b, w)
+            if not ctx.terminal and s.p_min <= b.p <= s.p_max:
+                stop = None  # (stop_point's first test, inlined: the common case)
+            else:
+                stop = ctx.stop_point(a, b, sigma_b, w)
             if stop is False:  # a bound crossed but not located: never keep a row outside
                 ds_new = state.ds * s.shrink
                 if ds_new < s.ds_min:

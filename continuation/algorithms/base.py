@@ -313,8 +313,9 @@ class BorderedLU:
         if self._sign == 2.0:
             if not self.sparse and self.n <= 24:
                 # small dense: plain Python over the pivots beats several NumPy calls
-                odd = sum(x < 0.0 for x in self._lu.diagonal().tolist())
-                odd += sum(k != i for i, k in enumerate(self._piv.tolist()))
+                odd = len([x for x in self._lu.diagonal().tolist() if x < 0.0])
+                piv = self._piv.tolist()
+                odd += len([i for i in range(len(piv)) if piv[i] != i])
                 self._sign = -1.0 if odd % 2 else 1.0
                 return self._sign
             d, parity = self._diag_parity()
@@ -723,7 +724,8 @@ def _correct_fused(
     n = u_pred.size - 1
     u, r, M = ev.u, ev.r, ev.M
     u[:] = u_pred
-    ev.set_border(c, float(c.dot(u_ref)) + sigma)
+    ev.c[:] = c  # (ev.set_border, inlined: the hot path of small problems)
+    ev.h[0] = float(c.dot(u_ref)) + sigma
     tol, step_tol, max_iter = newton.tol, newton.step_tol, newton.max_iter
     ev()
     finite = float(r.dot(r)) < math.inf
