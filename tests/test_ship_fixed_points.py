@@ -160,11 +160,12 @@ def test_chi_c_continuation_agrees_with_independent_newton(model, params, chi_br
 def test_chi_c_ranges_and_signs_match_paper_statements(model, chi_branches):
     """Paper: crest: rudder and heading positive; trough: heading negative, rudder positive."""
     crest, trough = chi_branches["crest"], chi_branches["trough"]
-    # the trough branch reaches the paper's 50 deg; our crest branch folds at ~47.8 deg
+    # the trough branch reaches the paper's 50 deg; our crest branch folds before it
+    # (at chi_c ~ 43.6 deg; the fold itself is checked in test_crest_fold_solves_fold_system)
     assert trough.p[-1] == pytest.approx(math.radians(50.0), abs=1e-12)
     assert len(trough.find("fold")) == 0
     fold = crest.find("fold")[0]
-    assert math.radians(45.0) < fold.p < math.radians(50.0)
+    assert math.radians(10.0) < fold.p < math.radians(50.0)
     kc = _first_fold_index(crest)
     sel = slice(1, kc + 1)
     assert np.all(crest.state("chi")[sel] > 0) and np.all(crest.state("delta")[sel] > 0)
@@ -172,6 +173,32 @@ def test_chi_c_ranges_and_signs_match_paper_statements(model, chi_branches):
     # both primary branches have saddle index 1 up to the fold
     assert np.all(crest.n_unstable[: kc + 1] == 1)
     assert np.all(trough.n_unstable == 1)
+
+
+def test_crest_fold_solves_fold_system(model, params, chi_branches):
+    """The located fold of the crest branch in chi_c against an independent solve of the
+    extended fold system ``f(x, p) = 0, f_x v = 0, v0 . v = 1`` (Seydel 2010, *Practical
+    Bifurcation and Stability Analysis*, Sec. 5.5) by MINPACK's hybrid method with a
+    finite-difference Jacobian, started from the branch row nearest the fold."""
+    crest = chi_branches["crest"]
+    fold = crest.find("fold")[0]
+    k = fold.index
+    x0, p0 = np.array(crest.x[k]), float(crest.p[k])
+    _, _, vt = np.linalg.svd(model.jacobian(x0, params.replace(chi_c=p0).values))
+    v0 = vt[-1]
+
+    def fold_system(z):
+        x, p, v = z[:8], z[8], z[9:]
+        pv = params.replace(chi_c=float(p)).values
+        return np.concatenate([model.f(x, pv), model.jacobian(x, pv) @ v, [v0 @ v - 1.0]])
+
+    sol = so.root(fold_system, np.concatenate([x0, [p0], v0]), method="hybr", tol=1e-13)
+    assert sol.success, sol.message
+    assert np.max(np.abs(fold_system(sol.x))) < 1e-9
+    assert abs(sol.x[8] - fold.p) < 1e-7
+    # a fold of the branch: chi_c is largest there among the rows around it
+    near = crest.p[max(k - 5, 0) : k + 6]
+    assert np.all(near <= fold.p + 1e-9)
 
 
 def test_port_starboard_symmetry(model, params, points10):
@@ -226,12 +253,23 @@ def test_dominant_eigenvector_components(points10):
     assert set(trough.dominant_components()[:3]) == {"chi", "r", "delta"}
 
 
-def test_fixed_points_past_the_fold_are_found(model, params):
-    """At chi_c = 45 deg the crest branch crosses the course 4 times (two folds)."""
-    pts = fixed_points(model, params.replace(chi_c=math.radians(45.0)))
+def test_fixed_points_past_the_fold_are_found(model, params, chi_branches):
+    """Between its first two folds in chi_c the crest branch crosses the course 4 times.
+
+    The branch goes up to the first fold, back down to the second, up to the third and
+    back to chi_c = 0 (at phi ~ -63 deg); the course half-way between the first two
+    folds is crossed once on each of these four arcs (sign changes of chi_c - course
+    along the traced branch), and ``fixed_points`` must find all four.
+    """
+    crest = chi_branches["crest"]
+    f1, f2 = crest.find("fold")[:2]
+    course = 0.5 * (f1.p + f2.p)
+    crossings = int(np.sum(np.diff(np.sign(crest.p - course)) != 0))
+    assert crossings == 4
+    pts = fixed_points(model, params.replace(chi_c=course))
     labels = [fp.label for fp in pts]
     assert labels[0] == "crest" and "trough" in labels
-    assert sum(lab.startswith("crest") for lab in labels) == 4
+    assert sum(lab.startswith("crest") for lab in labels) == crossings
     assert pts[0].saddle_index == 1
     for fp in pts:
         assert fp.residual_norm < 1e-9
