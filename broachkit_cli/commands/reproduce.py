@@ -54,6 +54,11 @@ STUDY_STEPS: tuple[tuple[str, str, str], ...] = (
         "Figs. 21, 23: connecting orbit and critical Fn against the course",
         "fig21_23_connection.py",
     ),
+    (
+        "fig16_22",
+        "Figs. 16-22: sudden-change experiments and the Fig. 23 squares",
+        "fig16_22_sudden_change.py",
+    ),
 )
 
 

@@ -21,10 +21,15 @@ Steps, each a public function:
 2. :func:`sudden_change` -- start at that state with the new controls ``params_to``
    and classify the transient (:func:`~ship_models.analysis.manifold.classify_ship_fate`):
    ``capsize`` (roll beyond the angle of vanishing stability), ``periodic`` (a periodic
-   attractor, or bounded recurrent surging), ``surf-riding`` (a stable equilibrium),
-   or ``undecided``.
+   attractor, or bounded recurrent surging), ``surf-riding`` (a stable fixed point),
+   ``saddle`` (converged onto an unstable fixed point, i.e. started on its stable
+   manifold: this happens in the invariant surge plane at ``chi_c = 0``, where the
+   ship surf-rides at the trough point that is unstable only in yaw), or
+   ``undecided``.
 3. :func:`sudden_change_boundary` -- the critical nominal Froude number by bisection
-   on "capsize or not" for one new course, one initial position (Fig. 23 squares).
+   on "periodic" (below) against "captured by the wave" (capsize, surf-riding or
+   saddle; above) for one new course and initial position (Fig. 23 squares). For
+   ``chi_c > 0`` the upper side is capsize; at ``chi_c = 0`` it is surf-riding.
 4. :func:`sudden_change_map` -- the outcome on a grid of initial positions and Fn
    (Figs. 16 and 22).
 """
@@ -48,14 +53,18 @@ from continuation.status import Status
 
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
+from .fixed_points import fixed_points
 from .manifold import ShipFate, classify_ship_fate
 
 log = logging.getLogger(__name__)
 
-CAPSIZE, PERIODIC, SURF_RIDING, UNDECIDED = "capsize", "periodic", "surf-riding", "undecided"
+CAPSIZE, PERIODIC, SURF_RIDING = "capsize", "periodic", "surf-riding"
+SADDLE, UNDECIDED = "saddle", "undecided"
 #: Outcomes of a sudden-change run (Umeda 1999, Figs. 16, 22: cross = capsize, circle =
 #: periodic motion).
-OUTCOMES = (CAPSIZE, PERIODIC, SURF_RIDING, UNDECIDED)
+OUTCOMES = (CAPSIZE, PERIODIC, SURF_RIDING, SADDLE, UNDECIDED)
+#: Outcomes counted as "captured by the wave" (the upper side of a boundary).
+CAPTURED = (CAPSIZE, SURF_RIDING, SADDLE)
 
 
 # ------------------------------------------------------------------------ helpers
@@ -523,6 +532,11 @@ class SuddenChange:
         """The ship capsized."""
         return self.outcome == CAPSIZE
 
+    @property
+    def captured(self) -> bool:
+        """Capsize, surf-riding or convergence onto a saddle (:data:`CAPTURED`)."""
+        return self.outcome in CAPTURED
+
     def to_json(self) -> dict[str, Any]:
         """JSON-ready summary (no trajectory)."""
         return {
@@ -542,6 +556,8 @@ def _outcome(fate: ShipFate) -> str:
         return PERIODIC
     if fate.kind == "equilibrium":
         return SURF_RIDING
+    if fate.kind == "saddle":
+        return SADDLE
     return UNDECIDED
 
 
@@ -589,8 +605,9 @@ def sudden_change(
         ``progress(t)`` after each integration segment.
     **classify
         Further options of :func:`~ship_models.analysis.manifold.classify_ship_fate`
-        (``segment``, ``dt``, ``return_tol``, ``points``, ...; by default no fixed
-        points are used, so surf-riding is found by the classifier's speed test).
+        (``segment``, ``dt``, ``return_tol``, ``points``, ...). ``points`` defaults to
+        :func:`~ship_models.analysis.fixed_points.fixed_points` at ``params_to``
+        (needed to recognise convergence onto a saddle).
 
     Returns
     -------
@@ -606,7 +623,9 @@ def sudden_change(
     t_max = _positive(t_max, "t_max")
     orb = _orbit_for(model, params_from, orbit)
     x0 = orb.state_at(xi_0)
-    points = classify.pop("points", ())
+    points = classify.pop("points", None)
+    if points is None:
+        points = fixed_points(model, pt)
     traj, fate = classify_ship_fate(
         model,
         pt,
@@ -630,7 +649,8 @@ class SuddenChangeBoundary:
     Fn : float
         Midpoint of the final bracket.
     bracket : (float, float)
-        ``(lower, upper)``: outcome not capsize at the lower end, capsize at the upper.
+        ``(lower, upper)``: periodic at the lower end, captured (capsize,
+        surf-riding, saddle) at the upper.
     outcomes : (str, str)
         Outcomes at the two ends.
     chi_c : float
@@ -696,12 +716,17 @@ def sudden_change_boundary(
     progress: Callable[[str], None] | None = None,
     **options: Any,
 ) -> SuddenChangeBoundary:
-    r"""Critical Fn of the sudden change to course ``chi_c_to`` by bisection on capsize.
+    r"""Critical Fn of the sudden change to course ``chi_c_to`` by bisection on the outcome.
 
-    The outcome at the lower end of ``fn_bracket`` must be "no capsize" and at the
-    upper end "capsize"; otherwise (or with an ``undecided`` run) the result carries
-    ``Status.UNDECIDED`` (``ContinuationError`` with ``throw=True``). Each step halves the
-    bracket, keeping ends with different outcomes, until it is shorter than ``tol``.
+    The outcome at the lower end of ``fn_bracket`` must be ``periodic`` and at the
+    upper end captured (:data:`CAPTURED`: ``capsize`` for ``chi_c > 0``,
+    ``surf-riding``/``saddle`` in the surge plane at ``chi_c = 0``); otherwise the
+    result carries ``Status.NO_BRACKET`` (``ContinuationError`` with ``throw=True``).
+    Each step halves the bracket, keeping ends with different outcomes, until it is
+    shorter than ``tol``. A run still ``undecided`` at ``t_max`` is repeated once with
+    ``2 t_max``; if still undecided the result carries ``Status.UNDECIDED``.
+    (Bisection assumes one switch in the bracket: check the outcome map,
+    :func:`sudden_change_map`, where that is in doubt.)
 
     Parameters
     ----------
@@ -753,14 +778,17 @@ def sudden_change_boundary(
 
     def run(fn: float) -> str:
         nonlocal n_runs
-        r = sudden_change(model, None, base.replace(Fn=fn), xi_0, orbit=orb, t_max=t_max, **options)
+        pt = base.replace(Fn=fn)
+        options.setdefault("points", None)
+        opts = (
+            {**options, "points": fixed_points(model, pt)} if options["points"] is None else options
+        )
+        r = sudden_change(model, None, pt, xi_0, orbit=orb, t_max=t_max, **opts)
         n_runs += 1
         if r.outcome == UNDECIDED and r.fate.status is not Status.INTERRUPTED:
             # close to the boundary the transient lingers near the crest saddle and the
             # attractor below it has several returns: one more try with twice the time
-            r = sudden_change(
-                model, None, base.replace(Fn=fn), xi_0, orbit=orb, t_max=2 * t_max, **options
-            )
+            r = sudden_change(model, None, pt, xi_0, orbit=orb, t_max=2 * t_max, **opts)
             n_runs += 1
         if r.fate.status is Status.INTERRUPTED:
             raise KeyboardInterrupt
@@ -779,11 +807,11 @@ def sudden_change_boundary(
     o_lo = o_hi = UNDECIDED
     try:
         o_lo, o_hi = run(lo), run(hi)
-        if UNDECIDED in (o_lo, o_hi) or (o_lo == CAPSIZE) == (o_hi == CAPSIZE) or o_lo == CAPSIZE:
+        if o_lo != PERIODIC or o_hi not in CAPTURED:
             return done(
                 Status.NO_BRACKET,
-                f"bracket ends must be 'no capsize' below and 'capsize' above; got {o_lo!r} "
-                f"at Fn = {lo:g} and {o_hi!r} at Fn = {hi:g}",
+                f"bracket ends must be 'periodic' below and captured ({', '.join(CAPTURED)}) "
+                f"above; got {o_lo!r} at Fn = {lo:g} and {o_hi!r} at Fn = {hi:g}",
                 (o_lo, o_hi),
             )
         while hi - lo > tol:
@@ -791,7 +819,7 @@ def sudden_change_boundary(
             o = run(mid)
             if o == UNDECIDED:
                 return done(Status.UNDECIDED, f"undecided outcome at Fn = {mid:.8f}", (o_lo, o_hi))
-            if o == CAPSIZE:
+            if o in CAPTURED:
                 hi, o_hi = mid, o
             else:
                 lo, o_lo = mid, o
@@ -887,11 +915,12 @@ def sudden_change_map(
     status = Status.SUCCESS
     try:
         for i, fn in enumerate(fns):
+            pt = base.replace(Fn=float(fn))
+            opts = dict(options)
+            if opts.get("points") is None:
+                opts["points"] = fixed_points(model, pt)
             for j, xi in enumerate(xs):
-                r = sudden_change(
-                    model, None, base.replace(Fn=float(fn)), float(xi), orbit=orb, t_max=t_max,
-                    **options,
-                )  # fmt: skip
+                r = sudden_change(model, None, pt, float(xi), orbit=orb, t_max=t_max, **opts)
                 outcomes[i, j], times[i, j] = r.outcome, r.t
                 if progress is not None:
                     progress(f"Fn = {fn:.5f}, xi_0 = {xi:.3f}: {r.outcome}")
@@ -902,8 +931,10 @@ def sudden_change_map(
 
 __all__ = [
     "CAPSIZE",
+    "CAPTURED",
     "OUTCOMES",
     "PERIODIC",
+    "SADDLE",
     "SURF_RIDING",
     "UNDECIDED",
     "PeriodicOrbit",

@@ -1,0 +1,372 @@
+"""Figs. 16-20, 22 and the squares of Fig. 23 of Umeda (1999): sudden-change experiments.
+
+The initial state is the steady periodic orbit for one set of controls; the controls
+are suddenly changed and the transient is classified (capsize or periodic motion);
+:mod:`ship_models.analysis.sudden_change` does the work, this script draws and saves:
+
+- Fig. 16: outcome over (initial position, Fn) for chi_c = 10 deg starting from the
+  (Fn = 0.1, chi_c = 0) orbit, beside the heteroclinic-bifurcation Fn (collocation,
+  :func:`~ship_models.analysis.connection.critical_fn_bvp`);
+- Figs. 17-20: the transient just above the boundary (xi_G vs u/c, u/c vs heading,
+  heading vs roll, time histories of heading/roll/rudder over t c / L), with Fig. 21's
+  comparison of its final stage with the unstable manifold of the crest saddle;
+- Fig. 22: the same from the (Fn = 0.3, chi_c = 45 deg) orbit (reached by following
+  the (0.1, 0) orbit in three parameter steps: our vessel capsizes from a calm-water
+  start at those controls);
+- Fig. 23 squares: the experiment's critical Fn against chi_c (0-30 deg) from the
+  (0.1, 0) orbit at (xi_G/lambda)_0 = 0.5, by bisection, beside the heteroclinic line
+  (:func:`~ship_models.analysis.connection.critical_curve`).
+
+Writes to ``--out`` (default ``out/fig16_22``): ``fig16_map.png``, ``fig17_20_transient.png``,
+``fig21_final_stage.png``, ``fig22_map.png``, ``fig23_squares.png``; ``fig16_map.csv``,
+``fig22_map.csv``, ``fig23_boundaries.csv``, ``transient.csv``, ``orbits.csv``,
+``summary.json``.
+
+Run: ``python studies/fig16_22_sudden_change.py [--out DIR] [--full]`` (the default
+uses modest grids, about a minute; ``--full`` uses the finer grids of the paper's
+figures and every 5 deg with a tighter tolerance, several minutes).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import new_figure, save_csv, save_figure, save_table
+
+CHI_TO_DEG = 10.0
+FROM_1 = (0.1, 0.0)  # (Fn, chi_c deg) of the first initial orbit (Figs. 16-21, 23)
+FROM_2 = (0.3, 45.0)  # of the second (Fig. 22)
+XI_FIG23 = 0.5
+PAPER_FN = (0.3247, 0.3248)
+
+
+def _map_rows(mp: Any) -> list[list[Any]]:
+    return [
+        [float(xi), float(fn), str(mp.outcomes[i, j]), float(mp.times[i, j])]
+        for i, fn in enumerate(mp.Fn)
+        for j, xi in enumerate(mp.xi_0)
+    ]
+
+
+def _draw_map(mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path: Path) -> None:
+    from ship_models.analysis.sudden_change import CAPSIZE, PERIODIC
+
+    fig = new_figure((5.8, 4.2))
+    ax = fig.subplots()
+    X, Y = np.meshgrid(mp.xi_0, mp.Fn)
+    o = mp.outcomes
+    for kind, mk, col, lab in (
+        (PERIODIC, "o", "tab:blue", "periodic motion"),
+        (CAPSIZE, "x", "tab:red", "capsizing due to broaching"),
+    ):
+        sel = o == kind
+        ax.plot(X[sel], Y[sel], mk, color=col, mfc="none", ms=7, mew=1.4, label=lab)
+    other = (o != PERIODIC) & (o != CAPSIZE) & (o != "")
+    if np.any(other):
+        ax.plot(X[other], Y[other], "s", color="tab:gray", mfc="none", ms=7, label="other")
+    ax.axhline(fn_het, color="k", ls="--", lw=1.2, label=f"heteroclinic bifurcation {fn_het:.5f}")
+    if bounds:
+        xs = sorted(bounds)
+        ax.errorbar(
+            xs, [bounds[x].Fn for x in xs],
+            yerr=[0.5 * (bounds[x].bracket[1] - bounds[x].bracket[0]) for x in xs],
+            fmt="D-", color="tab:green", ms=4, lw=0.8, label="boundary by bisection",
+        )  # fmt: skip
+    ax.set_xlabel("initial longitudinal position (xi_G / lambda)_0")
+    ax.set_ylabel("nominal Froude number")
+    ax.set_title(title, fontsize=8.5)
+    ax.set_xlim(-0.05, 1.0)
+    ax.ticklabel_format(axis="y", useOffset=False)
+    ax.legend(fontsize=6.5, loc="best")
+    save_figure(fig, path)
+
+
+def compute(
+    out: Path, progress: Callable[[str], None] | None = None, *, full: bool = False
+) -> dict[str, Any]:
+    """Run the experiments; write figures and data; return the summary."""
+    from ship_models import purse_seiner
+    from ship_models.analysis.connection import critical_curve, critical_fn_bvp
+    from ship_models.analysis.manifold import unstable_manifold
+    from ship_models.analysis.sudden_change import (
+        follow_orbit,
+        periodic_orbit,
+        sudden_change,
+        sudden_change_boundary,
+        sudden_change_map,
+    )
+
+    say = progress or (lambda msg: None)
+    out.mkdir(parents=True, exist_ok=True)
+    t_all = time.perf_counter()
+    model = purse_seiner()
+    chi10 = math.radians(CHI_TO_DEG)
+    base = model.default_params()
+    summary: dict[str, Any] = {"chi_c_to_deg": CHI_TO_DEG, "full": full}
+
+    say("heteroclinic Fn (collocation) and the critical curve 0-30 deg")
+    conn = critical_fn_bvp(chi10, model=model)
+    fn_het = float(conn.Fn)
+    courses_deg = np.arange(0.0, 31.0, 5.0)
+    curve = critical_curve(np.radians(courses_deg), model=model, start=conn)
+    summary["heteroclinic_Fn_10deg"] = fn_het
+    summary["curve"] = {"chi_c_deg": list(curve.chi_c_deg), "Fn": [float(v) for v in curve.Fn]}
+
+    say("periodic orbits: (0.1, 0 deg) from a calm-water start, (0.3, 45 deg) by following it")
+    p1 = base.replace(Fn=FROM_1[0], chi_c=math.radians(FROM_1[1]))
+    p2 = base.replace(Fn=FROM_2[0], chi_c=math.radians(FROM_2[1]))
+    orb1 = periodic_orbit(model, p1, throw=True)
+    direct2 = periodic_orbit(model, p2)
+    orb2 = follow_orbit(orb1, p2, steps=3, progress=say)
+    if not orb2.success:
+        raise RuntimeError(f"no periodic orbit at {FROM_2}: {orb2.message}")
+    summary["orbits"] = {"from_0.1_0deg": orb1.to_json(), "from_0.3_45deg": orb2.to_json()}
+    summary["orbit_0.3_45deg_from_calm_water"] = direct2.message
+    save_table(
+        out / "orbits.csv",
+        ["orbit", "period_s", "max_abs_multiplier", "closure", *model.state_names],
+        [
+            [
+                f"Fn={FROM_1[0]} chi_c={FROM_1[1]}deg",
+                orb1.period,
+                float(np.max(np.abs(orb1.multipliers))),
+                orb1.closure,
+                *orb1.x_section,
+            ],
+            [
+                f"Fn={FROM_2[0]} chi_c={FROM_2[1]}deg",
+                orb2.period,
+                float(np.max(np.abs(orb2.multipliers))),
+                orb2.closure,
+                *orb2.x_section,
+            ],
+        ],  # fmt: skip
+        meta={"section": "xi_G/lambda = 0", "units": "SI, angles rad"},
+    )
+
+    def opt(n_def: int, n_full: int) -> int:
+        return n_full if full else n_def
+
+    # ---- Fig. 16 and Fig. 22: outcome maps and boundaries
+    xi_grid = np.linspace(0.0, 0.9, 10) if full else np.array([0.0, 0.25, 0.5, 0.75])
+    d1 = [-0.004, -0.002, -0.0005, 0.0005, 0.002, 0.004]
+    d2 = [-0.014, -0.01, -0.006, -0.002, -0.0005, 0.0005]
+    if full:
+        d1 = list(np.linspace(-0.004, 0.004, 9))
+        d2 = list(np.linspace(-0.015, 0.005, 11))
+    tol_b = 2e-5 if full else 2e-4
+    maps: dict[str, Any] = {}
+    for key, orb, deltas, fig_name, title in (
+        ("fig16", orb1, d1, "fig16_map.png", "from the periodic orbit at Fn = 0.1, chi_c = 0"),
+        ("fig22", orb2, d2, "fig22_map.png", "from the periodic orbit at Fn = 0.3, chi_c = 45 deg"),
+    ):
+        say(f"{key}: outcome map {len(deltas)} Fn x {xi_grid.size} positions")
+        mp = sudden_change_map(
+            model, None, chi10, xi_grid, fn_het + np.array(deltas), orbit=orb,
+            progress=None,
+        )  # fmt: skip
+        save_table(
+            out / f"{key}_map.csv",
+            ["xi_0", "Fn", "outcome", "t_decided_s"],
+            _map_rows(mp),
+            meta={"chi_c_to_deg": CHI_TO_DEG, "heteroclinic_Fn": fn_het},
+        )
+        bxi = xi_grid if full else np.array([0.0, 0.5])
+        bounds = {}
+        lo_d, hi_d = min(deltas), max(deltas)
+        for xi in bxi:
+            say(f"{key}: boundary at xi_0 = {xi:g} (tol {tol_b:g})")
+            b = sudden_change_boundary(
+                model, None, chi10, float(xi), (fn_het + lo_d, fn_het + hi_d), tol_b, orbit=orb
+            )
+            if b.success:
+                bounds[float(xi)] = b
+        maps[key] = {
+            "xi_0": [float(v) for v in mp.xi_0],
+            "Fn": [float(v) for v in mp.Fn],
+            "outcomes": [[str(v) for v in row] for row in mp.outcomes],
+            "lowest_capsizing_Fn_of_grid": [float(v) for v in mp.boundary()],
+            "boundaries": {f"{k:g}": v.to_json() for k, v in bounds.items()},
+            "boundary_minus_heteroclinic": {f"{k:g}": v.Fn - fn_het for k, v in bounds.items()},
+            "seconds": mp.elapsed,
+        }
+        _draw_map(
+            mp, fn_het, bounds,
+            f"Sudden change to chi_c = {CHI_TO_DEG:g} deg (cf. Umeda 1999, Fig. {key[3:]})\n"
+            f"{title}",
+            out / fig_name,
+        )  # fmt: skip
+    summary["maps"] = maps
+
+    # ---- Fig. 23 squares
+    say("Fig. 23: experiment's boundary against the course")
+    sq_deg = courses_deg if full else np.array([0.0, 10.0, 20.0, 30.0])
+    rows = []
+    squares = {}
+    for deg in sq_deg:
+        k = int(np.argmin(np.abs(curve.chi_c_deg - deg)))
+        fh = float(curve.Fn[k])
+        b = None
+        for lo_d, hi_d in ((-0.0063, 0.0017), (-0.03, 0.01)):
+            b = sudden_change_boundary(
+                model, None, math.radians(deg), XI_FIG23, (fh + lo_d, fh + hi_d), tol_b,
+                orbit=orb1,
+            )  # fmt: skip
+            if b.status.name != "NO_BRACKET":
+                break
+        assert b is not None
+        say(f"  {deg:g} deg: {b.Fn:.6f} ({b.outcomes[1]} above; heteroclinic {fh:.6f})")
+        squares[deg] = b
+        rows.append(
+            [deg, b.Fn, b.bracket[0], b.bracket[1], b.outcomes[0], b.outcomes[1], fh, b.Fn - fh,
+             b.status.name, b.n_runs]
+        )  # fmt: skip
+    save_table(
+        out / "fig23_boundaries.csv",
+        ["chi_c_deg", "Fn_experiment", "lower", "upper", "outcome_lower", "outcome_upper",
+         "Fn_heteroclinic", "difference", "status", "runs"],
+        rows,
+        meta={"initial_orbit": "Fn = 0.1, chi_c = 0", "xi_0": XI_FIG23, "tol": tol_b},
+    )  # fmt: skip
+    summary["fig23_squares"] = [
+        {"chi_c_deg": float(d), **b.to_json(), "heteroclinic_Fn": float(r[6])}
+        for (d, b), r in zip(squares.items(), rows, strict=True)
+    ]
+    fig = new_figure((5.6, 3.9))
+    ax = fig.subplots()
+    ok = curve.converged
+    ax.plot(curve.chi_c_deg[ok], curve.Fn[ok], "o-", ms=4, label="heteroclinic bifurcation")
+    ax.errorbar(
+        list(squares), [b.Fn for b in squares.values()],
+        yerr=[0.5 * (b.bracket[1] - b.bracket[0]) for b in squares.values()],
+        fmt="s", mfc="none", ms=8, color="tab:orange",
+        label=f"numerical experiment (sudden change, (xi_G/lambda)_0 = {XI_FIG23:g})",
+    )  # fmt: skip
+    ax.set_xlabel("autopilot course chi_c (deg)")
+    ax.set_ylabel("critical nominal Froude number")
+    ax.ticklabel_format(axis="y", useOffset=False)
+    ax.set_title("Critical condition for capsizing due to broaching (cf. Fig. 23)", fontsize=9)
+    ax.legend(fontsize=7)
+    save_figure(fig, out / "fig23_squares.png")
+
+    # ---- Figs. 17-20: the transient just above the boundary, and Fig. 21
+    b10 = squares.get(CHI_TO_DEG)
+    fn_above = b10.bracket[1] if b10 is not None and b10.success else fn_het + 1e-4
+    say(f"Figs. 17-20: transient at Fn = {fn_above:.6f} (just above the boundary)")
+    pt = base.replace(Fn=fn_above, chi_c=chi10)
+    run = sudden_change(model, None, pt, XI_FIG23, orbit=orb1)
+    tr = run.trajectory
+    c = model.celerity(pt)
+    L = float(model.forces.L)
+    i = {n: model.state_index(n) for n in model.state_names}
+    x = tr.x
+    deg = np.degrees
+    save_csv(
+        out / "transient.csv",
+        {"t": tr.t, "t_nondim": tr.t * c / L, **{n: x[:, i[n]] for n in model.state_names}},
+        meta={"Fn": fn_above, "chi_c_deg": CHI_TO_DEG, "xi_0": XI_FIG23, "outcome": run.outcome,
+              "units": "SI, angles rad, xi_G unwrapped"},
+    )  # fmt: skip
+    summary["transient"] = {
+        "Fn": fn_above,
+        "outcome": run.outcome,
+        "t_end_s": float(tr.t[-1]),
+        "t_end_nondim": float(tr.t[-1] * c / L),
+        "xi_end": float(x[-1, i["xi_G"]]),
+        "max_heading_deg": float(deg(np.max(x[:, i["chi"]]))),
+        "roll_end_deg": float(deg(x[-1, i["phi"]])),
+        "rudder_end_deg": float(deg(x[-1, i["delta"]])),
+    }
+    fig = new_figure((9.0, 7.0))
+    ax = fig.subplots(2, 2).ravel()
+    ax[0].plot(x[:, i["xi_G"]], x[:, i["u"]] / c, lw=0.8)
+    ax[0].set_xlabel("xi_G / lambda (unwrapped)")
+    ax[0].set_ylabel("u / c")
+    ax[0].set_title("Fig. 17", fontsize=8)
+    ax[1].plot(deg(x[:, i["chi"]]), x[:, i["u"]] / c, lw=0.8)
+    ax[1].set_xlabel("heading angle chi (deg)")
+    ax[1].set_ylabel("u / c")
+    ax[1].set_title("Fig. 18", fontsize=8)
+    ax[2].plot(deg(x[:, i["phi"]]), deg(x[:, i["chi"]]), lw=0.8)
+    ax[2].set_xlabel("roll angle phi (deg)")
+    ax[2].set_ylabel("heading angle chi (deg)")
+    ax[2].set_title("Fig. 19", fontsize=8)
+    tn = tr.t * c / L
+    for n, lab in (("chi", "heading"), ("phi", "roll"), ("delta", "rudder")):
+        ax[3].plot(tn, deg(x[:, i[n]]), lw=0.9, label=f"{lab} angle")
+    ax[3].set_xlim(max(0.0, tn[-1] - 12.0), tn[-1])
+    ax[3].set_xlabel("nondimensional time t c / L")
+    ax[3].set_ylabel("angle (deg)")
+    ax[3].set_title("Fig. 20 (final stage)", fontsize=8)
+    ax[3].legend(fontsize=7)
+    fig.suptitle(
+        f"Transient just above the boundary: Fn = {fn_above:.6f}, chi_c = {CHI_TO_DEG:g} deg, "
+        f"from the (0.1, 0 deg) orbit at (xi_G/lambda)_0 = {XI_FIG23:g}: {run.outcome}",
+        fontsize=9,
+    )
+    save_figure(fig, out / "fig17_20_transient.png")
+
+    say("Fig. 21: final stage beside the unstable manifold of the crest saddle")
+    man = unstable_manifold(model, pt, "crest", t_max=300.0)
+    fig = new_figure((9.0, 3.8))
+    ax = fig.subplots(1, 2)
+    xi_end = x[-1, i["xi_G"]]
+    last = tr.t >= tr.t[-1] - 60.0
+    lab = "numerical experiment (last 60 s)"
+    sq = {"ms": 2.5, "mfc": "none", "color": "tab:orange", "label": lab}
+    ax[0].plot(x[last, i["xi_G"]] - math.floor(xi_end), x[last, i["u"]] / c, "s", **sq)
+    ax[1].plot(deg(x[last, i["chi"]]), deg(x[last, i["phi"]]), "s", **sq)
+    man_json = {}
+    for name, br in man.branches.items():
+        y = br.trajectory.x
+        col = "k" if name == "downslope" else "tab:gray"
+        ax[0].plot(y[:, i["xi_G"]] - math.floor(y[0, i["xi_G"]]), y[:, i["u"]] / c, "-", color=col,
+                   lw=1.0, label=f"unstable manifold, {name} ({br.fate.label})")  # fmt: skip
+        ax[1].plot(deg(y[:, i["chi"]]), deg(y[:, i["phi"]]), "-", color=col, lw=1.0,
+                   label=f"unstable manifold, {name}")  # fmt: skip
+        man_json[name] = br.fate.label
+    ax[0].set_xlabel("xi_G / lambda (shifted to one wave)")
+    ax[0].set_ylabel("u / c")
+    ax[1].set_xlabel("heading angle chi (deg)")
+    ax[1].set_ylabel("roll angle phi (deg)")
+    ax[0].legend(fontsize=6.5)
+    fig.suptitle(f"Final stage vs unstable manifold of the crest saddle, Fn = {fn_above:.6f} "
+                 "(cf. Fig. 21)", fontsize=9)  # fmt: skip
+    save_figure(fig, out / "fig21_final_stage.png")
+    summary["fig21_manifold_fates"] = man_json
+
+    summary["figures"] = [
+        "fig16_map.png", "fig17_20_transient.png", "fig21_final_stage.png", "fig22_map.png",
+        "fig23_squares.png",
+    ]  # fmt: skip
+    summary["seconds"] = round(time.perf_counter() - t_all, 2)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+    return summary
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry: ``python studies/fig16_22_sudden_change.py --out DIR``."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("out/fig16_22"))
+    ap.add_argument("--full", action="store_true", help="fine grids, every 5 deg, tol 2e-5")
+    args = ap.parse_args(argv)
+    s = compute(args.out, progress=lambda m: print(m, flush=True), full=args.full)
+    print(json.dumps({k: s[k] for k in ("heteroclinic_Fn_10deg", "fig23_squares", "seconds")},
+                     indent=2))  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
