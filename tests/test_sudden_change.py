@@ -29,6 +29,7 @@ from ship_models.analysis.eigen import paper_scales
 from ship_models.analysis.sudden_change import (
     CAPSIZE,
     PERIODIC,
+    SADDLE,
     default_guess,
     follow_orbit,
     periodic_orbit,
@@ -148,6 +149,23 @@ def test_boundary_agrees_with_the_heteroclinic_fn(model, orbit, fn_het):
     assert b.outcomes == (PERIODIC, CAPSIZE)
     assert abs(b.Fn - fn_het) < tol + 1e-4
     assert lo < fn_het + tol
+
+
+def test_surge_plane_at_chi_c_0_surf_rides_above_the_threshold(model, orbit):
+    """chi_c = 0: the ship stays in the surge plane; above the heteroclinic Fn it is
+    captured by the wave at the trough point (surf-riding, unstable only in yaw, so the
+    outcome is ``saddle``), below it keeps surging. Reference: the connection at 0 deg
+    by collocation (equal to the surge-only surf-riding threshold, test_ship_connection).
+    """
+    fn0 = float(critical_fn_bvp(0.0, model=model).Fn)
+    base = orbit.params.replace(chi_c=0.0)
+    below = sudden_change(model, None, base.replace(Fn=fn0 - 0.003), 0.5, orbit=orbit)
+    above = sudden_change(model, None, base.replace(Fn=fn0 + 0.003), 0.5, orbit=orbit)
+    assert below.outcome == PERIODIC
+    assert above.outcome == SADDLE and above.captured and not above.capsized
+    assert above.fate.equilibrium == "trough"
+    for r in (below, above):  # no lateral motion: v, chi, r, phi, p_roll, delta stay 0
+        assert np.max(np.abs(r.trajectory.x[:, 2:])) < 1e-9
 
 
 def test_bracket_without_switch(model, orbit, fn_het):

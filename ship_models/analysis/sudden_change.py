@@ -269,6 +269,8 @@ class _ReturnMap:
             rtol=1e-11,
             atol=1e-13,
         )
+        if tr.status is Status.INTERRUPTED:
+            raise KeyboardInterrupt
         if tr.terminal_event != "ret":
             raise ContinuationError(f"no return to the section within {self.tmax:g} s")
         return np.asarray(tr.x[-1, self.others], dtype=float), float(tr.t[-1]), tr
@@ -350,7 +352,7 @@ def periodic_orbit(
     cap = _capsize_sim_event(model, capsize_angle)
 
     def fail(status: Status, msg: str, traj: Trajectory) -> PeriodicOrbit:
-        if throw:
+        if throw and status is not Status.INTERRUPTED:
             raise ContinuationError(f"periodic_orbit: {msg}")
         return PeriodicOrbit(
             model, par, np.array(traj.x[-1], dtype=float), section, math.nan, 0,
@@ -429,14 +431,21 @@ def periodic_orbit(
         status, msg = Status.NEWTON_FAILED, str(exc)
     except np.linalg.LinAlgError:
         status, msg = Status.SINGULAR, "singular return-map Jacobian (a multiplier equal to 1)"
-    py, period, tr = pmap(y)
+    except KeyboardInterrupt:
+        return fail(Status.INTERRUPTED, "interrupted during the Newton refinement", last)
+    try:
+        py, period, tr = pmap(y)
+    except ContinuationError as exc:
+        return fail(Status.NEWTON_FAILED, f"Newton diverged: {exc}", last)
+    except KeyboardInterrupt:
+        return fail(Status.INTERRUPTED, "interrupted during the Newton refinement", last)
     closure = float(np.max(np.abs(py - y) / s7))
     mult = np.linalg.eigvals(J)
     orbit = PeriodicOrbit(
         model, par, pmap.full(y), section, period, drift, mult, closure, tr, status, msg,
         n_transient, time.perf_counter() - t_start,
     )  # fmt: skip
-    if throw and status is not Status.SUCCESS:
+    if throw and status not in (Status.SUCCESS, Status.INTERRUPTED):
         raise ContinuationError(f"periodic_orbit: {msg}")
     log.debug("periodic orbit: %s, period %.6g s, closure %.2e", msg, period, closure)
     return orbit
@@ -921,6 +930,8 @@ def sudden_change_map(
                 opts["points"] = fixed_points(model, pt)
             for j, xi in enumerate(xs):
                 r = sudden_change(model, None, pt, float(xi), orbit=orb, t_max=t_max, **opts)
+                if r.fate.status is Status.INTERRUPTED:
+                    raise KeyboardInterrupt
                 outcomes[i, j], times[i, j] = r.outcome, r.t
                 if progress is not None:
                     progress(f"Fn = {fn:.5f}, xi_0 = {xi:.3f}: {r.outcome}")
