@@ -215,6 +215,8 @@ def test_capsize_from_the_guess_is_reported(model, p_from):
     assert o.status is Status.EVENT and not o.success
     with pytest.raises(ContinuationError, match="capsized"):
         periodic_orbit(model, p, throw=True)
+    with pytest.raises(ContinuationError, match="did not converge"):
+        o.state_at(0.5)
 
 
 @pytest.mark.slow

@@ -194,6 +194,8 @@ class PeriodicOrbit:
         ndarray, shape (8,)
         """
         xi_0 = _position(xi_0)
+        if not self.success:
+            raise ContinuationError(f"the periodic orbit did not converge: {self.message}")
         i = self.model.state_index("xi_G")
         x = self.x_section.copy()
         if math.isclose(math.remainder(xi_0 - self.section, 1.0), 0.0, abs_tol=1e-13):
