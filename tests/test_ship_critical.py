@@ -139,6 +139,8 @@ def test_first_passage_rules():
     assert first_passage(fate("recurrent")) == "periodic"  # no visit: the final fate
     assert first_passage(fate("undecided", (-1, 0))) is None
     assert first_passage(fate("undecided")) is None
+    assert first_passage(fate("undecided", (-1, 1))) is None  # turned back: where to?
+    assert first_passage(fate("undecided", (-1, -1))) == "periodic"  # passed: decided
     assert first_passage(fate("capsize", (1, 1), (-1, -1))) == "periodic"
     assert first_passage(fate("capsize", (-1, 1)), branch="downslope") == "capsize"
     with pytest.raises(ValueError, match="branch"):

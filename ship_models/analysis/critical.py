@@ -214,8 +214,8 @@ def first_passage(fate: ShipFate, saddle: str = "crest", branch: str = "upslope"
         visits in its own direction (or first visits a copy two or more waves on);
         otherwise (it turned back) :func:`outcome` of the final fate, or
         ``"returned"`` if that is periodic. Without such a visit: :func:`outcome` of
-        the final fate. ``None`` if undecided (side unknown, or no visit and an
-        undecided final fate).
+        the final fate. ``None`` if undecided (side unknown; or it turned back, or
+        made no visit, and the final fate is undecided).
     """
     if branch not in BRANCH_SIGNS:
         raise ValueError(f"`branch` must be one of {tuple(BRANCH_SIGNS)}, got {branch!r}")
@@ -232,7 +232,9 @@ def first_passage(fate: ShipFate, saddle: str = "crest", branch: str = "upslope"
             return None
         if v.side == sign:
             return PERIODIC
-        return RETURNED if final in (None, PERIODIC) else final
+        if final is None:  # turned back, but where to is not known yet: look longer
+            return None
+        return RETURNED if final == PERIODIC else final
     return final
 
 

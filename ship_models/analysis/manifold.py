@@ -49,8 +49,10 @@ Fates (:func:`classify_ship_fate`), decided while integrating in segments:
     ``status``).
 
 Every fate also lists the saddles the branch passed close to (``visits``: label,
-shift in wavelengths, time and distance of closest approach), e.g. the paper's
-"approaches a saddle next to the original saddle and then ...".
+shift in wavelengths, time and distance of closest approach, and the side of the
+saddle's stable manifold on which it left, :attr:`SaddleVisit.side`), e.g. the paper's
+"approaches a saddle next to the original saddle and then ..." (upslope or back down
+the slope: the first-passage criterion of :mod:`ship_models.analysis.critical`).
 """
 
 from __future__ import annotations
