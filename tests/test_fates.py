@@ -354,6 +354,21 @@ def _melnikov_deviation(g):
     assert above.kind is FateKind.PERIODIC and above.shift == (1,)
     for f in (below, above):
         assert f.visits and f.visits[0].label == "saddle@+1"
+    # first passage of the start's copy one period on: back towards down@+1 (theta
+    # decreasing, side -1) below F_c, on over the top (side +1) above
+    side_at = manifold_fate_function(
+        PEND,
+        [g, F0],
+        "F",
+        [np.pi - np.arcsin(F0), 0.0],
+        branch=1,
+        equilibria={"down": [np.arcsin(F0), 0.0]},
+        t_max=20 / g + 200,
+        tol=1e-5,
+        passage="saddle",
+    )
+    assert side_at(Fc * (1 - 1e-6)) == "passage:saddle:-1"
+    assert side_at(Fc * (1 + 1e-6)) == "passage:saddle:+1"
     return abs(Fc / F0 - 1)
 
 
