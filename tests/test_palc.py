@@ -398,9 +398,9 @@ def test_bordered_csc_pattern_cache_matches_dense_assembly():
     assert D.nnz == 3
 
 
-def test_warm_sparse_eigs_reuse_the_corrector_factorisation():
-    """Along a sparse Bratu branch the eigenvalues near 0 from the warm-started ARPACK with
-    the bordered factorisation as G_z^{-1} equal dense LAPACK eigenvalues of G_z."""
+def test_sparse_eigs_reuse_the_corrector_factorisation():
+    """Along a sparse Bratu branch the eigenvalues near 0 from ARPACK with the bordered
+    factorisation as G_z^{-1} equal dense LAPACK eigenvalues of G_z."""
     import continuation.driver as drv
 
     n = 150
@@ -408,18 +408,18 @@ def test_warm_sparse_eigs_reuse_the_corrector_factorisation():
     prob = EquilibriumProblem(sys, sys.params(lam=0.0), "lam")
     st = ContinuationSettings(ds=0.3, ds_max=0.3, max_steps=8, p_max=3.0)
     used = []
-    real_opinv = drv._WarmSparseEigs._opinv
+    real_opinv = drv._SparseEigs._opinv
 
     def spy(self, pt):
         op = real_opinv(self, pt)
         used.append(op is not None)
         return op
 
-    drv._WarmSparseEigs._opinv = spy
+    drv._SparseEigs._opinv = spy
     try:
         br = continue_branch(prob, np.zeros(n), 0.0, settings=st)
     finally:
-        drv._WarmSparseEigs._opinv = real_opinv
+        drv._SparseEigs._opinv = real_opinv
     assert len(br) == 9 and all(used) and len(used) >= 9
     for k in range(len(br)):
         J = prob.jacobian(br.x[k], br.p[k]).toarray()
@@ -428,7 +428,7 @@ def test_warm_sparse_eigs_reuse_the_corrector_factorisation():
         # were computed at: compare at that level
         np.testing.assert_allclose(br.eigenvalues[k, :6].real, dense, rtol=1e-8)
         np.testing.assert_allclose(br.eigenvalues[k, :6].imag, 0.0, atol=1e-8)
-    # a pair near the shift: the warm solver returns both members (conjugates)
+    # a pair near the shift cut at k: both members returned (conjugates), with vectors
     import scipy.sparse as sp
 
     from continuation.stability import sparse_eigs_near
