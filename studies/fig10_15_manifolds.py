@@ -39,6 +39,8 @@ from _common import new_figure, save_csv, save_figure
 
 CHI_C_DEG = 10.0
 PAPER_FN = 0.3248
+#: Width of the Fn search below the first-passage bracket for the final-fate switch.
+FINAL_SEARCH_WIDTH = 1e-3
 COLORS = {"downslope": "tab:red", "upslope": "tab:blue"}
 STYLES = {"downslope": "-", "upslope": "--"}
 #: The paper's planes: (file tag, x quantity, y quantity).
@@ -174,21 +176,43 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     model = purse_seiner()
     base = model.default_params().replace(chi_c=math.radians(CHI_C_DEG))
     c = model.celerity(base)
-    say(f"bisection of Fn on the fate of the upslope branch (chi_c = {CHI_C_DEG:g} deg)")
+    say(f"bisection of Fn on the upslope branch's first passage (chi_c = {CHI_C_DEG:g} deg)")
     crit = critical_fn(
         model,
         base["chi_c"],
         tol=1e-5,
-        progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.fate.label}"),
+        progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),
     )
     (out / "critical.json").write_text(json.dumps(crit.to_json(), indent=2))
     if not crit.status.ok and crit.status.name != "SUCCESS":
         say(f"bisection did not succeed: {crit.message}")
     lo, hi = crit.bracket
-    cases = {"above": hi, "below": lo, "paper": PAPER_FN}
+    # Just below the primary connection, secondary switches (the branch passes crest@-1
+    # on the periodic side and turns back at crest@-2, -3, ...) accumulate, so the
+    # final fate there can be capsize. The paper's "just below" picture (a periodic
+    # attractor) is taken at the highest Fn whose final fate is periodic: a second
+    # bisection, on the final fate, below the first-passage bracket.
+    say("bisection on the final fate below the first-passage bracket (secondary switches)")
+    final = critical_fn(
+        model,
+        base["chi_c"],
+        fn_bracket=(lo - FINAL_SEARCH_WIDTH, lo),
+        tol=1e-6,
+        criterion="final",
+        progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),
+    )
+    (out / "critical_final_fate.json").write_text(json.dumps(final.to_json(), indent=2))
+    below = final.bracket[0] if final.status.name == "SUCCESS" else lo
+    cases = {"above": hi, "below": below, "paper": PAPER_FN}
     figures: list[str] = []
     data: list[str] = []
-    summary: dict[str, Any] = {"chi_c_deg": CHI_C_DEG, "critical": crit.to_json(), "cases": {}}
+    summary: dict[str, Any] = {
+        "chi_c_deg": CHI_C_DEG,
+        "critical": crit.to_json(),
+        "final_fate_switch": final.to_json(),
+        "cascade_interval": [final.bracket[1], lo],
+        "cases": {},
+    }
     mans = {}
     for case, fn in cases.items():
         say(f"unstable manifold of the crest saddle at Fn = {fn:.7f} ({case})")
@@ -208,9 +232,9 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         figures += _plot_case(man, c, out, nums, title)
         data += _save_series(man, c, out, case)
         summary["cases"][case] = {"Fn": fn, **man.to_json()}
-    say("global picture on both sides of the switch")
-    g_lo = build_global_picture(model, base.replace(Fn=lo), t_max=1500.0)
-    g_hi = build_global_picture(model, base.replace(Fn=hi), t_max=1500.0)
+    say("global picture at the 'below' and 'above' cases")
+    g_lo = build_global_picture(model, base.replace(Fn=cases["below"]), t_max=1500.0)
+    g_hi = build_global_picture(model, base.replace(Fn=cases["above"]), t_max=1500.0)
     diff = compare_pictures(g_lo, g_hi)
     summary["global_picture"] = {
         "below": [(u, v, k) for u, v, k in g_lo.edges(keys=True)],
