@@ -28,7 +28,7 @@ from .fate_bisection import (
     bisect_fate,
     manifold_fate_function,
 )
-from .fates import Fate, FateClassifier, FateKind, SaddleVisit, classify_fate
+from .fates import Fate, FateClassifier, FateKind, SaddleVisit, classify_fate, passage_side
 from .global_graph import EdgeChange, GraphDiff, build_global_graph, compare_graphs
 from .manifolds import ManifoldBranch, ManifoldResult, unstable_manifold
 from .newton import NewtonResult, newton
@@ -49,6 +49,7 @@ from .status import Status
 from .system import DynamicalSystem, System, check_jacobian
 
 __all__ = [
+    "passage_side",
     "simulate",
     "Simulator",
     "SimEvent",

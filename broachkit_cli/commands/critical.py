@@ -28,7 +28,7 @@ def _bisection(model: Any, params: Any, args: argparse.Namespace) -> dict[str, A
 
     def progress(ev: Any) -> None:
         if not args.json:
-            sys.stderr.write(f"  Fn = {ev.Fn:.8f}: {ev.fate.label}\n")
+            sys.stderr.write(f"  Fn = {ev.Fn:.8f}: {ev.outcome or 'undecided'}\n")
 
     res = critical_fn(
         model,
@@ -38,6 +38,7 @@ def _bisection(model: Any, params: Any, args: argparse.Namespace) -> dict[str, A
         tol=args.tol,
         progress=progress,
         t_max=args.t_max,
+        criterion=args.criterion,
     )
     return res.to_json()
 
@@ -96,6 +97,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fn-min", type=float, default=0.25, help="lower end of the Fn search")
     parser.add_argument("--fn-max", type=float, default=0.40, help="upper end of the Fn search")
     parser.add_argument("--tol", type=float, default=1e-5, help="bracket width in Fn (1e-5)")
+    parser.add_argument(
+        "--criterion",
+        choices=("first_passage", "final"),
+        default="first_passage",
+        help=(
+            "bisection: compare the side on which the upslope branch leaves the first "
+            "neighbouring saddle (default; switches at the heteroclinic connection) or "
+            "its final fate (switches at secondary connections too)"
+        ),
+    )
     parser.add_argument(
         "--t-max", type=float, default=1500.0, help="time limit per simulation in s (1500)"
     )

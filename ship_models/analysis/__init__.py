@@ -41,6 +41,9 @@ _LAZY = {
     "unstable_manifold": ".manifold",
     "CriticalResult": ".critical",
     "critical_fn": ".critical",
+    "first_passage": ".critical",
+    "CRITERIA": ".critical",
+    "RETURNED": ".critical",
     "PictureDiff": ".global_picture",
     "compare_pictures": ".global_picture",
     "build_global_picture": ".global_picture",
@@ -60,6 +63,9 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
+    "CRITERIA",
+    "RETURNED",
+    "first_passage",
     "CriticalConnection",
     "CriticalCurve",
     "critical_curve",
