@@ -63,7 +63,7 @@ def _map_rows(mp: Any) -> list[list[Any]]:
 def _draw_map(mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path: Path) -> None:
     from ship_models.analysis.sudden_change import CAPSIZE, PERIODIC
 
-    fig = new_figure((5.8, 4.2))
+    fig = new_figure((5.8, 4.9))
     ax = fig.subplots()
     X, Y = np.meshgrid(mp.xi_0, mp.Fn)
     o = mp.outcomes
@@ -89,7 +89,8 @@ def _draw_map(mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path
     ax.set_title(title, fontsize=8.5)
     ax.set_xlim(-0.05, 1.0)
     ax.ticklabel_format(axis="y", useOffset=False)
-    ax.legend(fontsize=6.5, loc="best")
+    ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
+    fig.tight_layout()
     save_figure(fig, path)
 
 
@@ -161,7 +162,7 @@ def compute(
 
     # ---- Fig. 16 and Fig. 22: outcome maps and boundaries
     xi_grid = np.linspace(0.0, 0.9, 10) if full else np.array([0.0, 0.25, 0.5, 0.75])
-    d1 = [-0.004, -0.002, -0.0005, 0.0005, 0.002, 0.004]
+    d1 = [-0.004, -0.0015, -0.0005, 0.0005, 0.003]
     d2 = [-0.014, -0.01, -0.006, -0.002, -0.0005, 0.0005]
     if full:
         d1 = list(np.linspace(-0.004, 0.004, 9))
