@@ -11,6 +11,7 @@ fig02_05   fixed points against chi_c and Fn           ``studies/fig02_05_fixed_
 fig06_09   eigenvalues and unstable eigenvectors       ``studies/fig06_09_eigen.py``
 fig10_15   critical Fn, unstable manifolds             ``studies/fig10_15_manifolds.py``
 fig21_23   connecting orbit, critical curve            ``studies/fig21_23_connection.py``
+fig16_22   sudden-change experiments                   ``studies/fig16_22_sudden_change.py``
 ========== =========================================== ===================================
 
 A step whose ``summary.json`` is already on disk is skipped unless ``--force``;

@@ -14,6 +14,8 @@ model (:mod:`ship_models`); the figure scripts in ``studies/`` and the command l
 - :mod:`.critical` -- critical Fn of the heteroclinic bifurcation by bisection
 - :mod:`.connection` -- the same as a connecting orbit by collocation, and its
   continuation in chi_c (the critical curve, Fig. 23)
+- :mod:`.sudden_change` -- the paper's "sudden change" experiments: start on the periodic
+  orbit of one control setting, switch the controls, classify the transient (Figs. 16-22)
 
 The simulation-based names are imported lazily (on first use).
 """
@@ -52,6 +54,15 @@ _LAZY = {
     "critical_curve": ".connection",
     "critical_fn_bisection": ".connection",
     "critical_fn_bvp": ".connection",
+    "periodic_orbit": ".sudden_change",
+    "follow_orbit": ".sudden_change",
+    "sudden_change": ".sudden_change",
+    "sudden_change_boundary": ".sudden_change",
+    "sudden_change_map": ".sudden_change",
+    "PeriodicOrbit": ".sudden_change",
+    "SuddenChange": ".sudden_change",
+    "SuddenChangeBoundary": ".sudden_change",
+    "SuddenChangeMap": ".sudden_change",
 }
 
 
@@ -63,6 +74,15 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
+    "periodic_orbit",
+    "follow_orbit",
+    "sudden_change",
+    "sudden_change_boundary",
+    "sudden_change_map",
+    "PeriodicOrbit",
+    "SuddenChange",
+    "SuddenChangeBoundary",
+    "SuddenChangeMap",
     "CRITERIA",
     "RETURNED",
     "first_passage",
