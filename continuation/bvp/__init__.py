@@ -6,7 +6,10 @@ Public names:
 * :class:`HeteroclinicProblem`, :class:`PinPhase` — the connection and its phase condition;
 * :class:`ConnectionResult` — orbit, equilibria, parameters, status; ``save``/``load``/``plot``;
 * :func:`solve_connection`, :func:`check_convergence`, :func:`continue_connection`,
-  :func:`connection_at`.
+  :func:`connection_at`;
+* :func:`simplified_newton`, :class:`JacobianCache` — Newton with few Jacobians (chord
+  steps with Broyden updates; one factorisation shared between nearby solves), behind
+  ``solve_connection(..., method="broyden" | "chord")``.
 
 Example: the Nagumo front ``u'' + c u' + u (1 - u)(u - a) = 0`` from ``u = 1`` to
 ``u = 0`` has ``c = sqrt(2) (1/2 - a)`` (McKean 1970)::
@@ -35,6 +38,7 @@ instead of ``saddle_to``; the state must be declared periodic in the System.
 from .collocation import CollocationMesh
 from .connection import HeteroclinicProblem, PinPhase
 from .result import ConnectionResult
+from .simplified import JacobianCache, simplified_newton
 from .solve import (
     ConvergenceCheck,
     check_convergence,
@@ -48,9 +52,11 @@ __all__ = [
     "ConnectionResult",
     "ConvergenceCheck",
     "HeteroclinicProblem",
+    "JacobianCache",
     "PinPhase",
     "check_convergence",
     "connection_at",
     "continue_connection",
+    "simplified_newton",
     "solve_connection",
 ]
