@@ -11,10 +11,12 @@ from .bvp import (
     ConnectionResult,
     ConvergenceCheck,
     HeteroclinicProblem,
+    JacobianCache,
     PinPhase,
     check_convergence,
     connection_at,
     continue_connection,
+    simplified_newton,
     solve_connection,
 )
 from .codim2 import FoldProblem, HopfProblem, continue_codim2
@@ -49,6 +51,8 @@ from .status import Status
 from .system import DynamicalSystem, System, check_jacobian
 
 __all__ = [
+    "JacobianCache",
+    "simplified_newton",
     "passage_side",
     "simulate",
     "Simulator",
