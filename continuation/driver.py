@@ -38,6 +38,7 @@ from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .errors import ContinuationError, ConvergenceError
 from .events import Event, HopfTest, bp_test, crossed
 from .locate import LocateResult, locate_zero
+from .problem import EquilibriumProblem
 from .settings import ContinuationSettings
 from .stability import _dense_eigvals as dense_eigvals
 from .stability import count_unstable, eigenvalues, sort_eigenvalues, sparse_eigs_near
@@ -51,6 +52,7 @@ ProgressFn = Callable[[BranchPoint], None]
 #: at most this fraction of the larger of its values at the two rows around it.
 BP_SINGULAR_RATIO = 0.1
 _EPS = float(np.finfo(float).eps)
+_NO_RECORDS = EquilibriumProblem.record
 
 _PREFIX = {
     SpecialKind.FOLD: "F",
@@ -234,6 +236,10 @@ class _Context:
         self.diff = _difference_fn(problem)
         self.grow_iters = int(getattr(algorithm, "grow_iters", 3))
         self.terminal = any(e.terminal for e in self.events)
+        # the protocol's record() of plain equilibria is always empty: not called per row
+        self.record = (
+            None if getattr(type(problem), "record", None) is _NO_RECORDS else problem.record
+        )
         period = getattr(getattr(problem, "system", None), "period", None)
         # plain differences (no periodic state): distances without problem.difference
         self.plain_diff = not callable(getattr(problem, "difference", None)) or (
@@ -245,7 +251,7 @@ class _Context:
         det = self.settings.detect
         ev = self.eig(pt)
         counts = None if ev is None else count_unstable(ev, det.eig_tol, det.imag_tol)
-        rec = self.problem.record(pt.z, pt.p)
+        rec = self.record(pt.z, pt.p) if self.record is not None else None
         rec = {str(k): float(v) for k, v in dict(rec).items()} if rec else {}
         evs = [e.value(pt.z, pt.p) for e in self.events] if self.events else []
         return _Row(pt.z, pt.p, ev, counts, ds, pt.iters, rec, evs, pt)
@@ -294,8 +300,13 @@ class _Context:
         """
         det = self.settings.detect
         pa, pb = a.point, b.point
+        ac, bc = a.counts, b.counts
+        fold = det.fold and pa.tau[-1] * pb.tau[-1] < 0
+        hopf = det.hopf and ac is not None and bc is not None and ac[0] == bc[0] and ac[1] != bc[1]
+        if not (fold or hopf or self.events or (det.branch_point and pa.bp_sign != pb.bp_sign)):
+            return []  # (the common case: nothing to locate)
         found: list[tuple[SpecialKind, LocateResult, dict[str, float], str]] = []
-        if det.fold and pa.tau[-1] * pb.tau[-1] < 0:
+        if fold:
             r = self.locate(
                 a,
                 b,
@@ -310,13 +321,8 @@ class _Context:
             bp = self.branch_point(a, b, sigma_b, w)
             if bp is not None:
                 found.append((SpecialKind.BRANCH_POINT, bp[0], bp[1], ""))
-        if (
-            det.hopf
-            and a.counts is not None
-            and b.counts is not None
-            and a.counts[0] == b.counts[0]
-            and a.counts[1] != b.counts[1]
-        ):
+        if hopf:
+            assert ac is not None and bc is not None
             assert a.eig is not None and b.eig is not None
             if abs(b.counts[1] - a.counts[1]) > 1:
                 log.warning(
@@ -599,6 +605,8 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
         ctx.progress(_branch_point(row0, 0))
     w = state.w
     far = 0.0
+    plain, u_start = ctx.plain_diff, row0.point.u
+    grow, ds_max, grow_iters = s.grow, s.ds_max, ctx.grow_iters
     p_at_bound = (p0 >= s.p_max and state.direction > 0) or (p0 <= s.p_min and state.direction < 0)
     if p_at_bound:
         run.status, run.message = Status.PARAM_BOUND, "the start point is on the parameter bound"
@@ -660,7 +668,11 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
                     ctx.progress(_branch_point(b, len(run.rows) - 1))
             if stop is not None:
                 break
-            dist0 = ctx.distance_to_start(run.rows[0], b, w)
+            if plain:  # (distance_to_start, inlined for plain differences)
+                d0 = b.point.u - u_start
+                dist0 = math.sqrt(float((w * d0).dot(d0)))
+            else:
+                dist0 = ctx.distance_to_start(run.rows[0], b, w)
             if (
                 far >= 3.0 * sigma_b
                 and dist0 <= 2.0 * sigma_b
@@ -669,7 +681,11 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
                 run.status, run.message = Status.CLOSED_LOOP, Status.CLOSED_LOOP.value
                 break
             far = max(far, dist0)
-            new_state.ds = adapt_ds(new_state.ds, outcome, s, grow_iters=ctx.grow_iters)
+            # (adapt_ds for an accepted step, inlined)
+            if outcome.newton_iters <= grow_iters:
+                new_state.ds = min(new_state.ds * grow, ds_max)
+            else:
+                new_state.ds = min(new_state.ds, ds_max)
             state = new_state
         else:
             run.status, run.message = Status.MAX_STEPS, Status.MAX_STEPS.value

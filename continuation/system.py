@@ -113,10 +113,15 @@ class BorderedEvaluator:
     input buffer, shape ``(n + 1,)``) and call ``ev()``; ``ev.r`` (shape ``(n + 1,)``)
     and ``ev.M`` (shape ``(n + 1, n + 1)``, Fortran order) then hold the bordered
     residual and matrix, until the next call. ``ev.lin()`` copies ``(f, df/dx,
-    df/dp)`` out of them. Not thread-safe; one evaluator per problem.
+    df/dp)`` out of them. When the compiled function has a third output (as built by
+    :meth:`System.bordered_evaluator`), ``ev.norms`` (shape ``(3,)``) holds
+    ``(max |r|, r . r, max |u|)`` of the same call (None otherwise): the corrector's
+    convergence and finiteness tests without further NumPy calls. ``max |r|`` ignores
+    NaN entries, ``r . r`` does not (it is NaN or inf for any non-finite entry). Not
+    thread-safe; one evaluator per problem.
     """
 
-    __slots__ = ("_buf", "run", "u", "p", "c", "h", "r", "M", "n")
+    __slots__ = ("_buf", "run", "u", "p", "c", "h", "r", "M", "n", "norms")
 
     def __init__(self, fn: ca.Function, n: int, params: Any) -> None:
         self._buf, self.run = fn.buffer()
@@ -132,6 +137,10 @@ class BorderedEvaluator:
         self._buf.set_res(0, memoryview(self.r))
         self._buf.set_res(1, memoryview(m_flat))
         self.M = m_flat.reshape(n + 1, n + 1).T  # column-major buffer: a Fortran view
+        self.norms = None
+        if fn.n_out() > 2 and fn.nnz_out(2) == 3:
+            self.norms = np.zeros(3)
+            self._buf.set_res(2, memoryview(self.norms))
 
     def set_border(self, c: FloatArray, h: float) -> None:
         """Set the border row ``c`` and the level ``h`` of the constraint ``c . u = h``."""
@@ -521,7 +530,8 @@ class System:
             top = ca.horzcat(ca.jacobian(F, X), ca.jacobian(F, U[n]))
             M = ca.densify(ca.vertcat(top, C.T))
             R = ca.vertcat(F, ca.dot(C, U) - H)
-            fn = cache[k] = ca.Function("bordered", [U, P, C, H], [R, M])
+            norms = ca.vertcat(ca.norm_inf(R), ca.dot(R, R), ca.norm_inf(U))
+            fn = cache[k] = ca.Function("bordered", [U, P, C, H], [R, M, norms])
         return BorderedEvaluator(fn, n, params)
 
     def casadi_functions(self) -> dict[str, ca.Function]:

@@ -723,15 +723,21 @@ def _correct_fused(
     """
     n = u_pred.size - 1
     u, r, M = ev.u, ev.r, ev.M
+    # (max |r|, r . r, max |u|) computed by the compiled function itself, if it can
+    nv = getattr(ev, "norms", None)
     u[:] = u_pred
     ev.c[:] = c  # (ev.set_border, inlined: the hot path of small problems)
     ev.h[0] = float(c.dot(u_ref)) + sigma
     tol, step_tol, max_iter = newton.tol, newton.step_tol, newton.max_iter
     ev()
-    finite = float(r.dot(r)) < math.inf
-    rn = _inf_norm(r)
+    if nv is not None:
+        rn, rr, un = nv.tolist()
+        finite = rr < math.inf
+    else:
+        finite = float(r.dot(r)) < math.inf
+        rn, un = _inf_norm(r), _inf_norm(u)
     rn0, rn_prev, step, it = rn, math.inf, math.inf, 0
-    step_ok = step_tol * (1.0 + _inf_norm(u))
+    step_ok = step_tol * (1.0 + un)
     while True:
         if not finite:
             return CorrectorResult(False, u[:n].copy(), float(u[n]), None, it, rn,
@@ -760,7 +766,11 @@ def _correct_fused(
                 if exact:
                     ev()
                     lin = ev.lin()
-                    rn = _inf_norm(r) if float(r.dot(r)) < math.inf else math.inf
+                    if nv is not None:
+                        rn, rr, un = nv.tolist()
+                    else:
+                        rr, rn = float(r.dot(r)), _inf_norm(r)
+                    rn = rn if rr < math.inf else math.inf
                     f_lu, f_piv, info = _getrf(M)
                     lu = BorderedLU.from_dense_factors(f_lu, f_piv) if info == 0 else None
             return CorrectorResult(True, u[:n].copy(), float(u[n]), lin, it, rn, "", lu,
@@ -785,8 +795,12 @@ def _correct_fused(
             return CorrectorResult(False, u[:n].copy(), float(u[n]), None, it, rn, msg)
         rn_prev = rn
         ev()
-        finite = float(r.dot(r)) < math.inf
-        rn = _inf_norm(r)
+        if nv is not None:
+            rn, rr, un = nv.tolist()
+            finite = rr < math.inf
+        else:
+            finite = float(r.dot(r)) < math.inf
+            rn = _inf_norm(r)
 
 
 def correct(
