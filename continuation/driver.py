@@ -40,8 +40,13 @@ from .events import Event, HopfTest, bp_test, crossed
 from .locate import LocateResult, locate_zero
 from .problem import EquilibriumProblem
 from .settings import ContinuationSettings
-from .stability import _dense_eigvals as dense_eigvals
-from .stability import count_unstable, eigenvalues, sort_eigenvalues, sparse_eigs_near
+from .stability import (
+    count_unstable,
+    dense_stability,
+    eigenvalues,
+    sort_eigenvalues,
+    sparse_eigs_near,
+)
 from .status import Status
 
 log = logging.getLogger(__name__)
@@ -65,12 +70,14 @@ _PREFIX = {
 def _eig_function(problem: Any, settings: ContinuationSettings) -> Callable[[PointInfo], Any]:
     det = settings.detect
     if getattr(problem, "jacobian_is_stability", False):
+        eig_tol, imag_tol = det.eig_tol, det.imag_tol
 
         def from_jacobian(pt: PointInfo) -> ComplexArray:
-            ev = pt.cache.get("eig")
+            cache = pt.cache
+            ev = cache.get("eig")
             if ev is None:
-                if isinstance(pt.Gz, np.ndarray):  # dense: LAPACK directly
-                    ev = sort_eigenvalues(dense_eigvals(pt.Gz))
+                if isinstance(pt.Gz, np.ndarray):  # dense: LAPACK directly, counts too
+                    ev, cache["counts"] = dense_stability(pt.Gz, eig_tol, imag_tol)
                 elif shift_invert is not None:
                     ev = shift_invert(pt)
                 else:
@@ -248,9 +255,11 @@ class _Context:
 
     # ------------------------------------------------------------------ rows
     def make_row(self, pt: PointInfo, ds: float) -> _Row:
-        det = self.settings.detect
         ev = self.eig(pt)
-        counts = None if ev is None else count_unstable(ev, det.eig_tol, det.imag_tol)
+        counts = pt.cache.get("counts") if ev is not None else None
+        if counts is None and ev is not None:
+            det = self.settings.detect
+            counts = count_unstable(ev, det.eig_tol, det.imag_tol)
         rec = self.record(pt.z, pt.p) if self.record is not None else None
         rec = {str(k): float(v) for k, v in dict(rec).items()} if rec else {}
         evs = [e.value(pt.z, pt.p) for e in self.events] if self.events else []

@@ -15,6 +15,7 @@ imaginary axis first are the ones near the origin.
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -110,6 +111,61 @@ def _dense_eigvals(J: Any) -> ComplexArray:
     out.real = wr
     out.imag = wi
     return out
+
+
+def dense_stability(
+    J: Any, eig_tol: float = 1e-10, imag_tol: float = 1e-8
+) -> tuple[ComplexArray, tuple[int, int]]:
+    """Sorted eigenvalues of a dense real matrix and their unstable counts, in one pass.
+
+    The same values as ``sort_eigenvalues(numpy.linalg.eigvals(J))`` and
+    :func:`count_unstable` of them, from one LAPACK ``dgeev`` call: the counts are taken
+    from its real and imaginary parts directly (no complex intermediate), which is what
+    a continuation step needs at every row of a small dense system.
+
+    Parameters
+    ----------
+    J : ndarray, shape (n, n)
+    eig_tol, imag_tol : float
+        As in :func:`count_unstable`.
+
+    Returns
+    -------
+    eigs : ndarray, shape (n,) complex
+        Sorted by decreasing real part, then decreasing imaginary part.
+    counts : tuple of int
+        ``(n_real, n_complex_pairs)`` unstable, as :func:`count_unstable`.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If ``J`` contains NaN or inf.
+    """
+    flat = J.ravel(order="K")
+    if not float(flat.dot(flat)) < math.inf and not np.all(np.isfinite(J)):
+        raise np.linalg.LinAlgError("Jacobian contains NaN or inf")
+    wr, wi, _, _, info = _GEEV(J, compute_vl=0, compute_vr=0)
+    if info != 0:
+        ev = sort_eigenvalues(np.linalg.eigvals(J))
+        return ev, count_unstable(ev, eig_tol, imag_tol)
+    n_real = n_pairs = 0
+    if wr.size <= 32:
+        for re, im in zip(wr.tolist(), wi.tolist(), strict=True):
+            if re > eig_tol:  # (dgeev's output is finite here)
+                if abs(im) > imag_tol * max(1.0, math.hypot(re, im)):
+                    n_pairs += im > 0
+                else:
+                    n_real += 1
+        counts = (n_real, n_pairs)
+    out = np.empty(wr.size, dtype=complex)
+    # sorted descending = negated, sorted ascending (lexicographic), negated back
+    np.negative(wr, out=out.real)
+    np.negative(wi, out=out.imag)
+    out.sort()
+    np.negative(out, out=out)
+    if wr.size > 32:
+        counts = count_unstable(out, eig_tol, imag_tol)
+    return out, counts
 
 
 def _sparse_eigs(J: Any, k: int, sigma: float, v0: Any) -> ComplexArray | None:
@@ -329,6 +385,7 @@ def eigen(
 __all__ = [
     "EigenResult",
     "count_unstable",
+    "dense_stability",
     "eigen",
     "eigenvalues",
     "n_unstable",
