@@ -149,13 +149,17 @@ def dense_stability(
         ev = sort_eigenvalues(np.linalg.eigvals(J))
         return ev, count_unstable(ev, eig_tol, imag_tol)
     n_real = n_pairs = 0
-    if wr.size <= 32:
-        for re, im in zip(wr.tolist(), wi.tolist(), strict=True):
-            if re > eig_tol:  # (dgeev's output is finite here)
-                if abs(im) > imag_tol * max(1.0, math.hypot(re, im)):
-                    n_pairs += im > 0
-                else:
-                    n_real += 1
+    if wr.size <= 32:  # plain Python on a few values (dgeev's output is finite here)
+        wr_l, wi_l = wr.tolist(), wi.tolist()
+        if max(wr_l, default=0.0) > eig_tol:
+            for re, im in zip(wr_l, wi_l, strict=True):
+                if re > eig_tol:
+                    if abs(im) > imag_tol * max(1.0, math.hypot(re, im)):
+                        n_pairs += im > 0
+                    else:
+                        n_real += 1
+        if not any(wi_l):  # all real: a float sort gives the same order
+            return np.array(sorted(wr_l, reverse=True), dtype=complex), (n_real, n_pairs)
         counts = (n_real, n_pairs)
     out = np.empty(wr.size, dtype=complex)
     # sorted descending = negated, sorted ascending (lexicographic), negated back

@@ -141,3 +141,43 @@ def test_corrector_same_branch_with_and_without_norms() -> None:
     # the folds of mu - a^3 + 3a: a = +-1, mu = -+2 (closed form)
     folds = sorted(s.p for s in a.special_points if s.kind.value == "fold")
     np.testing.assert_allclose(folds, [-2.0, 2.0], atol=1e-9)
+
+
+def test_bordered_lu_sign_small_dense_against_slogdet() -> None:
+    """Sign of det M of small dense bordered matrices (the branch-point test) against
+    ``numpy.linalg.slogdet``, including entries spread over 1e-150..1e150 where the
+    product of the pivots over- or underflows."""
+    from continuation.algorithms.base import BorderedLU
+
+    rng = np.random.default_rng(3)
+    checked = 0
+    for n in range(1, 12):
+        for k in range(30):
+            Gz = rng.standard_normal((n, n))
+            if k % 2:
+                Gz *= 10.0 ** rng.uniform(-150, 150, size=(n, n))
+            Gp, c = rng.standard_normal(n), rng.standard_normal(n + 1)
+            M = np.block([[Gz, Gp[:, None]], [c[None, :]]])
+            sign_ref, logdet = np.linalg.slogdet(M)
+            if sign_ref == 0 or not np.isfinite(logdet):
+                continue
+            assert BorderedLU(Gz, Gp, c).sign == sign_ref
+            checked += 1
+    assert checked > 250
+
+
+@pytest.mark.parametrize("n", [1, 4, 8, 40])
+def test_dense_stability_real_spectrum_same_order(n: int) -> None:
+    """All-real spectra (symmetric, and triangular with repeated eigenvalues) take the
+    float-sort path: exactly the order of ``sort_eigenvalues`` on the same dgeev output."""
+    from continuation.stability import _dense_eigvals
+
+    rng = np.random.default_rng(10 + n)
+    A = rng.standard_normal((n, n))
+    tri = np.triu(A, 1) + np.diag(np.repeat([0.5, -1.0, 2.0, 0.0], n)[:n])
+    for J in (A + A.T, tri):
+        ev, counts = dense_stability(np.asfortranarray(J), 1e-10, 1e-8)
+        ref = sort_eigenvalues(_dense_eigvals(np.asfortranarray(J)))
+        np.testing.assert_array_equal(ev, ref)
+        assert counts == count_unstable(ref, 1e-10, 1e-8)
+        assert ev.dtype == complex and ev.shape == (n,)

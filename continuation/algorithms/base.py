@@ -312,10 +312,13 @@ class BorderedLU:
         """Sign of ``det M`` (+1, -1, or 0 if singular)."""
         if self._sign == 2.0:
             if not self.sparse and self.n <= 24:
-                # small dense: plain Python over the pivots beats several NumPy calls
-                odd = len([x for x in self._lu.diagonal().tolist() if x < 0.0])
-                piv = self._piv.tolist()
-                odd += len([i for i in range(len(piv)) if piv[i] != i])
+                # small dense: the sign of the product of the pivots (IEEE products keep
+                # the sign through overflow to inf and underflow to 0, and getrf info = 0
+                # means no pivot is zero), times the parity of the row interchanges
+                prod = math.prod(self._lu.diagonal().tolist())
+                odd = int(np.count_nonzero(self._piv != _arange(self.n))) + (
+                    math.copysign(1.0, prod) < 0
+                )
                 self._sign = -1.0 if odd % 2 else 1.0
                 return self._sign
             d, parity = self._diag_parity()
