@@ -153,7 +153,7 @@ class PALC(ContinuationAlgorithm):
             )
         except np.linalg.LinAlgError as exc:
             return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
-        cos_angle = float(c.dot(b.tau))
+        cos_angle = b.ctau  # = c . tau (make_point's border is c)
         if cos_angle < self._cos_max and guarded:
             return state, StepOutcome(
                 False,
