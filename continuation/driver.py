@@ -616,13 +616,22 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
     far = 0.0
     plain, u_start = ctx.plain_diff, row0.point.u
     grow, ds_max, grow_iters = s.grow, s.ds_max, ctx.grow_iters
+    # (locals for the hot loop)
+    step, problem, make_row, detect = ctx.algorithm.step, ctx.problem, ctx.make_row, ctx.detect
+    rows, terminal_events, p_min, p_max, max_steps = (
+        run.rows,
+        ctx.terminal,
+        s.p_min,
+        s.p_max,
+        s.max_steps,
+    )
     p_at_bound = (p0 >= s.p_max and state.direction > 0) or (p0 <= s.p_min and state.direction < 0)
     if p_at_bound:
         run.status, run.message = Status.PARAM_BOUND, "the start point is on the parameter bound"
         return run
     try:
-        while state.n_steps < s.max_steps:
-            new_state, outcome = ctx.algorithm.step(ctx.problem, state, s)
+        while state.n_steps < max_steps:
+            new_state, outcome = step(problem, state, s)
             if not outcome.converged:
                 ds_new = adapt_ds(state.ds, outcome, s, grow_iters=ctx.grow_iters)
                 log.debug(
@@ -640,10 +649,10 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
                     break
                 state.ds = ds_new
                 continue
-            a = run.rows[-1]
+            a = rows[-1]
             sigma_b = outcome.sigma
-            b = ctx.make_row(new_state.point, sigma_b)
-            if not ctx.terminal and s.p_min <= b.p <= s.p_max:
+            b = make_row(new_state.point, sigma_b)
+            if not terminal_events and p_min <= b.p <= p_max:
                 stop = None  # (stop_point's first test, inlined: the common case)
             else:
                 stop = ctx.stop_point(a, b, sigma_b, w)
@@ -667,11 +676,13 @@ def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
                 run.status, run.message = status, msg
                 if k_event is not None:
                     terminal = (k_event, r)
-            index = len(run.rows) - 1
+            index = len(rows) - 1
             if sigma_b > 0:
-                run.specials.extend(ctx.detect(a, b, sigma_b, w, index, run.arclength, terminal))
+                found = detect(a, b, sigma_b, w, index, run.arclength, terminal)
+                if found:
+                    run.specials.extend(found)
             if stop is None or sigma_b > 0:
-                run.rows.append(b)
+                rows.append(b)
                 run.arclength += sigma_b
                 if ctx.progress is not None:
                     ctx.progress(_branch_point(b, len(run.rows) - 1))
