@@ -121,7 +121,7 @@ class BorderedEvaluator:
     thread-safe; one evaluator per problem.
     """
 
-    __slots__ = ("_buf", "run", "u", "p", "c", "h", "r", "M", "n", "norms")
+    __slots__ = ("_buf", "run", "u", "p", "c", "h", "r", "M", "n", "norms", "_bound")
 
     def __init__(self, fn: ca.Function, n: int, params: Any) -> None:
         self._buf, self.run = fn.buffer()
@@ -141,6 +141,8 @@ class BorderedEvaluator:
         if fn.n_out() > 2 and fn.nnz_out(2) == 3:
             self.norms = np.zeros(3)
             self._buf.set_res(2, memoryview(self.norms))
+        # the buffer holds raw pointers: keep every bound array alive with the evaluator
+        self._bound = (self.u, self.p, self.c, self.h, self.r, m_flat, self.norms)
 
     def set_border(self, c: FloatArray, h: float) -> None:
         """Set the border row ``c`` and the level ``h`` of the constraint ``c . u = h``."""
