@@ -42,6 +42,7 @@ from .simulate import EventHits, PoincareSection, SimEvent, Simulator, Trajector
 from .stability import (
     EigenResult,
     count_unstable,
+    dense_stability,
     eigen,
     eigenvalues,
     n_unstable,
@@ -51,6 +52,7 @@ from .status import Status
 from .system import DynamicalSystem, System, check_jacobian
 
 __all__ = [
+    "dense_stability",
     "JacobianCache",
     "simplified_newton",
     "passage_side",
