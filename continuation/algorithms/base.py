@@ -1020,12 +1020,18 @@ def adapt_ds(
 class ContinuationAlgorithm(abc.ABC):
     """A predictor-corrector scheme: ``init`` once, then ``step`` repeatedly."""
 
-    @abc.abstractmethod
     def init(
         self, problem: Any, z0: FloatArray, p0: float, settings: ContinuationSettings
     ) -> StepState:
-        """State at the (already corrected) start point ``(z0, p0)``;
-        ``sign(settings.ds)`` picks the direction of ``p`` at the start."""
+        """State at the (already corrected) start point ``(z0, p0)``.
+
+        The tangent there is oriented so that ``sign(dp/ds) = sign(settings.ds)``;
+        algorithms that need more start-up state override this.
+        """
+        w = theta_weights(z0.size, settings.theta)
+        direction = 1.0 if settings.ds > 0 else -1.0
+        pt = initial_point(problem, np.asarray(z0, float), float(p0), w, direction)
+        return StepState(point=pt, ds=abs(settings.ds), w=w, direction=direction)
 
     @abc.abstractmethod
     def step(

@@ -14,16 +14,13 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
 from ..settings import ContinuationSettings
 from .base import (
     ContinuationAlgorithm,
     StepOutcome,
     StepState,
     correct,
-    initial_point,
     make_point,
-    theta_weights,
 )
 
 
@@ -43,15 +40,6 @@ class Natural(ContinuationAlgorithm):
 
     def __repr__(self) -> str:
         return f"Natural(grow_iters={self.grow_iters})"
-
-    def init(
-        self, problem: Any, z0: FloatArray, p0: float, settings: ContinuationSettings
-    ) -> StepState:
-        """State at the start; ``sign(settings.ds)`` is the direction of ``p``."""
-        w = theta_weights(z0.size, settings.theta)
-        direction = 1.0 if settings.ds > 0 else -1.0
-        pt = initial_point(problem, np.asarray(z0, float), float(p0), w, direction)
-        return StepState(point=pt, ds=abs(settings.ds), w=w, direction=direction)
 
     def step(
         self, problem: Any, state: StepState, settings: ContinuationSettings

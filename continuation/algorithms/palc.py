@@ -45,16 +45,13 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
 from ..settings import ContinuationSettings
 from .base import (
     ContinuationAlgorithm,
     StepOutcome,
     StepState,
     correct,
-    initial_point,
     make_point,
-    theta_weights,
 )
 
 
@@ -104,15 +101,6 @@ class PALC(ContinuationAlgorithm):
             f"PALC(max_angle_deg={self.max_angle_deg}, grow_iters={self.grow_iters}, "
             f"max_contraction={self.max_contraction}, max_distance={self.max_distance})"
         )
-
-    def init(
-        self, problem: Any, z0: FloatArray, p0: float, settings: ContinuationSettings
-    ) -> StepState:
-        """Tangent at the start, oriented so that ``sign(dp/ds) = sign(settings.ds)``."""
-        w = theta_weights(z0.size, settings.theta)
-        direction = 1.0 if settings.ds > 0 else -1.0
-        pt = initial_point(problem, np.asarray(z0, float), float(p0), w, direction)
-        return StepState(point=pt, ds=abs(settings.ds), w=w, direction=direction)
 
     def step(
         self, problem: Any, state: StepState, settings: ContinuationSettings
