@@ -260,45 +260,36 @@ class _AutoNative(_Runner):
         self.native.close()
 
 
-class _AutoCtypes(_Runner):
+class _PythonPeer(_Runner):
+    """A peer driven by one adapter function ``run(problem) -> PeerResult``."""
+
+    module: str = ""
+    function: str = "run"
+
+    def __init__(self, problem: Any) -> None:
+        import importlib
+
+        self.problem = problem
+        self.fn = getattr(importlib.import_module(self.module), self.function)
+
+    def run(self) -> tuple[float, dict[str, Any]]:
+        t0 = time.perf_counter()
+        r = self.fn(self.problem)
+        return time.perf_counter() - t0, _peer_dict(r)
+
+
+class _AutoCtypes(_PythonPeer):
     rss_note = "worker + forked AUTO-07p child"
-
-    def __init__(self, problem: Any) -> None:
-        from benchmarks.peers.auto07p import run_ctypes
-
-        self.problem = problem
-        self.fn = run_ctypes
-
-    def run(self) -> tuple[float, dict[str, Any]]:
-        t0 = time.perf_counter()
-        r = self.fn(self.problem)
-        return time.perf_counter() - t0, _peer_dict(r)
+    module = "benchmarks.peers.auto07p"
+    function = "run_ctypes"
 
 
-class _Bice(_Runner):
-    def __init__(self, problem: Any) -> None:
-        from benchmarks.peers.bice_peer import run
-
-        self.problem = problem
-        self.fn = run
-
-    def run(self) -> tuple[float, dict[str, Any]]:
-        t0 = time.perf_counter()
-        r = self.fn(self.problem)
-        return time.perf_counter() - t0, _peer_dict(r)
+class _Bice(_PythonPeer):
+    module = "benchmarks.peers.bice_peer"
 
 
-class _Pycont(_Runner):
-    def __init__(self, problem: Any) -> None:
-        from benchmarks.peers.pycont_peer import run
-
-        self.problem = problem
-        self.fn = run
-
-    def run(self) -> tuple[float, dict[str, Any]]:
-        t0 = time.perf_counter()
-        r = self.fn(self.problem)
-        return time.perf_counter() - t0, _peer_dict(r)
+class _Pycont(_PythonPeer):
+    module = "benchmarks.peers.pycont_peer"
 
 
 RUNNERS = {
