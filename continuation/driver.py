@@ -505,6 +505,46 @@ class _Context:
         sigma = float(c.dot(pt.u - a.point.u))
         return LocateResult(sigma, pt, 0.0, True, r.iterations, r.message)
 
+    def bound_direct(
+        self, a: _Row, b: _Row, sigma_b: float, bound: float, w: FloatArray
+    ) -> LocateResult | None:
+        """The row exactly on ``p = bound`` inside a step along which ``p`` is monotone.
+
+        When ``dp/ds`` has the same sign at both rows (no fold inside the step), the
+        step crosses the bound once; the crossing is then found by one Newton solve at
+        fixed ``p = bound`` from the chord's point at that ``p``, instead of locating the
+        zero of ``p - bound`` along the step. The result is accepted only if it lies
+        inside the step (``0 < sigma <= sigma_b``) and the correction is not longer
+        than the chord (the solve stayed on this branch); otherwise None (the caller
+        then locates the crossing).
+        """
+        pa, pb = a.point, b.point
+        if pa.tau[-1] * pb.tau[-1] <= 0 or not (pa.p - bound) * (pb.p - bound) < 0:
+            return None
+        ua, ub = pa.u, pb.u
+        t = (bound - pa.p) / (pb.p - pa.p)
+        chord = ub - ua
+        guess = ua + t * chord
+        guess[-1] = bound
+        e_p = np.zeros(guess.size)
+        e_p[-1] = 1.0
+        res = correct(self.problem, guess, np.zeros(guess.size), e_p, bound, self.settings.newton)
+        if not res.converged or res.lin is None:
+            return None
+        c = w * pa.tau
+        try:
+            pt = make_point(res.z, bound, res.lin, c, w, iters=res.iters)
+        except np.linalg.LinAlgError:
+            return None
+        d = pt.u - ua
+        sigma = float(c.dot(d))
+        moved = res.u - guess
+        if not (0.0 < sigma <= sigma_b * (1 + 1e-12)) or theta_norm(moved, w) > theta_norm(
+            chord, w
+        ):
+            return None
+        return LocateResult(sigma, pt, 0.0, True, 1)
+
     def stop_point(
         self, a: _Row, b: _Row, sigma_b: float, w: FloatArray
     ) -> tuple[LocateResult, Status, str, int | None] | None | Literal[False]:
@@ -522,6 +562,11 @@ class _Context:
         cands: list[tuple[LocateResult, Status, str, int | None]] = []
         for bound, outside in ((s.p_max, pb > s.p_max), (s.p_min, pb < s.p_min)):
             if outside and math.isfinite(bound):
+                r_direct = self.bound_direct(a, b, sigma_b, bound, w)
+                if r_direct is not None:
+                    msg = f"{Status.PARAM_BOUND.value} ({self.problem.free}={bound:.10g})"
+                    cands.append((r_direct, Status.PARAM_BOUND, msg, None))
+                    continue
                 r = locate_zero(
                     self.problem,
                     a.point,

@@ -212,7 +212,11 @@ def locate_zero(
             if side == -1:
                 ghi *= 0.5
             side = -1
-        if hi - lo <= tol or abs(s - s_prev) <= tol:
+        # the next (Illinois-scaled) secant correction, without evaluating it: when it
+        # is below tol the zero is within tol of this trial point (a halved stale end
+        # value only lengthens the predicted correction, so the test stays conservative)
+        s_next = hi - ghi * (hi - lo) / (ghi - glo)
+        if hi - lo <= tol or abs(s - s_prev) <= tol or abs(s_next - s) <= tol:
             best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
             if abs(best[2]) > g_jump * max(abs(g_a), abs(g_b)):
                 # converged onto a jump of g, not a zero (e.g. a Hopf test that switched

@@ -112,7 +112,10 @@ class BorderedEvaluator:
     Usage: ``ev.set_border(c, h)``, then write the point into ``ev.u`` (the function's
     input buffer, shape ``(n + 1,)``) and call ``ev()``; ``ev.r`` (shape ``(n + 1,)``)
     and ``ev.M`` (shape ``(n + 1, n + 1)``, Fortran order) then hold the bordered
-    residual and matrix, until the next call. ``ev.lin()`` copies ``(f, df/dx,
+    residual and matrix, until the next call. ``ev.r`` is the first column of
+    ``ev.rt`` (shape ``(n + 1, 2)``, Fortran order), whose second column is the unit
+    vector ``e_{n+1}``: ``M x = rt`` gives the Newton correction and the (unnormalised)
+    tangent in one solve. ``ev.lin()`` copies ``(f, df/dx,
     df/dp)`` out of them. When the compiled function has a third output (as built by
     :meth:`System.bordered_evaluator`), ``ev.norms`` (shape ``(3,)``) holds
     ``(max |r|, r . r, max |u|)`` of the same call (None otherwise): the corrector's
@@ -121,7 +124,7 @@ class BorderedEvaluator:
     thread-safe; one evaluator per problem.
     """
 
-    __slots__ = ("_buf", "run", "u", "p", "c", "h", "r", "M", "n", "norms", "_bound")
+    __slots__ = ("_buf", "run", "u", "p", "c", "h", "r", "rt", "M", "n", "norms", "_bound")
 
     def __init__(self, fn: ca.Function, n: int, params: Any) -> None:
         self._buf, self.run = fn.buffer()
@@ -130,7 +133,11 @@ class BorderedEvaluator:
         self.p = np.array(np.asarray(params, dtype=float).reshape(-1), dtype=float)
         self.c = np.zeros(n + 1)
         self.h = np.zeros(1)
-        self.r = np.zeros(n + 1)
+        # two right-hand sides in one Fortran array: the residual (written by the call)
+        # and the unit vector e_{n+1} of the tangent, solved together by one LAPACK gesv
+        self.rt = np.zeros((n + 1, 2), order="F")
+        self.rt[n, 1] = 1.0
+        self.r = self.rt[:, 0]
         m_flat = np.zeros((n + 1) * (n + 1))
         for i, a in enumerate((self.u, self.p, self.c, self.h)):
             self._buf.set_arg(i, memoryview(a))
@@ -142,7 +149,7 @@ class BorderedEvaluator:
             self.norms = np.zeros(3)
             self._buf.set_res(2, memoryview(self.norms))
         # the buffer holds raw pointers: keep every bound array alive with the evaluator
-        self._bound = (self.u, self.p, self.c, self.h, self.r, m_flat, self.norms)
+        self._bound = (self.u, self.p, self.c, self.h, self.rt, m_flat, self.norms)
 
     def set_border(self, c: FloatArray, h: float) -> None:
         """Set the border row ``c`` and the level ``h`` of the constraint ``c . u = h``."""

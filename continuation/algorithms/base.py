@@ -53,7 +53,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import scipy.linalg as la
@@ -102,7 +102,7 @@ def _finite(v: FloatArray) -> bool:
 # ---------------------------------------------------------------------------- linear algebra
 # LAPACK getrf/getrs directly: same factorisation as scipy.linalg.lu_factor, without its
 # per-call overhead (a few microseconds, which matters for small systems) and warnings.
-_getrf, _getrs = la.get_lapack_funcs(("getrf", "getrs"), (np.zeros(1),))
+_getrf, _getrs, _gesv = la.get_lapack_funcs(("getrf", "getrs", "gesv"), (np.zeros(1),))
 _ARANGE: dict[int, Any] = {}
 
 
@@ -560,6 +560,7 @@ def make_point(
     lu: BorderedLU | None = None,
     u: FloatArray | None = None,
     residual_norm: float | None = None,
+    t_raw: FloatArray | None = None,
 ) -> PointInfo:
     """Factorise the bordered matrix at a converged point and compute its tangent.
 
@@ -588,6 +589,8 @@ def make_point(
         ``(z, p)`` if already available.
     residual_norm : float, optional
         ``max |G|`` if already known.
+    t_raw : ndarray, shape (N + 1,), optional
+        ``lu``'s solution of ``M t = e_{N+1}`` if already known (ignored without ``lu``).
 
     Raises
     ------
@@ -597,11 +600,13 @@ def make_point(
     G, Gz, Gp = lin
     if lu is None:
         lu = BorderedLU(Gz, Gp, border)
-    rhs = _last_unit(lu.n)
-    if lu.sparse:
-        t = lu.solve(rhs)
+        t_raw = None
+    if t_raw is not None:
+        t = t_raw
+    elif lu.sparse:
+        t = lu.solve(_last_unit(lu.n))
     else:  # LAPACK directly; a non-finite t fails the norm test below
-        t = _getrs(lu._lu, lu._piv, rhs)[0]
+        t = _getrs(lu._lu, lu._piv, _last_unit(lu.n))[0]
     nrm2 = float((w * t).dot(t))
     if not (0.0 < nrm2 < math.inf):
         raise np.linalg.LinAlgError("degenerate tangent")
@@ -661,13 +666,15 @@ def initial_point(
         return pt
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class CorrectorResult:
     """Outcome of :func:`correct`.
 
     ``lu`` is the factorisation of the bordered matrix at the last Newton iterate (the
     returned point, or the iterate one step before it, within the step tolerance), or
-    None; ``u_full`` is ``(z, p)`` when known.
+    None; ``u_full`` is ``(z, p)`` when known; ``t_raw`` is the solution of
+    ``M t = e_{N+1}`` with that factorisation when the corrector already has it (fused
+    evaluator), else None.
     """
 
     converged: bool
@@ -679,6 +686,7 @@ class CorrectorResult:
     message: str = ""
     lu: BorderedLU | None = None
     u_full: FloatArray | None = None
+    t_raw: FloatArray | None = None
 
     @property
     def u(self) -> FloatArray:
@@ -721,13 +729,19 @@ def _correct_fused(
     """:func:`correct` with a fused evaluator of the bordered residual and matrix.
 
     Same iteration and criteria; the iterate lives in the evaluator's input buffer and
-    every Newton step is one compiled-function call, one LAPACK ``getrf`` and one
-    ``getrs`` (no assembly of the bordered system in Python).
+    every Newton step is one compiled-function call and one LAPACK ``gesv`` with two
+    right-hand sides, the residual and ``e_{N+1}`` (``ev.rt`` when the evaluator has
+    that buffer, else a copy of ``ev.r`` is put into one): the Newton correction
+    and the unnormalised tangent of the same factorisation come together, so the
+    result carries ``t_raw`` and :func:`make_point` needs no further solve.
     """
     n = u_pred.size - 1
-    u, r, M = ev.u, ev.r, ev.M
-    # (max |r|, r . r, max |u|) computed by the compiled function itself, if it can
-    nv = getattr(ev, "norms", None)
+    u, r, M, nv = ev.u, ev.r, ev.M, ev.norms
+    rt = getattr(ev, "rt", None)
+    own_rt = rt is None  # an evaluator without the two-column buffer: copy r into one
+    if own_rt:
+        rt = np.zeros((n + 1, 2), order="F")
+        rt[n, 1] = 1.0
     u[:] = u_pred
     ev.c[:] = c  # (ev.set_border, inlined: the hot path of small problems)
     ev.h[0] = float(c.dot(u_ref)) + sigma
@@ -745,10 +759,12 @@ def _correct_fused(
         if not finite:
             return CorrectorResult(False, u[:n].copy(), float(u[n]), None, it, rn,
                                    "non-finite residual")  # fmt: skip
-        f_lu, f_piv, info = _getrf(M)  # a copy: M stays intact for lin()
+        if own_rt:
+            rt[:, 0] = r
+        f_lu, f_piv, x, info = _gesv(M, rt)  # copies: M and rt stay intact for lin()
         du = None
         if info == 0:
-            du = _getrs(f_lu, f_piv, r)[0]
+            du = x[:, 0]
             if not float(du.dot(du)) < math.inf:
                 du = None
         if du is None:
@@ -756,7 +772,7 @@ def _correct_fused(
             msg = "singular: singular bordered matrix"
             return CorrectorResult(rn <= tol, u[:n].copy(), float(u[n]), ev.lin(), it, rn,
                                    msg, None, u.copy())  # fmt: skip
-        dn = _inf_norm(du)
+        dn = abs(float(du[_idamax(du)]))
         if (
             (rn <= tol and (dn <= step_ok or step <= step_ok))
             or (step <= step_ok and rn > 0.5 * rn_prev)
@@ -764,6 +780,7 @@ def _correct_fused(
         ):
             lin = ev.lin()
             lu: BorderedLU | None = BorderedLU.from_dense_factors(f_lu, f_piv)
+            t_raw: FloatArray | None = x[:, 1]
             if dn <= step_ok:
                 u -= du
                 if exact:
@@ -774,10 +791,15 @@ def _correct_fused(
                     else:
                         rr, rn = float(r.dot(r)), _inf_norm(r)
                     rn = rn if rr < math.inf else math.inf
-                    f_lu, f_piv, info = _getrf(M)
-                    lu = BorderedLU.from_dense_factors(f_lu, f_piv) if info == 0 else None
+                    if own_rt:
+                        rt[:, 0] = r
+                    f_lu, f_piv, x, info = _gesv(M, rt)
+                    if info == 0:
+                        lu, t_raw = BorderedLU.from_dense_factors(f_lu, f_piv), x[:, 1]
+                    else:
+                        lu = t_raw = None
             return CorrectorResult(True, u[:n].copy(), float(u[n]), lin, it, rn, "", lu,
-                                   u.copy())  # fmt: skip
+                                   u.copy(), t_raw)  # fmt: skip
         if it >= max_iter:
             return CorrectorResult(False, u[:n].copy(), float(u[n]), ev.lin(), it, rn,
                                    "max_iter reached")  # fmt: skip
@@ -955,7 +977,7 @@ def correct(
 
 
 # ---------------------------------------------------------------------------- algorithm API
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class StepState:
     """Mutable iteration state passed between the driver and an algorithm.
 
@@ -980,9 +1002,9 @@ class StepState:
     n_steps: int = 0
 
 
-@dataclass(frozen=True)
-class StepOutcome:
-    """Result of one attempted step.
+class StepOutcome(NamedTuple):
+    """Result of one attempted step (immutable; a named tuple, cheap to create on the
+    hot path of small problems).
 
     Attributes
     ----------

@@ -137,7 +137,15 @@ class PALC(ContinuationAlgorithm):
                 )
         try:
             b = make_point(
-                res.z, res.p, res.lin, c, state.w, iters=res.iters, lu=res.lu, u=res.u_full
+                res.z,
+                res.p,
+                res.lin,
+                c,
+                state.w,
+                iters=res.iters,
+                lu=res.lu,
+                u=res.u_full,
+                t_raw=res.t_raw,
             )
         except np.linalg.LinAlgError as exc:
             return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
