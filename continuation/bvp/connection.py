@@ -541,10 +541,18 @@ class HeteroclinicProblem:
         Parameters
         ----------
         guess : ConnectionResult, (t, x) tuple, object with ``t`` and ``x``, or ndarray (K, n)
-            ``t`` (K,) strictly increasing, ``x`` (K, n). Its time span is mapped linearly
-            onto ``[0, T]`` (give it on an interval of length about ``T``). A bare array is
-            taken as equally spaced on ``[0, T]``. A :class:`ConnectionResult` also gives
-            the unknown parameters and the saddles.
+            ``t`` (K,) strictly increasing, ``x`` (K, n), in the time of the system. A
+            guess whose time span ``T_g = t[-1] - t[0]`` equals ``T`` is shifted onto
+            ``[0, T]``. One whose span differs is *not* stretched (that would rescale
+            time, slowing or speeding up the orbit by ``T / T_g``, and a stretched orbit
+            is far from any solution) but centred:
+            ``x(t) = x_g(t[0] + clip(t - (T - T_g) / 2, 0, T_g))``, i.e. held at its end
+            values (next to the saddles) on a longer interval, or cut symmetrically on
+            a shorter one, as :func:`~continuation.bvp.solve.check_convergence` does.
+            So an unstable-manifold trajectory cut at its closest approach to the
+            target can be given as it is, for any ``T``. A bare array has no time axis
+            and is taken as equally spaced on ``[0, T]``. A :class:`ConnectionResult`
+            also gives the unknown parameters and the saddles.
 
         Returns
         -------
@@ -561,13 +569,16 @@ class HeteroclinicProblem:
         if isinstance(guess, ConnectionResult):
             if guess.x.shape[1] != n:
                 raise ValueError(f"`guess` has {guess.x.shape[1]} states, expected {n}")
-            X0 = guess.mesh.interpolate(guess.x, mesh.tau)
+            T_g = float(guess.mesh.T)
+            X0 = guess.mesh.interpolate(guess.x, _guess_times(T_g, mesh) / T_g)
             x_from, x_to = guess.x_from, guess.x_to
             unknown_values = [guess.params[u] for u in self.unknown_params]
         else:
             t, x = _as_trajectory(guess, n)
-            tau_g = (t - t[0]) / (t[-1] - t[0])
-            X0 = np.column_stack([np.interp(mesh.tau, tau_g, x[:, i]) for i in range(n)])
+            if isinstance(guess, np.ndarray):  # no time axis: equally spaced on [0, T]
+                t = t * mesh.T
+            s_g = t[0] + _guess_times(float(t[-1] - t[0]), mesh)
+            X0 = np.column_stack([np.interp(s_g, t, x[:, i]) for i in range(n)])
         prob = self
         if self.layout.pin is None:
             if self.reference is None:
@@ -641,6 +652,18 @@ class HeteroclinicProblem:
             z=np.array(z, dtype=float),
             problem=self,
         )
+
+
+def _guess_times(T_g: float, mesh: CollocationMesh) -> FloatArray:
+    """Times in ``[0, T_g]`` of a guess at the mesh's points (see ``initial_vector``).
+
+    ``tau * T_g`` when ``T_g == T`` (to 1e-9 relative); otherwise the guess is centred
+    on ``[0, T]`` at its own time scale and held at its end values outside.
+    """
+    if abs(T_g - mesh.T) <= 1e-9 * max(abs(mesh.T), 1.0):
+        return np.clip(mesh.tau * T_g, 0.0, T_g)
+    log.info("guess spans %.6g, mesh T = %.6g: guess centred, not stretched", T_g, mesh.T)
+    return np.clip(mesh.tau * mesh.T - 0.5 * (mesh.T - T_g), 0.0, T_g)
 
 
 def _replace_fast(prob: HeteroclinicProblem, **changes: Any) -> HeteroclinicProblem:
