@@ -24,7 +24,14 @@ from typing import Any
 
 import numpy as np
 
-from .algorithms.base import PointInfo, _inf_norm, correct, make_point, theta_norm
+from .algorithms.base import (
+    PointInfo,
+    _inf_norm,
+    correct,
+    linearize,
+    make_point,
+    theta_norm,
+)
 from .settings import NewtonSettings
 
 log = logging.getLogger(__name__)
@@ -123,6 +130,51 @@ def point_at(
         )
 
 
+def _interpolated_zero(
+    problem: Any,
+    a: PointInfo,
+    end_lo: tuple[float, PointInfo, float],
+    end_hi: tuple[float, PointInfo, float],
+    w: Any,
+    newton: NewtonSettings,
+    test: Callable[[PointInfo, float], float],
+    sigma_b: float,
+) -> tuple[float, PointInfo, float] | None:
+    """The point at the secant zero of ``g`` on the chord between two bracket ends.
+
+    ``end = (sigma, point, g)`` with ``g`` of opposite signs. The chord point deviates
+    from the branch by at most ``kappa width^2 / 8`` (``kappa`` the curvature), so for a
+    narrow bracket it is a solution to within the corrector's tolerance; it is accepted
+    only if ``max |G| <= newton.tol`` there. Returns ``(sigma, point, g)`` or None.
+    """
+    (s0, q0, g0), (s1, q1, g1) = end_lo, end_hi
+    if not (s1 > s0 and g0 * g1 < 0 and math.isfinite(g0) and math.isfinite(g1)):
+        return None
+    lam = g0 / (g0 - g1)  # in (0, 1)
+    s = s0 + lam * (s1 - s0)
+    u = q0.u + lam * (q1.u - q0.u)
+    n = u.size - 1
+    z, p = u[:n].copy(), float(u[n])
+    try:
+        lin = linearize(problem, z, p)
+    except (ValueError, ArithmeticError):
+        return None
+    if not _inf_norm(lin[0]) <= newton.tol:
+        return None
+    c = w * a.tau
+    try:
+        pt = make_point(z, p, lin, c, w, u=u)
+    except np.linalg.LinAlgError:
+        tau = (q1.u - q0.u) / max(theta_norm(q1.u - q0.u, w), 1e-300)
+        G, Gz, Gp = lin
+        pt = PointInfo(z=z, p=p, tau=tau, G=G, Gz=Gz, Gp=Gp, lu=None, border=c, t_raw=tau,
+                       bp_sign=0.0, _bp_logdet=-math.inf, residual_norm=_inf_norm(G))  # fmt: skip
+    g = float(test(pt, s / sigma_b))
+    if not math.isfinite(g):
+        return None
+    return s, pt, g
+
+
 def locate_zero(
     problem: Any,
     a: PointInfo,
@@ -189,12 +241,20 @@ def locate_zero(
             pt = point_at(problem, a, b, s, sigma_b, w, newton, (near[0], near[1]))
             if pt is None:
                 # Newton cannot converge this close to the point (e.g. at a branch point,
-                # where the bordered matrix is singular): accept the bracket if it is
-                # already narrow and g small at its better end
+                # where the bordered matrix is singular and the corrected point is only
+                # determined to tol / sigma_min along the near-null vector): interpolate
+                # the branch between the bracket ends at the secant zero of g, which is on
+                # the branch to O(width^2), and accept it if its residual meets the
+                # corrector's tolerance
+                msg = f"corrector failed in a bracket of width {hi - lo:.1e}"
+                r_int = _interpolated_zero(problem, a, end_lo, end_hi, w, newton, test, sigma_b)
+                if r_int is not None:
+                    return LocateResult(r_int[0], r_int[1], r_int[2], True, it, msg)
+                # otherwise accept the bracket if it is already narrow and g small at its
+                # better end
                 best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
                 narrow = hi - lo <= 1e-6 * sigma_b
                 ok = narrow and abs(best[2]) <= g_jump * max(abs(g_a), abs(g_b))
-                msg = f"corrector failed in a bracket of width {hi - lo:.1e}"
                 return LocateResult(best[0], best[1], best[2], ok, it, msg)
         g = float(test(pt, s / sigma_b))
         if not math.isfinite(g):

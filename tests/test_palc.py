@@ -442,3 +442,49 @@ def test_sparse_eigs_reuse_the_corrector_factorisation():
     ref = np.concatenate([-j[:3] + 0.5j * j[:3], -j[:3] - 0.5j * j[:3]])
     np.testing.assert_allclose(np.sort_complex(vals), np.sort_complex(ref), rtol=1e-10)
     np.testing.assert_allclose(T @ vecs, vecs * vals, atol=1e-9)
+
+
+def test_hermite_predictor_same_branch_fewer_newton_iterations():
+    """The cubic Hermite predictor (default) and the tangent predictor solve the same
+    equations: the fold of the N = 20 Bratu problem agrees to 1e-12 (reference: the
+    tangent-predictor run and the extended-system value 3.509682479821677, see
+    benchmarks/problems.py), every row solves G = 0, and the better prediction needs
+    fewer corrector iterations (O(ds^4) against O(ds^2) prediction error)."""
+    runs = {}
+    for predictor in ("tangent", "hermite"):
+        br = continue_equilibria(
+            bratu(20),
+            np.zeros(20),
+            {"lam": 0.0},
+            "lam",
+            p_min=0.0,
+            p_max=4.0,
+            ds=0.01,
+            ds_max=0.1,
+            direction="forward",
+            max_steps=50,
+            algorithm=PALC(predictor=predictor),
+        )
+        (f,) = br.find("fold")
+        assert f.located
+        assert_invariants(br)
+        runs[predictor] = (f.p, int(br.newton_iters[1:].sum()), len(br))
+    assert runs["hermite"][0] == pytest.approx(runs["tangent"][0], abs=1e-12)
+    assert runs["hermite"][0] == pytest.approx(3.509682479821677, abs=1e-11)
+    assert runs["hermite"][2] == runs["tangent"][2]
+    assert runs["hermite"][1] <= 0.8 * runs["tangent"][1]
+    with pytest.raises(ValueError, match="predictor"):
+        PALC(predictor="quadratic")
+
+
+def test_bound_crossing_is_placed_exactly_on_the_bound():
+    """A monotone crossing of p_max is placed by one solve at p = p_max: the last row is
+    exactly on the bound and solves G = 0 there (fold normal form mu - x^2: x = sqrt(mu))."""
+    sys = fold_normal_form()
+    prob = EquilibriumProblem(sys, sys.params(mu=1.0), "mu")
+    st = ContinuationSettings(ds=0.07, ds_max=0.3, p_min=0.0, p_max=2.345)
+    br = continue_branch(prob, [1.0], 1.0, PALC(), st)
+    assert br.status is Status.PARAM_BOUND
+    assert br.p[-1] == 2.345
+    assert br.x[-1, 0] == pytest.approx(math.sqrt(2.345), abs=1e-12)
+    assert 0 < br.ds[-1] <= 0.3

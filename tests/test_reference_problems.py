@@ -254,6 +254,10 @@ def test_discrete_bratu_symmetry_breaking_branch_point():
         assert_invariants(br, tol=1e-8)
         found.append(bp.p)
     assert found[0] == pytest.approx(found[1], rel=1e-7)
+    # against the independent shooting / tridiagonal-eigenvalue computation below, at the
+    # accuracy the conditioning allows (tol 1e-10 over a vanishing singular value)
+    lam_ref, _ = _bratu_symmetric_pitchfork(n, 19.0, 21.0)
+    assert found == pytest.approx([lam_ref, lam_ref], rel=1e-7)
 
 
 def _bratu_symmetric_pitchfork(n: int, m_lo: float, m_hi: float) -> tuple[float, float]:

@@ -993,6 +993,17 @@ class StepState:
         ``+1`` or ``-1``: the sign of ``dp/ds`` requested at the start.
     n_steps : int
         Accepted steps so far.
+    prev_d : ndarray, shape (N + 1,), or None
+        ``u - (u_0 + prev_h * prev_tau)`` of ``point``'s ``u``, with ``u_0`` the accepted
+        point before it: how far the last step's corrector moved ``point`` from the
+        tangent prediction (for predictors that extrapolate the branch; None at the start
+        or when unknown).
+    prev_tau : ndarray, shape (N + 1,), or None
+        Tangent at ``u_0``.
+    prev_h : float
+        Pseudo-arclength from ``u_0`` to ``point``.
+    retries : int
+        Rejected attempts from ``point`` so far (set by the algorithm).
     """
 
     point: PointInfo
@@ -1000,6 +1011,10 @@ class StepState:
     w: FloatArray
     direction: float = 1.0
     n_steps: int = 0
+    prev_d: FloatArray | None = None
+    prev_tau: FloatArray | None = None
+    prev_h: float = 0.0
+    retries: int = 0
 
 
 class StepOutcome(NamedTuple):
