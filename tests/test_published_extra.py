@@ -911,3 +911,155 @@ def test_undamped_pendulum_separatrix_damping_found_zero():
     te = (res.t - T / 2)[res.mesh.mesh_mask]
     assert np.abs(res.x_mesh[:, 0] - (4 * np.arctan(np.exp(te)) - np.pi)).max() < 1e-8
     assert np.abs(res.x_mesh[:, 1] - 2 / np.cosh(te)).max() < 1e-8
+
+
+# ============================================================ codim-2 on large systems
+def brusselator_rd_diffusion(N: int) -> System:
+    """As :func:`brusselator_rd`, with the diffusion coefficients as parameters."""
+    h2 = (1.0 / (N + 1)) ** 2
+
+    def rhs(x, p, ops):
+        A, B, D1, D2 = p[0], p[1], p[2], p[3]
+        out = []
+        for i in range(N):
+            ul = x[i - 1] if i > 0 else A
+            ur = x[i + 1] if i < N - 1 else A
+            out.append(D1 * (ul - 2 * x[i] + ur) / h2 + A - (B + 1) * x[i] + x[i] ** 2 * x[N + i])
+        for i in range(N):
+            vl = x[N + i - 1] if i > 0 else B / A
+            vr = x[N + i + 1] if i < N - 1 else B / A
+            v = x[N + i]
+            out.append(D2 * (vl - 2 * v + vr) / h2 + B * x[i] - x[i] ** 2 * v)
+        return ops.stack(out)
+
+    names = tuple(f"u{i}" for i in range(N)) + tuple(f"v{i}" for i in range(N))
+    return System(rhs, names, ("A", "B", "D1", "D2"))
+
+
+def test_turing_hopf_point_on_the_hopf_curve_of_a_discretised_pde():
+    """Turing-Hopf (zero-Hopf) point of the Brusselator reaction-diffusion system
+    (Prigogine & Lefever 1968; e.g. De Wit, Lima, Dewel & Borckmans 1996, Phys. Rev. E
+    54:261, for Turing-Hopf interaction), N = 30 nodes, n = 60.
+
+    Mode blocks as in the sparse-path test: the Hopf curve of mode 1 is
+    ``B_H(D2) = 1 + A^2 + (D1+D2) mu_1`` and mode k has a zero eigenvalue where
+    ``B = B_T,k(D2) = (1 + D1 mu_k)(A^2 + D2 mu_k)/(D2 mu_k)``. Continuing the Hopf curve
+    in D2 over [0.045, 0.065] crosses the Turing curve of mode 17 once: a zero-Hopf
+    point at the root of ``B_H = B_T,17`` (Brent's method). Regression: the zero-Hopf
+    and double-Hopf test functions are products of thousands of eigenvalue sums here
+    and overflowed to NaN (no detection at all) before they were evaluated by
+    ``signed_product``. (Where the curve crosses a Turing curve the uniform state is
+    also at a branch point of the equilibria, so the curve has a branch point there as
+    well: both are reported.)
+    """
+    N, A, D1, D2 = 30, 2.0, 0.002, 0.045
+    s = brusselator_rd_diffusion(N)
+    h = 1.0 / (N + 1)
+    mu = 4 / h**2 * np.sin(np.arange(1, N + 1) * np.pi * h / 2) ** 2
+
+    def B_H(d2):
+        return 1 + A**2 + (D1 + d2) * mu[0]
+
+    def B_T(d2, k):
+        return (1 + D1 * mu[k - 1]) * (A**2 + d2 * mu[k - 1]) / (d2 * mu[k - 1])
+
+    d2_zh = brentq(lambda d2: B_H(d2) - B_T(d2, 17), 0.045, 0.065, xtol=1e-16)
+    br = continue_equilibria(
+        s, np.r_[np.full(N, A), np.full(N, 3.0 / A)], {"A": A, "B": 3.0, "D1": D1, "D2": D2},
+        "B", p_min=2.0, p_max=B_H(D2) + 0.1, direction="forward",
+    )  # fmt: skip
+    h1 = [q for q in br.find("hopf") if q.located]
+    assert len(h1) == 1 and h1[0].p == pytest.approx(B_H(D2), rel=1e-10)
+    curve = continue_codim2(
+        br,
+        h1[0],
+        "D2",
+        ContinuationSettings(ds=0.002, ds_max=0.004, p_min=0.04, p_max=0.065, max_steps=200),
+        direction="forward",
+    )
+    assert curve.status.ok, curve.message
+    np.testing.assert_allclose(curve.records["B"], B_H(curve.p), rtol=1e-10)
+    prob = curve.problem
+    for i in range(len(curve)):
+        assert all(np.isfinite(list(prob.test_functions(curve.x[i], curve.p[i]).values())))
+    zh = _one(curve, "zh")
+    # The zero coincides with a branch point of the curve (singular augmented Jacobian),
+    # where the locator's Newton-corrected trial points are poor; it accepts a point
+    # whose test value is below 1e-3 of the row values: measured error 6e-7 relative
+    # (smallest eigenvalue 4e-7 there), hence 1e-5. Elsewhere zeros are located to 1e-10.
+    assert zh.p == pytest.approx(d2_zh, rel=1e-5)
+    # on the curve to the corrector's accuracy next to a singular Jacobian (residual
+    # 1e-13 over a smallest singular value ~1e-5): 1e-8, not the 1e-10 of the rows
+    assert zh.data["B"] == pytest.approx(B_H(zh.p), rel=1e-8)
+    det1 = (B_H(zh.p) - 1 - D1 * mu[0]) * (-(A**2) - zh.p * mu[0]) + A**2 * B_H(zh.p)
+    assert zh.data["omega"] == pytest.approx(np.sqrt(det1), rel=1e-8)
+
+
+def test_cusp_of_a_fold_curve_in_a_stiff_chain():
+    """Cusp normal form ``x' = b1 + b2 x - x^3`` (Kuznetsov 2004, sec. 8.2) driving a
+    stiff chain ``w_i' = -d_i w_i + x^2 + w_{i-1}/10`` (d_i = 1 ... 1e11, n = 60): the
+    x equation is closed, so the fold curve is ``b1 = -+2 (b2/3)^(3/2)`` with its cusp at
+    the origin, exactly. Regression: the fold-curve test functions used the plain
+    adjugate, a product of 59 singular values spanning 1 ... 1e11, which overflows to
+    NaN; the scaled adjugate keeps their zeros without overflow.
+    """
+    n = 60
+    d = np.logspace(0, 11, n - 1)
+
+    def rhs(y, p, ops):
+        b1, b2, x = p[0], p[1], y[0]
+        chain = [-d[i] * y[i + 1] + x**2 + 0.1 * y[i] for i in range(n - 1)]
+        return ops.stack([b1 + b2 * x - x**3, *chain])
+
+    s = System(rhs, tuple(f"y{i}" for i in range(n)), ("b1", "b2"))
+
+    def equilibrium(x):
+        y = [x]
+        for i in range(n - 1):
+            y.append((x * x + 0.1 * y[-1]) / d[i])
+        return np.array(y)
+
+    b2, x0 = 3.0, 2.0
+    br = continue_equilibria(s, equilibrium(x0), {"b1": x0**3 - b2 * x0, "b2": b2}, "b1",
+                             p_min=-5.0, p_max=5.0)  # fmt: skip
+    folds = br.find("fold")
+    assert len(folds) == 2 and all(f.located for f in folds)
+    assert sorted(f.p for f in folds) == pytest.approx([-2.0, 2.0], rel=1e-10)
+    curve = continue_codim2(
+        br, folds[0], "b2", ContinuationSettings(ds=0.1, ds_max=0.3, p_min=-1.0, p_max=4.0)
+    )
+    assert curve.status.ok, curve.message
+    on = curve.p > 0
+    np.testing.assert_allclose(
+        np.abs(curve.records["b1"][on]), 2 * (curve.p[on] / 3) ** 1.5, rtol=1e-8, atol=1e-12
+    )
+    cp = _one(curve, "cusp")
+    # the chain's eigenvalues reach -1e11: the located zero is good to ~1e-9
+    assert abs(cp.p) < 1e-8 and abs(cp.data["b1"]) < 1e-12
+    assert not curve.find("bt")
+
+
+def test_overflow_free_products_agree_with_the_plain_ones():
+    """``signed_product`` equals ``prod(...).real`` and ``scaled_adjugate`` is a positive
+    multiple of the adjugate, on random small cases where the plain forms are exact."""
+    from continuation.codim2._base import adjugate, scaled_adjugate, signed_product
+    from continuation.codim2.fold import _pair_sum_product
+
+    rng = np.random.default_rng(5)
+    for n in (2, 3, 5, 8):
+        J = rng.standard_normal((n, n))
+        e = np.linalg.eigvals(J)
+        assert signed_product(e) == pytest.approx(float(np.prod(e).real), rel=1e-12)
+        plain = 1.0 + 0j
+        for i in range(n):
+            for j in range(i + 1, n):
+                plain *= e[i] + e[j]
+        assert _pair_sum_product(e) == pytest.approx(float(plain.real), rel=1e-12)
+        A, S = adjugate(J), scaled_adjugate(J)
+        ratio = A[np.abs(A) > 1e-8] / S[np.abs(A) > 1e-8]
+        assert np.all(ratio > 0) and np.ptp(ratio) < 1e-10 * ratio.max()
+        np.testing.assert_allclose(A @ J, np.linalg.det(J) * np.eye(n), atol=1e-10)
+    assert signed_product([]) == 1.0 and signed_product([0.0, 3.0]) == 0.0
+    big = np.full(5000, -7.0)  # (-7)^5000: overflows as a plain product; sign +
+    assert signed_product(big) > 0 and np.isfinite(signed_product(big))
+    assert signed_product(np.r_[big, -1e-3]) < 0

@@ -8,6 +8,7 @@ sits in the unknown vector ``z = (x, p1, extra...)``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -388,4 +389,76 @@ def adjugate(J: FloatArray) -> FloatArray:
     return np.asarray(sign * (vt.T * prods) @ u.T, dtype=float)
 
 
-__all__ = ["AugmentedProblem", "adjugate", "null_vector"]
+def scaled_adjugate(J: FloatArray) -> FloatArray:
+    r"""``adj(J)`` divided by the product of all singular values but the two smallest.
+
+    With :math:`J = U S V^T` (``s_1 >= ... >= s_n``), ``adj(J) = det(U) det(V) V D U^T``
+    with ``D_ii = prod_{j != i} s_j``. Dividing by the positive, continuous scale
+    :math:`\prod_{j \le n-2} s_j = |\det J| / (s_{n-1} s_n)` gives
+    ``D_ii = s_{n-1} s_n / s_i`` (``i <= n-2``), ``D_{n-1} = s_n``, ``D_n = s_{n-1}``:
+    the same zeros and signs as the adjugate (the codim-2 test functions built from it
+    keep their zeros and sign changes), but no overflow or underflow for large ``n``,
+    where the plain adjugate is a product of ``n - 1`` singular values. Equal to
+    :func:`adjugate` for ``n <= 2``.
+    """
+    J = np.asarray(J, dtype=float)
+    n = J.shape[0]
+    if n <= 2:
+        return adjugate(J)
+    u, s, vt = np.linalg.svd(J)
+    d = np.empty(n)
+    d[: n - 2] = s[n - 2] * s[n - 1] / np.maximum(s[: n - 2], np.finfo(float).tiny)
+    d[n - 2], d[n - 1] = s[n - 1], s[n - 2]
+    sign = np.linalg.det(u) * np.linalg.det(vt)
+    return np.asarray(sign * (vt.T * d) @ u.T, dtype=float)
+
+
+#: bound on the log-magnitude of the factors of a test-function product other than
+#: the smallest one (see :func:`signed_product`)
+LOG_CLIP = 300.0
+
+
+def signed_product(factors: Any) -> float:
+    r"""``prod(factors)`` (real: the set is closed under conjugation), overflow-free.
+
+    Computed as ``sign * |f_j| * exp(clip(sum_{k != j} log|f_k|, -LOG_CLIP, LOG_CLIP))``
+    with ``f_j`` the factor of smallest modulus and the sign from the summed
+    arguments. Where the clip is inactive this is the product itself; where it is
+    active (products of thousands of eigenvalue sums for a discretised PDE, which
+    overflow to inf/NaN in plain floating point) the value keeps the product's sign
+    and is proportional to the smallest factor, so a factor crossing zero still gives
+    a simple, locatable zero, and no sign change appears anywhere else.
+
+    Parameters
+    ----------
+    factors : array_like, shape (m,) complex
+        Closed under complex conjugation (so the product is real).
+
+    Returns
+    -------
+    float
+        1.0 for an empty set.
+    """
+    f = np.asarray(factors, dtype=complex).reshape(-1)
+    if f.size == 0:
+        return 1.0
+    mag = np.abs(f)
+    j = int(np.argmin(mag))
+    if mag[j] == 0.0:
+        return 0.0
+    if not np.all(np.isfinite(mag)):
+        return float("nan")
+    logs = np.log(mag)
+    rest = float(np.sum(logs) - logs[j])
+    sign = 1.0 if math.cos(float(np.sum(np.angle(f)))) >= 0.0 else -1.0
+    return sign * float(mag[j]) * math.exp(min(max(rest, -LOG_CLIP), LOG_CLIP))
+
+
+__all__ = [
+    "LOG_CLIP",
+    "AugmentedProblem",
+    "adjugate",
+    "null_vector",
+    "scaled_adjugate",
+    "signed_product",
+]

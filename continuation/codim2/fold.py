@@ -18,6 +18,9 @@ Methods for Bifurcations of Dynamical Equilibria", SIAM, Ch. 4), each smooth in
     :math:`\psi_{BT} = \operatorname{tr}\operatorname{adj} J = e_{n-1}(\lambda)`,
     the product of the eigenvalues other than the fold's zero; it vanishes when a
     second eigenvalue reaches zero. Equivalently :math:`\psi_{BT} \propto w^T v`.
+    (Both ``bt`` and ``cusp`` use the adjugate divided by the positive product of all
+    singular values of ``J`` but the two smallest, :func:`scaled_adjugate`: same zeros
+    and signs, no overflow for large ``n``.)
 ``cusp``
     :math:`\psi_{CP} = v^T \operatorname{adj}(J)\, B(v, v)`, proportional to the
     fold's quadratic normal-form coefficient :math:`a = w^T B(v, v) / (2 w^T v)`,
@@ -42,17 +45,19 @@ from .._types import FloatArray
 from ..params import Params
 from ..settings import NewtonSettings
 from ..system import System
-from ._base import AugmentedProblem, adjugate, null_vector
+from ._base import AugmentedProblem, adjugate, null_vector, scaled_adjugate, signed_product
 from ._build import fold_recipe
 
 
 def _pair_sum_product(eigs: np.ndarray) -> float:
-    """``prod_{i<j} (l_i + l_j)``, real part (the set is closed under conjugation)."""
-    out = complex(1.0)
-    for i in range(eigs.size):
-        for j in range(i + 1, eigs.size):
-            out *= eigs[i] + eigs[j]
-    return float(out.real)
+    """``prod_{i<j} (l_i + l_j)`` (real: the set is closed under conjugation).
+
+    Evaluated by :func:`signed_product`, so that the ``m (m - 1) / 2`` factors of a
+    large system do not overflow.
+    """
+    e = np.asarray(eigs, dtype=complex).reshape(-1)
+    i, j = np.triu_indices(e.size, k=1)
+    return signed_product(e[i] + e[j])
 
 
 @dataclass(frozen=True, eq=False)
@@ -159,7 +164,7 @@ class FoldProblem(AugmentedProblem):
         Pv = self.param_vector(z, p)
         J = self.state_jacobian(z, p)
         eigs = np.linalg.eigvals(J)
-        adj = adjugate(J)
+        adj = scaled_adjugate(J)  # adj(J) / (a positive scale): no overflow for large n
         k0 = int(np.argmin(np.abs(eigs)))
         rest = np.delete(eigs, k0)
         return {

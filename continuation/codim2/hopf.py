@@ -54,7 +54,7 @@ from .._types import FloatArray
 from ..params import Params
 from ..settings import NewtonSettings
 from ..system import System
-from ._base import AugmentedProblem
+from ._base import AugmentedProblem, signed_product
 from ._build import hopf_recipe
 from .fold import _pair_sum_product
 
@@ -373,7 +373,7 @@ class HopfProblem(AugmentedProblem):
             i, j = _critical_pair(eigs, self.kappa(z))
             rest = np.delete(eigs, [i, j])
             return {
-                "zh": float(np.prod(rest).real) if rest.size else 1.0,
+                "zh": signed_product(rest),
                 "hh": _pair_sum_product(rest),
             }
 
