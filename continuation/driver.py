@@ -37,7 +37,7 @@ from .algorithms.palc import PALC
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .errors import ContinuationError, ConvergenceError
 from .events import Event, HopfTest, bp_test, crossed
-from .locate import LocateResult, locate_zero
+from .locate import LocateResult, fold_guess, locate_zero
 from .problem import EquilibriumProblem
 from .settings import ContinuationSettings
 from .stability import (
@@ -77,7 +77,9 @@ def _eig_function(problem: Any, settings: ContinuationSettings) -> Callable[[Poi
             ev = cache.get("eig")
             if ev is None:
                 if isinstance(pt.Gz, np.ndarray):  # dense: LAPACK directly, counts too
-                    ev, cache["counts"] = dense_stability(pt.Gz, eig_tol, imag_tol)
+                    ev, cache["counts"] = dense_stability(
+                        pt.Gz, eig_tol, imag_tol, check_finite="jac_finite" not in cache
+                    )
                 elif shift_invert is not None:
                     ev = shift_invert(pt)
                 else:
@@ -275,6 +277,7 @@ class _Context:
         test: Callable[..., float],
         g_a: float,
         g_b: float,
+        first: float | None = None,
     ) -> LocateResult:
         det = self.settings.detect
         if not det.locate:
@@ -291,6 +294,7 @@ class _Context:
             newton=self.settings.newton,
             tol=det.tol,
             max_iter=det.max_iter,
+            first=first,
         )
 
     def detect(
@@ -324,6 +328,7 @@ class _Context:
                 lambda pt, t: float(pt.tau[-1]),
                 float(pa.tau[-1]),
                 float(pb.tau[-1]),
+                first=fold_guess(pa, pb, sigma_b),
             )
             found.append((SpecialKind.FOLD, r, {}, ""))
         if det.branch_point and pa.bp_sign != pb.bp_sign:
@@ -831,14 +836,18 @@ def _make_branch(
     events: Sequence[Event] = (),
 ) -> Branch:
     N = len(rows)
-    width = max((r.eig.size for r in rows if r.eig is not None), default=0)
-    eig = np.full((N, width), np.nan + 0j)
-    nun = np.full(N, -1, dtype=int)
-    for k, r in enumerate(rows):
-        if r.eig is not None:
-            eig[k, : r.eig.size] = r.eig
-        if r.counts is not None:
-            nun[k] = r.counts[0] + 2 * r.counts[1]
+    eigs = [r.eig for r in rows]
+    width = max((e.size for e in eigs if e is not None), default=0)
+    if N and width and all(e is not None and e.size == width for e in eigs):
+        eig = np.array(eigs, dtype=complex).reshape(N, width)  # (the common case at once)
+    else:
+        eig = np.full((N, width), np.nan + 0j)
+        for k, e in enumerate(eigs):
+            if e is not None:
+                eig[k, : e.size] = e
+    nun = np.array(
+        [-1 if r.counts is None else r.counts[0] + 2 * r.counts[1] for r in rows], dtype=int
+    ).reshape(N)
     keys: list[str] = []
     for r in rows:
         for key in r.records:

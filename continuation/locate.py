@@ -130,6 +130,42 @@ def point_at(
         )
 
 
+def fold_guess(a: PointInfo, b: PointInfo, sigma_b: float) -> float | None:
+    """First trial ``sigma`` for a fold between ``a`` and ``b``: the stationary point of
+    the cubic Hermite interpolant of ``p(sigma)``.
+
+    Along the step ``sigma = c . (u - u_a)`` with ``c = w o tau_a`` (the border of
+    ``b``), so ``dp/dsigma = tau_p / (c . tau)``: ``tau_a[-1]`` at ``a`` and
+    ``tau_b[-1] / b.ctau`` at ``b``, of opposite signs at a fold. The zero of the
+    derivative of the cubic through ``(0, p_a)``, ``(sigma_b, p_b)`` with these slopes
+    is ``O(sigma_b^3)`` from the fold on a smooth branch, against ``O(sigma_b^2)`` for the
+    secant of ``tau_p``. Returns None when it is not strictly inside the step.
+    """
+    if not (sigma_b > 0 and b.ctau > 0):
+        return None
+    h = sigma_b
+    m0 = float(a.tau[-1])
+    m1 = float(b.tau[-1]) / b.ctau
+    dp = (b.p - a.p) / h
+    # P'(t h) / 1 on t in [0, 1]: m0 h00' + ... as a quadratic A t^2 + B t + C
+    A = 3.0 * (m0 + m1 - 2.0 * dp)
+    B = 2.0 * (3.0 * dp - 2.0 * m0 - m1)
+    C = m0
+    roots: list[float] = []
+    if abs(A) <= 1e-14 * (abs(B) + abs(C)):
+        if B != 0.0:
+            roots.append(-C / B)
+    else:
+        disc = B * B - 4.0 * A * C
+        if disc >= 0.0:
+            q = -0.5 * (B + math.copysign(math.sqrt(disc), B))
+            roots.extend(r for r in ((q / A) if A else math.nan, (C / q) if q else math.nan))
+    inside = [t for t in roots if 0.0 < t < 1.0]
+    if len(inside) != 1:
+        return None
+    return inside[0] * h
+
+
 def _interpolated_zero(
     problem: Any,
     a: PointInfo,
@@ -188,6 +224,7 @@ def locate_zero(
     newton: NewtonSettings,
     tol: float = 1e-10,
     max_iter: int = 50,
+    first: float | None = None,
 ) -> LocateResult:
     """Find ``sigma`` in ``[0, sigma_b]`` where ``test(point(sigma), t) = 0``.
 
@@ -210,6 +247,9 @@ def locate_zero(
         Tolerance on ``sigma``.
     max_iter : int
         Maximum number of trial points.
+    first : float, optional
+        A better first trial ``sigma`` than the secant of ``g`` (e.g.
+        :func:`fold_guess`); ignored unless strictly inside ``(0, sigma_b)``.
 
     Returns
     -------
@@ -232,6 +272,8 @@ def locate_zero(
     s_prev = math.nan
     for it in range(1, max_iter + 1):
         s = hi - ghi * (hi - lo) / (ghi - glo)
+        if it == 1 and first is not None and 0.0 < first < sigma_b:
+            s = first
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
         near = min(end_lo, end_hi, key=lambda e: abs(e[0] - s))
@@ -290,4 +332,4 @@ def locate_zero(
     return LocateResult(best[0], best[1], best[2], False, max_iter, "max_iter reached")
 
 
-__all__ = ["LocateResult", "locate_zero", "point_at"]
+__all__ = ["LocateResult", "fold_guess", "locate_zero", "point_at"]

@@ -114,7 +114,7 @@ def _dense_eigvals(J: Any) -> ComplexArray:
 
 
 def dense_stability(
-    J: Any, eig_tol: float = 1e-10, imag_tol: float = 1e-8
+    J: Any, eig_tol: float = 1e-10, imag_tol: float = 1e-8, *, check_finite: bool = True
 ) -> tuple[ComplexArray, tuple[int, int]]:
     """Sorted eigenvalues of a dense real matrix and their unstable counts, in one pass.
 
@@ -128,6 +128,9 @@ def dense_stability(
     J : ndarray, shape (n, n)
     eig_tol, imag_tol : float
         As in :func:`count_unstable`.
+    check_finite : bool
+        Check that ``J`` is finite first (skip only when the caller knows it is: LAPACK
+        on NaN or inf input is undefined).
 
     Returns
     -------
@@ -141,9 +144,10 @@ def dense_stability(
     numpy.linalg.LinAlgError
         If ``J`` contains NaN or inf.
     """
-    flat = J.ravel(order="K")
-    if not float(flat.dot(flat)) < math.inf and not np.all(np.isfinite(J)):
-        raise np.linalg.LinAlgError("Jacobian contains NaN or inf")
+    if check_finite:
+        flat = J.ravel(order="K")
+        if not float(flat.dot(flat)) < math.inf and not np.all(np.isfinite(J)):
+            raise np.linalg.LinAlgError("Jacobian contains NaN or inf")
     wr, wi, _, _, info = _GEEV(J, compute_vl=0, compute_vr=0)
     if info != 0:
         ev = sort_eigenvalues(np.linalg.eigvals(J))

@@ -117,10 +117,12 @@ class BorderedEvaluator:
     vector ``e_{n+1}``: ``M x = rt`` gives the Newton correction and the (unnormalised)
     tangent in one solve. ``ev.lin()`` copies ``(f, df/dx,
     df/dp)`` out of them. When the compiled function has a third output (as built by
-    :meth:`System.bordered_evaluator`), ``ev.norms`` (shape ``(3,)``) holds
-    ``(max |r|, r . r, max |u|)`` of the same call (None otherwise): the corrector's
-    convergence and finiteness tests without further NumPy calls. ``max |r|`` ignores
-    NaN entries, ``r . r`` does not (it is NaN or inf for any non-finite entry). Not
+    :meth:`System.bordered_evaluator`), ``ev.norms`` (shape ``(5,)``) holds
+    ``(max |r|, r . r, max |u|, max |f|, sum M_ij^2)`` of the same call (None
+    otherwise): the corrector's convergence and finiteness tests, the residual norm of
+    ``f`` alone and the finiteness of the matrix without further NumPy calls. ``max``
+    ignores NaN entries, the sums of squares do not (they are NaN or inf for any
+    non-finite entry). Not
     thread-safe; one evaluator per problem.
     """
 
@@ -145,8 +147,8 @@ class BorderedEvaluator:
         self._buf.set_res(1, memoryview(m_flat))
         self.M = m_flat.reshape(n + 1, n + 1).T  # column-major buffer: a Fortran view
         self.norms = None
-        if fn.n_out() > 2 and fn.nnz_out(2) == 3:
-            self.norms = np.zeros(3)
+        if fn.n_out() > 2 and fn.nnz_out(2) == 5:
+            self.norms = np.zeros(5)
             self._buf.set_res(2, memoryview(self.norms))
         # the buffer holds raw pointers: keep every bound array alive with the evaluator
         self._bound = (self.u, self.p, self.c, self.h, self.rt, m_flat, self.norms)
@@ -539,7 +541,10 @@ class System:
             top = ca.horzcat(ca.jacobian(F, X), ca.jacobian(F, U[n]))
             M = ca.densify(ca.vertcat(top, C.T))
             R = ca.vertcat(F, ca.dot(C, U) - H)
-            norms = ca.vertcat(ca.norm_inf(R), ca.dot(R, R), ca.norm_inf(U))
+            Mv = ca.vec(M)
+            norms = ca.vertcat(
+                ca.norm_inf(R), ca.dot(R, R), ca.norm_inf(U), ca.norm_inf(F), ca.dot(Mv, Mv)
+            )
             fn = cache[k] = ca.Function("bordered", [U, P, C, H], [R, M, norms])
         return BorderedEvaluator(fn, n, params)
 

@@ -89,13 +89,16 @@ def test_bordered_evaluator_norms_match_numpy() -> None:
         ev.set_border(c, 0.7)
         ev()
         r = ev.r
-        rn, rr, un = ev.norms.tolist()
+        rn, rr, un, gn, mm = ev.norms.tolist()
         assert rn == np.abs(r).max()
         assert rr == pytest.approx(float(r @ r), rel=1e-14)
         assert un == np.abs(ev.u).max()
+        assert gn == np.abs(r[:-1]).max()  # the residual of f alone, without the border row
+        assert mm == pytest.approx(float(np.sum(ev.M**2)), rel=1e-14)
     ev.u[:] = [np.nan, 0.0, 0.0, 0.0]
     ev()
     assert not ev.norms[1] < np.inf  # r . r flags the non-finite residual
+    assert not ev.norms[4] < np.inf  # and sum M_ij^2 the non-finite matrix
 
 
 class _Stripped:

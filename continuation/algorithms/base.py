@@ -561,6 +561,7 @@ def make_point(
     u: FloatArray | None = None,
     residual_norm: float | None = None,
     t_raw: FloatArray | None = None,
+    jac_finite: bool = False,
 ) -> PointInfo:
     """Factorise the bordered matrix at a converged point and compute its tangent.
 
@@ -591,6 +592,9 @@ def make_point(
         ``max |G|`` if already known.
     t_raw : ndarray, shape (N + 1,), optional
         ``lu``'s solution of ``M t = e_{N+1}`` if already known (ignored without ``lu``).
+    jac_finite : bool
+        ``Gz`` is known to be finite (recorded in the point's cache as ``"jac_finite"``,
+        so that its eigenvalue solver can skip the check).
 
     Raises
     ------
@@ -632,7 +636,7 @@ def make_point(
         ctau,
         iters,
         _inf_norm(G) if residual_norm is None else residual_norm,
-        None,
+        {"jac_finite": True} if jac_finite else None,
         u,
     )
 
@@ -674,7 +678,8 @@ class CorrectorResult:
     returned point, or the iterate one step before it, within the step tolerance), or
     None; ``u_full`` is ``(z, p)`` when known; ``t_raw`` is the solution of
     ``M t = e_{N+1}`` with that factorisation when the corrector already has it (fused
-    evaluator), else None.
+    evaluator), else None; ``g_norm`` is ``max |G|`` of ``lin`` when known and
+    ``jac_finite`` is True when ``lin``'s Jacobian is known to be finite.
     """
 
     converged: bool
@@ -687,6 +692,8 @@ class CorrectorResult:
     lu: BorderedLU | None = None
     u_full: FloatArray | None = None
     t_raw: FloatArray | None = None
+    g_norm: float | None = None
+    jac_finite: bool = False
 
     @property
     def u(self) -> FloatArray:
@@ -737,6 +744,8 @@ def _correct_fused(
     """
     n = u_pred.size - 1
     u, r, M, nv = ev.u, ev.r, ev.M, ev.norms
+    run = getattr(ev, "run", ev)  # (the compiled call itself, without the wrapper)
+    gn = mm = math.nan  # max |f| and sum M_ij^2 of the last evaluation, when known
     rt = getattr(ev, "rt", None)
     own_rt = rt is None  # an evaluator without the two-column buffer: copy r into one
     if own_rt:
@@ -746,9 +755,9 @@ def _correct_fused(
     ev.c[:] = c  # (ev.set_border, inlined: the hot path of small problems)
     ev.h[0] = float(c.dot(u_ref)) + sigma
     tol, step_tol, max_iter = newton.tol, newton.step_tol, newton.max_iter
-    ev()
+    run()
     if nv is not None:
-        rn, rr, un = nv.tolist()
+        rn, rr, un, gn, mm = nv.tolist()
         finite = rr < math.inf
     else:
         finite = float(r.dot(r)) < math.inf
@@ -784,10 +793,10 @@ def _correct_fused(
             if dn <= step_ok:
                 u -= du
                 if exact:
-                    ev()
+                    run()
                     lin = ev.lin()
                     if nv is not None:
-                        rn, rr, un = nv.tolist()
+                        rn, rr, un, gn, mm = nv.tolist()
                     else:
                         rr, rn = float(r.dot(r)), _inf_norm(r)
                     rn = rn if rr < math.inf else math.inf
@@ -798,8 +807,9 @@ def _correct_fused(
                         lu, t_raw = BorderedLU.from_dense_factors(f_lu, f_piv), x[:, 1]
                     else:
                         lu = t_raw = None
-            return CorrectorResult(True, u[:n].copy(), float(u[n]), lin, it, rn, "", lu,
-                                   u.copy(), t_raw)  # fmt: skip
+            uf = u.copy()
+            return CorrectorResult(True, uf[:n], float(uf[n]), lin, it, rn, "", lu, uf, t_raw,
+                                   gn if gn == gn else None, mm < math.inf)  # fmt: skip
         if it >= max_iter:
             return CorrectorResult(False, u[:n].copy(), float(u[n]), ev.lin(), it, rn,
                                    "max_iter reached")  # fmt: skip
@@ -819,9 +829,9 @@ def _correct_fused(
             msg = f"corrector contracts too slowly (rate {step / step_prev:.2g} at step {it})"
             return CorrectorResult(False, u[:n].copy(), float(u[n]), None, it, rn, msg)
         rn_prev = rn
-        ev()
+        run()
         if nv is not None:
-            rn, rr, un = nv.tolist()
+            rn, rr, un, gn, mm = nv.tolist()
             finite = rr < math.inf
         else:
             finite = float(r.dot(r)) < math.inf

@@ -201,7 +201,9 @@ class PALC(ContinuationAlgorithm):
                 iters=res.iters,
                 lu=res.lu,
                 u=res.u_full,
+                residual_norm=res.g_norm,
                 t_raw=res.t_raw,
+                jac_finite=res.jac_finite,
             )
         except np.linalg.LinAlgError as exc:
             state.retries += 1
