@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
+import scipy.sparse.linalg as spla
+from scipy.sparse import csc_matrix
 
 from ._types import ComplexArray, FloatArray
 from .algorithms.base import (
@@ -58,6 +60,10 @@ ProgressFn = Callable[[BranchPoint], None]
 BP_SINGULAR_RATIO = 0.1
 _EPS = float(np.finfo(float).eps)
 _NO_RECORDS = EquilibriumProblem.record
+
+#: ``|dp/ds|`` of the unit start tangent below which the start point counts as a fold
+#: (the sign rule of the direction is then arbitrary; a warning says so).
+_FOLD_START_TAU = 1e-8
 
 _PREFIX = {
     SpecialKind.FOLD: "F",
@@ -649,14 +655,38 @@ class _Context:
 
 
 # ---------------------------------------------------------------------------- one run
-def _run(ctx: _Context, z0: FloatArray, p0: float, iters0: int) -> _Run:
+def _run(
+    ctx: _Context,
+    z0: FloatArray,
+    p0: float,
+    iters0: int,
+    orient: FloatArray | None = None,
+    warn_fold: bool = True,
+) -> _Run:
+    """One direction from ``(z0, p0)``; ``orient``: a direction the start tangent must
+    point along (``theta``-inner product > 0), overriding the sign rule of ``dp/ds``;
+    ``warn_fold``: warn when the start point is a fold (the sign rule is arbitrary)."""
     s = ctx.settings
     run = _Run()
     try:
         state = ctx.algorithm.init(ctx.problem, z0, p0, s)
+        pt = state.point
+        if orient is not None and float((state.w * pt.tau).dot(orient)) < 0:
+            state.point = make_point(
+                pt.z, pt.p, (pt.G, pt.Gz, pt.Gp), pt.border, state.w, orient=orient, lu=pt.lu
+            )
     except np.linalg.LinAlgError as exc:
         run.status, run.message = Status.SINGULAR, f"no tangent at the start point: {exc}"
         return run
+    if warn_fold and abs(float(state.point.tau[-1])) < _FOLD_START_TAU:
+        log.warning(
+            "the start point %s=%.10g is (numerically) a fold: dp/ds = %.1e there, so the "
+            "direction of p does not tell the two halves of the branch apart; use "
+            'direction="both" to follow both',
+            ctx.problem.free,
+            p0,
+            float(state.point.tau[-1]),
+        )
     state.point.iters = iters0
     row0 = ctx.make_row(state.point, 0.0)
     run.rows.append(row0)
@@ -985,9 +1015,10 @@ def continue_branch(
     ds_abs = abs(settings.ds)
     sgn = 1.0 if settings.ds > 0 else -1.0
 
-    def run_dir(sign: float) -> _Run:
+    def run_dir(sign: float, orient: FloatArray | None = None) -> _Run:
         st = dataclasses.replace(settings, ds=sign * ds_abs)
-        return _run(_Context(*ctx_args, st, events, progress), start.z, p0, start.iters)
+        ctx = _Context(*ctx_args, st, events, progress)
+        return _run(ctx, start.z, p0, start.iters, orient, warn_fold=direction != "both")
 
     if direction == "both":
         back = run_dir(-sgn)
@@ -995,7 +1026,9 @@ def continue_branch(
             # a closed loop is complete already; an interrupt stops everything
             fwd = _Run(rows=back.rows[:1], status=back.status, message=back.message)
         else:
-            fwd = run_dir(sgn)
+            # the forward run leaves opposite to the backward one, whatever dp/ds is
+            # (at a fold the sign of dp/ds cannot tell the two halves apart)
+            fwd = run_dir(sgn, orient=-back.rows[0].point.tau)
         if back.rows:
             rows, ds, specials = _merge(back, fwd)
         else:
@@ -1006,7 +1039,62 @@ def continue_branch(
         rows, ds, specials = one.rows, [r.ds for r in one.rows], one.specials
         status, message = one.status, one.message
     br = _make_branch(problem, rows, ds, specials, status, message, settings, p0, n, events)
+    br = _check_partial_stability(problem, br, settings)
     return _finish(br, throw)
+
+
+#: Rows of a sparse branch whose saddle index is checked against the rightmost
+#: eigenvalues (the first, the last and evenly spaced ones in between).
+N_STABILITY_CHECKS = 9
+
+
+def _check_partial_stability(problem: Any, br: Branch, settings: ContinuationSettings) -> Branch:
+    """Check the saddle index of a sparse branch against its rightmost eigenvalues.
+
+    On the sparse path only the ``n_eigs`` eigenvalues nearest ``eig_sigma`` are
+    computed at every row (shift-invert Arnoldi), so an unstable eigenvalue far from
+    the shift (a Hopf pair of large frequency behind many slow modes, say) is not seen
+    and ``n_unstable`` is only a lower bound. At up to :data:`N_STABILITY_CHECKS` rows
+    the ``n_eigs`` eigenvalues of largest real part are computed as well (ARPACK
+    ``which="LR"``, Lehoucq, Sorensen & Yang 1998); if they hold more unstable
+    eigenvalues than the row's count, a warning is logged and appended to the branch's
+    message (stability columns and Hopf detection are then incomplete: raise ``n_eigs``
+    or ``dense_eigs_max``). Dense branches are returned unchanged.
+    """
+    det = settings.detect
+    n = br.x.shape[1] if br.x.ndim == 2 else 0
+    k = int(det.n_eigs)
+    if (
+        not len(br)
+        or not getattr(problem, "jacobian_is_stability", False)
+        or n <= det.dense_eigs_max
+        or k >= n - 2
+        or not getattr(problem, "linearize", None)
+    ):
+        return br
+    rows = sorted(set(np.linspace(0, len(br) - 1, N_STABILITY_CHECKS).round().astype(int)))
+    missed = []
+    for i in rows:
+        try:
+            _, Gz, _ = problem.linearize(br.x[i], float(br.p[i]))
+            vals = spla.eigs(csc_matrix(Gz), k=k, which="LR", return_eigenvectors=False, tol=1e-8)
+        except (spla.ArpackNoConvergence, ValueError, RuntimeError):
+            continue
+        n_lr = count_unstable(sort_eigenvalues(vals), det.eig_tol, det.imag_tol)
+        unstable_lr = n_lr[0] + 2 * n_lr[1]
+        if unstable_lr > max(int(br.n_unstable[i]), 0):
+            missed.append((float(br.p[i]), int(br.n_unstable[i]), unstable_lr))
+    if not missed:
+        return br
+    p_i, had, lr = missed[0]
+    note = (
+        f" Stability incomplete: at {br.free}={p_i:.8g} the rightmost eigenvalues hold "
+        f"{lr} unstable, the {k} nearest eig_sigma={det.eig_sigma:g} only {had} "
+        f"({len(missed)} of {len(rows)} checked rows); n_unstable and Hopf detection miss "
+        "eigenvalues far from the shift: raise DetectionSettings.n_eigs or dense_eigs_max."
+    )
+    log.warning(note.strip())
+    return dataclasses.replace(br, message=br.message + note)
 
 
 def _correct_start(

@@ -488,3 +488,23 @@ def test_bound_crossing_is_placed_exactly_on_the_bound():
     assert br.p[-1] == 2.345
     assert br.x[-1, 0] == pytest.approx(math.sqrt(2.345), abs=1e-12)
     assert 0 < br.ds[-1] <= 0.3
+
+
+def test_start_exactly_at_a_fold_both_directions_covers_both_halves(caplog):
+    """mu - x^2 started at its fold (0, 0): dp/ds = 0 there, so the sign rule cannot
+    orient the two runs; with direction="both" they must still leave in opposite
+    directions and together cover x = -1..1 (closed form x = +-sqrt(mu)). A
+    single-direction start there warns that the direction is arbitrary."""
+    sys = fold_normal_form()
+    br = continue_equilibria(sys, [0.0], {"mu": 0.0}, "mu", p_min=-1.0, p_max=1.0)
+    assert br.x[:, 0].min() == pytest.approx(-1.0, abs=1e-12)
+    assert br.x[:, 0].max() == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(br.x[:, 0] ** 2, br.p, atol=1e-10)
+    assert np.all(np.diff(br.x[:, 0]) > 0) or np.all(np.diff(br.x[:, 0]) < 0)
+    assert len(br.find("fold")) == 0 or all(abs(f.p) < 1e-10 for f in br.find("fold"))
+    with caplog.at_level("WARNING", logger="continuation.driver"):
+        one = continue_equilibria(
+            sys, [0.0], {"mu": 0.0}, "mu", p_min=-1.0, p_max=1.0, direction="forward"
+        )
+    assert one.status is Status.PARAM_BOUND
+    assert any("is (numerically) a fold" in r.message for r in caplog.records)
