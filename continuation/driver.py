@@ -61,6 +61,12 @@ BP_SINGULAR_RATIO = 0.1
 _EPS = float(np.finfo(float).eps)
 _NO_RECORDS = EquilibriumProblem.record
 
+#: The branch-point test (a determinant) is smooth along the branch: at a located zero
+#: ``|g|`` must be within this many times its mean slope over the step times the final
+#: bracket (see :func:`~continuation.locate.locate_zero`), else a jump (trial points on
+#: the crossing branch) was bracketed.
+BP_CONTINUITY = 10.0
+
 #: ``|dp/ds|`` of the unit start tangent below which the start point counts as a fold
 #: (the sign rule of the direction is then arbitrary; a warning says so).
 _FOLD_START_TAU = 1e-8
@@ -284,6 +290,7 @@ class _Context:
         g_a: float,
         g_b: float,
         first: float | None = None,
+        continuity: float | None = None,
     ) -> LocateResult:
         det = self.settings.detect
         if not det.locate:
@@ -301,6 +308,7 @@ class _Context:
             tol=det.tol,
             max_iter=det.max_iter,
             first=first,
+            continuity=continuity,
         )
 
     def detect(
@@ -469,6 +477,7 @@ class _Context:
             g_bp,
             bp_test(pa.bp_sign, pa.bp_logdet, ref),
             bp_test(pb.bp_sign, pb.bp_logdet, ref),
+            continuity=BP_CONTINUITY,
         )
         rho = bordered_rcond(r.point, col)
         ratio = rho / rho_ab
@@ -705,6 +714,9 @@ def _run(
         s.p_max,
         s.max_steps,
     )
+    # the eigenvalues are those of G_z itself (equilibria): a real one crossing zero is a
+    # fold or branch point of this branch (not so for augmented codim-2 problems)
+    count_guard = bool(getattr(problem, "jacobian_is_stability", False))
     p_at_bound = (p0 >= s.p_max and state.direction > 0) or (p0 <= s.p_min and state.direction < 0)
     if p_at_bound:
         run.status, run.message = Status.PARAM_BOUND, "the start point is on the parameter bound"
@@ -732,6 +744,26 @@ def _run(
             a = rows[-1]
             sigma_b = outcome.sigma
             b = make_row(new_state.point, sigma_b)
+            ac, bc = a.counts, b.counts
+            if (
+                count_guard
+                and ac is not None
+                and bc is not None
+                and abs(bc[0] - ac[0]) >= 2
+                and bc[1] == ac[1]
+                and state.ds > s.ds_min * (1 + 1e-12)
+            ):
+                # two or more real eigenvalues of G_z crossed zero in one step (the
+                # complex count is unchanged, so no real pair merged into a complex one):
+                # their folds / branch points cancel in the sign tests; shorten the step
+                log.debug(
+                    "%d real eigenvalues crossed 0 between p=%.8g and p=%.8g: step retried shorter",
+                    abs(bc[0] - ac[0]),
+                    a.p,
+                    b.p,
+                )
+                state.ds = max(state.ds * s.shrink, s.ds_min)
+                continue
             if not terminal_events and p_min <= b.p <= p_max:
                 stop = None  # (stop_point's first test, inlined: the common case)
             else:

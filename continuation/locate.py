@@ -225,6 +225,7 @@ def locate_zero(
     tol: float = 1e-10,
     max_iter: int = 50,
     first: float | None = None,
+    continuity: float | None = None,
 ) -> LocateResult:
     """Find ``sigma`` in ``[0, sigma_b]`` where ``test(point(sigma), t) = 0``.
 
@@ -250,6 +251,12 @@ def locate_zero(
     first : float, optional
         A better first trial ``sigma`` than the secant of ``g`` (e.g.
         :func:`fold_guess`); ignored unless strictly inside ``(0, sigma_b)``.
+    continuity : float, optional
+        For a test function known to be smooth along the branch (the branch-point
+        determinant): a point counts as located only if ``|g|`` there is at most
+        ``continuity`` times the mean slope ``|g_b - g_a| / sigma_b`` times the final
+        bracket or correction, plus ``1e-6 max(|g_a|, |g_b|)`` for round-off;
+        otherwise the bracket closed on a jump (reported, not located).
 
     Returns
     -------
@@ -320,7 +327,17 @@ def locate_zero(
         s_next = hi - ghi * (hi - lo) / (ghi - glo)
         if hi - lo <= tol or abs(s - s_prev) <= tol or abs(s_next - s) <= tol:
             best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
-            if abs(best[2]) > g_jump * max(abs(g_a), abs(g_b)):
+            # with `continuity`: a zero within d of the best point leaves |g| there of
+            # about slope * d; allow `continuity` times the mean slope over the step
+            # plus round-off noise. A larger |g| means the bracket closed on a jump of g
+            # (e.g. trial points corrected onto a crossing branch next to a branch
+            # point), not on a zero
+            d = min(hi - lo, max(abs(s_next - s), tol))
+            g_max = max(abs(g_a), abs(g_b))
+            g_ok = g_jump * g_max
+            if continuity is not None:
+                g_ok = min(g_ok, continuity * abs(g_b - g_a) / sigma_b * d + 1e-6 * g_max)
+            if abs(best[2]) > g_ok:
                 # converged onto a jump of g, not a zero (e.g. a Hopf test that switched
                 # between eigenvalue pairs): report the bracket only
                 return LocateResult(

@@ -78,3 +78,57 @@ def test_dense_eigenvalues_find_the_exact_hopf_point(system):
     assert h.p == pytest.approx(B_HOPF[0], abs=1e-8)
     assert "Stability incomplete" not in br.message
     assert br.n_unstable[-1] == 2  # one pair unstable past the first Hopf point only
+
+
+def test_two_turing_branch_points_in_one_step_are_both_located():
+    """Brusselator RD with N = 30 (n = 60, dense), A = 2, D1 = 0.002, D2 = 0.045: the
+    uniform state has a branch point (Turing bifurcation) where mode k of the discrete
+    Laplacian has a zero eigenvalue, B_T,k = (1 + D1 mu_k)(A^2 + D2 mu_k)/(D2 mu_k)
+    (exact for the discretisation). Two of them (3.4115, 3.5158) fit in one default
+    step: the determinant changes sign twice and both went unseen, the real unstable
+    count jumping by 2. A step in which two real eigenvalues cross zero is retried
+    shorter, so all eight in (3, B_Hopf) are found. Next to some of them the
+    corrector's trial points jump between the crossing branches, so the branch-point
+    test jumps: those are reported bracketed (not located) rather than "located" off
+    the true point; every located one is accurate."""
+    n_nodes, a, d1, d2 = 30, 2.0, 0.002, 0.045
+    h2 = (1.0 / (n_nodes + 1)) ** 2
+
+    def rhs(x, p, ops):
+        B = p[0]
+        out = []
+        for i in range(n_nodes):
+            ul = x[i - 1] if i > 0 else a
+            ur = x[i + 1] if i < n_nodes - 1 else a
+            out.append(
+                d1 * (ul - 2 * x[i] + ur) / h2 + a - (B + 1) * x[i] + x[i] ** 2 * x[n_nodes + i]
+            )
+        for i in range(n_nodes):
+            k = n_nodes + i
+            vl = x[k - 1] if i > 0 else B / a
+            vr = x[k + 1] if i < n_nodes - 1 else B / a
+            out.append(d2 * (vl - 2 * x[k] + vr) / h2 + B * x[i] - x[i] ** 2 * x[k])
+        return ops.stack(out)
+
+    sys = System(rhs, tuple(f"w{i}" for i in range(2 * n_nodes)), ("B",))
+    h = 1.0 / (n_nodes + 1)
+    mu = 4 / h**2 * np.sin(np.arange(1, n_nodes + 1) * np.pi * h / 2) ** 2
+    b_t = (1 + d1 * mu) * (a**2 + d2 * mu) / (d2 * mu)
+    b_h = 1 + a**2 + (d1 + d2) * mu[0]
+    expected = np.sort(b_t[(b_t > 3) & (b_t < b_h)])
+    assert expected.size == 8
+    x0 = np.r_[np.full(n_nodes, a), np.full(n_nodes, 3.0 / a)]
+    br = continue_equilibria(sys, x0, {"B": 3.0}, "B", p_min=2.0, p_max=b_h - 0.05,
+                             direction="forward")  # fmt: skip
+    bps = sorted(br.find("bp"), key=lambda q: q.p)
+    assert len(bps) == 8
+    for q, exact in zip(bps, expected, strict=True):
+        lo, hi = sorted(q.bracket)
+        assert lo <= exact <= hi
+        if q.located:
+            # next to a branch point the corrected points are determined to the Newton
+            # tolerance over a vanishing singular value: 1e-8 relative
+            assert q.p == pytest.approx(exact, rel=1e-8)
+    assert sum(q.located for q in bps) >= 6
+    # the saddle index rises by one at each
+    assert br.n_unstable[-1] - br.n_unstable[0] == 8
