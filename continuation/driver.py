@@ -346,7 +346,8 @@ class _Context:
             )
             found.append((SpecialKind.FOLD, r, {}, ""))
         if det.branch_point and pa.bp_sign != pb.bp_sign:
-            bp = self.branch_point(a, b, sigma_b, w)
+            r_fold = found[0][1] if fold and found[0][1].located else None
+            bp = self.branch_point(a, b, sigma_b, w, r_fold)
             if bp is not None:
                 found.append((SpecialKind.BRANCH_POINT, bp[0], bp[1], ""))
         if hopf:
@@ -425,9 +426,20 @@ class _Context:
         return out
 
     def branch_point(
-        self, a: _Row, b: _Row, sigma_b: float, w: FloatArray
+        self,
+        a: _Row,
+        b: _Row,
+        sigma_b: float,
+        w: FloatArray,
+        fold: LocateResult | None = None,
     ) -> tuple[LocateResult, dict[str, float]] | None:
         """Locate and verify a branch point where the BP test changes sign from a to b.
+
+        ``fold``: a fold located in the same step. If the bordered matrix is singular
+        there by the criterion below, the fold is the branch point (a pitchfork met
+        along its non-trivial branch, which turns there) and is returned as such:
+        locating the determinant's zero separately would correct trial points next to
+        that singular matrix.
 
         The test function is the determinant of the bordered matrix
         ``M = [[G_z, G_p], [c^T]]``; its sign is only meaningful where ``M`` is
@@ -464,6 +476,10 @@ class _Context:
                 rho_b,
             )
             return None
+        if fold is not None:
+            rho_f = bordered_rcond(fold.point, col)
+            if rho_f / rho_ab <= BP_SINGULAR_RATIO:
+                return fold, {"rcond": rho_f, "rcond_ratio": rho_f / rho_ab}
         ref = pa.bp_logdet
 
         def g_bp(pt: PointInfo, t: float) -> float:

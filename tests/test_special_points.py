@@ -22,6 +22,7 @@ from continuation.events import Event
 from continuation.problem import EquilibriumProblem
 from continuation.settings import ContinuationSettings
 from continuation.status import Status
+from continuation.system import System
 
 TOL = 1e-8  # required location accuracy on normal forms
 
@@ -321,3 +322,21 @@ def test_located_branch_points_are_verified_singular():
         )
         (bp,) = br.find("bp")
         assert bp.located and bp.data["rcond_ratio"] < 1e-12
+
+
+@pytest.mark.parametrize("ds", [0.1, 0.05, 0.037, 0.01, 0.003])
+def test_pitchfork_met_along_its_nontrivial_branch_fold_is_the_branch_point(ds):
+    """x' = mu x - x^3 from (1, 1) along x^2 = mu: the branch turns (fold) exactly at the
+    pitchfork (0, 0), so the fold and the branch point coincide (closed form). Both are
+    reported located there, at every step size (before, the determinant's zero was
+    sought separately next to the singular bordered matrix and was often not located,
+    with a bracket in p excluding 0; reported by the generality audit)."""
+    sys = System(lambda x, p, ops: ops.stack([p[0] * x[0] - x[0] ** 3]), ("x",), ("mu",))
+    br = continue_equilibria(sys, [1.0], {"mu": 1.0}, "mu", p_min=-1, p_max=2, ds=ds, ds_max=ds)
+    (fold,) = br.find("fold")
+    (bp,) = br.find("bp")
+    for q in (fold, bp):
+        assert q.located
+        assert abs(q.p) < 1e-12
+        assert abs(float(q.x[0])) < 1e-6  # x = sqrt(mu): mu to 1e-14 gives x to 1e-7
+    assert bp.data["rcond_ratio"] <= 0.1
