@@ -79,7 +79,11 @@ _PREFIX = {
 
 
 # ---------------------------------------------------------------------------- helpers
-def _eig_function(problem: Any, settings: ContinuationSettings) -> Callable[[PointInfo], Any]:
+def _eig_function(
+    problem: Any, settings: ContinuationSettings, rightmost: bool = False
+) -> Callable[[PointInfo], Any]:
+    """Eigenvalues at a point (cached on it); ``rightmost``: on the sparse path, the
+    ``n_eigs`` of largest real part as well as those nearest the shift."""
     det = settings.detect
     if getattr(problem, "jacobian_is_stability", False):
         eig_tol, imag_tol = det.eig_tol, det.imag_tol
@@ -107,7 +111,9 @@ def _eig_function(problem: Any, settings: ContinuationSettings) -> Callable[[Poi
         n = int(problem.n_unknowns)
         k = int(det.n_eigs)
         shift_invert = (
-            _SparseEigs(n, k, det.eig_sigma) if n > det.dense_eigs_max and k < n - 2 else None
+            _SparseEigs(n, k, det.eig_sigma, rightmost)
+            if n > det.dense_eigs_max and k < n - 2
+            else None
         )
         return from_jacobian
 
@@ -149,10 +155,11 @@ class _SparseEigs:
     slower on a loaded machine: not done.
     """
 
-    __slots__ = ("n", "k", "sigma")
+    __slots__ = ("n", "k", "sigma", "rightmost")
 
-    def __init__(self, n: int, k: int, sigma: float) -> None:
+    def __init__(self, n: int, k: int, sigma: float, rightmost: bool = False) -> None:
         self.n, self.k, self.sigma = n, k, float(sigma)
+        self.rightmost = bool(rightmost)
 
     def _opinv(self, pt: PointInfo) -> Callable[[FloatArray], FloatArray] | None:
         lu, t = pt.lu, pt.t_raw
@@ -184,11 +191,31 @@ class _SparseEigs:
             vectors=False,
         )
         if out is None:
-            return eigenvalues(pt.Gz, n_eigs=self.k, sigma=self.sigma, dense_max=self.n)
-        vals = out[0]
+            vals = eigenvalues(pt.Gz, n_eigs=self.k, sigma=self.sigma, dense_max=self.n)
+            vals = vals[np.isfinite(vals)]
+        else:
+            vals = out[0]
+        if self.rightmost:
+            vals = _with_rightmost(pt.Gz, vals, self.k)
         ev = np.full(self.n, np.nan + 0j)
-        ev[: vals.size] = sort_eigenvalues(vals)
+        vals = sort_eigenvalues(vals)[: self.n]
+        ev[: vals.size] = vals
         return ev
+
+
+def _with_rightmost(J: Any, near: ComplexArray, k: int) -> ComplexArray:
+    """``near`` together with the ``k`` eigenvalues of ``J`` of largest real part
+    (ARPACK ``which="LR"``, relative tolerance 1e-12), duplicates (within 1e-9 relative)
+    dropped; ``near`` alone if ARPACK fails."""
+    try:
+        lr = spla.eigs(csc_matrix(J), k=k, which="LR", return_eigenvectors=False, tol=1e-12)
+    except (spla.ArpackNoConvergence, ValueError, RuntimeError):
+        return near
+    out = list(near)
+    for lam in lr:
+        if all(abs(lam - mu) > 1e-9 * max(1.0, abs(lam)) for mu in out):
+            out.append(lam)
+    return np.asarray(out, dtype=complex)
 
 
 def _difference_fn(problem: Any) -> Callable[[FloatArray, FloatArray], FloatArray]:
@@ -247,13 +274,14 @@ class _Context:
         settings: ContinuationSettings,
         events: Sequence[Event],
         progress: ProgressFn | None,
+        rightmost: bool = False,
     ) -> None:
         self.problem = problem
         self.algorithm = algorithm
         self.settings = settings
         self.events = tuple(events)
         self.progress = progress
-        self.eig = _eig_function(problem, settings)
+        self.eig = _eig_function(problem, settings, rightmost)
         self.diff = _difference_fn(problem)
         self.grow_iters = int(getattr(algorithm, "grow_iters", 3))
         self.terminal = any(e.terminal for e in self.events)
@@ -1063,31 +1091,61 @@ def continue_branch(
     ds_abs = abs(settings.ds)
     sgn = 1.0 if settings.ds > 0 else -1.0
 
-    def run_dir(sign: float, orient: FloatArray | None = None) -> _Run:
+    def run_dir(sign: float, orient: FloatArray | None, rightmost: bool) -> _Run:
         st = dataclasses.replace(settings, ds=sign * ds_abs)
-        ctx = _Context(*ctx_args, st, events, progress)
+        ctx = _Context(*ctx_args, st, events, progress, rightmost)
         return _run(ctx, start.z, p0, start.iters, orient, warn_fold=direction != "both")
 
-    if direction == "both":
-        back = run_dir(-sgn)
-        if back.status in (Status.INTERRUPTED, Status.CLOSED_LOOP) or not back.rows:
-            # a closed loop is complete already; an interrupt stops everything
-            fwd = _Run(rows=back.rows[:1], status=back.status, message=back.message)
+    def run_all(rightmost: bool) -> Branch:
+        if direction == "both":
+            back = run_dir(-sgn, None, rightmost)
+            if back.status in (Status.INTERRUPTED, Status.CLOSED_LOOP) or not back.rows:
+                # a closed loop is complete already; an interrupt stops everything
+                fwd = _Run(rows=back.rows[:1], status=back.status, message=back.message)
+            else:
+                # the forward run leaves opposite to the backward one, whatever dp/ds is
+                # (at a fold the sign of dp/ds cannot tell the two halves apart)
+                fwd = run_dir(sgn, -back.rows[0].point.tau, rightmost)
+            if back.rows:
+                rows, ds, specials = _merge(back, fwd)
+            else:
+                rows, ds, specials = fwd.rows, [r.ds for r in fwd.rows], fwd.specials
+            status, message = _combine(back, fwd)
         else:
-            # the forward run leaves opposite to the backward one, whatever dp/ds is
-            # (at a fold the sign of dp/ds cannot tell the two halves apart)
-            fwd = run_dir(sgn, orient=-back.rows[0].point.tau)
-        if back.rows:
-            rows, ds, specials = _merge(back, fwd)
-        else:
-            rows, ds, specials = fwd.rows, [r.ds for r in fwd.rows], fwd.specials
-        status, message = _combine(back, fwd)
-    else:
-        one = run_dir(sgn if direction == "forward" else -sgn)
-        rows, ds, specials = one.rows, [r.ds for r in one.rows], one.specials
-        status, message = one.status, one.message
-    br = _make_branch(problem, rows, ds, specials, status, message, settings, p0, n, events)
-    br = _check_partial_stability(problem, br, settings)
+            one = run_dir(sgn if direction == "forward" else -sgn, None, rightmost)
+            rows, ds, specials = one.rows, [r.ds for r in one.rows], one.specials
+            status, message = one.status, one.message
+        return _make_branch(problem, rows, ds, specials, status, message, settings, p0, n, events)
+
+    br = run_all(False)
+    missed = _missed_unstable(problem, br, settings)
+    if missed and br.status is not Status.INTERRUPTED:
+        p_i, had, lr = missed[0]
+        log.warning(
+            "the %d eigenvalues nearest eig_sigma=%g missed unstable ones (at %s=%.8g: %d "
+            "unstable among the rightmost, %d counted): continuing again with the rightmost "
+            "eigenvalues at every point",
+            settings.detect.n_eigs,
+            settings.detect.eig_sigma,
+            problem.free,
+            p_i,
+            lr,
+            had,
+        )
+        br = run_all(True)
+        note = (
+            f" (Second pass: the {settings.detect.n_eigs} eigenvalues nearest "
+            f"eig_sigma={settings.detect.eig_sigma:g} missed unstable ones, at "
+            f"{br.free}={p_i:.8g} {lr} against {had}; this branch has the "
+            f"{settings.detect.n_eigs} rightmost eigenvalues too at every point.)"
+        )
+        still = _missed_unstable(problem, br, settings)
+        if still:
+            note += (
+                " Stability still incomplete at some checked rows: raise "
+                "DetectionSettings.n_eigs or dense_eigs_max."
+            )
+        br = dataclasses.replace(br, message=br.message + note)
     return _finish(br, throw)
 
 
@@ -1097,18 +1155,21 @@ def continue_branch(
 N_STABILITY_CHECKS = 3
 
 
-def _check_partial_stability(problem: Any, br: Branch, settings: ContinuationSettings) -> Branch:
-    """Check the saddle index of a sparse branch against its rightmost eigenvalues.
+def _missed_unstable(
+    problem: Any, br: Branch, settings: ContinuationSettings
+) -> list[tuple[float, int, int]]:
+    """Rows of a sparse branch whose saddle index misses unstable eigenvalues.
 
     On the sparse path only the ``n_eigs`` eigenvalues nearest ``eig_sigma`` are
     computed at every row (shift-invert Arnoldi), so an unstable eigenvalue far from
     the shift (a Hopf pair of large frequency behind many slow modes, say) is not seen
-    and ``n_unstable`` is only a lower bound. At up to :data:`N_STABILITY_CHECKS` rows
+    and ``n_unstable`` would only be a lower bound. At :data:`N_STABILITY_CHECKS` rows
     the ``n_eigs`` eigenvalues of largest real part are computed as well (ARPACK
-    ``which="LR"``, Lehoucq, Sorensen & Yang 1998); if they hold more unstable
-    eigenvalues than the row's count, a warning is logged and appended to the branch's
-    message (stability columns and Hopf detection are then incomplete: raise ``n_eigs``
-    or ``dense_eigs_max``). Dense branches are returned unchanged.
+    ``which="LR"``, Lehoucq, Sorensen & Yang 1998). Returns ``[(p, counted,
+    unstable among the rightmost), ...]`` for the rows where the rightmost ones hold
+    more unstable eigenvalues than counted; empty for dense branches (all eigenvalues
+    are computed there). :func:`continue_branch` then continues the branch again with
+    the rightmost eigenvalues at every point.
     """
     det = settings.detect
     n = br.x.shape[1] if br.x.ndim == 2 else 0
@@ -1120,7 +1181,7 @@ def _check_partial_stability(problem: Any, br: Branch, settings: ContinuationSet
         or k >= n - 2
         or not getattr(problem, "linearize", None)
     ):
-        return br
+        return []
     rows = sorted(set(np.linspace(0, len(br) - 1, N_STABILITY_CHECKS).round().astype(int)))
     missed = []
     for i in rows:
@@ -1133,17 +1194,7 @@ def _check_partial_stability(problem: Any, br: Branch, settings: ContinuationSet
         unstable_lr = n_lr[0] + 2 * n_lr[1]
         if unstable_lr > max(int(br.n_unstable[i]), 0):
             missed.append((float(br.p[i]), int(br.n_unstable[i]), unstable_lr))
-    if not missed:
-        return br
-    p_i, had, lr = missed[0]
-    note = (
-        f" Stability incomplete: at {br.free}={p_i:.8g} the rightmost eigenvalues hold "
-        f"{lr} unstable, the {k} nearest eig_sigma={det.eig_sigma:g} only {had} "
-        f"({len(missed)} of {len(rows)} checked rows); n_unstable and Hopf detection miss "
-        "eigenvalues far from the shift: raise DetectionSettings.n_eigs or dense_eigs_max."
-    )
-    log.warning(note.strip())
-    return dataclasses.replace(br, message=br.message + note)
+    return missed
 
 
 def _correct_start(
