@@ -42,6 +42,7 @@ gives the linear Eq. (11) of the paper.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -265,12 +266,62 @@ class Umeda4DOF(System):
         settings: NewtonSettings | None = None,
         throw: bool = False,
     ) -> NewtonResult:
-        """Newton solve of ``f(x, p) = 0`` from :meth:`equilibrium_guess` (or ``guess``)."""
+        """The surf-riding equilibrium near the crest or the trough, by Newton's method.
+
+        With ``guess`` (or at ``chi_c = 0``), a Newton solve from it (or from
+        :meth:`equilibrium_guess`). Otherwise the guess with zero lateral states is only
+        good near ``chi_c = 0`` (at ``chi_c >= ~27 deg`` Newton from it lands on another
+        equilibrium), so the ``chi_c = 0`` point is continued in ``chi_c`` to the target
+        by pseudo-arclength (:func:`continuation.api.continue_equilibria`) and polished
+        there: the result is the point of the branch that starts at the crest (trough) at
+        ``chi_c = 0``, as :func:`ship_models.analysis.fixed_points.find_fixed_point`
+        labels it. If that branch folds back before reaching ``chi_c``, the result is not
+        converged and its message says so (never another equilibrium silently).
+        """
         pv = self.check_params(params)
-        x0 = self.equilibrium_guess(pv, where) if guess is None else self.check_state(guess)
         s = settings or NewtonSettings(tol=1e-9, max_iter=50, damping=True)
-        res = newton(lambda z: self.f(z, pv), lambda z: self.jacobian(z, pv), x0, s, throw=throw)
-        return res
+
+        def solve(x0: FloatArray) -> NewtonResult:
+            return newton(
+                lambda z: self.f(z, pv), lambda z: self.jacobian(z, pv), x0, s, throw=throw
+            )
+
+        chi_c = float(pv[1])
+        if guess is not None or chi_c == 0.0:
+            x0 = self.equilibrium_guess(pv, where) if guess is None else self.check_state(guess)
+            return solve(x0)
+        from continuation.api import continue_equilibria  # (api imports the engine)
+        from continuation.status import Status
+
+        p0 = Params(PARAM_NAMES, pv).replace(chi_c=0.0)
+        start = newton(
+            lambda z: self.f(z, p0.values),
+            lambda z: self.jacobian(z, p0.values),
+            self.equilibrium_guess(p0.values, where),
+            s,
+        )
+        if not start.converged:
+            return _failed(start, f"no {where} equilibrium at chi_c = 0: {start.message}", throw)
+        lo, hi = (0.0, chi_c) if chi_c > 0 else (chi_c, 0.0)
+        br = continue_equilibria(
+            self,
+            start.z,
+            p0,
+            "chi_c",
+            ds=math.copysign(0.01, chi_c),
+            ds_max=0.05,
+            p_min=lo,
+            p_max=hi,
+            direction="forward",
+        )
+        if br.status is not Status.PARAM_BOUND or abs(float(br.p[-1]) - chi_c) > 1e-12:
+            msg = (
+                f"the {where} equilibrium branch from chi_c = 0 does not reach chi_c = "
+                f"{math.degrees(chi_c):.4g} deg (it ends at {math.degrees(br.p[-1]):.4g} deg: "
+                f"{br.message})"
+            )
+            return _failed(NewtonResult(br.x[-1], False, 0, math.inf, br.status, msg), msg, throw)
+        return solve(br.x[-1])
 
     def random_state(self, seed: int | None = None) -> FloatArray:
         """A random, physically plausible state (for tests), shape (8,)."""
@@ -288,6 +339,18 @@ class Umeda4DOF(System):
                 rng.uniform(-0.4, 0.4),
             ]
         )
+
+
+def _failed(res: NewtonResult, message: str, throw: bool) -> NewtonResult:
+    """``res`` as a failure with ``message`` (ConvergenceError with ``throw``)."""
+    if throw:
+        from continuation.errors import ConvergenceError
+
+        raise ConvergenceError(message)
+    from continuation.status import Status
+
+    status = res.status if not res.status.ok else Status.NEWTON_FAILED
+    return NewtonResult(res.z, False, res.iterations, res.residual_norm, status, message)
 
 
 __all__ = ["PARAM_NAMES", "STATE_NAMES", "Umeda4DOF", "smooth_saturation"]

@@ -160,3 +160,26 @@ def test_rudder_saturation_is_smooth_and_bounded(model):
     lin = Umeda4DOF(model.data, saturation=False)
     x[3] = p[1] - 0.05  # small error: saturation is the identity to 1e-6
     assert model.f(x, p)[7] == pytest.approx(lin.f(x, p)[7], rel=1e-6)
+
+
+def test_find_equilibrium_follows_the_crest_branch_to_large_courses(model):
+    """At chi_c >= ~27 deg Newton from the zero-lateral-state guess landed on another
+    equilibrium (heading ~43 deg at chi_c = 30 deg). find_equilibrium now continues the
+    chi_c = 0 crest point to the course: the result is the crest point of
+    find_fixed_point (independent: traced over 0..50 deg and polished), and past the
+    branch's fold it fails with a message instead of returning another point."""
+    from continuation.errors import ConvergenceError
+    from ship_models.analysis.fixed_points import find_fixed_point
+
+    for deg in (27.0, 30.0):
+        p = model.default_params().replace(Fn=0.31, chi_c=np.radians(deg))
+        res = model.find_equilibrium(p, "crest")
+        assert res.converged
+        ref = find_fixed_point(model, p, "crest")
+        np.testing.assert_allclose(res.z, ref.x, atol=1e-9)
+        assert np.degrees(res.z[model.index("chi")]) < deg  # heading between 0 and chi_c
+    past = model.default_params().replace(Fn=0.31, chi_c=np.radians(50.0))
+    res = model.find_equilibrium(past, "crest")
+    assert not res.converged and "does not reach chi_c" in res.message
+    with pytest.raises(ConvergenceError, match="does not reach"):
+        model.find_equilibrium(past, "crest", throw=True)

@@ -178,33 +178,19 @@ class CrestSaddle:
         return float(np.min(-self.eigenvalues.real[present]))
 
 
-def _crest_equilibrium(model: Any, params: Params, step: float = math.radians(2.0)) -> FloatArray:
-    """The crest equilibrium followed from ``chi_c = 0`` (where it is the surge root).
-
-    Natural-parameter continuation in ``chi_c`` with Newton at each step: a guess with
-    zero lateral states (``model.find_equilibrium``) can converge to another root at
-    large courses, the continued branch cannot (unless it folds: then it fails).
-    """
-    target = float(params["chi_c"])
-    n_steps = max(int(math.ceil(abs(target) / step)), 1)
+def _crest_equilibrium(model: Any, params: Params) -> FloatArray:
+    """The crest equilibrium followed from ``chi_c = 0`` (where it is the surge root):
+    ``model.find_equilibrium`` continues it in ``chi_c`` (a guess with zero lateral
+    states alone can converge to another root at large courses); fails if the branch
+    folds before the course."""
     settings = NewtonSettings(tol=1e-11, max_iter=30, damping=True)
-    res = model.find_equilibrium(params.replace(chi_c=0.0), "crest", settings=settings)
-    x, x_prev = np.asarray(res.z, dtype=float), None
-    for k in range(1, n_steps + 1):
-        if not res.converged:
-            break
-        chi = target * k / n_steps
-        guess = x if x_prev is None else 2 * x - x_prev  # secant predictor
-        res = model.find_equilibrium(
-            params.replace(chi_c=chi), "crest", guess=guess, settings=settings
-        )
-        x_prev, x = x, np.asarray(res.z, dtype=float)
+    res = model.find_equilibrium(params, "crest", settings=settings)
     if not res.converged:
         raise ContinuationError(
             f"no crest equilibrium at {dict(params.items())} (followed from chi_c = 0): "
             f"{res.message}"
         )
-    return x
+    return np.asarray(res.z, dtype=float)
 
 
 def crest_saddle(model: Any, params: Params) -> CrestSaddle:
