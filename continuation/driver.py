@@ -554,20 +554,31 @@ class _Context:
         correction at fixed ``p = bound`` (from that point) puts the row exactly on it.
         Returns ``r`` unchanged if that correction fails.
         """
-        u = r.point.u.copy()
-        u[-1] = bound
-        e_p = np.zeros(u.size)
-        e_p[-1] = 1.0
-        res = correct(self.problem, u, np.zeros(u.size), e_p, bound, self.settings.newton)
-        if not res.converged or res.lin is None:
-            return r
         c = w * a.point.tau
-        try:
-            pt = make_point(res.z, bound, res.lin, c, w, iters=r.point.iters)
-        except np.linalg.LinAlgError:
+        solved = self.point_on_bound(r.point.u, bound, c, w)
+        if solved is None:
             return r
+        pt = solved[1]
+        pt.iters = r.point.iters
         sigma = float(c.dot(pt.u - a.point.u))
         return LocateResult(sigma, pt, 0.0, True, r.iterations, r.message)
+
+    def point_on_bound(
+        self, u: FloatArray, bound: float, c: FloatArray, w: FloatArray
+    ) -> tuple[CorrectorResult, PointInfo] | None:
+        """Newton's method at fixed ``p = bound`` from ``u`` (its ``p`` replaced), and the
+        point with its tangent (border ``c``); None if either fails."""
+        guess = np.array(u, dtype=float)
+        guess[-1] = bound
+        e_p = np.zeros(guess.size)
+        e_p[-1] = 1.0
+        res = correct(self.problem, guess, np.zeros(guess.size), e_p, bound, self.settings.newton)
+        if not res.converged or res.lin is None:
+            return None
+        try:
+            return res, make_point(res.z, bound, res.lin, c, w, iters=res.iters)
+        except np.linalg.LinAlgError:
+            return None
 
     def bound_direct(
         self, a: _Row, b: _Row, sigma_b: float, bound: float, w: FloatArray
@@ -590,16 +601,11 @@ class _Context:
         chord = ub - ua
         guess = ua + t * chord
         guess[-1] = bound
-        e_p = np.zeros(guess.size)
-        e_p[-1] = 1.0
-        res = correct(self.problem, guess, np.zeros(guess.size), e_p, bound, self.settings.newton)
-        if not res.converged or res.lin is None:
-            return None
         c = w * pa.tau
-        try:
-            pt = make_point(res.z, bound, res.lin, c, w, iters=res.iters)
-        except np.linalg.LinAlgError:
+        solved = self.point_on_bound(guess, bound, c, w)
+        if solved is None:
             return None
+        res, pt = solved
         d = pt.u - ua
         sigma = float(c.dot(d))
         moved = res.u - guess

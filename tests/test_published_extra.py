@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import brusselator_rd
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, fsolve
 from scipy.special import ai_zeros
@@ -632,29 +633,6 @@ def test_dimensional_cstr_in_kelvin_folds_and_hopf():
 
 
 # ======================================================== Brusselator reaction-diffusion
-def brusselator_rd(N: int, D1: float, D2: float) -> System:
-    """Brusselator on [0, 1] with Dirichlet data (A, B/A), second-order differences."""
-    h2 = (1.0 / (N + 1)) ** 2
-
-    def rhs(x, p, ops):
-        A, B = p[0], p[1]
-        out = []
-        for i in range(N):
-            ul = x[i - 1] if i > 0 else A
-            ur = x[i + 1] if i < N - 1 else A
-            u, v = x[i], x[N + i]
-            out.append(D1 * (ul - 2 * u + ur) / h2 + A - (B + 1) * u + u * u * v)
-        for i in range(N):
-            vl = x[N + i - 1] if i > 0 else B / A
-            vr = x[N + i + 1] if i < N - 1 else B / A
-            u, v = x[i], x[N + i]
-            out.append(D2 * (vl - 2 * v + vr) / h2 + B * u - u * u * v)
-        return ops.stack(out)
-
-    names = tuple(f"u{i}" for i in range(N)) + tuple(f"v{i}" for i in range(N))
-    return System(rhs, names, ("A", "B"))
-
-
 def test_brusselator_reaction_diffusion_hopf_on_the_sparse_path():
     """Brusselator reaction-diffusion (Prigogine & Lefever 1968, J. Chem. Phys.
     48:1695; Nicolis & Prigogine 1977, ch. 7), u_t = D1 u_xx + A - (B+1) u + u^2 v,

@@ -13,30 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import brusselator_rd
 
 from continuation import DetectionSettings, System, continue_equilibria
 from continuation.settings import ContinuationSettings
-
-
-def _brusselator_rd(N: int, D1: float, D2: float) -> System:
-    h2 = (1.0 / (N + 1)) ** 2
-
-    def rhs(x, p, ops):
-        A, B = p[0], p[1]
-        out = []
-        for i in range(N):
-            ul = x[i - 1] if i > 0 else A
-            ur = x[i + 1] if i < N - 1 else A
-            out.append(D1 * (ul - 2 * x[i] + ur) / h2 + A - (B + 1) * x[i] + x[i] ** 2 * x[N + i])
-        for i in range(N):
-            vl = x[N + i - 1] if i > 0 else B / A
-            vr = x[N + i + 1] if i < N - 1 else B / A
-            out.append(D2 * (vl - 2 * x[N + i] + vr) / h2 + B * x[i] - x[i] ** 2 * x[N + i])
-        return ops.stack(out)
-
-    names = tuple(f"u{i}" for i in range(N)) + tuple(f"v{i}" for i in range(N))
-    return System(rhs, names, ("A", "B"))
-
 
 N, A, D1, D2 = 100, 2.0, 1e-4, 2e-4
 H = 1.0 / (N + 1)
@@ -46,7 +26,7 @@ B_HOPF = 1 + A**2 + (D1 + D2) * MU  # exact Hopf points of the discretisation
 
 @pytest.fixture(scope="module")
 def system() -> System:
-    return _brusselator_rd(N, D1, D2)
+    return brusselator_rd(N, D1, D2)
 
 
 def _run(system: System, **detect) -> object:
@@ -99,25 +79,7 @@ def test_two_turing_branch_points_in_one_step_are_both_located():
     test jumps: those are reported bracketed (not located) rather than "located" off
     the true point; every located one is accurate."""
     n_nodes, a, d1, d2 = 30, 2.0, 0.002, 0.045
-    h2 = (1.0 / (n_nodes + 1)) ** 2
-
-    def rhs(x, p, ops):
-        B = p[0]
-        out = []
-        for i in range(n_nodes):
-            ul = x[i - 1] if i > 0 else a
-            ur = x[i + 1] if i < n_nodes - 1 else a
-            out.append(
-                d1 * (ul - 2 * x[i] + ur) / h2 + a - (B + 1) * x[i] + x[i] ** 2 * x[n_nodes + i]
-            )
-        for i in range(n_nodes):
-            k = n_nodes + i
-            vl = x[k - 1] if i > 0 else B / a
-            vr = x[k + 1] if i < n_nodes - 1 else B / a
-            out.append(d2 * (vl - 2 * x[k] + vr) / h2 + B * x[i] - x[i] ** 2 * x[k])
-        return ops.stack(out)
-
-    sys = System(rhs, tuple(f"w{i}" for i in range(2 * n_nodes)), ("B",))
+    sys = brusselator_rd(n_nodes, d1, d2)
     h = 1.0 / (n_nodes + 1)
     mu = 4 / h**2 * np.sin(np.arange(1, n_nodes + 1) * np.pi * h / 2) ** 2
     b_t = (1 + d1 * mu) * (a**2 + d2 * mu) / (d2 * mu)
@@ -125,7 +87,7 @@ def test_two_turing_branch_points_in_one_step_are_both_located():
     expected = np.sort(b_t[(b_t > 3) & (b_t < b_h)])
     assert expected.size == 8
     x0 = np.r_[np.full(n_nodes, a), np.full(n_nodes, 3.0 / a)]
-    br = continue_equilibria(sys, x0, {"B": 3.0}, "B", p_min=2.0, p_max=b_h - 0.05,
+    br = continue_equilibria(sys, x0, {"A": a, "B": 3.0}, "B", p_min=2.0, p_max=b_h - 0.05,
                              direction="forward")  # fmt: skip
     bps = sorted(br.find("bp"), key=lambda q: q.p)
     assert len(bps) == 8
