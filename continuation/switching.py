@@ -610,12 +610,11 @@ def _check_crossing(
     u_star = np.append(ct.z, ct.p)
     phi2 = ct.phi2 if float((w * ct.phi2).dot(t_new)) > 0 else -ct.phi2
     S = float((w * phi2).dot(t_new))
-    U = np.column_stack((br.x, br.p))
     step = -1 if side > 0 else 1
     k = k0 + step
     radius = 4.0 * amplitude
     while 0 <= k < len(br):
-        d = U[k] - u_star
+        d = _delta(br.problem, br.x[k], br.p[k], u_star[:-1], u_star[-1])
         s = float((w * t_new).dot(d))
         past = s * side <= 0
         near = theta_norm(d, w) <= radius
@@ -627,6 +626,13 @@ def _check_crossing(
             break  # the first row past u* beyond the radius was the last one checked
         k += step
     return True, -1, math.nan
+
+
+def _delta(problem: Any, z1: FloatArray, p1: float, z0: FloatArray, p0: float) -> FloatArray:
+    """``(z1, p1) - (z0, p0)``, periodic states reduced modulo their period."""
+    diff = getattr(problem, "difference", None)
+    dz = diff(z1, z0) if callable(diff) else np.asarray(z1) - np.asarray(z0)
+    return np.append(np.asarray(dz, dtype=float), float(p1) - float(p0))
 
 
 def _slice(br: Branch, lo: int, hi: int) -> Branch:
@@ -705,7 +711,7 @@ def _reference_tangent(branch: Branch, point: SpecialPoint, w: FloatArray) -> Fl
     where the bordered matrix is singular)."""
     i = int(point.index)
     if 0 <= i and i + 1 < len(branch):
-        chord = np.append(branch.x[i + 1] - branch.x[i], branch.p[i + 1] - branch.p[i])
+        chord = _delta(branch.problem, branch.x[i + 1], branch.p[i + 1], branch.x[i], branch.p[i])
         if np.all(np.isfinite(chord)) and theta_norm(chord, w) > 0:
             return chord / theta_norm(chord, w)
     if point.tangent is not None and np.all(np.isfinite(point.tangent)):
@@ -737,7 +743,7 @@ def _row_abe_scale(problem: Any, branch: Branch, point: SpecialPoint, w: FloatAr
         if not 0 <= i < len(branch):
             continue
         u = np.append(branch.x[i], branch.p[i])
-        d = theta_norm(u - u_star, w)
+        d = theta_norm(_delta(problem, u[:-1], u[-1], u_star[:-1], u_star[-1]), w)
         if not d > 1e-8 * max(1.0, theta_norm(u_star, w)):
             continue
         _, Gz, Gp = linearize(problem, u[:-1], float(u[-1]))
@@ -977,17 +983,21 @@ def switch_branch(
             _OrientedStart(algorithm, t_new),
             run_settings,
             events=events,
-            direction=direction if direction != "both" else "both",
+            direction=direction,
             throw=False,
             progress=progress,
         )
         if not len(br):
+            if br.status is Status.INTERRUPTED:
+                return br
             last_reason = br.message
             amp /= 4.0
             continue
-        if direction == "both":
-            U = np.column_stack((br.x, br.p))
-            dist = np.sqrt(((U - start) ** 2 * w).sum(axis=1))
+        if direction == "both" and br.status is not Status.INTERRUPTED:
+            dist = [
+                theta_norm(_delta(problem, br.x[k], br.p[k], start[:-1], start[-1]), w)
+                for k in range(len(br))
+            ]
             k0 = int(np.argmin(dist))
             ok, k_bad, ratio = _check_crossing(br, ct, t_new, w, k0, side, amp)
             if not ok:
