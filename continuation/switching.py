@@ -135,13 +135,15 @@ KERNEL_GAP = 0.1
 #: ABE coefficients below this fraction of ``max ||D^2G[q_i, q_j]||`` count as zero.
 ABE_ZERO = 1e-8
 
-#: Smallest accepted ``min(|lambda_-|, lambda_+) / max |lambda|`` of the ABE matrix:
-#: below it the two roots (nearly) coincide and the branch point is not simple.
-ABE_SIMPLE = 1e-7
+#: Smallest accepted ``min(|lambda_-|, lambda_+) / max |lambda|`` of the ABE matrix
+#: (about the squared angle between the roots): below it the two roots coincide to
+#: working accuracy and the branch point is not simple.
+ABE_SIMPLE = 1e-12
 
 #: The root of the ABE nearer the current branch must make at most this cosine with
-#: the new one (``theta`` metric), else the crossing branch is indistinguishable.
-MAX_COS_BRANCHES = 0.999
+#: the new one (``theta`` metric; an angle of about 1.4e-5 rad), else the crossing
+#: branch is indistinguishable from the current one.
+MAX_COS_BRANCHES = 1.0 - 1e-10
 
 #: The start point must be within this fraction of the amplitude of its prediction.
 START_DISTANCE = 0.5
@@ -158,8 +160,18 @@ CROSSING_RATIO = 0.5
 #: at a simple branch point); else the point is degenerate (e.g. cubic tangency).
 ABE_DEGENERATE = 1e-3
 
-#: Attempts with the amplitude divided by 4 each time.
-N_ATTEMPTS = 3
+#: Start points tried, the amplitude divided by 4 after each failure (a failed start
+#: costs a few Newton iterations).
+N_START_ATTEMPTS = 8
+
+#: Runs tried through the branch point, the amplitude divided by 4 after a run that
+#: fails the row check next to the branch point.
+N_CROSSING_ATTEMPTS = 2
+
+#: Below this sine of the crossing angle the default amplitude shrinks in proportion
+#: (the start corrector's basin and the separation of the two branches near the branch
+#: point scale with ``amplitude * sin(angle)``).
+SMALL_ANGLE_SIN = 0.1
 
 _EPS = float(np.finfo(float).eps)
 
@@ -938,6 +950,7 @@ def switch_branch(
     amp = amplitude
     if amp is None:
         amp = min(abs(settings.ds), 1e-2 * max(1.0, theta_norm(u_star, w)))
+        amp *= min(1.0, ct.sin_angle / SMALL_ANGLE_SIN)
     info = (
         f"switched at {label} ({branch.free}={sp_.p:.10g}) onto the crossing branch "
         f"(angle {ct.angle_deg:.4g} deg, ABE coefficients "
@@ -949,7 +962,8 @@ def switch_branch(
         sides = (1.0,) if direction == "forward" else (-1.0,)
 
     last_reason = ""
-    for attempt in range(N_ATTEMPTS):
+    n_start_fail = n_cross_fail = 0
+    while n_start_fail < N_START_ATTEMPTS and n_cross_fail < N_CROSSING_ATTEMPTS:
         start: FloatArray | None = None
         side = 0.0
         out_of_bounds = 0
@@ -972,6 +986,7 @@ def switch_branch(
                 )
                 return fail(Status.PARAM_BOUND, msg)
             log.info("amplitude %.3g: %s", amp, last_reason)
+            n_start_fail += 1
             amp /= 4.0
             continue
         ds0 = min(max(0.7 * amp, settings.ds_min), settings.ds_max)
@@ -991,6 +1006,7 @@ def switch_branch(
             if br.status is Status.INTERRUPTED:
                 return br
             last_reason = br.message
+            n_start_fail += 1
             amp /= 4.0
             continue
         if direction == "both" and br.status is not Status.INTERRUPTED:
@@ -1007,7 +1023,8 @@ def switch_branch(
                     "the predicted offset from the current branch)"
                 )
                 log.info("amplitude %.3g: %s", amp, last_reason)
-                if attempt + 1 < N_ATTEMPTS:
+                n_cross_fail += 1
+                if n_cross_fail < N_CROSSING_ATTEMPTS:
                     amp /= 4.0
                     continue
                 kept = _slice(br, k_bad + 1, len(br)) if side > 0 else _slice(br, 0, k_bad)
@@ -1026,8 +1043,7 @@ def switch_branch(
         return br
     return fail(
         Status.NEWTON_FAILED,
-        f"no start point on the crossing branch after {N_ATTEMPTS} amplitudes down to "
-        f"{amp * 4:.3g}: {last_reason}",
+        f"no start point on the crossing branch (amplitude down to {amp * 4:.3g}): {last_reason}",
         ConvergenceError,
     )
 

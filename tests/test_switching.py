@@ -207,6 +207,21 @@ def test_oblique_crossing_needs_the_bifurcation_equation(backend):
     assert back.p.min() == pytest.approx(-0.5) and back.p.max() == pytest.approx(0.5)
 
 
+@pytest.mark.parametrize(("a", "b"), [(1.0, 1.02), (100.0, 101.0)])
+def test_nearly_tangent_lines(a, b):
+    """G = (x - a mu)(x - b mu) with the lines 0.57 and 0.0057 degrees apart (theta
+    metric): the ABE still separates them and the switched branch is x = b mu."""
+    system = System(lambda x, p, ops: ops.stack([(x[0] - a * p[0]) * (x[0] - b * p[0])]), "x", "mu")
+    br = continue_equilibria(system, [-0.5 * a], {"mu": -0.5}, "mu", p_max=0.5, direction="forward")
+    (bp,) = br.find("bp")
+    nb = switch_branch(br, bp, settings=dataclasses.replace(BOUNDED, ds_max=2.0))
+    angle = math.degrees(math.acos(_cos_theta(np.array([a, 1.0]), np.array([b, 1.0]), W1)))
+    assert f"angle {angle:.4g} deg" in nb.message
+    assert nb.status is Status.PARAM_BOUND
+    np.testing.assert_allclose(nb.x[:, 0], b * nb.p, atol=1e-12 * b)
+    assert nb.p.min() == pytest.approx(-0.5) and nb.p.max() == pytest.approx(0.5)
+
+
 def test_two_dimensional_branch_point_away_from_the_origin():
     """The plane system's branch point at (1, 2, 1): the switched branch is
     x = 1 + b (mu - 1), y = x^2 + mu; tangent (b, 2b + 1, 1) and the theta-angle to
