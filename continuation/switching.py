@@ -12,8 +12,8 @@ with :math:`q_1, q_2` orthonormal in the ``theta`` inner product of the continua
 (:func:`~continuation.algorithms.base.theta_weights`). Every branch through
 :math:`u^*` has the form :math:`u(s) = u^* + s\,(\alpha q_1 + \beta q_2) + O(s^2)`;
 projecting the second-order expansion of :math:`G(u(s)) = 0` on :math:`\psi` gives the
-*algebraic bifurcation equation* (ABE; Keller 1977; Doedel, Keller & Kernevez 1991,
-Sec. 5; Govaerts 2000, Ch. 5; Kuznetsov 2004, Sec. 10.2)
+*algebraic bifurcation equation* (ABE; Keller 1977; Doedel, Keller & Kernevez 1991;
+Govaerts 2000; Kuznetsov 2004, Sec. 10.2)
 
 .. math::
 
@@ -39,7 +39,7 @@ The second derivatives :math:`D^2G[a, b]` come from the CasADi trace of the mode
 
 The kernel comes from the SVD of :math:`A\, W^{-1/2}` (``W = diag(theta weights)``)
 for dense or moderately sized problems, and for large sparse ones from two solves with
-the bordered matrix (Govaerts 2000, Ch. 3; Keller 1977)
+the bordered matrix (Govaerts 2000, on bordered matrices; Keller 1977)
 
 .. math::
 
@@ -843,8 +843,8 @@ def switch_branch(
     settings : ContinuationSettings, optional
         Default ``branch.settings``. Bounds, ``ds_max``, ``max_steps`` (per direction),
         corrector and detection apply to the new branch; the first step is
-        ``0.7 * amplitude`` and grows from there. ``sign(ds)`` orients the new branch
-        (below).
+        ``0.7 * amplitude`` (so that no step lands on the singular point) and grows
+        from there. ``sign(ds)`` orients the new branch (below).
     direction : {"both", "forward", "backward"}
         ``"forward"``: the half of the crossing branch along ``+t_new``, the crossing
         tangent oriented so that ``sign(dp/ds) = sign(settings.ds)`` (where the
@@ -858,8 +858,10 @@ def switch_branch(
     amplitude : float, optional
         Distance (``theta`` norm, as ``ds``) of the start point from the branch
         point along the crossing tangent; default ``min(|ds|, 0.01 max(1,
-        ||u*||_theta))``. Divided by 4 (up to twice) when the start cannot be corrected
-        onto the crossing branch.
+        ||u*||_theta))``, times ``sin(angle) / 0.1`` when the branches cross at less
+        than ~5.7 degrees. Divided by 4 after a start that cannot be corrected onto the
+        crossing branch (up to 7 times) and after a run through the branch point that
+        fails the row check (once).
     algorithm : ContinuationAlgorithm, optional
         Default :class:`~continuation.algorithms.palc.PALC`.
     throw : bool
