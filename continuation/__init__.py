@@ -49,6 +49,7 @@ from .stability import (
     sort_eigenvalues,
 )
 from .status import Status
+from .switching import CrossingTangents, crossing_tangents, switch_branch
 from .system import DynamicalSystem, System, check_jacobian
 
 __all__ = [
@@ -105,6 +106,9 @@ __all__ = [
     "HopfProblem",
     "continue_branch",
     "continue_codim2",
+    "switch_branch",
+    "crossing_tangents",
+    "CrossingTangents",
     "continue_equilibria",
     "count_unstable",
     "eigen",
