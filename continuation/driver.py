@@ -23,6 +23,7 @@ import numpy as np
 import scipy.sparse.linalg as spla
 from scipy.sparse import csc_matrix
 
+from ._threads import blas_threads_for
 from ._types import ComplexArray, FloatArray
 from .algorithms.base import (
     ContinuationAlgorithm,
@@ -1123,6 +1124,16 @@ def continue_branch(
             status, message = one.status, one.message
         return _make_branch(problem, rows, ds, specials, status, message, settings, p0, n, events)
 
+    with blas_threads_for(n, bool(getattr(problem, "sparse", False))):
+        br = _run_checked(problem, settings, run_all)
+    return _finish(br, throw)
+
+
+def _run_checked(
+    problem: Any, settings: ContinuationSettings, run_all: Callable[[bool], Branch]
+) -> Branch:
+    """``run_all(False)``, and again with the rightmost eigenvalues if the sparse
+    stability check finds unstable ones the shift missed (see :func:`_missed_unstable`)."""
     br = run_all(False)
     missed = _missed_unstable(problem, br, settings)
     if missed and br.status is not Status.INTERRUPTED:
@@ -1152,7 +1163,7 @@ def continue_branch(
                 "DetectionSettings.n_eigs or dense_eigs_max."
             )
         br = dataclasses.replace(br, message=br.message + note)
-    return _finish(br, throw)
+    return br
 
 
 #: Rows of a sparse branch whose saddle index is checked against the rightmost
