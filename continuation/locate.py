@@ -147,7 +147,7 @@ def fold_guess(a: PointInfo, b: PointInfo, sigma_b: float) -> float | None:
     m0 = float(a.tau[-1])
     m1 = float(b.tau[-1]) / b.ctau
     dp = (b.p - a.p) / h
-    # P'(t h) / 1 on t in [0, 1]: m0 h00' + ... as a quadratic A t^2 + B t + C
+    # derivative of the Hermite cubic, P'(t h) for t in [0, 1], as A t^2 + B t + C
     A = 3.0 * (m0 + m1 - 2.0 * dp)
     B = 2.0 * (3.0 * dp - 2.0 * m0 - m1)
     C = m0
@@ -159,7 +159,9 @@ def fold_guess(a: PointInfo, b: PointInfo, sigma_b: float) -> float | None:
         disc = B * B - 4.0 * A * C
         if disc >= 0.0:
             q = -0.5 * (B + math.copysign(math.sqrt(disc), B))
-            roots.extend(r for r in ((q / A) if A else math.nan, (C / q) if q else math.nan))
+            roots.append(q / A)  # (A != 0 here)
+            if q != 0.0:
+                roots.append(C / q)
     inside = [t for t in roots if 0.0 < t < 1.0]
     if len(inside) != 1:
         return None
