@@ -419,6 +419,7 @@ class _Context:
                     lambda pt, t, e=e: e.value(pt.z, pt.p),
                     a.events[k],
                     b.events[k],
+                    continuity=e.continuity,
                 )
                 found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
         if not found:
@@ -676,6 +677,7 @@ class _Context:
                     lambda pt, t, e=e: e.value(pt.z, pt.p),
                     a.events[k],
                     b.events[k],
+                    continuity=e.continuity,
                 )
                 if not r.located:
                     r = LocateResult(sigma_b, b.point, b.events[k], False, r.iterations)

@@ -52,12 +52,20 @@ class Event:
     terminal : bool
         Stop the branch at the (located) event; the branch then ends with
         ``Status.EVENT`` and its last row is the event point.
+    continuity : float, optional
+        For a ``fn`` known to be continuous along the branch: a zero counts as located
+        only if ``|fn|`` at the returned point is at most ``continuity`` times the mean
+        slope of ``fn`` over the step times the final bracket, plus round-off
+        (:func:`~continuation.locate.locate_zero`). A sign change across a jump of
+        ``fn`` is then reported as bracketed, not located. ``None`` (default): only the
+        loose rule ``|fn| <= 1e-3 max(|fn_a|, |fn_b|)``.
     """
 
     name: str
     fn: Callable[[FloatArray, float], float]
     direction: Direction = "both"
     terminal: bool = False
+    continuity: float | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name):
@@ -68,6 +76,13 @@ class Event:
             raise ValueError(
                 f"`direction` of event {self.name!r} must be 'both', 'up' or 'down', "
                 f"got {self.direction!r}"
+            )
+        if self.continuity is not None and not (
+            isinstance(self.continuity, int | float) and self.continuity > 0
+        ):
+            raise ValueError(
+                f"`continuity` of event {self.name!r} must be a positive number or None, "
+                f"got {self.continuity!r}"
             )
 
     def value(self, x: FloatArray, p: float) -> float:

@@ -772,10 +772,15 @@ def _row_abe_scale(problem: Any, branch: Branch, point: SpecialPoint, w: FloatAr
 
 def _orient(t: FloatArray, sign_ds: float) -> FloatArray:
     """``t`` with ``sign(dp/ds) = sign_ds``; if ``t`` is (numerically) vertical, with its
-    largest state component positive."""
+    largest state component positive: the first of the components within a relative
+    ``1e-3`` of the largest magnitude, so that mirror-symmetric problems (an
+    antisymmetric kernel vector has two largest components of opposite sign, told apart
+    only by round-off or by the point's own asymmetry, ~1e-5) are oriented the same way
+    on every machine."""
     if abs(float(t[-1])) > 1e-6:
         return t if t[-1] * sign_ds > 0 else -t
-    k = int(np.argmax(np.abs(t[:-1])))
+    mag = np.abs(t[:-1])
+    k = int(np.argmax(mag >= (1.0 - 1e-3) * mag.max()))
     return t if t[k] > 0 else -t
 
 
@@ -849,7 +854,8 @@ def switch_branch(
         ``"forward"``: the half of the crossing branch along ``+t_new``, the crossing
         tangent oriented so that ``sign(dp/ds) = sign(settings.ds)`` (where the
         crossing branch is vertical, ``dp/ds = 0``, as at a pitchfork: so that its
-        largest state component is positive); it starts at distance ``amplitude``
+        largest state component is positive, the first one of those within 1e-3 of the
+        largest magnitude); it starts at distance ``amplitude``
         from the branch point. ``"backward"``: the other half. ``"both"``: one branch
         ordered from the backward end through the branch point (detected again there,
         with any fold of the new branch at it) to the forward end.

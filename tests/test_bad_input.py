@@ -112,6 +112,8 @@ def test_event_validation():
         Event("e", 3.0)
     with pytest.raises(ValueError, match="`direction`"):
         Event("e", lambda x, p: 0.0, direction="left")
+    with pytest.raises(ValueError, match="continuity"):
+        Event("e", lambda x, p: 0.0, continuity=0.0)
 
 
 def test_special_point_kind_validated():

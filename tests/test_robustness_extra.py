@@ -399,3 +399,27 @@ def test_pendulum_bounded_segment_is_not_a_loop():
     assert (br.p[0], br.p[-1]) == (-0.5, 0.5)
     np.testing.assert_allclose(br.x[[0, -1], 0], [-np.pi / 6, np.pi / 6], atol=1e-10)
     assert np.all(br.stable) and not br.special_points
+
+
+@pytest.mark.parametrize("continuity", [None, 10.0])
+def test_event_continuity_tells_a_jump_from_a_zero(continuity):
+    """x = mu on [0, 1]. g = mu - 0.5 -+ 1e-5 (a jump of 2e-5 at mu = 0.5, steps of
+    0.01 .. 0.1) changes sign across the jump, which the loose rule (|g| <= 1e-3 max|g|)
+    calls a zero; with ``continuity`` it is bracketed, not located. A smooth event
+    (mu - 0.3) is located either way."""
+
+    def g(x, p):
+        return p - 0.5 + (1e-5 if p > 0.5 else -1e-5)
+
+    jump = Event("jump", g, continuity=continuity)
+    smooth = Event("smooth", lambda x, p: p - 0.3, continuity=continuity)
+    br = continue_equilibria(
+        _line(), [0.0], {"mu": 0.0}, "mu", p_min=0, p_max=1, events=[jump, smooth],
+        direction="forward",
+    )  # fmt: skip
+    (j,) = [sp for sp in br.special_points if sp.label == "jump"]
+    (s,) = [sp for sp in br.special_points if sp.label == "smooth"]
+    assert s.located and s.p == pytest.approx(0.3, abs=1e-9)
+    assert j.located is (continuity is None)
+    lo, hi = sorted(j.bracket)
+    assert lo <= 0.5 <= hi

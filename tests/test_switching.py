@@ -469,3 +469,19 @@ def test_bad_input_names_the_argument(tmp_path):
         crossing_tangents(br.problem, [0.0], 0.0, [0.0, 1.0], kernel="qr")
     with pytest.raises(ValueError, match="`z`"):
         crossing_tangents(br.problem, [0.0, 1.0], 0.0, [0.0, 1.0])
+
+
+def test_vertical_tangent_orientation_ignores_mirror_round_off():
+    """A vertical crossing tangent (dp = 0) whose two largest components are mirror
+    images of opposite sign is oriented by the first of them, whichever one round-off
+    (or the point's own 1e-5 asymmetry) makes larger: the same half is "forward" on
+    every machine."""
+    base = np.array([0.5, -2.0, 1.0, 2.0, 0.0])
+    for eps in (3e-6, -3e-6):
+        t = base.copy()
+        t[3] *= 1 + eps
+        for sign_ds in (1.0, -1.0):  # sign(ds) does not matter for a vertical tangent
+            assert sw._orient(t, sign_ds)[1] > 0
+            assert sw._orient(-t, sign_ds)[1] > 0
+    # a clearly largest component still decides
+    assert sw._orient(np.array([0.5, -1.0, 3.0, 0.0]), 1.0)[2] > 0
