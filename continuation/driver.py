@@ -40,7 +40,7 @@ from .algorithms.palc import PALC
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .errors import ContinuationError, ConvergenceError
 from .events import Event, HopfTest, bp_test, crossed
-from .locate import LocateResult, fold_guess, locate_zero
+from .locate import LocateResult, fold_guess, locate_beyond, locate_zero
 from .problem import EquilibriumProblem
 from .settings import ContinuationSettings
 from .stability import (
@@ -390,7 +390,7 @@ class _Context:
                     pa.p,
                     pb.p,
                 )
-            ht = HopfTest(a.eig, b.eig, det.imag_tol)
+            ht = HopfTest(a.eig, b.eig, det.imag_tol, det.eig_tol)
             if ht.ok:
 
                 def g_h(pt: PointInfo, t: float) -> float:
@@ -398,7 +398,27 @@ class _Context:
                     return math.nan if lam is None else lam.real
 
                 assert ht.lam_a is not None and ht.lam_b is not None
-                r = self.locate(a, b, sigma_b, w, g_h, ht.lam_a.real, ht.lam_b.real)
+                g_a, g_b = ht.lam_a.real, ht.lam_b.real
+                if ht.outside:
+                    # Re > 0 at both rows, but inside the eig_tol band at one of them
+                    # (counted stable there): the zero lies just beyond that row
+                    end = (0.0, pa, g_a) if abs(g_a) <= abs(g_b) else (sigma_b, pb, g_b)
+                    if det.locate:
+                        r = locate_beyond(
+                            self.problem,
+                            pa,
+                            end,
+                            sigma_b,
+                            w,
+                            g_h,
+                            (g_b - g_a) / sigma_b,
+                            newton=self.settings.newton,
+                            tol=det.tol,
+                        )
+                    else:
+                        r = LocateResult(end[0], end[1], end[2], False, 0, "location disabled")
+                else:
+                    r = self.locate(a, b, sigma_b, w, g_h, g_a, g_b)
                 lam = ht.track(self.eig(r.point), r.sigma / sigma_b)
                 omega = abs(lam.imag) if lam is not None else math.nan
                 found.append((SpecialKind.HOPF, r, {"omega": omega}, ""))

@@ -137,14 +137,35 @@ def critical_pair(eigs: ComplexArray, imag_tol: float) -> complex | None:
 
 
 def crossing_pair(
-    eig_a: ComplexArray, eig_b: ComplexArray, imag_tol: float
+    eig_a: ComplexArray, eig_b: ComplexArray, imag_tol: float, eig_tol: float = 0.0
 ) -> tuple[complex | None, complex | None]:
     """Match the complex eigenvalue that crosses the imaginary axis between two rows.
 
-    Among the eigenvalues with ``Im > 0`` at rows ``a`` and ``b``, the pair
-    ``(lambda_a, lambda_b)`` with real parts of opposite signs (or one zero) that are
-    closest to each other; eigenvalues move continuously, so the crossing pair is the
-    nearest such match. ``(None, None)`` if there is none.
+    Among the eigenvalues with ``Im > 0`` at rows ``a`` and ``b``, the candidates are
+    the pairs ``(lambda_a, lambda_b)`` whose classification as unstable changes
+    (``Re > eig_tol`` at one row, not at the other: these change the unstable count
+    that detects a Hopf point), or, if there is no such pair, those with real parts of
+    opposite signs (or one zero); the chosen one is the closest candidate: eigenvalues
+    move continuously, so the crossing pair is the nearest match. With the ``eig_tol``
+    band a pair whose real part lies in ``(0, eig_tol]`` at one row and above
+    ``eig_tol`` at the other is matched although both real parts are positive (the
+    zero of ``Re`` then lies within ``|Re| / slope`` of that row, just outside the
+    step). ``(None, None)`` if there is no candidate.
+
+    Parameters
+    ----------
+    eig_a, eig_b : array_like, complex
+        Eigenvalues at the two rows (NaN entries ignored).
+    imag_tol : float
+        As in :func:`complex_mask`.
+    eig_tol : float
+        Real parts ``<= eig_tol`` count as stable
+        (:attr:`~continuation.settings.DetectionSettings.eig_tol`); 0 gives the plain
+        sign rule.
+
+    Returns
+    -------
+    (complex or None, complex or None)
     """
     va = np.asarray(eig_a, dtype=complex)
     vb = np.asarray(eig_b, dtype=complex)
@@ -152,10 +173,12 @@ def crossing_pair(
     if ca.size == 0 or cb.size == 0:
         return None, None
     dist = np.abs(ca[:, None] - cb[None, :])
-    opposite = ca.real[:, None] * cb.real[None, :] <= 0
-    if not np.any(opposite):
-        return None, None
-    dist[~opposite] = np.inf
+    cand = (ca.real[:, None] > eig_tol) != (cb.real[None, :] > eig_tol)
+    if not np.any(cand):
+        cand = ca.real[:, None] * cb.real[None, :] <= 0
+        if not np.any(cand):
+            return None, None
+    dist[~cand] = np.inf
     i, j = np.unravel_index(int(np.argmin(dist)), dist.shape)
     return complex(ca[i]), complex(cb[j])
 
@@ -163,24 +186,33 @@ def crossing_pair(
 class HopfTest:
     """Test function for locating a Hopf point between rows ``a`` and ``b``.
 
-    The crossing pair ``(lambda_a, lambda_b)`` is chosen by :func:`crossing_pair`; at a
-    trial point at fraction ``t`` of the step, the tracked eigenvalue is the complex one
-    nearest ``(1 - t) lambda_a + t lambda_b``, and the test value is its real part.
-    ``omega`` is its imaginary part.
+    The crossing pair ``(lambda_a, lambda_b)`` is chosen by :func:`crossing_pair`
+    (with the ``eig_tol`` band); at a trial point at fraction ``t`` of the step, the
+    tracked eigenvalue is the complex one nearest ``(1 - t) lambda_a + t lambda_b``, and
+    the test value is its real part. ``omega`` is its imaginary part.
     """
 
-    def __init__(self, eig_a: ComplexArray, eig_b: ComplexArray, imag_tol: float) -> None:
+    def __init__(
+        self, eig_a: ComplexArray, eig_b: ComplexArray, imag_tol: float, eig_tol: float = 0.0
+    ) -> None:
         self.imag_tol = imag_tol
-        self.lam_a, self.lam_b = crossing_pair(eig_a, eig_b, imag_tol)
+        self.eig_tol = eig_tol
+        self.lam_a, self.lam_b = crossing_pair(eig_a, eig_b, imag_tol, eig_tol)
 
     @property
     def ok(self) -> bool:
-        """Both rows have a critical pair, with real parts of opposite signs."""
-        return (
-            self.lam_a is not None
-            and self.lam_b is not None
-            and self.lam_a.real * self.lam_b.real <= 0
-        )
+        """Both rows have a critical pair, with real parts of opposite signs or one of
+        them inside the ``eig_tol`` band (``0 <= Re <= eig_tol``) and the other above."""
+        if self.lam_a is None or self.lam_b is None:
+            return False
+        ra, rb = self.lam_a.real, self.lam_b.real
+        return ra * rb <= 0 or (ra > self.eig_tol) != (rb > self.eig_tol)
+
+    @property
+    def outside(self) -> bool:
+        """The real parts have the same (positive) sign, one of them in the ``eig_tol``
+        band: the zero of ``Re`` lies just outside the step, beyond that row."""
+        return self.ok and self.lam_a.real * self.lam_b.real > 0  # type: ignore[union-attr]
 
     def track(self, eigs: ComplexArray, t: float) -> complex | None:
         """The tracked eigenvalue at fraction ``t`` in ``[0, 1]`` of the step."""

@@ -213,6 +213,74 @@ def _interpolated_zero(
     return s, pt, g
 
 
+def locate_beyond(
+    problem: Any,
+    a: PointInfo,
+    end: tuple[float, PointInfo, float],
+    sigma_b: float,
+    w: Any,
+    test: Callable[[PointInfo, float], float],
+    slope: float,
+    *,
+    newton: NewtonSettings,
+    tol: float = 1e-10,
+    max_iter: int = 8,
+) -> LocateResult:
+    """The zero of ``g`` just outside the step, beyond the bracket end ``end``.
+
+    For a test function whose sign change is decided with a tolerance band (the Hopf
+    test: ``Re`` of the critical pair, counted as stable up to ``eig_tol``), ``g`` can
+    have the same sign at both rows although the band says it crossed: its value at
+    ``end = (sigma_e, point, g_e)`` (``sigma_e`` 0 or ``sigma_b``) is tiny, and the zero
+    lies about ``g_e / slope`` beyond it, outside ``[0, sigma_b]``. It is found by the
+    secant method from that estimate (``slope`` is ``dg/dsigma``, e.g. the mean slope over
+    the step), each trial point corrected on the branch with the step's constraint
+    ``<tau_a, u - u_a>_theta = sigma`` (``sigma`` slightly outside ``[0, sigma_b]``).
+    When the first estimate is within ``tol`` of the row, the row itself is returned.
+
+    Returns
+    -------
+    LocateResult
+        ``sigma`` may lie slightly outside ``[0, sigma_b]``; not located if the
+        corrector fails, ``g`` is not finite, or the secant iteration does not settle
+        within ``max_iter`` trial points.
+    """
+    s_e, q, g_e = end
+    if not (math.isfinite(g_e) and math.isfinite(slope) and slope != 0.0 and sigma_b > 0):
+        return LocateResult(s_e, q, g_e, False, 0, "no slope to extrapolate the zero")
+    s = s_e - g_e / slope
+    if abs(s - s_e) <= tol:
+        return LocateResult(s_e, q, g_e, True, 0, "zero within tol of the row")
+    c = w * a.tau
+    ct = float(c.dot(q.tau))
+    if not ct > 0.1:
+        return LocateResult(s_e, q, g_e, False, 0, "tangent unsuited to extrapolate")
+    s_prev, g_prev = s_e, g_e
+    for it in range(1, max_iter + 1):
+        u_pred = q.u + ((s - s_e) / ct) * q.tau
+        res = correct(problem, u_pred, a.u, c, s, newton)
+        if not res.converged or res.lin is None:
+            return LocateResult(s_e, q, g_e, False, it, "corrector failed beyond the row")
+        try:
+            pt = make_point(res.z, res.p, res.lin, c, w, iters=res.iters, lu=res.lu, u=res.u_full)
+        except np.linalg.LinAlgError:
+            return LocateResult(s_e, q, g_e, False, it, "singular point beyond the row")
+        g = float(test(pt, s / sigma_b))
+        if not math.isfinite(g):
+            return LocateResult(s_e, q, g_e, False, it, "test not finite")
+        if g == 0.0:
+            return LocateResult(s, pt, g, True, it)
+        if g == g_prev:
+            break
+        s_next = s - g * (s - s_prev) / (g - g_prev)
+        if abs(s_next - s) <= tol:
+            ok = abs(g) <= max(abs(g_e), 10.0 * abs(slope) * tol)
+            msg = "" if ok else "test function jumps, no zero"
+            return LocateResult(s, pt, g, ok, it, msg)
+        s_prev, g_prev, s = s, g, s_next
+    return LocateResult(s_e, q, g_e, False, max_iter, "zero beyond the row not found")
+
+
 def locate_zero(
     problem: Any,
     a: PointInfo,
@@ -351,4 +419,4 @@ def locate_zero(
     return LocateResult(best[0], best[1], best[2], False, max_iter, "max_iter reached")
 
 
-__all__ = ["LocateResult", "fold_guess", "locate_zero", "point_at"]
+__all__ = ["LocateResult", "fold_guess", "locate_beyond", "locate_zero", "point_at"]

@@ -184,7 +184,6 @@ def test_start_exactly_at_hopf():
     np.testing.assert_array_equal(br.n_unstable, np.where(br.p > 0, 2, 0))
 
 
-@pytest.mark.xfail(strict=True, reason="repro2_hopf_near_start.py: Re within eig_tol")
 def test_start_next_to_hopf():
     """Started at mu = 1e-12 (Re lambda = 1e-12 < eig_tol), the Hopf at mu = 0 must
     still be located."""
@@ -423,3 +422,21 @@ def test_event_continuity_tells_a_jump_from_a_zero(continuity):
     assert j.located is (continuity is None)
     lo, hi = sorted(j.bracket)
     assert lo <= 0.5 <= hi
+
+
+def test_start_next_to_slow_hopf_is_extrapolated():
+    """x' = k mu x - y - x r^2, y' = x + k mu y - y r^2 with k = 1e-3: eigenvalues
+    k mu +- i, Hopf at mu = 0. Started at mu = 5e-8 (Re = 5e-11, inside eig_tol), the
+    zero of Re lies 5e-8 behind the start row, far beyond the location tolerance: it is
+    found outside the step, once, to 1e-10."""
+    k = 1e-3
+
+    def rhs(x, p, ops):
+        r2 = x[0] ** 2 + x[1] ** 2
+        return ops.stack([k * p[0] * x[0] - x[1] - x[0] * r2, x[0] + k * p[0] * x[1] - x[1] * r2])
+
+    s = System(rhs, ("x", "y"), ("mu",))
+    br = continue_equilibria(s, [0.0, 0.0], {"mu": 5e-8}, "mu", p_min=-1, p_max=1)
+    (h,) = br.find("hopf")
+    assert h.located and abs(h.p) <= 1e-10
+    assert h.data["omega"] == pytest.approx(1.0, abs=1e-12)
