@@ -39,8 +39,8 @@ from .algorithms.base import (
 from .algorithms.palc import PALC
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .errors import ContinuationError, ConvergenceError
-from .events import Event, HopfTest, bp_test, crossed
-from .locate import LocateResult, fold_guess, locate_beyond, locate_zero
+from .events import MAX_DIP_POINTS, Event, HopfTest, bp_test, crossed, event_slope, hermite_dip
+from .locate import LocateResult, fold_guess, locate_beyond, locate_zero, point_at
 from .problem import EquilibriumProblem
 from .settings import ContinuationSettings
 from .stability import (
@@ -254,6 +254,7 @@ class _Row:
     records: dict[str, float]
     events: list[float]
     point: PointInfo
+    slopes: list[float] = field(default_factory=list)  # d(event)/ds along the tangent
 
 
 @dataclass(eq=False)
@@ -286,6 +287,8 @@ class _Context:
         self.diff = _difference_fn(problem)
         self.grow_iters = int(getattr(algorithm, "grow_iters", 3))
         self.terminal = any(e.terminal for e in self.events)
+        # event sub-brackets of the last step refined inside it (see event_brackets)
+        self._dip_cache: tuple[_Row, _Row, dict[int, list[Any]]] | None = None
         # the protocol's record() of plain equilibria is always empty: not called per row
         self.record = (
             None if getattr(type(problem), "record", None) is _NO_RECORDS else problem.record
@@ -305,8 +308,12 @@ class _Context:
             counts = count_unstable(ev, det.eig_tol, det.imag_tol)
         rec = self.record(pt.z, pt.p) if self.record is not None else None
         rec = {str(k): float(v) for k, v in dict(rec).items()} if rec else {}
-        evs = [e.value(pt.z, pt.p) for e in self.events] if self.events else []
-        return _Row(pt.z, pt.p, ev, counts, ds, pt.iters, rec, evs, pt)
+        if not self.events:
+            return _Row(pt.z, pt.p, ev, counts, ds, pt.iters, rec, [], pt)
+        z, p, tau = pt.z, pt.p, pt.tau
+        evs = [e.value(z, p) for e in self.events]
+        slopes = [event_slope(e, z, p, tau, g) for e, g in zip(self.events, evs, strict=True)]
+        return _Row(z, p, ev, counts, ds, pt.iters, rec, evs, pt, slopes)
 
     # ------------------------------------------------------------------ location
     def locate(
@@ -320,9 +327,14 @@ class _Context:
         g_b: float,
         first: float | None = None,
         continuity: float | None = None,
+        bracket: tuple[tuple[float, PointInfo, float], tuple[float, PointInfo, float]]
+        | None = None,
     ) -> LocateResult:
         det = self.settings.detect
         if not det.locate:
+            if bracket is not None:
+                lo = bracket[0]
+                return LocateResult(lo[0], lo[1], lo[2], False, 0, "location disabled")
             return LocateResult(0.0, a.point, g_a, False, 0, "location disabled")
         return locate_zero(
             self.problem,
@@ -338,7 +350,103 @@ class _Context:
             max_iter=det.max_iter,
             first=first,
             continuity=continuity,
+            bracket=bracket,
         )
+
+    def event_brackets(
+        self, a: _Row, b: _Row, sigma_b: float, w: FloatArray, k: int
+    ) -> list[tuple[tuple[float, PointInfo, float], tuple[float, PointInfo, float]]]:
+        """The sub-brackets of the step from ``a`` to ``b`` where event ``k`` crosses zero
+        (in its direction), in branch order: ``[((sigma_lo, point_lo, g_lo),
+        (sigma_hi, point_hi, g_hi)), ...]``.
+
+        A sign change between the rows is the whole step. When ``g`` has the same sign
+        at both rows, the slopes ``dg/ds`` stored with the rows (:func:`event_slope`)
+        give the cubic Hermite interpolant of ``g(sigma)``; if it dips to zero
+        (:func:`~continuation.events.hermite_dip`) a point is corrected on the branch at
+        its extremum (:func:`~continuation.locate.point_at`) and, with its value and
+        slope, the two halves are examined the same way, up to ``MAX_DIP_POINTS`` points
+        per step. Consecutive points of opposite signs are the sub-brackets. Cached for
+        the last ``(a, b)`` (the terminal check and the detection share it).
+        """
+        e = self.events[k]
+        g_a, g_b = a.events[k], b.events[k]
+        if crossed(g_a, g_b, e.direction):
+            return [((0.0, a.point, g_a), (sigma_b, b.point, g_b))]
+        m_a, m_b = a.slopes[k], b.slopes[k]
+        if not (g_a * g_b > 0 and (g_a > 0) == (m_b > 0) != (m_a > 0)):
+            return []  # (the common case: no sign change, monotone by the end slopes)
+        cache = self._dip_cache
+        if cache is not None and cache[0] is a and cache[1] is b and k in cache[2]:
+            return cache[2][k]
+        if cache is None or cache[0] is not a or cache[1] is not b:
+            cache = self._dip_cache = (a, b, {})
+        out = self._dip_brackets(a, b, sigma_b, w, e, g_a, g_b, m_a, m_b)
+        cache[2][k] = out
+        return out
+
+    def _dip_brackets(
+        self,
+        a: _Row,
+        b: _Row,
+        sigma_b: float,
+        w: FloatArray,
+        e: Event,
+        g_a: float,
+        g_b: float,
+        m_a: float,
+        m_b: float,
+    ) -> list[tuple[tuple[float, PointInfo, float], tuple[float, PointInfo, float]]]:
+        """:meth:`event_brackets` for a step whose rows have values of the same sign."""
+        pa, pb = a.point, b.point
+        c = w * pa.tau
+        # slopes per unit sigma: dsigma/ds = c . tau at each point
+        samples: list[tuple[float, PointInfo, float, float]] = [
+            (0.0, pa, g_a, m_a / float(c.dot(pa.tau))),
+            (sigma_b, pb, g_b, m_b / float(c.dot(pb.tau))),
+        ]
+        newton, tol = self.settings.newton, self.settings.detect.tol
+        done: set[float] = set()  # left ends of intervals examined without a dip
+        for _ in range(MAX_DIP_POINTS):
+            pick = None
+            for i in range(len(samples) - 1):
+                s0, q0, g0, m0 = samples[i]
+                s1, q1, g1, m1 = samples[i + 1]
+                if s0 in done or s1 - s0 <= tol:
+                    continue
+                t = hermite_dip(g0, g1, m0, m1, s1 - s0)
+                if t is None:
+                    done.add(s0)
+                    continue
+                pick = (i, s0 + t * (s1 - s0))
+                break
+            if pick is None:
+                break
+            i, s = pick
+            near = min(samples[i], samples[i + 1], key=lambda q: abs(q[0] - s))
+            pt = point_at(self.problem, pa, pb, s, sigma_b, w, newton, (near[0], near[1]))
+            if pt is None:
+                log.debug("event %r: no point at sigma=%.3g inside a step", e.name, s)
+                done.add(samples[i][0])
+                continue
+            g = e.value(pt.z, pt.p)
+            ct = float(c.dot(pt.tau))
+            m = event_slope(e, pt.z, pt.p, pt.tau, g) / ct if ct > 0 else math.nan
+            samples.insert(i + 1, (s, pt, g, m))
+        out = []
+        for (s0, q0, g0, _), (s1, q1, g1, _) in zip(samples, samples[1:], strict=False):
+            if crossed(g0, g1, e.direction):
+                out.append(((s0, q0, g0), (s1, q1, g1)))
+        if len(samples) > 2:
+            log.debug(
+                "event %r: %d points corrected inside the step p=%.8g..%.8g, %d crossings",
+                e.name,
+                len(samples) - 2,
+                pa.p,
+                pb.p,
+                len(out),
+            )
+        return out
 
     def detect(
         self,
@@ -430,18 +538,20 @@ class _Context:
             if terminal is not None and k == terminal[0]:
                 r = terminal[1]
                 found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
-            elif crossed(a.events[k], b.events[k], e.direction):
-                r = self.locate(
-                    a,
-                    b,
-                    sigma_b,
-                    w,
-                    lambda pt, t, e=e: e.value(pt.z, pt.p),
-                    a.events[k],
-                    b.events[k],
-                    continuity=e.continuity,
-                )
-                found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
+            else:
+                for lo, hi in self.event_brackets(a, b, sigma_b, w, k):
+                    r = self.locate(
+                        a,
+                        b,
+                        sigma_b,
+                        w,
+                        lambda pt, t, e=e: e.value(pt.z, pt.p),
+                        lo[2],
+                        hi[2],
+                        continuity=e.continuity,
+                        bracket=(lo, hi),
+                    )
+                    found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
         if not found:
             return []
         out = []
@@ -688,19 +798,24 @@ class _Context:
                 msg = f"{Status.PARAM_BOUND.value} ({self.problem.free}={bound:.10g})"
                 cands.append((r, Status.PARAM_BOUND, msg, None))
         for k, e in enumerate(self.events):
-            if e.terminal and crossed(a.events[k], b.events[k], e.direction):
+            if not e.terminal:
+                continue
+            brackets = self.event_brackets(a, b, sigma_b, w, k)
+            if brackets:
+                lo, hi = brackets[0]  # the first zero in branch order ends the branch
                 r = self.locate(
                     a,
                     b,
                     sigma_b,
                     w,
                     lambda pt, t, e=e: e.value(pt.z, pt.p),
-                    a.events[k],
-                    b.events[k],
+                    lo[2],
+                    hi[2],
                     continuity=e.continuity,
+                    bracket=(lo, hi),
                 )
                 if not r.located:
-                    r = LocateResult(sigma_b, b.point, b.events[k], False, r.iterations)
+                    r = LocateResult(hi[0], hi[1], hi[2], False, r.iterations)
                 cands.append((r, Status.EVENT, f"terminal event {e.name!r}", k))
         if not cands:
             return None

@@ -13,8 +13,35 @@ bp         ``det [G_z G_p; tau^T]`` changes sign           that determinant (sca
 hopf       the number of unstable complex-conjugate       ``Re`` of the critical pair
            pairs changes by one while the number of
            unstable real eigenvalues stays the same
-user       ``fn(x, p)`` changes sign (``direction``)      ``fn(x, p)``
+user       ``fn(x, p)`` changes sign (``direction``),     ``fn(x, p)``
+           or dips through zero inside a step (below)
 ========== ============================================= ===============================
+
+A Hopf pair counted as stable (``Re <= eig_tol``) at one row and unstable at the other
+is the crossing pair even if both real parts are positive (:func:`crossing_pair`); the
+zero of ``Re`` then lies just beyond the row inside the band and is located there
+(:func:`~continuation.locate.locate_beyond`).
+
+*Double crossings of user events.* A user event whose ``g`` has the same sign at both
+rows of a step may still cross zero twice inside it (a dip of ``g`` between the rows).
+Every row also stores ``dg/ds = grad g . tau`` for each event, by one forward difference
+along the unit tangent (:func:`event_slope`: one extra evaluation of ``fn`` per row per
+event, none without events). When the end slopes point towards zero at the first row
+and away from it at the second, the cubic Hermite interpolant of ``g(sigma)`` over the
+step has an interior extremum; if it comes within ``DIP_MARGIN`` (10 %) of the smaller
+end value of zero (:func:`hermite_dip`), a point is corrected on the branch at that
+extremum; if ``g`` there has the opposite sign, the step holds two sign-changing
+sub-brackets, each located like an ordinary crossing (``direction`` applies to each,
+``continuity`` too); otherwise the two halves are examined in the same way, at most
+``MAX_DIP_POINTS`` (6) corrected points per step and event. A terminal event ends the
+branch at the first such zero. A ``g`` that only touches zero (a double root) gives no
+sign change at the corrected points and so no special point, unless a corrected point
+hits ``g == 0`` exactly, which is reported as a located zero, as at a row. Not
+detected: zeros the end slopes do not announce (e.g. more than one extremum of ``g``
+inside a step whose end slopes point the same way, or an even number of extra zeros
+next to a sign change); the built-in tests (fold, branch point, Hopf) rely on the sign
+test at the rows only. Steps with a monotone event (end slopes of the same sign) or
+without events cost nothing extra beyond the slope evaluation.
 
 References: Govaerts (2000), *Numerical Methods for Bifurcations of Dynamical
 Equilibria*, SIAM, Ch. 3-4; Kuznetsov (2004), *Elements of Applied Bifurcation
@@ -31,6 +58,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ._types import ComplexArray, FloatArray
+from .algorithms.base import _inf_norm
 
 Direction = Literal["both", "up", "down"]
 
@@ -51,7 +79,8 @@ class Event:
         ``"down"``: positive to negative.
     terminal : bool
         Stop the branch at the (located) event; the branch then ends with
-        ``Status.EVENT`` and its last row is the event point.
+        ``Status.EVENT`` and its last row is the event point. With two zeros inside
+        one step (see below), the first one in branch order stops it.
     continuity : float, optional
         For a ``fn`` known to be continuous along the branch: a zero counts as located
         only if ``|fn|`` at the returned point is at most ``continuity`` times the mean
@@ -59,6 +88,17 @@ class Event:
         (:func:`~continuation.locate.locate_zero`). A sign change across a jump of
         ``fn`` is then reported as bracketed, not located. ``None`` (default): only the
         loose rule ``|fn| <= 1e-3 max(|fn_a|, |fn_b|)``.
+
+    Notes
+    -----
+    A crossing is detected by a sign change of ``fn`` between consecutive rows, and
+    also when ``fn`` has the same sign at both rows of a step but dips through zero
+    between them: ``fn`` is evaluated once more per row, at a point ``O(sqrt(eps))``
+    along the tangent (off the branch, so ``fn`` must be defined in a neighbourhood of
+    it), for its slope along the branch; when the slopes announce an extremum whose
+    cubic Hermite estimate nears zero, a point on the branch there decides, and both
+    zeros are located (see the module docstring). ``fn`` should therefore be smooth
+    along the branch for this second mechanism to see its dips.
     """
 
     name: str
@@ -105,6 +145,82 @@ def crossed(g_a: float, g_b: float, direction: Direction = "both") -> bool:
     if direction == "down":
         return g_a > 0
     return True
+
+
+#: Relative step of the directional finite difference of an event function along the
+#: unit tangent (:func:`event_slope`): ``sqrt(eps)`` times ``1 + max |u|``.
+SLOPE_STEP = math.sqrt(float(np.finfo(float).eps))
+
+#: A step whose event values have the same sign at both rows is refined only if the
+#: cubic Hermite interpolant of ``g`` comes within this fraction of the smaller end
+#: value ``min(|g_a|, |g_b|)`` of zero (or crosses it): a safety margin for the error of
+#: the cubic, at the price of one corrected point in steps where ``g`` dips that far.
+DIP_MARGIN = 0.1
+
+#: At most this many points are corrected inside one step per event to resolve zeros
+#: the rows' sign test misses.
+MAX_DIP_POINTS = 6
+
+
+def event_slope(event: Event, z: FloatArray, p: float, tau: FloatArray, g: float) -> float:
+    """``dg/ds = grad g . tau`` of an event at a point, by one forward difference.
+
+    ``g = fn(z, p)`` at the point, ``tau`` its unit tangent (``s`` the arclength);
+    the difference step is ``h = SLOPE_STEP (1 + max |(z, p)|)`` (of the order of
+    ``sqrt(eps)`` relative), i.e. one extra evaluation of ``fn`` off the branch, at
+    ``(z, p) + h tau``, with a first-order error ``O(h g'')``, plenty for deciding
+    whether ``g`` may have an interior extremum in a step. NaN if either value is not
+    finite.
+    """
+    if not math.isfinite(g):
+        return math.nan
+    h = SLOPE_STEP * (1.0 + max(abs(p), _inf_norm(z)))
+    try:
+        g_h = event.value(z + h * tau[:-1], p + h * float(tau[-1]))
+    except (ValueError, ArithmeticError):
+        return math.nan
+    return (g_h - g) / h if math.isfinite(g_h) else math.nan
+
+
+def hermite_dip(g0: float, g1: float, m0: float, m1: float, h: float) -> float | None:
+    """Where ``g`` may cross zero twice between two values of the same sign.
+
+    ``g0, g1``: values of ``g`` at the ends of an interval of length ``h``, of the same
+    sign; ``m0, m1``: its derivatives there. When the derivatives point towards zero at
+    the start and away from it at the end (``sign(g0) m0 < 0 < sign(g0) m1``), the cubic
+    Hermite interpolant ``H`` of ``g`` has one interior extremum, at ``t* h``; if
+    ``sign(g0) H(t* h) < DIP_MARGIN min(|g0|, |g1|)`` the interval may hold two zeros
+    of ``g`` (or a double one): returns ``t*`` in ``(0, 1)``. None otherwise (in
+    particular when ``g`` is monotone by its end derivatives).
+    """
+    if not (g0 * g1 > 0 and h > 0):
+        return None
+    sg = 1.0 if g0 > 0 else -1.0
+    if not (sg * m0 < 0 < sg * m1):  # (False for NaN)
+        return None
+    M0, M1, d = m0 * h, m1 * h, g1 - g0
+    c2 = 3.0 * d - 2.0 * M0 - M1
+    c3 = M0 + M1 - 2.0 * d
+    # H'(t) = M0 + 2 c2 t + 3 c3 t^2 changes sign once on (0, 1) (H'(0) = M0 and
+    # H'(1) = M1 have opposite signs): its root there
+    A, B, C = 3.0 * c3, 2.0 * c2, M0
+    t = math.nan
+    if abs(A) <= 1e-14 * (abs(B) + abs(C)):
+        if B != 0.0:
+            t = -C / B
+    else:
+        disc = max(B * B - 4.0 * A * C, 0.0)
+        q = -0.5 * (B + math.copysign(math.sqrt(disc), B))
+        for r in (q / A, C / q if q != 0.0 else math.nan):
+            if 0.0 < r < 1.0:
+                t = r
+                break
+    if not 0.0 < t < 1.0:
+        t = 0.5
+    H = g0 + t * (M0 + t * (c2 + t * c3))
+    if sg * H < DIP_MARGIN * min(abs(g0), abs(g1)):
+        return t
+    return None
 
 
 def fold_test(tau: FloatArray) -> float:
@@ -237,5 +353,7 @@ __all__ = [
     "complex_mask",
     "critical_pair",
     "crossed",
+    "event_slope",
     "fold_test",
+    "hermite_dip",
 ]

@@ -296,6 +296,7 @@ def locate_zero(
     max_iter: int = 50,
     first: float | None = None,
     continuity: float | None = None,
+    bracket: tuple[tuple[float, PointInfo, float], tuple[float, PointInfo, float]] | None = None,
 ) -> LocateResult:
     """Find ``sigma`` in ``[0, sigma_b]`` where ``test(point(sigma), t) = 0``.
 
@@ -327,24 +328,42 @@ def locate_zero(
         ``continuity`` times the mean slope ``|g_b - g_a| / sigma_b`` times the final
         bracket or correction, plus ``1e-6 max(|g_a|, |g_b|)`` for round-off;
         otherwise the bracket closed on a jump (reported, not located).
+    bracket : ((sigma_lo, point_lo, g_lo), (sigma_hi, point_hi, g_hi)), optional
+        A sub-bracket ``0 <= sigma_lo < sigma_hi <= sigma_b`` of the step, its ends on
+        the branch (e.g. from :func:`point_at`) with their test values of opposite
+        signs; the search is confined to it and ``g_lo, g_hi`` replace ``g_a, g_b``
+        (including in the ``1e-3`` and ``continuity`` rules, whose mean slope is then
+        taken over the sub-bracket). Default: the whole step, ``(0, a, g_a)`` and
+        ``(sigma_b, b, g_b)``.
 
     Returns
     -------
     LocateResult
     """
+    end_lo, end_hi = (0.0, a, g_a), (sigma_b, b, g_b)  # true values at the bracket ends
+    if bracket is not None:
+        end_lo, end_hi = bracket
+        g_a, g_b = end_lo[2], end_hi[2]
+    lo, hi = end_lo[0], end_hi[0]
     if g_a == 0.0:
-        return LocateResult(0.0, a, 0.0, True, 0)
+        return LocateResult(lo, end_lo[1], 0.0, True, 0)
     if g_b == 0.0:
-        return LocateResult(sigma_b, b, 0.0, True, 0)
-    if not (sigma_b > 0 and g_a * g_b < 0 and math.isfinite(g_a) and math.isfinite(g_b)):
-        return LocateResult(0.0, a, g_a, False, 0, "test function does not change sign")
+        return LocateResult(hi, end_hi[1], 0.0, True, 0)
+    if not (
+        sigma_b > 0
+        and 0.0 <= lo < hi <= sigma_b
+        and g_a * g_b < 0
+        and math.isfinite(g_a)
+        and math.isfinite(g_b)
+    ):
+        return LocateResult(lo, end_lo[1], g_a, False, 0, "test function does not change sign")
+    width = hi - lo  # (sigma_b unless a sub-bracket is given)
     g_small = 1e-14 * max(abs(g_a), abs(g_b))
     # a located zero must have |g| <= g_jump * max(|g_a|, |g_b|) once the bracket has
     # collapsed: a continuous g is far smaller there (it is bounded by its slope times the
     # tolerance, plus round-off noise), a jump of g is not
     g_jump = 1e-3
-    lo, hi, glo, ghi = 0.0, sigma_b, g_a, g_b  # glo/ghi are Illinois-scaled values
-    end_lo, end_hi = (0.0, a, g_a), (sigma_b, b, g_b)  # true values at the bracket ends
+    glo, ghi = g_a, g_b  # glo/ghi are Illinois-scaled values
     side = 0
     s_prev = math.nan
     for it in range(1, max_iter + 1):
@@ -372,7 +391,7 @@ def locate_zero(
                 # otherwise accept the bracket if it is already narrow and g small at its
                 # better end
                 best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
-                narrow = hi - lo <= 1e-6 * sigma_b
+                narrow = hi - lo <= 1e-6 * width
                 ok = narrow and abs(best[2]) <= g_jump * max(abs(g_a), abs(g_b))
                 return LocateResult(best[0], best[1], best[2], ok, it, msg)
         g = float(test(pt, s / sigma_b))
@@ -406,7 +425,7 @@ def locate_zero(
             g_max = max(abs(g_a), abs(g_b))
             g_ok = g_jump * g_max
             if continuity is not None:
-                g_ok = min(g_ok, continuity * abs(g_b - g_a) / sigma_b * d + 1e-6 * g_max)
+                g_ok = min(g_ok, continuity * abs(g_b - g_a) / width * d + 1e-6 * g_max)
             if abs(best[2]) > g_ok:
                 # converged onto a jump of g, not a zero (e.g. a Hopf test that switched
                 # between eigenvalue pairs): report the bracket only

@@ -330,7 +330,6 @@ def test_event_crossed_twice_on_curved_branch():
     np.testing.assert_allclose(got, ref, atol=1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason="repro2_event_double_crossing.py: no sign change")
 @pytest.mark.parametrize("terminal", [False, True])
 def test_event_crossed_twice_within_one_step(terminal):
     """x = mu, event (mu - 0.5)^2 - 1e-4 (zeros 0.49, 0.51) with one step 0.4 -> 0.6:
@@ -440,3 +439,54 @@ def test_start_next_to_slow_hopf_is_extrapolated():
     (h,) = br.find("hopf")
     assert h.located and abs(h.p) <= 1e-10
     assert h.data["omega"] == pytest.approx(1.0, abs=1e-12)
+
+
+def _parabola() -> System:
+    """x = mu^2 (residual linear in x: the corrector converges at once, steps stay long)."""
+    return System(lambda x, p, ops: ops.stack([x[0] - p[0] ** 2]), ("x",), ("mu",))
+
+
+def _parabola_run(ev):
+    return continue_equilibria(
+        _parabola(), [0.01], {"mu": -0.1}, "mu", p_min=-1, p_max=0.3, ds=0.15, ds_max=0.15,
+        events=[ev], direction="forward",
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("direction", "ref"), [("both", [-0.01, 0.01]), ("up", [0.01]), ("down", [-0.01])]
+)
+def test_event_crossed_twice_within_one_curved_step(direction, ref):
+    """Branch x = mu^2, event x - 1e-4 (zeros mu = -0.01 going down, +0.01 going up),
+    one step from mu = -0.1 across both: each zero located (1e-9: the locator's 1e-10
+    in sigma), only those in the event's direction."""
+    br = _parabola_run(Event("c", lambda x, p: x[0] - 1e-4, direction=direction))
+    assert not np.any(np.abs(br.p) < 0.05)  # (the sign test at the rows sees nothing)
+    got = [sp for sp in br.special_points if sp.label == "c"]
+    assert all(sp.located for sp in got)
+    assert [sp.p for sp in got] == pytest.approx(ref, abs=1e-9)
+    np.testing.assert_allclose([sp.x[0] for sp in got], 1e-4, atol=1e-11)
+
+
+def test_terminal_event_crossed_twice_stops_at_first_zero():
+    """As above, terminal: the branch ends at mu = -0.01 (the first zero), x = 1e-4."""
+    br = _parabola_run(Event("c", lambda x, p: x[0] - 1e-4, terminal=True))
+    assert br.status is Status.EVENT
+    (sp,) = br.special_points
+    assert sp.located and sp.p == pytest.approx(-0.01, abs=1e-9)
+    assert br.p[-1] == pytest.approx(-0.01, abs=1e-9) and br.x[-1, 0] == pytest.approx(1e-4)
+
+
+@pytest.mark.parametrize("terminal", [False, True])
+@pytest.mark.parametrize("offset", [0.0, 1e-6])
+def test_event_touching_zero_gives_no_point(terminal, offset):
+    """x = mu, event (mu - 0.5)^2 + offset: a double root at mu = 0.5 (offset 0) or a
+    minimum 1e-6 above zero, inside the step 0.4 -> 0.6; g never changes sign (it is
+    a square), so no special point and the branch runs to its bound."""
+    ev = Event("touch", lambda x, p: (p - 0.5) ** 2 + offset, terminal=terminal)
+    br = continue_equilibria(
+        _line(), [0.4], {"mu": 0.4}, "mu", p_min=0, p_max=1, ds=0.2, ds_max=0.2,
+        events=[ev], direction="forward",
+    )  # fmt: skip
+    assert br.status is Status.PARAM_BOUND and br.p[-1] == 1.0
+    assert not br.special_points
