@@ -189,6 +189,19 @@ class EquilibriumProblem:
             object.__setattr__(self, "_bordered", ev)
         return ev
 
+    def step_kernel(self) -> Any:
+        """The compiled pseudo-arclength step of this problem
+        (:class:`continuation._kernel.StepKernel`: dense, CasADi trace, a few states, a
+        short tape, Numba installed; :func:`continuation._tape.step_kernel_for`), built
+        once and cached; None otherwise."""
+        k = self.__dict__.get("_step_kernel", False)
+        if k is False:
+            from ._tape import step_kernel_for
+
+            k = step_kernel_for(self)
+            object.__setattr__(self, "_step_kernel", k)
+        return k
+
     def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
         """``z1 - z2`` with periodic states reduced modulo their period."""
         return self.system.difference(z1, z2)

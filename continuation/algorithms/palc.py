@@ -70,7 +70,9 @@ import numpy as np
 
 from ..settings import ContinuationSettings
 from .base import (
+    BorderedLU,
     ContinuationAlgorithm,
+    PointInfo,
     StepOutcome,
     StepState,
     correct,
@@ -104,6 +106,13 @@ class PALC(ContinuationAlgorithm):
     predictor : {"hermite", "tangent"}
         ``"hermite"``: cubic Hermite extrapolation of the last two points when the
         branch is smooth there, else the tangent; ``"tangent"``: always the tangent.
+    kernel : bool
+        Run each step as one compiled call where the problem offers one
+        (``problem.step_kernel()``: small dense systems with a CasADi trace, when
+        Numba is installed; :mod:`continuation._kernel`). Same predictor, corrector,
+        safeguards, tangent and eigenvalues; any step the kernel does not accept as a
+        whole (a rejection, a singular matrix, ...) is redone by the Python step,
+        which decides. ``False``: always the Python step.
     """
 
     def __init__(
@@ -114,6 +123,7 @@ class PALC(ContinuationAlgorithm):
         max_contraction: float = 0.8,
         max_distance: float = 1.0,
         predictor: str = "hermite",
+        kernel: bool = True,
     ) -> None:
         if not (0 < max_angle_deg <= 180):
             raise ValueError(f"`max_angle_deg` must be in (0, 180], got {max_angle_deg}")
@@ -125,7 +135,12 @@ class PALC(ContinuationAlgorithm):
             raise ValueError(f"`max_distance` must be a positive number, got {max_distance!r}")
         if predictor not in ("hermite", "tangent"):
             raise ValueError(f"`predictor` must be 'hermite' or 'tangent', got {predictor!r}")
+        if not isinstance(kernel, bool):
+            raise ValueError(f"`kernel` must be True or False, got {kernel!r}")
         self.predictor = predictor
+        self.kernel = kernel
+        # the kernel's scalar arguments for the last settings object: (array, settings)
+        self._scalars: tuple[Any, ContinuationSettings] | None = None
         self.max_angle_deg = float(max_angle_deg)
         self.grow_iters = grow_iters
         self.max_contraction = float(max_contraction)
@@ -136,13 +151,20 @@ class PALC(ContinuationAlgorithm):
         return (
             f"PALC(max_angle_deg={self.max_angle_deg}, grow_iters={self.grow_iters}, "
             f"max_contraction={self.max_contraction}, max_distance={self.max_distance}, "
-            f"predictor={self.predictor!r})"
+            f"predictor={self.predictor!r}, kernel={self.kernel})"
         )
 
     def step(
         self, problem: Any, state: StepState, settings: ContinuationSettings
     ) -> tuple[StepState, StepOutcome]:
         """One predictor-corrector step of length ``state.ds``."""
+        if self.kernel:
+            get = getattr(problem, "step_kernel", None)
+            kern = get() if get is not None else None
+            if kern is not None:
+                done = self._kernel_step(kern, problem, state, settings)
+                if done is not None:
+                    return done
         a = state.point
         ds = state.ds
         tau = a.tau
@@ -220,6 +242,45 @@ class PALC(ContinuationAlgorithm):
             )
         new = StepState(b, ds, state.w, state.direction, state.n_steps + 1, d, tau, ds)
         return new, StepOutcome(True, res.iters, res.residual_norm, ds)
+
+    def _kernel_step(
+        self, kern: Any, problem: Any, state: StepState, settings: ContinuationSettings
+    ) -> tuple[StepState, StepOutcome] | None:
+        """:meth:`step` as one compiled call; None when the kernel did not accept the
+        step (the Python step then runs and decides)."""
+        a = state.point
+        ds = state.ds
+        guarded = ds > settings.ds_min * (1 + 1e-12)
+        d_prev = state.prev_d
+        hermite = d_prev is not None and not state.retries and self.predictor == "hermite"
+        sc = self._scalars
+        if sc is None or sc[1] is not settings:
+            nw, det = settings.newton, settings.detect
+            arr = np.array([0.0, 1.0, _COS_HERMITE, self.max_contraction, self.max_distance,
+                            self._cos_max, nw.tol, nw.step_tol, nw.max_iter, det.eig_tol,
+                            det.imag_tol])  # fmt: skip
+            sc = self._scalars = (arr, settings)
+        arr = sc[0]
+        arr[0] = ds
+        arr[1] = state.prev_h if hermite else 1.0
+        got = kern.step(a.u, a.tau, state.w, d_prev, state.prev_tau, arr, hermite, guarded,
+                        bool(getattr(problem, "jacobian_is_stability", False)))  # fmt: skip
+        if got is None:
+            return None
+        (it, rn, gn, jac_finite, ctau, det_sign, eig_ok, counts,
+         u, d, G, Gz, Gp, lu, piv, t_raw, tau_b, c, eigs) = got  # fmt: skip
+        cache: dict[str, Any] = {"jac_finite": True} if jac_finite else {}
+        if eig_ok:
+            cache["eig"] = eigs
+            cache["counts"] = counts
+        blu = BorderedLU.from_dense_factors(lu, piv)
+        blu._sign = det_sign
+        # (ctau > 0 after orientation: det [Gz Gp; (w o tau)^T] has the sign of det M)
+        b = PointInfo(u[:-1], float(u[-1]), tau_b, G, Gz, Gp, blu, c, t_raw, det_sign, ctau,
+                      it, gn, cache, u)  # fmt: skip
+        new = StepState(b, ds, state.w, state.direction, state.n_steps + 1,
+                        d if guarded else None, a.tau, ds)  # fmt: skip
+        return new, StepOutcome(True, it, rn, ds)
 
 
 __all__ = ["PALC"]
