@@ -68,6 +68,15 @@ _NO_RECORDS = EquilibriumProblem.record
 #: the crossing branch) was bracketed.
 BP_CONTINUITY = 10.0
 
+#: ... unless the point where the bracket closed is numerically singular: reciprocal
+#: condition of the bordered matrix at most this many times its round-off level
+#: ``10 (N + 1) eps``. At a branch point the crossing branch passes through the same
+#: point, so trial points next to it are only determined to ``tol / sigma_min`` across
+#: the branch and the test function there reflects that indeterminacy, not a jump; a
+#: point singular to working precision is the branch point (a point on a jump next to
+#: it, ``d`` away, has ``rcond ~ d`` times that of the rows, orders of magnitude more).
+BP_ROUNDOFF_SINGULAR = 1000.0
+
 #: ``|dp/ds|`` of the unit start tangent below which the start point counts as a fold
 #: (the sign rule of the direction is then arbitrary; a warning says so).
 _FOLD_START_TAU = 1e-8
@@ -659,6 +668,12 @@ class _Context:
         ratio = rho / rho_ab
         data = {"rcond": rho, "rcond_ratio": ratio}
         if ratio <= BP_SINGULAR_RATIO:
+            if not r.located and r.iterations and rho <= BP_ROUNDOFF_SINGULAR * noise:
+                msg = (
+                    f"bracket closed on a numerically singular point (rcond {rho:.1e}); "
+                    f"locator: {r.message}"
+                )
+                r = dataclasses.replace(r, located=True, message=msg)
             return r, data
         if min(rho_a, rho_b) <= noise:
             log.info(

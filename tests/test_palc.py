@@ -310,11 +310,13 @@ def test_corrector_contraction_safeguard():
 
 
 def test_palc_distance_safeguard_rejects_far_corrections(monkeypatch):
-    """A corrected point farther than max_distance * ds from the predictor is rejected."""
+    """A corrected point farther than max_distance * ds from the predictor is rejected
+    (the Python step, whose corrector is replaced here; the compiled step's own
+    safeguards: tests/test_step_kernel.py)."""
     sys = fold_normal_form()
     prob = EquilibriumProblem(sys, sys.params(mu=1.0), "mu")
     st = ContinuationSettings(ds=-0.1, ds_max=0.1, p_min=-1.0, p_max=2.0)
-    alg = PALC()
+    alg = PALC(kernel=False)
     state = alg.init(prob, np.array([1.0]), 1.0, st)
     real = base.correct
 

@@ -13,6 +13,7 @@ from conftest import bratu, brusselator, cstr, lorenz84, selkov
 from scipy.optimize import fsolve
 from test_special_points import assert_invariants
 
+from continuation.algorithms.palc import PALC
 from continuation.api import continue_equilibria
 from continuation.events import Event
 from continuation.status import Status
@@ -225,7 +226,11 @@ def test_discrete_bratu_symmetry_breaking_branch_point():
     n = 20
     stop = Event("far", lambda x, p: float(np.max(x)) - 21.0, terminal=True)
     found = []
-    for ds_max in (0.5, 0.05):  # a large step makes the locator work near the BP
+    steps = (0.5, 0.05)  # a large step makes the locator work near the BP
+    # both steps (the compiled and the Python one): their rows differ by round-off,
+    # which at this conditioning (rcond ~ 1e-12 at the point) decides how the locator's
+    # trial points fall around the crossing branch
+    for ds_max, alg in [(d, PALC(kernel=k)) for d in steps for k in (True, False)]:
         br = continue_equilibria(
             bratu(n),
             np.zeros(n),
@@ -238,6 +243,7 @@ def test_discrete_bratu_symmetry_breaking_branch_point():
             direction="forward",
             events=[stop],
             max_steps=2000,
+            algorithm=alg,
         )
         assert br.status is Status.EVENT
         (bp,) = br.find("bp")
@@ -253,11 +259,11 @@ def test_discrete_bratu_symmetry_breaking_branch_point():
         assert np.max(np.abs(bp.x - bp.x[::-1])) < 1e-6 * np.max(np.abs(bp.x))
         assert_invariants(br, tol=1e-8)
         found.append(bp.p)
-    assert found[0] == pytest.approx(found[1], rel=1e-7)
+    assert max(found) == pytest.approx(min(found), rel=1e-7)
     # against the independent shooting / tridiagonal-eigenvalue computation below, at the
     # accuracy the conditioning allows (tol 1e-10 over a vanishing singular value)
     lam_ref, _ = _bratu_symmetric_pitchfork(n, 19.0, 21.0)
-    assert found == pytest.approx([lam_ref, lam_ref], rel=1e-7)
+    assert found == pytest.approx([lam_ref] * len(found), rel=1e-7)
 
 
 def _bratu_symmetric_pitchfork(n: int, m_lo: float, m_hi: float) -> tuple[float, float]:

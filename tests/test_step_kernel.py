@@ -186,3 +186,33 @@ def test_when_there_is_no_kernel(monkeypatch):
 def test_kernel_argument_validated():
     with pytest.raises(ValueError, match="`kernel`"):
         PALC(kernel="yes")
+
+
+def test_kernel_safeguards_reject_and_leave_the_step_to_python():
+    """The compiled step applies PALC's safeguards: with max_distance or the tangent
+    angle made impossible to meet (or Newton allowed no iteration) it accepts nothing
+    (returns None, so the Python step decides); unguarded (ds at ds_min) the distance
+    and angle tests are waived, as in the Python step."""
+    s, x0, params = _cubic8()
+    prob = EquilibriumProblem(s, params, "p")
+    kern = prob.step_kernel()
+    n = s.n_states
+    w = np.full(n + 1, 0.5 / n)
+    w[-1] = 0.5
+    ua = np.r_[x0, params["p"]]
+    lin = prob.linearize(x0, params["p"])
+    t = np.linalg.solve(np.vstack([np.c_[lin[1], lin[2]], np.eye(n + 1)[-1]]), np.eye(n + 1)[-1])
+    tau = t / np.sqrt((w * t) @ t)
+
+    def sc(max_distance=1.0, cos_max=0.5, max_iter=10):
+        return np.array([0.05, 1.0, 0.86, 0.8, max_distance, cos_max, 1e-10, 1e-10, max_iter,
+                         1e-10, 1e-8])  # fmt: skip
+
+    ok = kern.step(ua, tau, w, None, None, sc(), False, True, True)
+    assert ok is not None
+    u = ok[8]
+    np.testing.assert_allclose(prob.residual(u[:-1], u[-1]), 0.0, atol=1e-10)
+    assert kern.step(ua, tau, w, None, None, sc(max_distance=1e-12), False, True, True) is None
+    assert kern.step(ua, tau, w, None, None, sc(cos_max=1.0), False, True, True) is None
+    assert kern.step(ua, tau, w, None, None, sc(max_iter=0), False, True, True) is None
+    assert kern.step(ua, tau, w, None, None, sc(max_distance=1e-12), False, False, True)
