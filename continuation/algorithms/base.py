@@ -862,7 +862,9 @@ def _correct_fused(
         finite = float(r.dot(r)) < math.inf
         rn, un = _inf_norm(r), _inf_norm(u)
     rn0, rn_prev, step, it = rn, math.inf, math.inf, 0
-    a, lo, hi = _step_bounds(un, u_ref, step_tol)  # the componentwise step test
+    # the componentwise step test (_step_ok, bounds as in _step_bounds; inlined)
+    a = min(1.0, un) + _TINY
+    lo, hi = step_tol * a, step_tol * (max(un, _inf_norm(u_ref)) + a)
     step_ok = False  # the last step passed it
     while True:
         if not finite:
@@ -1043,7 +1045,7 @@ def correct(
     finite = _finite(r)
     rn = _inf_norm(r)
     rn0, rn_prev, step, it = rn, math.inf, math.inf, 0
-    a, lo, hi = _step_bounds(_inf_norm(u), u_ref, step_tol)  # the componentwise step test
+    a, lo, hi = _step_bounds(_inf_norm(u), u_ref, step_tol)  # componentwise step test
     step_ok = False  # the last step passed it
     dense = isinstance(lin[1], np.ndarray)
     n1 = n + 1
