@@ -18,10 +18,16 @@ class NewtonSettings:
     Attributes
     ----------
     tol : float
-        Converged when ``||G(z)||_inf <= tol`` (and the last step is below ``step_tol``
-        scaled by ``1 + ||z||_inf``).
+        Converged when ``||G(z)||_inf <= tol`` and the last Newton step is below
+        ``step_tol``. The continuation corrector
+        (:func:`continuation.algorithms.base.correct`) also accepts a stalled iteration
+        whose residual is above ``tol`` but at the round-off level of ``G``'s terms
+        (backward error ``<= 64 eps``), never any other residual.
     step_tol : float
-        Tolerance on the last Newton step.
+        Tolerance on the last Newton step. In the continuation corrector it is
+        componentwise: ``|dz_i| <= step_tol * (|z_i| + min(1, ||z||_inf))`` for every
+        unknown (the free parameter included); the plain equilibrium solver
+        (:mod:`continuation.newton`) tests ``||dz||_inf <= step_tol * (1 + ||z||_inf)``.
     max_iter : int
         Maximum number of iterations.
     damping : bool

@@ -91,6 +91,105 @@ def _inf_norm(v: FloatArray) -> float:
     return abs(float(v[_idamax(v)])) if v.size else 0.0
 
 
+# ---------------------------------------------------------------------------- Newton acceptance
+#: Round-off floor of the corrector's tests: a modest multiple of the unit round-off
+#: ``eps``, which bounds the relative error of evaluating a short sum of terms in
+#: floating point (Higham 2002, *Accuracy and Stability of Numerical Algorithms*,
+#: Sec. 3.1: ``|fl(sum) - sum| <= gamma_k sum |terms|``, ``gamma_k ~ k eps``).
+ROUNDOFF_FLOOR = _RF = 64.0 * np.finfo(float).eps
+_TINY = 1e-300  # (keeps the scale of an all-zero vector positive)
+#: A stalled correction (neither the residual nor the step halves, residual below
+#: ``tol``) is accepted up to this multiple of the step tolerance: the noise of the
+#: solve next to a singular bordered matrix (corrections ~ ``tol / sigma_min``).
+NOISE_SLACK = 10.0
+_maximum, _abs = np.maximum, np.abs
+
+
+def _step_ok(
+    du: FloatArray, u_pred: FloatArray, u_ref: FloatArray, a: float, step_tol: float
+) -> bool:
+    r"""The componentwise Newton step test ``|du_i| <= step_tol * d_i`` for every ``i``.
+
+    .. math::
+
+        d_i = s_i + a, \qquad s_i = \max(|u_{\mathrm{pred},i}|, |u_{\mathrm{ref},i}|),
+        \qquad a = \min(1, \|u_{\mathrm{pred}}\|_\infty),
+
+    i.e. ``|du_i| <= step_tol (|u_i| + min(1, ||u||_inf))``: the relative-plus-absolute
+    test ``|du_i| <= step_tol (1 + |u_i|)`` of AUTO (``EPSU``; Doedel et al., AUTO-07p
+    manual) and of Dennis & Schnabel (1983, *Numerical Methods for Unconstrained
+    Optimization and Nonlinear Equations*, Sec. 7.2, typical size ``typ u = 1``), applied
+    to every component separately (Deuflhard 2004, *Newton Methods for Nonlinear
+    Problems*, Sec. 2.1, scaled norms; ``s`` is the scaling of NLEQ1's ``N1SCAL``, the
+    larger magnitude of the component at two points), with the typical size ``1``
+    lowered to the largest component when all components are smaller. Unlike one test
+    of ``max |du|`` against ``step_tol (1 + max |u|)``, a large component (a parameter of
+    ``1e6``) does not loosen the test of the others, and a problem whose unknowns are
+    all small (states of ``1e-9`` next to a parameter of ``1e-4``) is tested relative to
+    its own size, not to an absolute ``step_tol``.
+
+    The caller first compares ``dn = max |du|`` with the bounds of :func:`_step_bounds`,
+    which decide the test whatever the components, so that a step costs one ``idamax``
+    as the plain ``max |du|`` test did; only between them are the components compared.
+    """
+    return _step_ratio(du, u_pred, u_ref, a) <= step_tol
+
+
+def _step_ratio(du: FloatArray, u_pred: FloatArray, u_ref: FloatArray, a: float) -> float:
+    """``max_i |du_i| / d_i`` with the scale ``d`` of :func:`_step_ok`."""
+    q = du / (_maximum(_abs(u_pred), _abs(u_ref)) + a)
+    return abs(float(q[_idamax(q)]))
+
+
+def _step_bounds(un: float, u_ref: FloatArray, step_tol: float) -> tuple[float, float, float]:
+    """``(a, lo, hi)`` of the step test :func:`_step_ok`, ``un = ||u_pred||_inf``.
+
+    ``a = min(1, un)``; ``max |du| <= lo = step_tol * a`` passes the test and
+    ``max |du| > hi = step_tol * (max(un, ||u_ref||_inf) + a)`` fails it, whatever the
+    components (``a <= d_i <= max_j s_j + a``).
+    """
+    a = min(1.0, un) + _TINY
+    return a, step_tol * a, step_tol * (max(un, _inf_norm(u_ref)) + a)
+
+
+def _backward_error(M: Any, r: FloatArray, u: FloatArray, Gp: Any = None, c: Any = None) -> float:
+    r"""Normwise backward error of the bordered residual, relative to the terms of ``G``.
+
+    .. math::
+
+        \omega = \max\Big( \frac{\|G\|_\infty}{\| |G_z| |z| + |G_p| |p| \|_\infty},
+        \ \frac{|c \cdot u - h|}{|c| \cdot |u|} \Big),
+
+    ``r = (G, c . u - h)`` the bordered residual at ``u`` and ``M`` the bordered matrix
+    ``[[G_z, G_p], [c^T]]`` there. ``(|G_z| |z| + |G_p| |p|)_i`` is the size of the
+    first-order terms of equation ``i`` (exact for terms linear in one component, ``k``
+    times the term for a monomial of degree ``k``), so ``omega`` of the order of
+    ``eps`` means that the residual is the rounding error of evaluating those terms:
+    ``u`` solves ``G = 0`` up to a perturbation of ``G``'s terms at round-off, and no
+    Newton step can improve it (the backward error of Rigal & Gaches, J. ACM 14 (1967),
+    with the componentwise matrix-vector size of Oettli & Prager, Numer. Math. 6 (1964)
+    in place of ``||M|| ||u||``, which would let a large parameter inflate the floor of
+    every equation; Higham 2002, Sec. 7.1-7.2). The border row, a linear equation of
+    its own scale, is measured separately.
+
+    With ``Gp`` and ``c`` given, ``M`` is ``G_z`` alone (dense or SciPy sparse) and the
+    bordered matrix is formed implicitly.
+    """
+    au = np.abs(u)
+    n = au.size - 1
+    if Gp is None:
+        s = np.abs(M) @ au
+        sf = s[:n]
+        sb = float(s[n])
+    else:
+        sf = abs(M) @ au[:n]
+        sf += np.abs(Gp) * au[n]
+        sb = float(np.abs(c).dot(au))
+    ar = np.abs(r)
+    wf = float(ar[:n].max() / (sf.max() + _TINY)) if n else 0.0
+    return max(wf, float(ar[n]) / (sb + _TINY))
+
+
 def _finite(v: FloatArray) -> bool:
     """True when every entry of ``v`` is finite (one dot product; entries beyond
     ``1e154`` in magnitude also count as non-finite, which only ever happens for
@@ -763,7 +862,10 @@ def _correct_fused(
         finite = float(r.dot(r)) < math.inf
         rn, un = _inf_norm(r), _inf_norm(u)
     rn0, rn_prev, step, it = rn, math.inf, math.inf, 0
-    step_ok = step_tol * (1.0 + un)
+    # the componentwise step test (_step_ok, bounds as in _step_bounds; inlined)
+    a = min(1.0, un) + _TINY
+    lo, hi = step_tol * a, step_tol * (max(un, _inf_norm(u_ref)) + a)
+    step_ok = False  # the last step passed it
     while True:
         if not finite:
             return CorrectorResult(False, u[:n].copy(), float(u[n]), None, it, rn,
@@ -782,15 +884,26 @@ def _correct_fused(
             return CorrectorResult(rn <= tol, u[:n].copy(), float(u[n]), ev.lin(), it, rn,
                                    msg, None, u.copy())  # fmt: skip
         dn = abs(float(du[_idamax(du)]))
+        dn_ok = dn <= lo or (dn <= hi and _step_ok(du, u_pred, u_ref, a, step_tol))
         if (
-            (rn <= tol and (dn <= step_ok or step <= step_ok))
-            or (step <= step_ok and rn > 0.5 * rn_prev)
-            or (not exact and it and dn <= step_ok and 10.0 * rn * dn * dn <= tol * step * step)
+            (rn <= tol and (dn_ok or step_ok))
+            # stalled in the noise of an ill-conditioned solve (see the docstring)
+            or (
+                it
+                and rn <= tol
+                and rn > 0.5 * rn_prev
+                and dn > 0.5 * step
+                and dn <= NOISE_SLACK * hi
+                and _step_ratio(du, u_pred, u_ref, a) <= NOISE_SLACK * step_tol
+            )
+            # stalled (the residual did not halve) at the round-off floor of G's terms
+            or (step_ok and rn > 0.5 * rn_prev and _backward_error(M, r, u) <= _RF)
+            or (not exact and it and dn_ok and 10.0 * rn * dn * dn <= tol * step * step)
         ):
             lin = ev.lin()
             lu: BorderedLU | None = BorderedLU.from_dense_factors(f_lu, f_piv)
             t_raw: FloatArray | None = x[:, 1]
-            if dn <= step_ok:
+            if dn_ok:
                 u -= du
                 if exact:
                     run()
@@ -818,12 +931,12 @@ def _correct_fused(
                                    "diverging")  # fmt: skip
         u -= du
         it += 1
-        step_prev, step = step, dn
+        step_prev, step, step_ok = step, dn, dn_ok
         if (
             max_contraction is not None
             and it >= 2
             and step > max_contraction * step_prev
-            and step > step_ok
+            and not step_ok
             and rn > tol
         ):
             msg = f"corrector contracts too slowly (rate {step / step_prev:.2g} at step {it})"
@@ -855,19 +968,45 @@ def correct(
     ``c . (u - u_ref) = sigma`` (the pseudo-arclength condition for
     ``c = w o tau_ref``; natural stepping for ``c = e_p``), from ``u_pred``.
 
-    Converged when the last step is below ``newton.step_tol * (1 + max |u|)`` and
-    either ``max |G| <= newton.tol`` or the residual has stagnated at its round-off
-    floor (it did not decrease by a factor 2 in the last iteration while the step was
-    already that small: more iterations cannot improve the point, e.g. for finely
-    discretised PDEs whose Jacobian entries are large), or when ``max |G| <= newton.tol``
-    and the Newton correction computed at the current point is below the step
-    tolerance; that last correction is then applied. With ``exact=False`` a point is
-    also converged when that correction is below the step tolerance and, at the
+    Steps are tested componentwise (see :func:`_step_ok`),
+
+    .. math::
+
+        \|du\|_d = \max_i \frac{|du_i|}{d_i}, \qquad
+        d_i = s_i + \min(1, \|u_{\mathrm{pred}}\|_\infty), \quad
+        s_i = \max(|u_{\mathrm{pred},i}|, |u_{\mathrm{ref},i}|),
+
+    i.e. ``||du||_d <= step_tol`` is ``|du_i| <= step_tol (|u_i| + min(1, ||u||_inf))``
+    for every component, and the residual's round-off floor is its backward error
+    relative to the terms of ``G`` (see :func:`_backward_error`),
+
+    .. math::
+
+        \omega = \max\Big( \frac{\|G\|_\infty}{\| |G_z| |z| + |G_p| |p| \|_\infty},
+        \ \frac{|c \cdot u - h|}{|c| \cdot |u|} \Big) \le \epsilon_r
+        \quad (\epsilon_r = \mathtt{ROUNDOFF\_FLOOR} = 64\,\mathrm{eps}).
+
+    Converged when (a) ``max |r| <= newton.tol`` (``r`` the bordered residual, ``G``
+    and the constraint) and either the last step or the Newton correction computed at
+    the current point has ``||.||_d <= newton.step_tol`` (that correction is then
+    applied), or (b) the last step has ``||du||_d <= newton.step_tol``, the residual
+    did not decrease by a factor 2 in the last iteration and it is at its round-off
+    floor, ``omega <= eps_r``: more iterations cannot improve the point (e.g. finely
+    discretised PDEs whose Jacobian entries are large, where ``newton.tol`` is below
+    the round-off of ``G``), or (c) ``max |r| <= newton.tol`` after at least one
+    iteration in which neither the residual nor the correction halved, and the
+    correction has ``||du||_d <= NOISE_SLACK * newton.step_tol`` (``NOISE_SLACK = 10``):
+    next to a singular bordered matrix (trial points of a branch-point locator) the
+    correction at a residual below ``tol`` is the noise of the solve, of order
+    ``tol / sigma_min``, which the componentwise test alone need not reach. A stalled
+    iteration whose residual is above both ``newton.tol`` and the round-off floor is
+    not converged, whatever its step. With ``exact=False`` a point is
+    also converged when that correction has ``||.||_d <= newton.step_tol`` and, at the
     quadratic rate observed in the previous iteration (residual ``r_k`` after a step
-    ``d_{k-1}``: ``|G| ~ (r_k / d_{k-1}^2) d_k^2``), it leaves a residual ten times below
-    ``newton.tol`` (Deuflhard 2004, Sec. 2.1, a-posteriori estimates from the
-    observed convergence). The result carries ``lin`` and
-    ``lu`` (the factorisation of the bordered matrix, for the caller's tangent): with
+    ``d_{k-1}``, in ``||.||_inf``: ``|G| ~ (r_k / d_{k-1}^2) d_k^2``), it leaves a residual
+    ten times below ``newton.tol`` (Deuflhard 2004, Sec. 2.1, a-posteriori estimates
+    from the observed convergence). The result carries ``lin`` and ``lu`` (the
+    factorisation of the bordered matrix, for the caller's tangent): with
     ``exact=True`` they are re-evaluated at the returned point after that final
     correction; with ``exact=False`` they are those of the point before it, within the
     step tolerance of the returned one (usually within round-off, the final correction
@@ -906,8 +1045,8 @@ def correct(
     finite = _finite(r)
     rn = _inf_norm(r)
     rn0, rn_prev, step, it = rn, math.inf, math.inf, 0
-    # scale of the step tolerance: from the predictor (the iterates move much less)
-    step_ok = step_tol * (1.0 + _inf_norm(u))
+    a, lo, hi = _step_bounds(_inf_norm(u), u_ref, step_tol)  # componentwise step test
+    step_ok = False  # the last step passed it
     dense = isinstance(lin[1], np.ndarray)
     n1 = n + 1
     lu: BorderedLU | None = None
@@ -938,17 +1077,28 @@ def correct(
                 return CorrectorResult(rn <= tol, u[:n].copy(), float(u[n]), lin, it, rn,
                                        f"singular: {exc}", None, u)  # fmt: skip
         dn = _inf_norm(du)
+        dn_ok = dn <= lo or (dn <= hi and _step_ok(du, u_pred, u_ref, a, step_tol))
         if (
-            (rn <= tol and (dn <= step_ok or step <= step_ok))
-            or (step <= step_ok and rn > 0.5 * rn_prev)
+            (rn <= tol and (dn_ok or step_ok))
+            # stalled in the noise of an ill-conditioned solve (see the docstring)
+            or (
+                it
+                and rn <= tol
+                and rn > 0.5 * rn_prev
+                and dn > 0.5 * step
+                and dn <= NOISE_SLACK * hi
+                and _step_ratio(du, u_pred, u_ref, a) <= NOISE_SLACK * step_tol
+            )
+            # stalled (the residual did not halve) at the round-off floor of G's terms
+            or (step_ok and rn > 0.5 * rn_prev and _backward_error(lin[1], r, u, lin[2], c) <= _RF)
             # without exactness: the final correction is below the step tolerance and,
             # at the observed quadratic rate (residual rn after a step of length
             # `step`), leaves a residual ten times below tol
-            or (not exact and it and dn <= step_ok and 10.0 * rn * dn * dn <= tol * step * step)
+            or (not exact and it and dn_ok and 10.0 * rn * dn * dn <= tol * step * step)
         ):
             if dense:
                 lu = BorderedLU.from_dense_factors(f_lu, f_piv)
-            if dn <= step_ok:
+            if dn_ok:
                 # final Newton correction, below the step tolerance
                 u -= du
                 if exact:
@@ -967,12 +1117,12 @@ def correct(
             return fail("diverging", lin)
         u -= du
         it += 1
-        step_prev, step = step, dn
+        step_prev, step, step_ok = step, dn, dn_ok
         if (
             max_contraction is not None
             and it >= 2
             and step > max_contraction * step_prev
-            and step > step_ok
+            and not step_ok
             and rn > tol
         ):
             return fail(
