@@ -309,6 +309,28 @@ if HAVE_NUMBA:
         return rn, rr, un, gn, mm
 
     @_jit
+    def _backward_error(M, r, u):  # pragma: no cover - compiled
+        """``base._backward_error`` of the bordered residual ``r`` at ``u``: ``max(max_i
+        |G_i| / max_i (|M| |u|)_i, |r_n| / (|M| |u|)_n)``, ``i < n``."""
+        n1 = u.size
+        n = n1 - 1
+        sf = 0.0
+        sb = 0.0
+        for i in range(n1):
+            s = 0.0
+            for j in range(n1):
+                s += abs(M[i, j]) * abs(u[j])
+            if i < n:
+                sf = max(sf, s)
+            else:
+                sb = s
+        gf = 0.0
+        for i in range(n):
+            gf = max(gf, abs(r[i]))
+        wf = gf / (sf + 1e-300) if n else 0.0
+        return max(wf, abs(r[n]) / (sb + 1e-300))
+
+    @_jit
     def _factor_solve(M, r, lu, x, piv, iw, ch):  # pragma: no cover - compiled
         """LAPACK ``dgetrf`` of a copy of ``M`` into ``lu`` (1-based ``piv``) and
         ``dgetrs`` for ``x = M^{-1} [r, e_{N+1}]`` (what ``dgesv`` does). Returns info."""
@@ -398,8 +420,9 @@ if HAVE_NUMBA:
         and ``make_point``), compiled.
 
         ``sc = (ds, prev_h, cos_hermite, max_contraction, max_distance, cos_max, tol,
-        step_tol, max_iter, eig_tol, imag_tol)``. On acceptance the point is written
-        into ``out`` (layout :func:`out_layout`) and ``piv_out`` (0-based pivots).
+        step_tol, max_iter, eig_tol, imag_tol, NOISE_SLACK, ROUNDOFF_FLOOR)``. On
+        acceptance the point is written into ``out`` (layout :func:`out_layout`) and
+        ``piv_out`` (0-based pivots).
         Returns ``(code, iters, rn, gn, jac_finite, ctau, det_sign, eig_ok, n_real,
         n_pairs)``; ``code`` 0: the step is accepted with these values; 1: anything
         else (a rejection or a rare case: the caller runs the Python step instead,
@@ -411,6 +434,7 @@ if HAVE_NUMBA:
         ds, prev_h, cos_hermite, max_contraction = sc[0], sc[1], sc[2], sc[3]
         max_distance, cos_max, tol, step_tol = sc[4], sc[5], sc[6], sc[7]
         max_iter, eig_tol, imag_tol = int(sc[8]), sc[9], sc[10]
+        noise_slack, roundoff = sc[11], sc[12]
         fail = (1, 0, 0.0, 0.0, False, 0.0, 0.0, False, 0, 0)
         o_eig, o_u, o_d, o_g, o_gz, o_gp, o_lu, o_t, o_tau, o_c = out_offsets(n)
         # predictor
@@ -436,6 +460,12 @@ if HAVE_NUMBA:
         for i in range(n1):
             hlev += c[i] * ua[i]
         hlev += ds
+        # the componentwise step scale max(|u_pred,i|, |u_ref,i|) + a (base._step_ok)
+        su = np.empty(n1)
+        ur = 0.0
+        for i in range(n1):
+            su[i] = max(abs(u[i]), abs(ua[i]))
+            ur = max(ur, abs(ua[i]))
         # corrector (Newton on the bordered system, the rules of _correct_fused)
         rn, rr, un, gn, mm = _linearise(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz,
                                          rows, cols, c, hlev, M, r)  # fmt: skip
@@ -444,9 +474,13 @@ if HAVE_NUMBA:
         rn_prev = math.inf
         step = math.inf
         it = 0
-        step_ok = step_tol * (1.0 + un)
+        a = min(1.0, un) + 1e-300
+        lo = step_tol * a
+        hi = step_tol * (max(un, ur) + a)
+        step_ok = False  # the last step passed the step test
         mc = max_contraction if guarded else -1.0
         dn = 0.0
+        dn_ok = False
         while True:
             if not finite:
                 return fail
@@ -454,18 +488,31 @@ if HAVE_NUMBA:
                 return fail
             dd = 0.0
             dn = 0.0
+            ratio = 0.0  # max_i |du_i| / (su_i + a)
             for i in range(n1):
                 v = x[i, 0]
                 dd += v * v
                 v = abs(v)
                 if v > dn:
                     dn = v
+                q = v / (su[i] + a)
+                if q > ratio:
+                    ratio = q
             if not dd < math.inf:
                 return fail
+            dn_ok = dn <= lo or (dn <= hi and ratio <= step_tol)
             if (
-                (rn <= tol and (dn <= step_ok or step <= step_ok))
-                or (step <= step_ok and rn > 0.5 * rn_prev)
-                or (it > 0 and dn <= step_ok and 10.0 * rn * dn * dn <= tol * step * step)
+                (rn <= tol and (dn_ok or step_ok))
+                or (
+                    it > 0
+                    and rn <= tol
+                    and rn > 0.5 * rn_prev
+                    and dn > 0.5 * step
+                    and dn <= noise_slack * hi
+                    and ratio <= noise_slack * step_tol
+                )
+                or (step_ok and rn > 0.5 * rn_prev and _backward_error(M, r, u) <= roundoff)
+                or (it > 0 and dn_ok and 10.0 * rn * dn * dn <= tol * step * step)
             ):
                 break
             if it >= max_iter:
@@ -477,14 +524,15 @@ if HAVE_NUMBA:
             it += 1
             step_prev = step
             step = dn
-            if mc >= 0.0 and it >= 2 and step > mc * step_prev and step > step_ok and rn > tol:
+            step_ok = dn_ok
+            if mc >= 0.0 and it >= 2 and step > mc * step_prev and not step_ok and rn > tol:
                 return fail
             rn_prev = rn
             rn, rr, un, gn, mm = _linearise(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz,
                                              rows, cols, c, hlev, M, r)  # fmt: skip
             finite = rr < math.inf
         # accepted by the corrector: lin is of the last evaluation, the factorisation too
-        if dn <= step_ok:
+        if dn_ok:
             for i in range(n1):
                 u[i] -= x[i, 0]
         dist = 0.0
@@ -617,9 +665,10 @@ class StepKernel:
             Last point, its tangent, the ``theta`` weights.
         prev_d, prev_tau : ndarray, shape (n + 1,), or None
             For the Hermite predictor (ignored unless ``hermite``).
-        sc : ndarray, shape (11,)
+        sc : ndarray, shape (13,)
             ``(ds, prev_h, cos_hermite, max_contraction, max_distance, cos_max, tol,
-            step_tol, max_iter, eig_tol, imag_tol)``.
+            step_tol, max_iter, eig_tol, imag_tol, NOISE_SLACK, ROUNDOFF_FLOOR)``
+            (the last two: :mod:`continuation.algorithms.base`).
         hermite, guarded, want_eig : bool
             Try the Hermite predictor; apply the step safeguards; compute eigenvalues.
 

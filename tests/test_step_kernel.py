@@ -14,6 +14,7 @@ from conftest import bratu, brusselator, hopf_normal_form, lorenz84, periodic_si
 
 import continuation._kernel as K
 import continuation._tape as T
+from continuation.algorithms.base import NOISE_SLACK, ROUNDOFF_FLOOR
 from continuation.algorithms.palc import PALC
 from continuation.api import continue_equilibria
 from continuation.problem import EquilibriumProblem
@@ -206,7 +207,7 @@ def test_kernel_safeguards_reject_and_leave_the_step_to_python():
 
     def sc(max_distance=1.0, cos_max=0.5, max_iter=10):
         return np.array([0.05, 1.0, 0.86, 0.8, max_distance, cos_max, 1e-10, 1e-10, max_iter,
-                         1e-10, 1e-8])  # fmt: skip
+                         1e-10, 1e-8, NOISE_SLACK, ROUNDOFF_FLOOR])  # fmt: skip
 
     ok = kern.step(ua, tau, w, None, None, sc(), False, True, True)
     assert ok is not None

@@ -70,6 +70,8 @@ import numpy as np
 
 from ..settings import ContinuationSettings
 from .base import (
+    NOISE_SLACK,
+    ROUNDOFF_FLOOR,
     BorderedLU,
     ContinuationAlgorithm,
     PointInfo,
@@ -258,7 +260,7 @@ class PALC(ContinuationAlgorithm):
             nw, det = settings.newton, settings.detect
             arr = np.array([0.0, 1.0, _COS_HERMITE, self.max_contraction, self.max_distance,
                             self._cos_max, nw.tol, nw.step_tol, nw.max_iter, det.eig_tol,
-                            det.imag_tol])  # fmt: skip
+                            det.imag_tol, NOISE_SLACK, ROUNDOFF_FLOOR])  # fmt: skip
             sc = self._scalars = (arr, settings)
         arr = sc[0]
         arr[0] = ds
