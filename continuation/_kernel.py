@@ -86,6 +86,7 @@ from ._tape import (
     _K_TWICE,
     Tape,
 )  # fmt: skip
+from .algorithms.base import BorderedLU, PointInfo
 
 log = logging.getLogger(__name__)
 
@@ -675,28 +676,98 @@ class StepKernel:
         Returns
         -------
         tuple or None
-            None when the kernel did not accept the step; else ``(iters, rn, gn,
-            jac_finite, ctau, det_sign, eig_ok, counts, u, d, G, Gz, Gp, lu, piv,
-            t_raw, tau, c, eigs)`` (arrays are views of one fresh buffer).
+            None when the kernel did not accept the step; else ``(point, iters, rn,
+            d)``: the new :class:`KernelPoint`, the corrector iterations, the final
+            bordered residual ``max |r|`` and ``d = u - (u_a + ds tau)`` (the corrector's
+            move from the tangent prediction, for the next Hermite predictor).
         """
-        n = self.n
-        n1 = n + 1
+        n1 = self.n + 1
         if not hermite:
             prev_d = prev_tau = ua
         out = np.empty(self.size)
         piv = np.empty(n1, dtype=np.int32)
-        res = _step(self._fb, self._ib, out, piv, ua, tau, w, prev_d, prev_tau, sc, hermite,
-                    guarded, want_eig)  # fmt: skip
-        if res[0] != 0:
-            return None
-        o_eig, o_u, o_d, o_g, o_gz, o_gp, o_lu, o_t, o_tau, o_c = self.offsets
-        return (
-            res[1], res[2], res[3], res[4], res[5], res[6], res[7], (res[8], res[9]),
-            out[o_u:o_d], out[o_d:o_g], out[o_g:o_gz],
-            out[o_gz:o_gp].reshape((n, n), order="F"), out[o_gp:o_lu],
-            out[o_lu:o_t].reshape((n1, n1), order="F"), piv, out[o_t:o_tau],
-            out[o_tau:o_c], out[o_c:], out[o_eig:o_u].view(np.complex128),
+        code, it, rn, gn, jac_finite, ctau, det_sign, eig_ok, n_real, n_pairs = _step(
+            self._fb, self._ib, out, piv, ua, tau, w, prev_d, prev_tau, sc, hermite, guarded,
+            want_eig,
         )  # fmt: skip
+        if code != 0:
+            return None
+        o = self.offsets
+        cache: dict[str, Any] = {"jac_finite": True} if jac_finite else {}
+        if eig_ok:
+            cache["eig"] = out[o[0] : o[1]].view(np.complex128)
+            cache["counts"] = (n_real, n_pairs)
+        return KernelPoint(self, out, piv, it, gn, ctau, det_sign, cache), it, rn, out[o[2] : o[3]]
+
+
+def _lazy(name: str, make: Any) -> property:
+    """A property over ``PointInfo``'s slot ``name`` that fills it with ``make(self)`` on
+    first read (and is written as the slot)."""
+    slot = getattr(PointInfo, name)
+
+    def get(self: Any) -> Any:
+        try:
+            return slot.__get__(self, type(self))
+        except AttributeError:
+            value = make(self)
+            slot.__set__(self, value)
+            return value
+
+    def put(self: Any, value: Any) -> None:
+        slot.__set__(self, value)
+
+    return property(get, put, doc=f"``{name}`` (made from the step's buffer on first use)")
+
+
+def _lu_of(pt: KernelPoint) -> BorderedLU:
+    n1 = pt._k.n + 1
+    o = pt._k.offsets
+    lu = BorderedLU.from_dense_factors(
+        pt._out[o[6] : o[7]].reshape((n1, n1), order="F"), pt._piv
+    )
+    lu._sign = pt._bp_sign  # (ctau > 0: det [Gz Gp; (w o tau)^T] has the sign of det M)
+    return lu
+
+
+class KernelPoint(PointInfo):
+    """A :class:`~continuation.algorithms.base.PointInfo` of the compiled step.
+
+    The fields the continuation needs at every row (``z``, ``p``, ``u``, ``tau``,
+    ``border``, ``ctau``, the sign of the branch-point test, eigenvalues and counts in
+    ``cache``) are set at once; ``G``, ``Gz``, ``Gp``, ``lu`` and ``t_raw``, needed only
+    where a special point is located, are views of the step's output buffer made on
+    first use (layout :func:`out_layout`).
+    """
+
+    __slots__ = ("_k", "_out", "_piv")
+
+    def __init__(self, k: StepKernel, out: Any, piv: Any, iters: int, gn: float, ctau: float,
+                 det_sign: float, cache: dict[str, Any]) -> None:  # fmt: skip
+        o = k.offsets
+        u = out[o[1] : o[2]]
+        self._k, self._out, self._piv = k, out, piv
+        self.z = u[:-1]
+        self.p = float(u[-1])
+        self._u = u
+        self.tau = out[o[8] : o[9]]
+        self.border = out[o[9] :]
+        self.ctau = ctau
+        self.iters = iters
+        self.residual_norm = gn
+        self.cache = cache
+        self._bp_sign = det_sign
+        self._bp_logdet = None
+
+    G = _lazy("G", lambda pt: pt._out[pt._k.offsets[3] : pt._k.offsets[4]])
+    Gz = _lazy(
+        "Gz",
+        lambda pt: pt._out[pt._k.offsets[4] : pt._k.offsets[5]].reshape(
+            (pt._k.n, pt._k.n), order="F"
+        ),
+    )
+    Gp = _lazy("Gp", lambda pt: pt._out[pt._k.offsets[5] : pt._k.offsets[6]])
+    lu = _lazy("lu", _lu_of)
+    t_raw = _lazy("t_raw", lambda pt: pt._out[pt._k.offsets[7] : pt._k.offsets[8]])
 
 
 __all__ = ["HAVE_NUMBA", "StepKernel", "out_layout"]

@@ -18,6 +18,7 @@ from continuation.algorithms.base import NOISE_SLACK, ROUNDOFF_FLOOR
 from continuation.algorithms.palc import PALC
 from continuation.api import continue_equilibria
 from continuation.problem import EquilibriumProblem
+from continuation.settings import ContinuationSettings
 from continuation.system import System
 
 pytestmark = pytest.mark.skipif(not K.HAVE_NUMBA, reason="Numba is not installed")
@@ -211,9 +212,35 @@ def test_kernel_safeguards_reject_and_leave_the_step_to_python():
 
     ok = kern.step(ua, tau, w, None, None, sc(), False, True, True)
     assert ok is not None
-    u = ok[8]
-    np.testing.assert_allclose(prob.residual(u[:-1], u[-1]), 0.0, atol=1e-10)
+    pt = ok[0]
+    np.testing.assert_allclose(prob.residual(pt.z, pt.p), 0.0, atol=1e-10)
     assert kern.step(ua, tau, w, None, None, sc(max_distance=1e-12), False, True, True) is None
     assert kern.step(ua, tau, w, None, None, sc(cos_max=1.0), False, True, True) is None
     assert kern.step(ua, tau, w, None, None, sc(max_iter=0), False, True, True) is None
     assert kern.step(ua, tau, w, None, None, sc(max_distance=1e-12), False, False, True)
+
+
+def test_kernel_point_fields_equal_the_python_step():
+    """One step from the same state by the compiled and the Python step: the point and
+    the lazily made fields (G, Gz, Gp of the last corrector iterate, the factors, the
+    raw tangent, the branch-point sign, eigenvalues) agree to round-off."""
+    s, x0, params = _cubic8()
+    prob = EquilibriumProblem(s, params, "p")
+    st = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-4.5, p_max=4.0)
+    fast, slow = PALC(kernel=True), PALC(kernel=False)
+    state = slow.init(prob, x0, params["p"], st)
+    a, _ = fast.step(prob, state, st)
+    b, _ = slow.step(prob, state, st)
+    pa, pb = a.point, b.point
+    assert type(pa).__name__ == "KernelPoint" and type(pb).__name__ == "PointInfo"
+    for name in ("u", "tau", "border", "G", "Gz", "Gp", "t_raw"):
+        np.testing.assert_allclose(getattr(pa, name), getattr(pb, name), rtol=1e-12,
+                                   atol=1e-14, err_msg=name)  # fmt: skip
+    assert pa.p == pytest.approx(pb.p, abs=1e-14) and pa.ctau == pytest.approx(pb.ctau)
+    assert pa.bp_sign == pb.bp_sign and pa.lu.sign == pb.lu.sign
+    assert pa.bp_logdet == pytest.approx(pb.bp_logdet, rel=1e-12)
+    e = np.eye(s.n_states + 1)[-1]
+    np.testing.assert_allclose(pa.lu.solve(e), pb.lu.solve(e), rtol=1e-12)
+    np.testing.assert_allclose(pa.cache["eig"], np.sort_complex(np.linalg.eigvals(pb.Gz))[::-1],
+                               rtol=1e-10, atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(a.prev_d, b.prev_d, atol=1e-14)

@@ -72,9 +72,7 @@ from ..settings import ContinuationSettings
 from .base import (
     NOISE_SLACK,
     ROUNDOFF_FLOOR,
-    BorderedLU,
     ContinuationAlgorithm,
-    PointInfo,
     StepOutcome,
     StepState,
     correct,
@@ -269,17 +267,7 @@ class PALC(ContinuationAlgorithm):
                         bool(getattr(problem, "jacobian_is_stability", False)))  # fmt: skip
         if got is None:
             return None
-        (it, rn, gn, jac_finite, ctau, det_sign, eig_ok, counts,
-         u, d, G, Gz, Gp, lu, piv, t_raw, tau_b, c, eigs) = got  # fmt: skip
-        cache: dict[str, Any] = {"jac_finite": True} if jac_finite else {}
-        if eig_ok:
-            cache["eig"] = eigs
-            cache["counts"] = counts
-        blu = BorderedLU.from_dense_factors(lu, piv)
-        blu._sign = det_sign
-        # (ctau > 0 after orientation: det [Gz Gp; (w o tau)^T] has the sign of det M)
-        b = PointInfo(u[:-1], float(u[-1]), tau_b, G, Gz, Gp, blu, c, t_raw, det_sign, ctau,
-                      it, gn, cache, u)  # fmt: skip
+        b, it, rn, d = got
         new = StepState(b, ds, state.w, state.direction, state.n_steps + 1,
                         d if guarded else None, a.tau, ds)  # fmt: skip
         return new, StepOutcome(True, it, rn, ds)
