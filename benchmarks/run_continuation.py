@@ -423,6 +423,18 @@ def _spawn(tool: str, problem: str, args: argparse.Namespace) -> dict[str, Any]:
             os.unlink(path)
 
 
+def _median_round(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """The worker result with the median of the rounds' median times (all rounds' medians
+    kept as ``round_medians_s``); a failed round fails the measurement."""
+    bad = [r for r in runs if not r["ok"]]
+    if bad:
+        return bad[0]
+    ordered = sorted(runs, key=lambda r: r["median_s"])
+    out = dict(ordered[(len(ordered) - 1) // 2])
+    out["round_medians_s"] = [r["median_s"] for r in runs]
+    return out
+
+
 def _fmt_p(p: float) -> str:
     return f"{p:.10g}"
 
@@ -468,7 +480,14 @@ def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
     cmds = " then ".join(f"`{c}`" for c in meta.get("commands", [meta["command"]]))
     lines = [
         f"Measured {meta['date']} on {meta['machine']} with {cmds} "
-        f"({meta['repeats']} timed repeats, median). 1-minute load average "
+        f"({meta['repeats']} timed repeats, median"
+        + (
+            f"; {meta['rounds']} worker processes per tool and problem, interleaved, the "
+            "one with the median of their medians reported"
+            if meta.get("rounds", 1) > 1
+            else ""
+        )
+        + "). 1-minute load average "
         f"{meta['loadavg_start'][0]:.1f} at the start, {meta['loadavg_end'][0]:.1f} at the end "
         "of the last command (the machine is shared with other work, which inflates wall "
         "times; CPU times suffer less).",
@@ -526,6 +545,7 @@ def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
             "| broachkit / peer, wall | broachkit / peer, CPU | broachkit per step / floor |",
             "|---|---:|---|---:|---:|---:|---:|",
         ]
+        rounds = []
         for name, ours, best, floor in summary:
             fl = f"{ours['per_step_s'] / floor['total_s']:.1f}x" if floor else "-"
             cpu = ours["cpu_median_s"] / best["cpu_median_s"] if best["cpu_median_s"] else math.nan
@@ -533,7 +553,14 @@ def markdown(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
                 f"| {name} | {_ms(ours['median_s'])} | {best['tool']} | {_ms(best['median_s'])} | "
                 f"{ours['median_s'] / best['median_s']:.2f} | {cpu:.2f} | {fl} |"
             )
+            a, b = ours.get("round_medians_s"), best.get("round_medians_s")
+            if a and b and len(a) == len(b) > 1:
+                ratios = ", ".join(f"{x / y:.2f}" for x, y in zip(a, b, strict=True))
+                rounds.append(f"* {name}: broachkit / {best['tool']} per round: {ratios}")
         lines.append("")
+        if rounds:
+            lines += ["Wall-time ratio in each round (worker processes run back to back):", ""]
+            lines += [*rounds, ""]
     return "\n".join(lines)
 
 
@@ -567,6 +594,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--floor-reps", type=int, default=200)
     ap.add_argument("--timeout", type=float, default=1800.0, help="per worker, seconds")
+    ap.add_argument(
+        "--rounds",
+        type=int,
+        default=1,
+        help="fresh worker processes per (tool, problem), interleaved between the tools; "
+        "the run reported is the one with the median of their medians",
+    )
     ap.add_argument("--no-readme", action="store_true", help="do not touch README.md")
     ap.add_argument(
         "--update",
@@ -611,17 +645,24 @@ def main(argv: list[str] | None = None) -> int:
             raise SystemExit(f"unknown tool {t!r}; choose from {TOOLS}")
     load_start = os.getloadavg()
     results = []
+    if args.rounds < 1:
+        raise SystemExit("--rounds must be >= 1")
     for prob in problems:
+        runs: dict[str, list[dict[str, Any]]] = {t: [] for t in tools}
+        for _ in range(args.rounds):  # interleaved: tool A, tool B, ..., tool A, ...
+            for tool in tools:
+                t0 = time.perf_counter()
+                r = _spawn(tool, prob, args)
+                runs[tool].append(r)
+                msg = (
+                    f"{_ms(r['median_s'])} ms, {r['steps']} steps, {r['special']}"
+                    if r["ok"]
+                    else r.get("reason", "")
+                )
+                print(f"[{time.perf_counter() - t0:6.1f} s] {prob:12s} {tool:15s} {msg}",
+                      flush=True)  # fmt: skip
         for tool in tools:
-            t0 = time.perf_counter()
-            r = _spawn(tool, prob, args)
-            results.append(r)
-            msg = (
-                f"{_ms(r['median_s'])} ms, {r['steps']} steps, {r['special']}"
-                if r["ok"]
-                else r.get("reason", "")
-            )
-            print(f"[{time.perf_counter() - t0:6.1f} s] {prob:12s} {tool:15s} {msg}", flush=True)
+            results.append(_median_round(runs[tool]))
     cmd = "python benchmarks/run_continuation.py" + (
         "" if argv is None and len(sys.argv) == 1 else " " + " ".join(sys.argv[1:])
     )
@@ -631,6 +672,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{platform.python_version()} ({_python()})",
         "command": cmd.strip(),
         "repeats": args.repeats,
+        "rounds": args.rounds,
         "loadavg_start": load_start,
         "loadavg_end": os.getloadavg(),
     }
