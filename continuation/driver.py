@@ -457,6 +457,23 @@ class _Context:
             )
         return out
 
+    def locate_event(
+        self, a: _Row, b: _Row, sigma_b: float, w: FloatArray, e: Event, lo: Any, hi: Any
+    ) -> LocateResult:
+        """Locate the zero of event ``e`` in the sub-bracket ``(lo, hi)`` of the step
+        (ends ``(sigma, point, g)`` from :meth:`event_brackets`)."""
+        return self.locate(
+            a,
+            b,
+            sigma_b,
+            w,
+            lambda pt, t: e.value(pt.z, pt.p),
+            lo[2],
+            hi[2],
+            continuity=e.continuity,
+            bracket=(lo, hi),
+        )
+
     def detect(
         self,
         a: _Row,
@@ -549,17 +566,7 @@ class _Context:
                 found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
             else:
                 for lo, hi in self.event_brackets(a, b, sigma_b, w, k):
-                    r = self.locate(
-                        a,
-                        b,
-                        sigma_b,
-                        w,
-                        lambda pt, t, e=e: e.value(pt.z, pt.p),
-                        lo[2],
-                        hi[2],
-                        continuity=e.continuity,
-                        bracket=(lo, hi),
-                    )
+                    r = self.locate_event(a, b, sigma_b, w, e, lo, hi)
                     found.append((SpecialKind.USER, r, {"g": r.g}, e.name))
         if not found:
             return []
@@ -818,17 +825,7 @@ class _Context:
             brackets = self.event_brackets(a, b, sigma_b, w, k)
             if brackets:
                 lo, hi = brackets[0]  # the first zero in branch order ends the branch
-                r = self.locate(
-                    a,
-                    b,
-                    sigma_b,
-                    w,
-                    lambda pt, t, e=e: e.value(pt.z, pt.p),
-                    lo[2],
-                    hi[2],
-                    continuity=e.continuity,
-                    bracket=(lo, hi),
-                )
+                r = self.locate_event(a, b, sigma_b, w, e, lo, hi)
                 if not r.located:
                     r = LocateResult(hi[0], hi[1], hi[2], False, r.iterations)
                 cands.append((r, Status.EVENT, f"terminal event {e.name!r}", k))
