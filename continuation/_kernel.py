@@ -113,7 +113,6 @@ except (ImportError, ValueError, AttributeError) as _exc:  # pragma: no cover
     HAVE_NUMBA = False
 
 
-
 # ----------------------------------------------------------------------------- compiled
 def _offsets(n: int) -> tuple[int, int, int, int, int, int, int, int, int, int]:
     """Offsets in a step's output buffer (:func:`out_layout`) for ``n`` unknowns."""
@@ -143,6 +142,7 @@ if HAVE_NUMBA:
     # error_model="numpy": float division by zero and math domain errors give inf/NaN
     # as in C (CasADi's own virtual machine), not Python exceptions
     _jit = numba.njit(cache=True, nogil=True, boundscheck=False, error_model="numpy")
+    out_offsets = _jit(_offsets)  # (the same offsets inside the compiled step)
 
     @_jit
     def _run_tape(op, ia, ib, io, consts, w, u, p, f, nz):  # pragma: no cover - compiled
@@ -613,10 +613,6 @@ if HAVE_NUMBA:
                     else:
                         n_real += 1
         return (0, it, rn, gn, jac_finite, ctau, det_sign, eig_ok, n_real, n_pairs)
-
-
-if HAVE_NUMBA:
-    out_offsets = numba.njit(cache=True)(_offsets)
 
 
 # ----------------------------------------------------------------------------- Python side
