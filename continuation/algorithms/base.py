@@ -190,6 +190,48 @@ def _backward_error(M: Any, r: FloatArray, u: FloatArray, Gp: Any = None, c: Any
     return max(wf, float(ar[n]) / (sb + _TINY))
 
 
+def _accepted(
+    rn: float,
+    rn_prev: float,
+    dn: float,
+    dn_ok: bool,
+    step: float,
+    step_ok: bool,
+    it: int,
+    exact: bool,
+    tol: float,
+    step_tol: float,
+    hi: float,
+    ratio: Callable[[], float],
+    backward_error: Callable[[], float],
+) -> bool:
+    """The corrector's convergence test (see :func:`correct`), shared by its dense and
+    sparse iterations. ``rn``: ``max |r|`` now, ``rn_prev`` before the last step;
+    ``dn = max |du|`` of the correction at the current point and ``dn_ok`` its
+    componentwise test; ``step``/``step_ok`` the same of the last step taken; ``hi`` the
+    upper bound of :func:`_step_bounds`; ``ratio()`` gives :func:`_step_ratio` of the
+    correction and ``backward_error()`` :func:`_backward_error` at the current point,
+    both evaluated only when the clause needing them is reached."""
+    return bool(
+        (rn <= tol and (dn_ok or step_ok))
+        # stalled in the noise of an ill-conditioned solve (see correct's docstring)
+        or (
+            it
+            and rn <= tol
+            and rn > 0.5 * rn_prev
+            and dn > 0.5 * step
+            and dn <= NOISE_SLACK * hi
+            and ratio() <= NOISE_SLACK * step_tol
+        )
+        # stalled (the residual did not halve) at the round-off floor of G's terms
+        or (step_ok and rn > 0.5 * rn_prev and backward_error() <= _RF)
+        # without exactness: the final correction is below the step tolerance and, at
+        # the observed quadratic rate (residual rn after a step of length `step`),
+        # leaves a residual ten times below tol
+        or (not exact and it and dn_ok and 10.0 * rn * dn * dn <= tol * step * step)
+    )
+
+
 def _finite(v: FloatArray) -> bool:
     """True when every entry of ``v`` is finite (one dot product; entries beyond
     ``1e154`` in magnitude also count as non-finite, which only ever happens for
@@ -885,21 +927,9 @@ def _correct_fused(
                                    msg, None, u.copy())  # fmt: skip
         dn = abs(float(du[_idamax(du)]))
         dn_ok = dn <= lo or (dn <= hi and _step_ok(du, u_pred, u_ref, a, step_tol))
-        if (
-            (rn <= tol and (dn_ok or step_ok))
-            # stalled in the noise of an ill-conditioned solve (see the docstring)
-            or (
-                it
-                and rn <= tol
-                and rn > 0.5 * rn_prev
-                and dn > 0.5 * step
-                and dn <= NOISE_SLACK * hi
-                and _step_ratio(du, u_pred, u_ref, a) <= NOISE_SLACK * step_tol
-            )
-            # stalled (the residual did not halve) at the round-off floor of G's terms
-            or (step_ok and rn > 0.5 * rn_prev and _backward_error(M, r, u) <= _RF)
-            or (not exact and it and dn_ok and 10.0 * rn * dn * dn <= tol * step * step)
-        ):
+        if _accepted(rn, rn_prev, dn, dn_ok, step, step_ok, it, exact, tol, step_tol, hi,
+                     lambda du=du: _step_ratio(du, u_pred, u_ref, a),
+                     lambda u=u: _backward_error(M, r, u)):  # fmt: skip
             lin = ev.lin()
             lu: BorderedLU | None = BorderedLU.from_dense_factors(f_lu, f_piv)
             t_raw: FloatArray | None = x[:, 1]
@@ -1078,24 +1108,10 @@ def correct(
                                        f"singular: {exc}", None, u)  # fmt: skip
         dn = _inf_norm(du)
         dn_ok = dn <= lo or (dn <= hi and _step_ok(du, u_pred, u_ref, a, step_tol))
-        if (
-            (rn <= tol and (dn_ok or step_ok))
-            # stalled in the noise of an ill-conditioned solve (see the docstring)
-            or (
-                it
-                and rn <= tol
-                and rn > 0.5 * rn_prev
-                and dn > 0.5 * step
-                and dn <= NOISE_SLACK * hi
-                and _step_ratio(du, u_pred, u_ref, a) <= NOISE_SLACK * step_tol
-            )
-            # stalled (the residual did not halve) at the round-off floor of G's terms
-            or (step_ok and rn > 0.5 * rn_prev and _backward_error(lin[1], r, u, lin[2], c) <= _RF)
-            # without exactness: the final correction is below the step tolerance and,
-            # at the observed quadratic rate (residual rn after a step of length
-            # `step`), leaves a residual ten times below tol
-            or (not exact and it and dn_ok and 10.0 * rn * dn * dn <= tol * step * step)
-        ):
+        if _accepted(rn, rn_prev, dn, dn_ok, step, step_ok, it, exact, tol, step_tol, hi,
+                     lambda du=du: _step_ratio(du, u_pred, u_ref, a),
+                     lambda J=lin[1], Gp=lin[2], r=r, u=u: _backward_error(J, r, u, Gp, c),
+                     ):  # fmt: skip
             if dense:
                 lu = BorderedLU.from_dense_factors(f_lu, f_piv)
             if dn_ok:
