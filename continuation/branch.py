@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from ._types import BoolArray, ComplexArray, FloatArray, IntArray
+from .typing import BoolArray, ComplexArray, FloatArray, IntArray
 from .settings import ContinuationSettings, DetectionSettings, NewtonSettings
 from .status import Status
 

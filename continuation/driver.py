@@ -24,7 +24,7 @@ import scipy.sparse.linalg as spla
 from scipy.sparse import csc_matrix
 
 from ._threads import blas_threads_for
-from ._types import ComplexArray, FloatArray
+from .typing import ComplexArray, FloatArray
 from .algorithms.base import (
     ContinuationAlgorithm,
     CorrectorResult,

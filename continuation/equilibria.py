@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
+from .typing import ComplexArray, FloatArray
 from .errors import ConvergenceError
 from .newton import NewtonResult, newton
 from .params import Params

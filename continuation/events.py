@@ -57,7 +57,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
+from .typing import ComplexArray, FloatArray
 from .algorithms.base import _inf_norm
 
 Direction = Literal["both", "up", "down"]

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ._types import FloatArray
+from .typing import FloatArray
 from .errors import ContinuationError, ConvergenceError
 from .fates import Fate, FateClassifier, FateKind, passage_side, refine_equilibrium
 from .manifolds import unstable_manifold

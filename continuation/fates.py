@@ -68,7 +68,7 @@ from typing import Any
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
+from .typing import ComplexArray, FloatArray
 from .errors import ContinuationError
 from .newton import newton
 from .settings import NewtonSettings

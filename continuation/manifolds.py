@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
+from .typing import ComplexArray, FloatArray
 from .fates import Fate, FateClassifier, refine_equilibrium
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, Simulator, Trajectory, _param_vector, _period
 from .status import Status

@@ -11,7 +11,7 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ._types import FloatArray
+from .typing import FloatArray
 from .errors import ConvergenceError
 from .settings import NewtonSettings
 from .status import Status

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ._types import FloatArray
+from .typing import FloatArray
 from .branch import Branch, SpecialKind
 
 _MARKERS = {

@@ -13,7 +13,7 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
+from .typing import ComplexArray, FloatArray
 from .params import Params
 from .system import System
 

@@ -80,7 +80,7 @@ import numpy as np
 import scipy.integrate as si
 from scipy.optimize import brentq
 
-from ._types import FloatArray
+from .typing import FloatArray
 from .errors import ContinuationError
 from .params import Params
 from .status import Status

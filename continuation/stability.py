@@ -24,7 +24,7 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ._types import ComplexArray
+from .typing import ComplexArray
 
 log = logging.getLogger(__name__)
 

@@ -102,7 +102,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ._types import FloatArray
+from .typing import FloatArray
 from .algorithms.base import (
     ContinuationAlgorithm,
     StepOutcome,

@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from ._types import FloatArray
+from .typing import FloatArray
 from .algorithms.base import csc_with_data
 from .differentiation import fd_jacobian
 from .errors import ModelError

@@ -31,7 +31,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 from continuation.ops import NUMPY_OPS, Ops
 
 from .hydro.propeller import revolutions, thrust

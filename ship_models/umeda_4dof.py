@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 import scipy.optimize as so
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 from continuation.newton import NewtonResult, newton
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.params import Params

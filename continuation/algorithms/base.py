@@ -61,7 +61,7 @@ import scipy.linalg.blas as sla_blas
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .._types import FloatArray
+from ..typing import FloatArray
 from ..settings import ContinuationSettings, NewtonSettings
 
 log = logging.getLogger(__name__)

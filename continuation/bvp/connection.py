@@ -65,7 +65,7 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
 
-from .._types import FloatArray
+from ..typing import FloatArray
 from ..newton import newton as _newton
 from ..params import Params
 from ..settings import NewtonSettings

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
+from ..typing import FloatArray
 from ..params import Params
 from ..status import Status
 from .collocation import CollocationMesh

@@ -35,7 +35,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .._types import FloatArray
+from ..typing import FloatArray
 from ..errors import ConvergenceError
 from ..newton import NewtonResult
 from ..settings import NewtonSettings

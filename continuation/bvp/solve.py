@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
+from ..typing import FloatArray
 from ..errors import ConvergenceError
 from ..newton import NewtonResult, newton
 from ..settings import ContinuationSettings, NewtonSettings

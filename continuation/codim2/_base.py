@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .._types import ComplexArray, FloatArray
+from ..typing import ComplexArray, FloatArray
 from ..newton import NewtonResult, newton
 from ..params import Params
 from ..settings import NewtonSettings

@@ -41,7 +41,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .._types import FloatArray
+from ..typing import FloatArray
 from ..params import Params
 from ..settings import NewtonSettings
 from ..system import System

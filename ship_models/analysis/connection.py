@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 from continuation.bvp import (
     CollocationMesh,
     ConnectionResult,

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import ComplexArray, FloatArray
+from continuation.typing import ComplexArray, FloatArray
 from continuation.params import Params
 from continuation.stability import eigen
 

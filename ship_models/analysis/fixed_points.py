@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 from continuation.api import continue_equilibria
 from continuation.branch import Branch, BranchPoint
 from continuation.equilibria import solve_equilibrium, unique_equilibria

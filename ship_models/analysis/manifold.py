@@ -65,7 +65,7 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 from continuation.errors import ContinuationError
 from continuation.fates import Fate, FateClassifier, FateKind
 from continuation.params import Params

@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 from continuation.errors import ContinuationError
 from continuation.params import Params
 from continuation.simulate import PoincareSection, SimEvent, Trajectory, simulate

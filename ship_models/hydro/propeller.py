@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 from continuation.ops import NUMPY_OPS, Ops
 
 # Oosterveld & van Oossanen (1975), K_T = sum C J^s (P/D)^t (AE/A0)^u Z^v.

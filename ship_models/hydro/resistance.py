@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 from continuation.ops import NUMPY_OPS, Ops
 
 
