@@ -102,25 +102,24 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .typing import FloatArray
 from .algorithms.base import (
     ContinuationAlgorithm,
     StepOutcome,
     StepState,
-    correct,
-    linearize,
-    make_point,
     theta_norm,
     theta_weights,
 )
+from .algorithms.corrector import correct
 from .algorithms.palc import PALC
+from .algorithms.point import make_point
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .driver import continue_branch
 from .errors import ContinuationError, ConvergenceError
 from .events import Event
-from .problem import EquilibriumProblem
+from .problem import EquilibriumProblem, linearize
 from .settings import ContinuationSettings, NewtonSettings
 from .status import Status
+from .typing import FloatArray
 
 log = logging.getLogger(__name__)
 

@@ -15,13 +15,9 @@ from typing import Any
 import numpy as np
 
 from ..settings import ContinuationSettings
-from .base import (
-    ContinuationAlgorithm,
-    StepOutcome,
-    StepState,
-    correct,
-    make_point,
-)
+from .base import ContinuationAlgorithm, StepOutcome, StepState
+from .corrector import correct
+from .point import make_point
 
 
 class Natural(ContinuationAlgorithm):

@@ -18,7 +18,7 @@ one step of length ``ds``
 3. computes the new tangent from ``[[G_z, G_p], [(w o tau_a)^T]] t = e_{N+1}`` at the
    converged point, ``tau = t / ||t||_theta``; the last equation gives
    ``<tau_a, tau>_theta > 0``, so the orientation is kept through folds. The same LU
-   factorisation gives the branch-point test function (see :mod:`.base`).
+   factorisation gives the branch-point test function (see :mod:`.point`).
 
 A step is rejected (and retried by the driver with a smaller ``ds``) when
 
@@ -69,15 +69,9 @@ from typing import Any
 import numpy as np
 
 from ..settings import ContinuationSettings
-from .base import (
-    NOISE_SLACK,
-    ROUNDOFF_FLOOR,
-    ContinuationAlgorithm,
-    StepOutcome,
-    StepState,
-    correct,
-    make_point,
-)
+from .base import ContinuationAlgorithm, StepOutcome, StepState
+from .corrector import NOISE_SLACK, ROUNDOFF_FLOOR, correct
+from .point import make_point
 
 #: The Hermite predictor is used only where consecutive tangents differ by at most this
 #: angle (degrees, ``theta``-metric): where the steps resolve the branch's turning, so
