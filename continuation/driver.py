@@ -391,34 +391,10 @@ def continue_branch(
         Bad input: ``z0`` of the wrong shape or not finite, ``p0`` not finite or out of
         bounds, ``direction`` unknown, ``events`` not :class:`Event` instances.
     """
-    settings = settings if settings is not None else ContinuationSettings()
-    if not isinstance(settings, ContinuationSettings):
-        raise ValueError(f"`settings` must be a ContinuationSettings, got {type(settings)}")
-    algorithm = algorithm if algorithm is not None else PALC()
-    if not isinstance(algorithm, ContinuationAlgorithm):
-        raise ValueError(f"`algorithm` must be a ContinuationAlgorithm, got {algorithm!r}")
-    if direction not in ("forward", "backward", "both"):
-        raise ValueError(f"`direction` must be 'forward', 'backward' or 'both', got {direction!r}")
-    events = tuple(events)
-    for e in events:
-        if not isinstance(e, Event):
-            raise ValueError(f"`events` must contain Event instances, got {e!r}")
-    n = int(problem.n_unknowns)
-    z = np.asarray(z0, dtype=float)
-    if z.shape != (n,):
-        raise ValueError(f"`z0` must have shape ({n},), got {z.shape}")
-    if not np.all(np.isfinite(z)):
-        raise ValueError(f"`z0` contains NaN or inf: {z}")
-    try:
-        p0 = float(p0)
-    except (TypeError, ValueError):
-        raise ValueError(f"`p0` must be a float, got {p0!r}") from None
-    if not math.isfinite(p0):
-        raise ValueError(f"`p0` must be finite, got {p0}")
-    if not settings.p_min <= p0 <= settings.p_max:
-        raise ValueError(
-            f"`p0`={p0} lies outside [p_min, p_max] = [{settings.p_min}, {settings.p_max}]"
-        )
+    settings, algorithm, events, z, p0 = _checked_inputs(
+        problem, z0, p0, algorithm, settings, events, direction
+    )
+    n = z.size
 
     start = _correct_start(problem, z, p0, settings)
     if not start.converged:
@@ -461,6 +437,54 @@ def continue_branch(
     with blas_threads_for(n, is_sparse(problem)):
         br = run_checked(problem, settings, run_all)
     return _finish(br, throw)
+
+
+def _checked_inputs(
+    problem: Any,
+    z0: Any,
+    p0: Any,
+    algorithm: ContinuationAlgorithm | None,
+    settings: ContinuationSettings | None,
+    events: Sequence[Event],
+    direction: str,
+) -> tuple[ContinuationSettings, ContinuationAlgorithm, tuple[Event, ...], FloatArray, float]:
+    """The arguments of :func:`continue_branch` checked and with their defaults:
+    ``(settings, algorithm, events, z0 as float array (N,), p0 as float)``.
+
+    Raises
+    ------
+    ValueError
+        One line naming the argument (see :func:`continue_branch`).
+    """
+    settings = settings if settings is not None else ContinuationSettings()
+    if not isinstance(settings, ContinuationSettings):
+        raise ValueError(f"`settings` must be a ContinuationSettings, got {type(settings)}")
+    algorithm = algorithm if algorithm is not None else PALC()
+    if not isinstance(algorithm, ContinuationAlgorithm):
+        raise ValueError(f"`algorithm` must be a ContinuationAlgorithm, got {algorithm!r}")
+    if direction not in ("forward", "backward", "both"):
+        raise ValueError(f"`direction` must be 'forward', 'backward' or 'both', got {direction!r}")
+    events = tuple(events)
+    for e in events:
+        if not isinstance(e, Event):
+            raise ValueError(f"`events` must contain Event instances, got {e!r}")
+    n = int(problem.n_unknowns)
+    z = np.asarray(z0, dtype=float)
+    if z.shape != (n,):
+        raise ValueError(f"`z0` must have shape ({n},), got {z.shape}")
+    if not np.all(np.isfinite(z)):
+        raise ValueError(f"`z0` contains NaN or inf: {z}")
+    try:
+        p0 = float(p0)
+    except (TypeError, ValueError):
+        raise ValueError(f"`p0` must be a float, got {p0!r}") from None
+    if not math.isfinite(p0):
+        raise ValueError(f"`p0` must be finite, got {p0}")
+    if not settings.p_min <= p0 <= settings.p_max:
+        raise ValueError(
+            f"`p0`={p0} lies outside [p_min, p_max] = [{settings.p_min}, {settings.p_max}]"
+        )
+    return settings, algorithm, events, z, p0
 
 
 def _correct_start(
