@@ -111,10 +111,10 @@ class SparseEigs:
       singular); otherwise SciPy factorises ``G_z`` itself.
 
     The Arnoldi iteration starts from a fixed vector. Starting it from the previous
-    point's eigenvectors saves about 12 % more on the discrete Bratu problem (N = 200)
-    with one BLAS thread, but extracting the eigenvectors (ARPACK ``dneupd``) runs
-    level-3 BLAS that multi-threaded OpenBLAS parallelises, which made whole runs 2-6x
-    slower on a loaded machine: not done.
+    point's eigenvectors saves a little with one BLAS thread, but extracting the
+    eigenvectors (ARPACK ``dneupd``) runs level-3 BLAS that multi-threaded OpenBLAS
+    parallelises, which made whole runs several times slower on a loaded machine: not
+    done (measurements in ``benchmarks/README.md``, *Engine design measurements*).
     """
 
     __slots__ = ("n", "k", "sigma", "rightmost")
@@ -219,7 +219,7 @@ def run_checked(
 
 #: Rows of a sparse branch whose saddle index is checked against the rightmost
 #: eigenvalues (the first, the middle and the last; each check is one Arnoldi run
-#: without shift-invert, about 10 ms at n = 200).
+#: without shift-invert).
 N_STABILITY_CHECKS = 3
 
 
