@@ -191,7 +191,7 @@ class _Generic:
 def test_fused_corrector_matches_generic(exact):
     """The fused CasADi path of the corrector (EquilibriumProblem) and the generic path
     (protocol methods only) follow the same iteration: same point, iterations, tangent."""
-    from conftest import lorenz84
+    from helpers import lorenz84
 
     from continuation.problem import EquilibriumProblem
 

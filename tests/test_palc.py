@@ -7,8 +7,14 @@ import math
 
 import numpy as np
 import pytest
-from conftest import bratu, brusselator, circle, fold_normal_form, hopf_normal_form
-from test_special_points import assert_invariants
+from helpers import (
+    assert_invariants,
+    bratu,
+    brusselator,
+    circle,
+    fold_normal_form,
+    hopf_normal_form,
+)
 
 import continuation.algorithms.base as base
 import continuation.algorithms.corrector as corrector
@@ -246,7 +252,7 @@ def test_codim2_fold_curve_does_not_jump_to_a_distant_family():
     closed form derived in tests/test_codim2.py::TestCSTR); the curve passes the cusp at
     beta = B/4 - 1 = 2.5, turns, and reaches p_min = -0.99 as x1 -> 0.
     """
-    from conftest import cstr
+    from helpers import cstr
 
     from continuation.codim2 import continue_codim2
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-from conftest import bratu, brusselator, hopf_normal_form, lorenz84, periodic_sine
+from helpers import bratu, brusselator, hopf_normal_form, lorenz84, periodic_sine
 
 import continuation._kernel as K
 import continuation._tape as T
