@@ -116,7 +116,7 @@ from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .driver import continue_branch
 from .errors import ContinuationError, ConvergenceError
 from .events import Event
-from .problem import EquilibriumProblem, linearize
+from .problem import EquilibriumProblem, difference, linearize
 from .settings import ContinuationSettings, NewtonSettings
 from .status import Status
 from .typing import FloatArray
@@ -641,8 +641,8 @@ def _check_crossing(
 
 def _delta(problem: Any, z1: FloatArray, p1: float, z0: FloatArray, p0: float) -> FloatArray:
     """``(z1, p1) - (z0, p0)``, periodic states reduced modulo their period."""
-    diff = getattr(problem, "difference", None)
-    dz = diff(z1, z0) if callable(diff) else np.asarray(z1) - np.asarray(z0)
+    diff = difference(problem)
+    dz = diff(z1, z0) if diff is not None else np.asarray(z1) - np.asarray(z0)
     return np.append(np.asarray(dz, dtype=float), float(p1) - float(p0))
 
 
