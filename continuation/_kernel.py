@@ -312,7 +312,7 @@ if HAVE_NUMBA:
 
     @_jit
     def _backward_error(M, r, u):  # pragma: no cover - compiled
-        """``base._backward_error`` of the bordered residual ``r`` at ``u``: ``max(max_i
+        """``corrector._backward_error`` of the bordered residual ``r`` at ``u``: ``max(max_i
         |G_i| / max_i (|M| |u|)_i, |r_n| / (|M| |u|)_n)``, ``i < n``."""
         n1 = u.size
         n = n1 - 1
@@ -462,7 +462,7 @@ if HAVE_NUMBA:
         for i in range(n1):
             hlev += c[i] * ua[i]
         hlev += ds
-        # the componentwise step scale max(|u_pred,i|, |u_ref,i|) + a (base._step_ok)
+        # the componentwise step scale max(|u_pred,i|, |u_ref,i|) + a (corrector._step_ok)
         su = np.empty(n1)
         ur = 0.0
         for i in range(n1):
