@@ -21,24 +21,39 @@ from .bvp import (
 )
 from .codim2 import FoldProblem, HopfProblem, continue_codim2
 from .driver import continue_branch
+from .dynamics import (
+    BisectionResult,
+    EdgeChange,
+    EquilibriumTracker,
+    EventHits,
+    Fate,
+    FateClassifier,
+    FateKind,
+    GraphDiff,
+    ManifoldBranch,
+    ManifoldResult,
+    PoincareSection,
+    SaddleVisit,
+    SimEvent,
+    Simulator,
+    Trajectory,
+    bisect_fate,
+    build_global_graph,
+    classify_fate,
+    compare_graphs,
+    manifold_fate_function,
+    passage_side,
+    simulate,
+    unstable_manifold,
+)
 from .equilibria import EquilibriumResult, solve_equilibrium, unique_equilibria
 from .errors import ContinuationError, ConvergenceError, ModelError
 from .events import Event
-from .fate_bisection import (
-    BisectionResult,
-    EquilibriumTracker,
-    bisect_fate,
-    manifold_fate_function,
-)
-from .fates import Fate, FateClassifier, FateKind, SaddleVisit, classify_fate, passage_side
-from .global_graph import EdgeChange, GraphDiff, build_global_graph, compare_graphs
-from .manifolds import ManifoldBranch, ManifoldResult, unstable_manifold
 from .newton import NewtonResult, newton
 from .ops import CASADI_OPS, NUMPY_OPS, Ops
 from .params import Params
 from .problem import ContinuationProblem, EquilibriumProblem
 from .settings import ContinuationSettings, DetectionSettings, NewtonSettings
-from .simulate import EventHits, PoincareSection, SimEvent, Simulator, Trajectory, simulate
 from .stability import (
     EigenResult,
     count_unstable,

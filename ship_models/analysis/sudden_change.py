@@ -46,9 +46,9 @@ from typing import Any
 import numpy as np
 
 from continuation._types import FloatArray
+from continuation.dynamics.simulate import PoincareSection, SimEvent, Trajectory, simulate
 from continuation.errors import ContinuationError
 from continuation.params import Params
-from continuation.simulate import PoincareSection, SimEvent, Trajectory, simulate
 from continuation.status import Status
 
 from .eigen import paper_scales

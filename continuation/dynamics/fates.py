@@ -42,7 +42,7 @@ left (:attr:`SaddleVisit.side`): the sign of the unstable coordinate
     c_u = \frac{w_u^T\, d}{w_u^T v_u}, \qquad d = x_{exit} - (x_s + k P),
 
 at the first sample beyond ``2 saddle_radius`` (``w_u`` the left and ``v_u`` the right
-unstable eigenvector, ``v_u`` oriented as in :mod:`continuation.manifolds`: its first
+unstable eigenvector, ``v_u`` oriented as in :mod:`continuation.dynamics.manifolds`: its first
 periodic component positive if not negligible, else its largest component). Near a
 hyperbolic saddle, :math:`W^s_{loc}` is the graph :math:`c_u = h(c_s)` with
 :math:`h = O(|c_s|^2)` (stable manifold theorem; Guckenheimer & Holmes 1983,
@@ -68,10 +68,11 @@ from typing import Any
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
-from .errors import ContinuationError
-from .newton import newton
-from .settings import NewtonSettings
+from .._types import ComplexArray, FloatArray
+from ..errors import ContinuationError
+from ..newton import newton
+from ..settings import NewtonSettings
+from ..status import Status
 from .simulate import (
     DEFAULT_ATOL,
     DEFAULT_RTOL,
@@ -83,7 +84,6 @@ from .simulate import (
     _param_vector,
     _period,
 )
-from .status import Status
 
 log = logging.getLogger(__name__)
 
@@ -415,7 +415,7 @@ class FateClassifier:
         A periodic orbit must extend further than this (scaled) from its section point
         (default ``1000 * tol``).
     method, rtol, atol : optional
-        Integrator and tolerances (see :func:`~continuation.simulate.simulate`).
+        Integrator and tolerances (see :func:`~continuation.dynamics.simulate.simulate`).
     """
 
     def __init__(

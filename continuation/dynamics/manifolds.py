@@ -33,10 +33,10 @@ from typing import Any
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
+from .._types import ComplexArray, FloatArray
+from ..status import Status
 from .fates import Fate, FateClassifier, refine_equilibrium
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, Simulator, Trajectory, _param_vector, _period
-from .status import Status
 
 log = logging.getLogger(__name__)
 
@@ -263,7 +263,7 @@ def unstable_manifold(
     scale : array_like (n,), optional
         State scales for the norm of ``v_u``.
     dt, method, rtol, atol
-        Sampling and integrator options (see :func:`~continuation.simulate.simulate`).
+        Sampling and integrator options (see :func:`~continuation.dynamics.simulate.simulate`).
     refine : bool
         Newton-refine ``x_saddle`` first.
     dense : bool
