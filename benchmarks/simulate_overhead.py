@@ -30,7 +30,7 @@ from functools import partial
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from continuation.dynamics.simulate import PoincareSection, SimEvent, simulate
+from continuation.dynamics import PoincareSection, SimEvent, simulate
 from continuation.ops import NUMPY_OPS
 from continuation.system import System
 

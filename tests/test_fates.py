@@ -25,15 +25,20 @@ import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
 
-from continuation.dynamics.fate_bisection import (
+from continuation.dynamics import (
     EquilibriumTracker,
+    FateClassifier,
+    FateKind,
+    PoincareSection,
+    SimEvent,
     bisect_fate,
+    classify_fate,
     fate_label,
     manifold_fate_function,
+    passage_side,
+    simulate,
+    unstable_manifold,
 )
-from continuation.dynamics.fates import FateClassifier, FateKind, classify_fate, passage_side
-from continuation.dynamics.manifolds import unstable_manifold
-from continuation.dynamics.simulate import PoincareSection, SimEvent, simulate
 from continuation.errors import ContinuationError
 from continuation.status import Status
 from continuation.system import System

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from continuation.dynamics.global_graph import GraphDiff, build_global_graph, compare_graphs
-from continuation.dynamics.simulate import SimEvent
+from continuation.dynamics import GraphDiff, SimEvent, build_global_graph, compare_graphs
 from continuation.status import Status
 from continuation.system import System
 

@@ -6,9 +6,12 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicHermiteSpline
 
-from continuation.dynamics.fates import FateClassifier
-from continuation.dynamics.manifolds import oriented_unstable_direction, unstable_manifold
-from continuation.dynamics.simulate import SimEvent
+from continuation.dynamics import (
+    FateClassifier,
+    SimEvent,
+    oriented_unstable_direction,
+    unstable_manifold,
+)
 from continuation.status import Status
 from continuation.system import System
 

@@ -28,8 +28,7 @@ from continuation.bvp.collocation import CollocationMesh
 from continuation.bvp.connection import HeteroclinicProblem, PinPhase
 from continuation.bvp.solve import check_convergence, continue_connection, solve_connection
 from continuation.codim2 import continue_codim2
-from continuation.dynamics.manifolds import unstable_manifold
-from continuation.dynamics.simulate import PoincareSection, simulate
+from continuation.dynamics import PoincareSection, simulate, unstable_manifold
 from continuation.settings import ContinuationSettings
 from continuation.status import Status
 from continuation.system import System

@@ -24,7 +24,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from continuation.bvp.solve import check_convergence
-from continuation.dynamics.simulate import SimEvent, simulate
+from continuation.dynamics import SimEvent, simulate
 from continuation.status import Status
 from ship_models import purse_seiner, purse_seiner_surge
 from ship_models.analysis.connection import (

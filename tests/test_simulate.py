@@ -7,13 +7,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.linalg import expm
 
-from continuation.dynamics.simulate import (
-    PoincareSection,
-    SimEvent,
-    Simulator,
-    Trajectory,
-    simulate,
-)
+from continuation.dynamics import PoincareSection, SimEvent, Simulator, Trajectory, simulate
 from continuation.errors import ContinuationError
 from continuation.events import Event
 from continuation.status import Status

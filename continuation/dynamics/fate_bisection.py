@@ -39,8 +39,11 @@ from ..newton import newton
 from ..params import Params
 from ..settings import NewtonSettings
 from ..status import Status
-from .fates import Fate, FateClassifier, FateKind, passage_side, refine_equilibrium
+from ._common import positive
+from .classifier import FateClassifier
+from .fates import Fate, FateKind, passage_side
 from .manifolds import unstable_manifold
+from .saddles import REFINE_NEWTON, n_unstable_of, refine_equilibrium
 
 log = logging.getLogger(__name__)
 
@@ -147,8 +150,7 @@ def bisect_fate(
         raise ValueError(f"`a` and `b` must be numbers, got {a!r}, {b!r}") from None
     if not (math.isfinite(a) and math.isfinite(b)) or a == b:
         raise ValueError(f"`a` and `b` must be distinct finite numbers, got {a}, {b}")
-    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
-        raise ValueError(f"`tol` must be a positive finite number, got {tol!r}")
+    positive("tol", tol)
     if not (isinstance(max_evaluations, int) and max_evaluations >= 2):
         raise ValueError(f"`max_evaluations` must be an integer >= 2, got {max_evaluations!r}")
     if not callable(fate_at):
@@ -278,7 +280,7 @@ class EquilibriumTracker:
             self.names = tuple(f"E{i}" for i in range(len(pts)))
         if not pts:
             raise ValueError("`points` must contain at least one equilibrium")
-        self.newton = newton or NewtonSettings(tol=1e-11, step_tol=1e-10, max_iter=30)
+        self.newton = newton or REFINE_NEWTON
         self.max_halvings = int(max_halvings)
         self.check_index = check_index
         v0 = float(vec[self.k])
@@ -320,9 +322,7 @@ class EquilibriumTracker:
             if not res.converged:
                 return None
             if self.check_index:
-                vals = np.linalg.eigvals(self.system.jacobian(res.z, pv))
-                thr = 1e-9 * max(1.0, float(np.max(np.abs(vals))))
-                nu = int(np.sum(vals.real > thr))
+                nu = n_unstable_of(np.linalg.eigvals(self.system.jacobian(res.z, pv)))
                 if nu != self.index[j]:
                     raise ConvergenceError(
                         f"equilibrium {self.names[j]!r} changed its saddle index from "

@@ -26,7 +26,8 @@ import networkx as nx
 import numpy as np
 
 from ..status import Status
-from .fates import Fate, FateClassifier, FateKind, _with_shift
+from .classifier import FateClassifier
+from .fates import Fate, FateKind, _with_shift
 from .manifolds import unstable_manifold
 
 log = logging.getLogger(__name__)

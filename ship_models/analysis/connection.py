@@ -57,7 +57,7 @@ from continuation.bvp import (
     solve_connection,
 )
 from continuation.bvp.simplified import JacobianCache, simplified_newton
-from continuation.dynamics.simulate import SimEvent, Simulator, Trajectory
+from continuation.dynamics import SimEvent, Simulator, Trajectory
 from continuation.errors import ContinuationError, ConvergenceError
 from continuation.newton import newton
 from continuation.params import Params

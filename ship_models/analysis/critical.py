@@ -59,8 +59,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from continuation.dynamics.fate_bisection import bisect_fate, fate_label
-from continuation.dynamics.fates import Fate, FateKind
+from continuation.dynamics import Fate, FateKind, bisect_fate, fate_label
 from continuation.errors import ContinuationError, ConvergenceError
 from continuation.params import Params
 from continuation.status import Status

@@ -66,8 +66,15 @@ from typing import Any
 import numpy as np
 
 from continuation._types import FloatArray
-from continuation.dynamics.fates import Fate, FateClassifier, FateKind
-from continuation.dynamics.simulate import EventHits, PoincareSection, SimEvent, Trajectory
+from continuation.dynamics import (
+    EventHits,
+    Fate,
+    FateClassifier,
+    FateKind,
+    PoincareSection,
+    SimEvent,
+    Trajectory,
+)
 from continuation.errors import ContinuationError
 from continuation.params import Params
 from continuation.status import Status

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from continuation._types import FloatArray
-from continuation.dynamics.simulate import PoincareSection, SimEvent, Trajectory, simulate
+from continuation.dynamics import PoincareSection, SimEvent, Trajectory, simulate
 from continuation.errors import ContinuationError
 from continuation.params import Params
 from continuation.status import Status
