@@ -18,12 +18,24 @@ methods are dominated by call overhead on small models, while CVODES calls the c
 function in C. BDF is the default rather than Adams for its robustness on stiff models,
 at a small extra cost on non-stiff ones (measurements: ``benchmarks/README.md``,
 "Time integrators").
+
+Interrupts. A CVODES call is native code, but CasADi polls Python's signal handlers
+between right-hand-side evaluations, so a Ctrl-C (SIGINT) stops it within one
+integrator step; the call then fails with a ``RuntimeError`` (``CV_RHSFUNC_FAIL``)
+whose message, with CasADi's warnings off, does not say why. :func:`sigint_recorded`
+counts the SIGINTs that arrive while a simulation runs, so that :class:`_CvodesBackend`
+raises ``KeyboardInterrupt`` for such a failure instead of reporting an integration
+failure (which would be misread as a blow-up, and retried).
 """
 
 from __future__ import annotations
 
 import math
+import signal
+import threading
 import weakref
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import casadi as ca
@@ -41,6 +53,55 @@ DEFAULT_RTOL = 1e-10
 DEFAULT_ATOL = 1e-12
 #: CVODES internal steps allowed per output interval before it reports failure.
 _MAX_STEPS_PER_SAMPLE = 20000
+
+
+class _Sigints:
+    """SIGINTs seen while :func:`sigint_recorded` blocks run (``count``), and their depth."""
+
+    count = 0
+    depth = 0
+    previous: Any = None
+
+
+def _record_sigint(signum: int, frame: Any) -> Any:
+    """Count the signal, then hand it to the handler that was installed before."""
+    _Sigints.count += 1
+    return _Sigints.previous(signum, frame)
+
+
+@contextmanager
+def sigint_recorded() -> Iterator[None]:
+    """Count every SIGINT that arrives while the block runs, then handle it as before.
+
+    The previous handler still runs (Python's default raises ``KeyboardInterrupt``);
+    the count only lets a native call that failed tell that a SIGINT arrived while it
+    ran (module notes). Re-entrant; a no-op outside the main thread (where no signal
+    handler can be set) and when the current handler is not a Python callable
+    (``SIG_IGN``, ``SIG_DFL``).
+    """
+    if _Sigints.depth > 0:
+        _Sigints.depth += 1
+        try:
+            yield
+        finally:
+            _Sigints.depth -= 1
+        return
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if not callable(previous):
+        yield
+        return
+    _Sigints.previous = previous
+    _Sigints.depth = 1
+    signal.signal(signal.SIGINT, _record_sigint)
+    try:
+        yield
+    finally:
+        _Sigints.depth = 0
+        signal.signal(signal.SIGINT, previous)
+        _Sigints.previous = None
 
 
 class _IntegrationFailure(Exception):
@@ -106,9 +167,12 @@ class _CvodesBackend:
         """States at ``t0 + T k / n_out``, k = 1..n_out, shape ``(n_out, n)``."""
         integ = self._integrator(n_out, span_hint)
         self.n_calls += 1
+        n_sigint = _Sigints.count
         try:
             out = integ(x0=x0, p=np.concatenate([self.p, [T]]))
         except RuntimeError as exc:
+            if _Sigints.count != n_sigint or "KeyboardInterrupt" in str(exc):
+                raise KeyboardInterrupt from None  # Ctrl-C inside CVODES (module notes)
             msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else "CVODES failed"
             raise _IntegrationFailure(msg) from None
         xs = np.asarray(out["xf"], dtype=float).reshape(self.n, n_out).T

@@ -45,6 +45,7 @@ from .integrators import (
     _CvodesBackend,
     _IntegrationFailure,
     _ScipyBackend,
+    sigint_recorded,
 )
 from .trajectory import EventHits, Trajectory
 
@@ -178,7 +179,8 @@ class Simulator:
         positive("dt", dt)
         n_samples = max(1, math.ceil(abs(span) / dt - 1e-9))
         watches = self._watches(events)
-        return self._loop(x0, t0, t1, n_samples, watches, dense, progress)
+        with sigint_recorded():
+            return self._loop(x0, t0, t1, n_samples, watches, dense, progress)
 
     def _intervals(self, x0: FloatArray, t0: float, t1: float, n_samples: int) -> Iterator[Any]:
         """Yield blocks ``(t (k+1,), x (k+1, n), interp, is_output (k+1,))``.
