@@ -12,6 +12,7 @@ from ..params import Params
 
 
 def param_vector(system: Any, params: Any) -> FloatArray:
+    """Parameter vector ``(m,)`` from a Params, a mapping or an array (checked by the system)."""
     if hasattr(system, "check_params"):
         return np.asarray(system.check_params(params, "params"), dtype=float)
     if isinstance(params, Params):
@@ -20,12 +21,14 @@ def param_vector(system: Any, params: Any) -> FloatArray:
 
 
 def state_period(system: Any, n: int) -> FloatArray:
+    """Period of each of the ``n`` states, ``(n,)`` (``0`` where not periodic)."""
     per = getattr(system, "period", None)
     return np.zeros(n) if per is None else np.asarray(per, dtype=float).reshape(n)
 
 
 
 def check_scale(n: int, scale: Any) -> FloatArray:
+    """State scales ``(n,)`` of the distances (default ones); ValueError unless positive."""
     if scale is None:
         return np.ones(n)
     s = np.asarray(scale, dtype=float).reshape(-1)
@@ -54,6 +57,7 @@ def period_shift(period: FloatArray, x: FloatArray, x_ref: FloatArray) -> tuple[
 
 
 def positive(name: str, v: Any) -> float:
+    """``float(v)``; ValueError naming ``name`` unless ``v`` is a positive finite number."""
     if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
         raise ValueError(f"`{name}` must be a positive finite number, got {v!r}")
     return float(v)
