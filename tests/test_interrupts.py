@@ -23,6 +23,8 @@ from pathlib import Path
 
 import pytest
 
+from continuation.dynamics.integrators import _Sigints, sigint_recorded
+
 ROOT = Path(__file__).resolve().parents[1]
 
 CHILD = r"""
@@ -99,3 +101,23 @@ def test_sigint_stops_a_long_cvodes_call_and_keeps_the_finished_samples(kind):
     # error (about 1.6e-7 after 50 time units, some 250 periods, at rtol = 1e-10)
     assert last["energy_drift"] < 1e-6
     assert proc.returncode == -signal.SIGINT and "KeyboardInterrupt" in proc.stderr
+
+
+def test_sigint_recorded_counts_chains_and_restores_the_handler():
+    seen = []
+
+    def handler(signum, frame):
+        seen.append(signum)
+
+    old = signal.signal(signal.SIGINT, handler)
+    try:
+        with sigint_recorded():
+            with sigint_recorded():  # nested (a classifier's segments): one install
+                n0 = _Sigints.count
+                signal.raise_signal(signal.SIGINT)
+                assert _Sigints.count == n0 + 1
+            assert signal.getsignal(signal.SIGINT) is not handler
+        assert seen == [signal.SIGINT]  # the previous handler still ran
+        assert signal.getsignal(signal.SIGINT) is handler
+    finally:
+        signal.signal(signal.SIGINT, old)

@@ -79,15 +79,15 @@ def sigint_recorded() -> Iterator[None]:
     handler can be set) and when the current handler is not a Python callable
     (``SIG_IGN``, ``SIG_DFL``).
     """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
     if _Sigints.depth > 0:
         _Sigints.depth += 1
         try:
             yield
         finally:
             _Sigints.depth -= 1
-        return
-    if threading.current_thread() is not threading.main_thread():
-        yield
         return
     previous = signal.getsignal(signal.SIGINT)
     if not callable(previous):
