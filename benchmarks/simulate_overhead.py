@@ -1,4 +1,4 @@
-"""Compare time integrators for :func:`continuation.simulate.simulate` side by side.
+"""Compare time integrators for :func:`continuation.dynamics.simulate.simulate` side by side.
 
 Run: ``python benchmarks/simulate_overhead.py`` (a few minutes on one core; methods
 slower than ``TIME_LIMIT`` once are not re-run).
@@ -30,8 +30,8 @@ from functools import partial
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from continuation.dynamics import PoincareSection, SimEvent, simulate
 from continuation.ops import NUMPY_OPS
-from continuation.simulate import PoincareSection, SimEvent, simulate
 from continuation.system import System
 
 

@@ -38,11 +38,8 @@ from .codim2 import FoldProblem, HopfProblem, continue_codim2
 # connecting orbits (boundary-value problems)
 from .bvp import ConnectionResult, HeteroclinicProblem, continue_connection, solve_connection
 
-# time domain: simulation, manifolds, fates (their modules move to continuation.dynamics)
-from .simulate import Trajectory, simulate
-from .manifolds import unstable_manifold
-from .fates import FateKind, classify_fate
-from .fate_bisection import bisect_fate
+# time domain (continuation.dynamics): simulation, manifolds, fates
+from .dynamics import FateKind, Trajectory, bisect_fate, classify_fate, simulate, unstable_manifold
 
 __all__ = [
     # the model

@@ -75,7 +75,7 @@ def compute(
     out: Path, progress: Callable[[str], None] | None = None, *, quick: bool = False
 ) -> dict[str, Any]:
     """Solve the connection, the curve and the bisection checks; write figures and data."""
-    from continuation.simulate import simulate
+    from continuation.dynamics import simulate
     from ship_models import purse_seiner
     from ship_models.analysis.connection import (
         critical_curve,

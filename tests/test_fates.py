@@ -1,4 +1,4 @@
-"""Tests of fate classification (continuation.fates) and fate bisection.
+"""Tests of fate classification (continuation.dynamics.fates) and fate bisection.
 
 Reference systems with known fates:
 
@@ -25,16 +25,21 @@ import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
 
-from continuation.errors import ContinuationError
-from continuation.fate_bisection import (
+from continuation.dynamics import (
     EquilibriumTracker,
+    FateClassifier,
+    FateKind,
+    PoincareSection,
+    SimEvent,
     bisect_fate,
+    classify_fate,
     fate_label,
     manifold_fate_function,
+    passage_side,
+    simulate,
+    unstable_manifold,
 )
-from continuation.fates import FateClassifier, FateKind, classify_fate, passage_side
-from continuation.manifolds import unstable_manifold
-from continuation.simulate import PoincareSection, SimEvent, simulate
+from continuation.errors import ContinuationError
 from continuation.status import Status
 from continuation.system import System
 

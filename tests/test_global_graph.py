@@ -1,4 +1,4 @@
-"""Tests of continuation.global_graph on systems whose global phase portraits are known."""
+"""Tests of continuation.dynamics.global_graph on systems whose global phase portraits are known."""
 
 from __future__ import annotations
 
@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from continuation.global_graph import GraphDiff, build_global_graph, compare_graphs
-from continuation.simulate import SimEvent
+from continuation.dynamics import GraphDiff, SimEvent, build_global_graph, compare_graphs
 from continuation.status import Status
 from continuation.system import System
 

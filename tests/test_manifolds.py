@@ -1,4 +1,4 @@
-"""Tests of continuation.manifolds against closed-form unstable manifolds."""
+"""Tests of continuation.dynamics.manifolds against closed-form unstable manifolds."""
 
 from __future__ import annotations
 
@@ -6,9 +6,12 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicHermiteSpline
 
-from continuation.fates import FateClassifier
-from continuation.manifolds import oriented_unstable_direction, unstable_manifold
-from continuation.simulate import SimEvent
+from continuation.dynamics import (
+    FateClassifier,
+    SimEvent,
+    oriented_unstable_direction,
+    unstable_manifold,
+)
 from continuation.status import Status
 from continuation.system import System
 

@@ -28,9 +28,8 @@ from continuation.bvp.collocation import CollocationMesh
 from continuation.bvp.connection import HeteroclinicProblem, PinPhase
 from continuation.bvp.solve import check_convergence, continue_connection, solve_connection
 from continuation.codim2 import continue_codim2
-from continuation.manifolds import unstable_manifold
+from continuation.dynamics import PoincareSection, simulate, unstable_manifold
 from continuation.settings import ContinuationSettings
-from continuation.simulate import PoincareSection, simulate
 from continuation.status import Status
 from continuation.system import System
 

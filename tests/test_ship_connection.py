@@ -9,7 +9,7 @@ References
   ``chi_c = 10 deg`` is for measured coefficients; our vessel has estimated ones, so
   the references here are independent computations with the same model:
 * bisection on the fate of the upslope branch by simulation (written in this file
-  with :func:`continuation.simulate.simulate`, and :func:`critical_fn_bisection`);
+  with :func:`continuation.dynamics.simulate.simulate`, and :func:`critical_fn_bisection`);
 * at ``chi_c = 0`` the lateral motions decouple (``v = r = phi = p = delta = 0`` is
   invariant), so the critical ``Fn`` must be that of the uncoupled surge model
   (a 2-D system), found here by shooting with SciPy's DOP853.
@@ -24,7 +24,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from continuation.bvp.solve import check_convergence
-from continuation.simulate import SimEvent, simulate
+from continuation.dynamics import SimEvent, simulate
 from continuation.status import Status
 from ship_models import purse_seiner, purse_seiner_surge
 from ship_models.analysis.connection import (
@@ -61,7 +61,7 @@ def _upslope_passes(model, Fn: float, chi_c: float) -> bool:
     """True when the upslope branch passes the next crest (periodic motion).
 
     Written independently of ship_models.analysis.connection: own saddle and
-    eigenvector, own events, CVODES through continuation.simulate.
+    eigenvector, own events, CVODES through continuation.dynamics.simulate.
     """
     p = model.default_params().replace(Fn=Fn, chi_c=chi_c)
     pv = np.asarray(p.values)

@@ -1,4 +1,4 @@
-"""Tests of continuation.simulate against exact solutions and independent quadrature."""
+"""Tests of continuation.dynamics.simulate against exact solutions and independent quadrature."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import pytest
 from scipy.integrate import quad
 from scipy.linalg import expm
 
+from continuation.dynamics import PoincareSection, SimEvent, Simulator, Trajectory, simulate
 from continuation.errors import ContinuationError
 from continuation.events import Event
-from continuation.simulate import PoincareSection, SimEvent, Simulator, Trajectory, simulate
 from continuation.status import Status
 from continuation.system import System
 

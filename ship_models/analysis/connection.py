@@ -56,11 +56,11 @@ from continuation.bvp import (
     solve_connection,
 )
 from continuation.bvp.simplified import JacobianCache, simplified_newton
+from continuation.dynamics import SimEvent, Simulator, Trajectory
 from continuation.errors import ContinuationError, ConvergenceError
 from continuation.newton import newton
 from continuation.params import Params
 from continuation.settings import ContinuationSettings, NewtonSettings
-from continuation.simulate import SimEvent, Simulator, Trajectory
 from continuation.status import Status
 from continuation.typing import FloatArray
 

@@ -9,7 +9,7 @@ capsizing due to broaching.
 
 :func:`critical_fn` locates it by bisection on the fate of that branch
 (:func:`~ship_models.analysis.manifold.unstable_manifold`, bisected by the generic
-:func:`continuation.fate_bisection.bisect_fate`): the bracket
+:func:`continuation.dynamics.fate_bisection.bisect_fate`): the bracket
 ``[Fn_lo, Fn_hi]`` always has ``fate(Fn_lo) != fate(Fn_hi)`` and is halved until its
 width is at most ``tol``; its cost is one branch simulation per halving
 (``log2(width / tol)`` of them).
@@ -33,7 +33,7 @@ passes ``crest@-1`` upslope, then capsizes after ``crest@-2``).
 on which it leaves the *first* neighbouring crest saddle it visits
 (:attr:`SaddleVisit.side <ship_models.analysis.manifold.SaddleVisit>`, the sign of
 its coordinate along that saddle's unstable eigenvector on leaving, see
-:func:`continuation.fates.passage_side`): continuing upslope is ``"periodic"``,
+:func:`continuation.dynamics.fates.passage_side`): continuing upslope is ``"periodic"``,
 turning back is named after the final fate (``"capsize"``, or stable surf-riding
 ``"equilibrium:..."``; ``"returned"`` should it still end periodic). This switches
 exactly at the primary connection. A branch that visits no shifted crest saddle
@@ -59,9 +59,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from continuation.dynamics import Fate, FateKind, bisect_fate, fate_label
 from continuation.errors import ContinuationError, ConvergenceError
-from continuation.fate_bisection import bisect_fate, fate_label
-from continuation.fates import Fate, FateKind
 from continuation.params import Params
 from continuation.status import Status
 

@@ -74,7 +74,7 @@ def capsize_event(model: Any, angle: float | None = None, *, terminal: bool = Tr
     -------
     continuation.events.Event
         Named ``"capsize"``; ``fn(x, p)`` accepts one state ``(8,)`` or samples
-        ``(M, 8)``. The simulator (:mod:`continuation.simulate`) adapts it.
+        ``(M, 8)``. The simulator (:mod:`continuation.dynamics.simulate`) adapts it.
     """
     phi_cap = capsize_angle(model, angle)
     i = model.state_index("phi")

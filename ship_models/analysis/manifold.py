@@ -65,10 +65,17 @@ from typing import Any
 
 import numpy as np
 
+from continuation.dynamics import (
+    EventHits,
+    Fate,
+    FateClassifier,
+    FateKind,
+    PoincareSection,
+    SimEvent,
+    Trajectory,
+)
 from continuation.errors import ContinuationError
-from continuation.fates import Fate, FateClassifier, FateKind
 from continuation.params import Params
-from continuation.simulate import EventHits, PoincareSection, SimEvent, Trajectory
 from continuation.status import Status
 from continuation.typing import FloatArray
 
@@ -105,7 +112,7 @@ class SaddleVisit:
         sign of its coordinate along the saddle's unstable eigenvector (oriented with
         ``xi_G`` increasing) on leaving, so ``-1`` continues upslope (the wave
         overtakes the ship) and ``+1`` turns back down the slope; ``0`` if unknown
-        (:class:`continuation.fates.SaddleVisit`).
+        (:class:`continuation.dynamics.fates.SaddleVisit`).
     """
 
     label: str
@@ -196,7 +203,7 @@ def _ship_fate(
     scales: FloatArray,
     match_tol: float,
 ) -> ShipFate:
-    """Translate a generic :class:`~continuation.fates.Fate` into a :class:`ShipFate`."""
+    """Translate a generic :class:`~continuation.dynamics.fates.Fate` into a :class:`ShipFate`."""
     visits = tuple(
         SaddleVisit(
             v.name, int(v.shift[0]) if v.shift else 0, float(v.t), float(v.distance), int(v.side)
@@ -265,7 +272,7 @@ def classify_ship_fate(
 ) -> tuple[Trajectory, ShipFate]:
     """Integrate from ``x0`` in segments until the fate is known (see module notes).
 
-    The generic :class:`continuation.fates.FateClassifier` does the work; this function
+    The generic :class:`continuation.dynamics.fates.FateClassifier` does the work; this function
     supplies the ship's capsize event, Poincare section, nondimensional distance and
     fixed points, and adds the ``recurrent`` fate.
 
@@ -304,7 +311,7 @@ def classify_ship_fate(
     progress : callable, optional
         ``progress(t)`` after each segment.
     rtol, atol : float
-        Integrator tolerances (CVODES BDF, :mod:`continuation.simulate`).
+        Integrator tolerances (CVODES BDF, :mod:`continuation.dynamics.simulate`).
 
     Returns
     -------

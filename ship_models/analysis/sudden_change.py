@@ -45,9 +45,9 @@ from typing import Any
 
 import numpy as np
 
+from continuation.dynamics import PoincareSection, SimEvent, Trajectory, simulate
 from continuation.errors import ContinuationError
 from continuation.params import Params
-from continuation.simulate import PoincareSection, SimEvent, Trajectory, simulate
 from continuation.status import Status
 from continuation.typing import FloatArray
 

@@ -19,7 +19,7 @@ connection sought (branch of ``W^u(A)`` on ``W^s(B)``) but also at secondary one
 (the branch passes ``B``, then lands on ``W^s`` of a further saddle), which can
 accumulate on the primary connection; bisection on the final fate may then lock onto
 one of them. The side on which the branch leaves ``B`` on its first passage
-(:func:`continuation.fates.passage_side`) switches only at the primary connection:
+(:func:`continuation.dynamics.fates.passage_side`) switches only at the primary connection:
 ``manifold_fate_function(..., passage="B")`` bisects that instead.
 """
 
@@ -33,14 +33,17 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ContinuationError, ConvergenceError
-from .fates import Fate, FateClassifier, FateKind, passage_side, refine_equilibrium
+from ..errors import ContinuationError, ConvergenceError
+from ..newton import newton
+from ..params import Params
+from ..settings import NewtonSettings
+from ..status import Status
+from ..typing import FloatArray
+from ._common import positive
+from .classifier import FateClassifier
+from .fates import Fate, FateKind, passage_side
 from .manifolds import unstable_manifold
-from .newton import newton
-from .params import Params
-from .settings import NewtonSettings
-from .status import Status
-from .typing import FloatArray
+from .saddles import REFINE_NEWTON, n_unstable_of, refine_equilibrium
 
 log = logging.getLogger(__name__)
 
@@ -147,8 +150,7 @@ def bisect_fate(
         raise ValueError(f"`a` and `b` must be numbers, got {a!r}, {b!r}") from None
     if not (math.isfinite(a) and math.isfinite(b)) or a == b:
         raise ValueError(f"`a` and `b` must be distinct finite numbers, got {a}, {b}")
-    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
-        raise ValueError(f"`tol` must be a positive finite number, got {tol!r}")
+    positive("tol", tol)
     if not (isinstance(max_evaluations, int) and max_evaluations >= 2):
         raise ValueError(f"`max_evaluations` must be an integer >= 2, got {max_evaluations!r}")
     if not callable(fate_at):
@@ -278,7 +280,7 @@ class EquilibriumTracker:
             self.names = tuple(f"E{i}" for i in range(len(pts)))
         if not pts:
             raise ValueError("`points` must contain at least one equilibrium")
-        self.newton = newton or NewtonSettings(tol=1e-11, step_tol=1e-10, max_iter=30)
+        self.newton = newton or REFINE_NEWTON
         self.max_halvings = int(max_halvings)
         self.check_index = check_index
         v0 = float(vec[self.k])
@@ -320,9 +322,7 @@ class EquilibriumTracker:
             if not res.converged:
                 return None
             if self.check_index:
-                vals = np.linalg.eigvals(self.system.jacobian(res.z, pv))
-                thr = 1e-9 * max(1.0, float(np.max(np.abs(vals))))
-                nu = int(np.sum(vals.real > thr))
+                nu = n_unstable_of(np.linalg.eigvals(self.system.jacobian(res.z, pv)))
                 if nu != self.index[j]:
                     raise ConvergenceError(
                         f"equilibrium {self.names[j]!r} changed its saddle index from "
@@ -381,9 +381,9 @@ def manifold_fate_function(
 
     At each ``p`` the saddle and the other ``equilibria`` are re-solved by an
     :class:`EquilibriumTracker` (Newton from the nearest value already solved), a
-    :class:`~continuation.fates.FateClassifier` is built with them (the saddle named
+    :class:`~continuation.dynamics.fates.FateClassifier` is built with them (the saddle named
     ``"saddle"``, the others as given), and the fate of the ``branch`` of
-    :func:`~continuation.manifolds.unstable_manifold` is returned.
+    :func:`~continuation.dynamics.manifolds.unstable_manifold` is returned.
 
     Parameters
     ----------
@@ -394,18 +394,18 @@ def manifold_fate_function(
     x_saddle : array_like, shape (n,)
         Index-1 saddle at ``params``.
     branch : {+1, -1}
-        Which branch (see the sign convention of :mod:`continuation.manifolds`).
+        Which branch (see the sign convention of :mod:`continuation.dynamics.manifolds`).
     equilibria : sequence or mapping
         Other equilibria to recognise (e.g. the stable ones, or the neighbouring
         saddle if it is a different point modulo the periods).
     eps, orient
-        As for :func:`~continuation.manifolds.unstable_manifold`.
+        As for :func:`~continuation.dynamics.manifolds.unstable_manifold`.
     tracker_options : mapping, optional
         Options of :class:`EquilibriumTracker`.
     passage : str, optional
         Name of a saddle in ``equilibria`` (or ``"saddle"`` for copies of the start
         shifted by whole periods): ``fate_at`` then returns the side on which the branch
-        leaves its first visit of that saddle (:func:`continuation.fates.passage_side`),
+        leaves its first visit of that saddle (:func:`continuation.dynamics.fates.passage_side`),
         as ``passage_labels[side]``; the plain fate when there is no such visit or
         its side is unknown (far from the connection, or converging onto it). See the
         module notes.
@@ -414,7 +414,7 @@ def manifold_fate_function(
         after the final fates on each side (e.g. ``{+1: "event:y_up", -1:
         "event:y_down"}``) so that evaluations without a visit compare consistently.
     **classifier_options
-        Options of :class:`~continuation.fates.FateClassifier` (``events``,
+        Options of :class:`~continuation.dynamics.fates.FateClassifier` (``events``,
         ``poincare``, ``tol``, ``t_max``, ...).
 
     Returns

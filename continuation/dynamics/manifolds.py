@@ -18,25 +18,30 @@ is the manifold up to the integration error and a time shift
 
 Sign convention (so that "upslope/downslope" is reproducible): ``v_u`` has unit norm
 (in the ``scale``-weighted 2-norm) and is oriented so that its *reference component* is
-positive. The reference component is the state named by ``orient`` if given; otherwise
-the first periodic state if its component is at least ``1e-3`` of the largest one
-(for the ship: ``+v_u`` increases ``xi_G``); otherwise the largest component.
+positive (:func:`~continuation.dynamics.saddles.oriented_unstable_direction`: the state
+named by ``orient`` if given; otherwise the first periodic state if its component is at
+least ``1e-3`` of the largest one, for the ship ``+v_u`` increases ``xi_G``; otherwise
+the largest component).
 """
 
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .fates import Fate, FateClassifier, refine_equilibrium
-from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, Simulator, Trajectory, _param_vector, _period
-from .status import Status
-from .typing import ComplexArray, FloatArray
+from ..status import Status
+from ..typing import ComplexArray, FloatArray
+from ._common import check_scale, param_vector, positive, state_period
+from .classifier import FateClassifier
+from .fates import Fate
+from .integrators import DEFAULT_ATOL, DEFAULT_RTOL
+from .saddles import oriented_unstable_direction, refine_equilibrium
+from .simulate import Simulator
+from .trajectory import Trajectory
 
 log = logging.getLogger(__name__)
 
@@ -141,75 +146,6 @@ class ManifoldResult:
         return tuple(b.fate for b in self.branches)
 
 
-def oriented_unstable_direction(
-    system: Any,
-    J: FloatArray,
-    *,
-    orient: str | int | None = None,
-    scale: Any = None,
-    eig_tol: float = 1e-9,
-) -> tuple[float, FloatArray, ComplexArray]:
-    """Unstable eigenvalue and oriented unit eigenvector of an index-1 saddle.
-
-    Parameters
-    ----------
-    system : System
-        Supplies state names and periods for the orientation.
-    J : ndarray, shape (n, n)
-        Jacobian at the saddle.
-    orient : str or int, optional
-        State whose component of ``v_u`` is made positive.
-    scale : array_like (n,), optional
-        ``v_u`` has unit norm in ``||v / scale||_2``.
-    eig_tol : float
-        Real parts within ``eig_tol * max(1, max|lambda|)`` of zero count as zero.
-
-    Returns
-    -------
-    (lambda_u, v_u, eigenvalues)
-
-    Raises
-    ------
-    ValueError
-        If ``J`` has not exactly one eigenvalue with positive real part, or an
-        eigenvalue on the imaginary axis (not hyperbolic), or ``orient`` names a
-        state whose component vanishes.
-    """
-    n = J.shape[0]
-    vals, vecs = np.linalg.eig(np.asarray(J, dtype=float))
-    order = np.lexsort((-vals.imag, -vals.real))
-    vals, vecs = np.asarray(vals, complex)[order], np.asarray(vecs, complex)[:, order]
-    thr = eig_tol * max(1.0, float(np.max(np.abs(vals))))
-    n_unst = int(np.sum(vals.real > thr))
-    if n_unst != 1:
-        raise ValueError(
-            f"`x_saddle` must have exactly one unstable eigenvalue (saddle of index 1; only "
-            f"1-D unstable manifolds are supported), got {n_unst}: eigenvalues {vals}"
-        )
-    if np.any(np.abs(vals.real) <= thr):
-        raise ValueError(f"`x_saddle` is not hyperbolic (eigenvalue on the imaginary axis): {vals}")
-    lam = float(vals[0].real)
-    v = np.real(vecs[:, 0])
-    s = np.ones(n) if scale is None else np.asarray(scale, dtype=float).reshape(n)
-    v = v / np.linalg.norm(v / s)
-    names = tuple(system.state_names)
-    if orient is not None:
-        i = names.index(orient) if isinstance(orient, str) and orient in names else orient
-        if not isinstance(i, (int, np.integer)) or not 0 <= int(i) < n:
-            raise ValueError(f"`orient` must be a state name or index, got {orient!r}")
-        i = int(i)
-        if abs(v[i]) <= 1e-9 * np.max(np.abs(v)):
-            raise ValueError(f"`orient` state {names[i]!r} has no component along v_u")
-    else:
-        per = _period(system, n)
-        big = float(np.max(np.abs(v)))
-        cand = [k for k in np.flatnonzero(per > 0) if abs(v[k]) >= 1e-3 * big]
-        i = int(cand[0]) if cand else int(np.argmax(np.abs(v)))
-    if v[i] < 0:
-        v = -v
-    return lam, v, vals
-
-
 def unstable_manifold(
     system: Any,
     params: Any,
@@ -263,7 +199,7 @@ def unstable_manifold(
     scale : array_like (n,), optional
         State scales for the norm of ``v_u``.
     dt, method, rtol, atol
-        Sampling and integrator options (see :func:`~continuation.simulate.simulate`).
+        Sampling and integrator options (see :func:`~continuation.dynamics.simulate.simulate`).
     refine : bool
         Newton-refine ``x_saddle`` first.
     dense : bool
@@ -285,10 +221,9 @@ def unstable_manifold(
         part (or is not hyperbolic), if ``x_saddle`` is not near an equilibrium, or for
         bad ``eps``, ``branches``, ``orient``.
     """
-    p = _param_vector(system, params)
+    p = param_vector(system, params)
     n = len(system.state_names)
-    if not (isinstance(eps, (int, float)) and math.isfinite(eps) and eps > 0):
-        raise ValueError(f"`eps` must be a positive finite number, got {eps!r}")
+    positive("eps", eps)
     branches = tuple(int(b) for b in branches)
     if (
         not branches
@@ -297,9 +232,7 @@ def unstable_manifold(
     ):
         raise ValueError(f"`branches` must be a non-empty subset of (+1, -1), got {branches}")
     if scale is not None:
-        sc = np.asarray(scale, dtype=float).reshape(-1)
-        if sc.shape != (n,) or np.any(~np.isfinite(sc)) or np.any(sc <= 0):
-            raise ValueError(f"`scale` must be {n} positive finite numbers")
+        check_scale(n, scale)
     if refine:
         xs, _, _, _ = refine_equilibrium(system, x_saddle, p, name="x_saddle")
     else:
@@ -341,7 +274,7 @@ def unstable_manifold(
                 np.array([0.0]),
                 x0[None, :],
                 state_names=tuple(system.state_names),
-                period=_period(system, n),
+                period=state_period(system, n),
                 params=p,
             )
         br = ManifoldBranch(sgn, x0, traj, fate)
@@ -357,6 +290,5 @@ def unstable_manifold(
 __all__ = [
     "ManifoldBranch",
     "ManifoldResult",
-    "oriented_unstable_direction",
     "unstable_manifold",
 ]

@@ -9,7 +9,7 @@ sign, the shift in periods of the target, the saddles visited on the way, and th
 
 Comparing the graphs at two parameter values (:func:`compare_graphs`) shows what changed:
 an edge whose target changed between ``p1`` and ``p2`` means a global bifurcation in
-between (a heteroclinic or homoclinic connection), which :mod:`continuation.fate_bisection`
+between (a heteroclinic or homoclinic connection), which :mod:`continuation.dynamics.fate_bisection`
 then locates. This is the picture of Umeda (1999, Sec. "Unstable manifolds and numerical
 experiments"): the upslope branch of the crest saddle goes to a periodic attractor below
 the critical Froude number and to capsizing above it.
@@ -25,9 +25,10 @@ from typing import Any
 import networkx as nx
 import numpy as np
 
-from .fates import Fate, FateClassifier, FateKind, _with_shift
+from ..status import Status
+from .classifier import FateClassifier
+from .fates import Fate, FateKind, _with_shift
 from .manifolds import unstable_manifold
-from .status import Status
 
 log = logging.getLogger(__name__)
 
@@ -114,14 +115,14 @@ def build_global_graph(
         periods. Their stability is computed; the unstable manifold of every saddle of
         index 1 is computed and classified.
     events, poincare, tol, saddle_radius, scale, t_max
-        Options of :class:`~continuation.fates.FateClassifier`.
+        Options of :class:`~continuation.dynamics.fates.FateClassifier`.
     eps : float
         Start distance of the manifold branches.
     match_tol : float, optional
         Scaled distance below which two periodic fates are the same attractor (compared
         at their section points); default ``1000 * tol``.
     orient : str or int, optional
-        Orientation of the unstable eigenvectors (see :mod:`continuation.manifolds`).
+        Orientation of the unstable eigenvectors (see :mod:`continuation.dynamics.manifolds`).
     progress : callable, optional
         ``progress(saddle_name, sign, fate)`` after each branch.
     **classifier_options
@@ -315,8 +316,9 @@ def compare_graphs(g1: nx.MultiDiGraph, g2: nx.MultiDiGraph) -> GraphDiff:
     """What changed from ``g1`` to ``g2`` (graphs from :func:`build_global_graph`).
 
     Nodes are matched by name (so give the equilibria the same names at both parameter
-    values, e.g. by following them with :class:`~continuation.fate_bisection.EquilibriumTracker`);
-    branches by ``(saddle, sign)``.
+    values, e.g. by following them with
+    :class:`~continuation.dynamics.fate_bisection.EquilibriumTracker`); branches by
+    ``(saddle, sign)``.
 
     Returns
     -------

@@ -1,0 +1,66 @@
+"""Time-domain tools: simulation, unstable manifolds, fates and global bifurcations.
+
+Simulation of :math:`\\dot x = f(x, p)` (:mod:`.simulate`, the loop; :mod:`.integrators`,
+the CVODES and SciPy back-ends; :mod:`.events`, events and Poincare sections;
+:mod:`.trajectory`, the result and its files); local analysis of saddles
+(:mod:`.saddles`); their one-dimensional unstable manifolds (:mod:`.manifolds`); where a
+trajectory goes (:mod:`.fates`, the outcome; :mod:`.classifier`, the classifier;
+:mod:`.fate_scan`, its per-segment tests); the parameter value where a fate switches
+(:mod:`.fate_bisection`); and the global phase portrait as a graph (:mod:`.global_graph`).
+"""
+
+from .classifier import FateClassifier, classify_fate
+from .events import PoincareSection, SimEvent
+from .fate_bisection import (
+    BisectionResult,
+    EquilibriumTracker,
+    bisect_fate,
+    fate_label,
+    manifold_fate_function,
+)
+from .fates import Fate, FateKind, KnownEquilibrium, SaddleVisit, passage_side
+from .global_graph import EdgeChange, GraphDiff, build_global_graph, compare_graphs
+from .integrators import DEFAULT_ATOL, DEFAULT_RTOL, METHODS
+from .manifolds import ManifoldBranch, ManifoldResult, unstable_manifold
+from .saddles import oriented_unstable_direction, refine_equilibrium
+from .simulate import Simulator, simulate
+from .trajectory import EventHits, Trajectory
+
+__all__ = [
+    # simulation
+    "simulate",
+    "Simulator",
+    "SimEvent",
+    "PoincareSection",
+    "Trajectory",
+    "EventHits",
+    "METHODS",
+    "DEFAULT_RTOL",
+    "DEFAULT_ATOL",
+    # saddles
+    "refine_equilibrium",
+    "oriented_unstable_direction",
+    # unstable manifolds
+    "unstable_manifold",
+    "ManifoldResult",
+    "ManifoldBranch",
+    # fates
+    "classify_fate",
+    "FateClassifier",
+    "Fate",
+    "FateKind",
+    "SaddleVisit",
+    "KnownEquilibrium",
+    "passage_side",
+    # fate bisection (global bifurcations)
+    "bisect_fate",
+    "fate_label",
+    "BisectionResult",
+    "EquilibriumTracker",
+    "manifold_fate_function",
+    # global graph
+    "build_global_graph",
+    "compare_graphs",
+    "GraphDiff",
+    "EdgeChange",
+]

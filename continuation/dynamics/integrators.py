@@ -1,0 +1,222 @@
+r"""The two integrator back-ends of :class:`~continuation.dynamics.simulate.Simulator`.
+
+``method="cvodes"`` (default when the system has a CasADi trace)
+    SUNDIALS CVODES (Hindmarsh et al. 2005, "SUNDIALS: Suite of nonlinear and
+    differential/algebraic equation solvers", ACM TOMS 31(3)) through
+    ``casadi.integrator``: variable-order BDF (orders 1-5) with a Newton corrector
+    on the exact Jacobian ``T df/dx`` that CasADi derives from the trace. Robust on
+    stiff models (the ship's rudder servo is much faster than its surge motion).
+``method="cvodes_adams"``
+    CVODES with variable-order Adams-Moulton (orders 1-12), for non-stiff models.
+``method in {"RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA"}``
+    SciPy's ``OdeSolver`` classes stepped one by one, calling the compiled CasADi
+    ``f`` (and ``jacobian`` for the implicit ones). Available for any system,
+    including NumPy-only ones; default for those.
+
+One CasADi ``f`` call from Python costs tens of microseconds of overhead, so the SciPy
+methods are dominated by call overhead on small models, while CVODES calls the compiled
+function in C. BDF is the default rather than Adams for its robustness on stiff models,
+at a small extra cost on non-stiff ones (measurements: ``benchmarks/README.md``,
+"Time integrators").
+
+Interrupts. A CVODES call is native code, but CasADi polls Python's signal handlers
+between right-hand-side evaluations, so a Ctrl-C (SIGINT) stops it within one
+integrator step; the call then fails with a ``RuntimeError`` (``CV_RHSFUNC_FAIL``)
+whose message, with CasADi's warnings off, does not say why. :func:`sigint_recorded`
+counts the SIGINTs that arrive while a simulation runs, so that :class:`_CvodesBackend`
+raises ``KeyboardInterrupt`` for such a failure instead of reporting an integration
+failure (which would be misread as a blow-up, and retried).
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import threading
+import weakref
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import scipy.integrate as si
+
+from ..typing import FloatArray
+
+SCIPY_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
+CVODES_METHODS = ("cvodes", "cvodes_adams")
+METHODS = CVODES_METHODS + SCIPY_METHODS
+
+#: Default relative and absolute tolerances of the integrators.
+DEFAULT_RTOL = 1e-10
+DEFAULT_ATOL = 1e-12
+#: CVODES internal steps allowed per output interval before it reports failure.
+_MAX_STEPS_PER_SAMPLE = 20000
+
+
+class _Sigints:
+    """SIGINTs seen while :func:`sigint_recorded` blocks run (``count``), and their depth."""
+
+    count = 0
+    depth = 0
+    previous: Any = None
+
+
+def _record_sigint(signum: int, frame: Any) -> Any:
+    """Count the signal, then hand it to the handler that was installed before."""
+    _Sigints.count += 1
+    return _Sigints.previous(signum, frame)
+
+
+@contextmanager
+def sigint_recorded() -> Iterator[None]:
+    """Count every SIGINT that arrives while the block runs, then handle it as before.
+
+    The previous handler still runs (Python's default raises ``KeyboardInterrupt``);
+    the count only lets a native call that failed tell that a SIGINT arrived while it
+    ran (module notes). Re-entrant; a no-op outside the main thread (where no signal
+    handler can be set) and when the current handler is not a Python callable
+    (``SIG_IGN``, ``SIG_DFL``).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    if _Sigints.depth > 0:
+        _Sigints.depth += 1
+        try:
+            yield
+        finally:
+            _Sigints.depth -= 1
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if not callable(previous):
+        yield
+        return
+    _Sigints.previous = previous
+    _Sigints.depth = 1
+    signal.signal(signal.SIGINT, _record_sigint)
+    try:
+        yield
+    finally:
+        _Sigints.depth = 0
+        signal.signal(signal.SIGINT, previous)
+        _Sigints.previous = None
+
+
+class _IntegrationFailure(Exception):
+    """Raised by a backend when the integrator fails on an interval."""
+
+
+
+
+class _CvodesBackend:
+    """CVODES through ``casadi.integrator`` with time scaled to ``[0, 1]``.
+
+    The integrated system is ``dx/ds = T f(x, p)`` on ``s in [0, 1]``, ``T`` an extra
+    parameter, so one compiled integrator serves every segment length (and both time
+    directions). Integrators are cached per system and options.
+    """
+
+    _cache: weakref.WeakKeyDictionary[Any, dict[tuple[Any, ...], Any]] = weakref.WeakKeyDictionary()
+
+    def __init__(
+        self, system: Any, p: FloatArray, method: str, rtol: float, atol: float, max_step: float
+    ) -> None:
+        self.system = system
+        self.p = np.asarray(p, dtype=float)
+        self.lmm = "adams" if method == "cvodes_adams" else "bdf"
+        self.rtol = rtol
+        self.atol = atol
+        self.max_step = max_step
+        self.n = len(system.state_names)
+        self.n_calls = 0
+        self._local: dict[tuple[Any, ...], Any] = {}
+
+    def _integrator(self, n_out: int, span: float) -> Any:
+        ms = self.max_step / abs(span) if math.isfinite(self.max_step) else 0.0
+        key = (n_out, self.lmm, self.rtol, self.atol, ms)
+        try:
+            store = self._cache.setdefault(self.system, {})
+        except TypeError:  # system not weak-referenceable: cache on this backend only
+            store = self._local
+        integ = store.get(key)
+        if integ is None:
+            f = self.system.casadi_functions()["f"]
+            X = ca.SX.sym("x", self.n)
+            P = ca.SX.sym("p", self.p.size)
+            T = ca.SX.sym("T")
+            dae = {"x": X, "p": ca.vertcat(P, T), "ode": T * f(X, P)}
+            opts: dict[str, Any] = {
+                "reltol": self.rtol,
+                "abstol": self.atol,
+                "max_num_steps": _MAX_STEPS_PER_SAMPLE,
+                "linear_multistep_method": self.lmm,
+                "disable_internal_warnings": True,
+                "show_eval_warnings": False,
+                "error_on_fail": True,
+            }
+            if ms > 0:
+                opts["max_step_size"] = ms
+            grid = [k / n_out for k in range(1, n_out + 1)]
+            integ = ca.integrator(f"sim_{n_out}", "cvodes", dae, 0.0, grid, opts)
+            store[key] = integ
+        return integ
+
+    def run(self, x0: FloatArray, T: float, n_out: int, span_hint: float) -> FloatArray:
+        """States at ``t0 + T k / n_out``, k = 1..n_out, shape ``(n_out, n)``."""
+        integ = self._integrator(n_out, span_hint)
+        self.n_calls += 1
+        n_sigint = _Sigints.count
+        try:
+            out = integ(x0=x0, p=np.concatenate([self.p, [T]]))
+        except RuntimeError as exc:
+            if _Sigints.count != n_sigint or "KeyboardInterrupt" in str(exc):
+                raise KeyboardInterrupt from None  # Ctrl-C inside CVODES (module notes)
+            msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else "CVODES failed"
+            raise _IntegrationFailure(msg) from None
+        xs = np.asarray(out["xf"], dtype=float).reshape(self.n, n_out).T
+        if not np.all(np.isfinite(xs)):
+            raise _IntegrationFailure("non-finite state")
+        return xs
+
+    def advance(self, x0: FloatArray, tau: float, span_hint: float) -> FloatArray:
+        """State at ``t0 + tau``, shape ``(n,)``."""
+        if tau == 0.0:
+            return np.array(x0, dtype=float)
+        return self.run(x0, tau, 1, span_hint)[0]
+
+
+class _ScipyBackend:
+    """A SciPy ``OdeSolver`` driven step by step with the compiled right-hand side."""
+
+    def __init__(
+        self, system: Any, p: FloatArray, method: str, rtol: float, atol: float, max_step: float
+    ) -> None:
+        self.system = system
+        self.p = np.asarray(p, dtype=float)
+        self.method = method
+        self.rtol = rtol
+        self.atol = atol
+        self.max_step = max_step
+        self.n_calls = 0
+        f = getattr(system, "casadi_functions", None)
+        funcs = None
+        if getattr(system, "has_casadi", False) and f is not None:
+            funcs = f()
+        if funcs is not None:
+            cf, cj = funcs["f"], funcs["jac"]
+            pp = self.p
+            self.fun = lambda t, x: np.asarray(cf(x, pp)).reshape(-1)
+            self.jac = lambda t, x: np.asarray(cj(x, pp))
+        else:
+            self.fun = lambda t, x: np.asarray(system.f(x, self.p), dtype=float).reshape(-1)
+            self.jac = lambda t, x: np.asarray(system.jacobian(x, self.p), dtype=float)
+
+    def solver(self, t0: float, x0: FloatArray, t1: float) -> Any:
+        cls = getattr(si, self.method)
+        kw: dict[str, Any] = {"rtol": self.rtol, "atol": self.atol, "max_step": self.max_step}
+        if self.method in ("Radau", "BDF", "LSODA"):
+            kw["jac"] = self.jac
+        return cls(self.fun, t0, np.array(x0, dtype=float), t1, **kw)
+

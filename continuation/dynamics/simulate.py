@@ -1,0 +1,475 @@
+r"""Time-domain simulation of :math:`\dot x = f(x, p)` with events and Poincare sections.
+
+The right-hand side is the :class:`~continuation.system.System`'s compiled CasADi
+trace, so the integrator and the equilibrium engine evaluate the very same model. The
+integrators are described in :mod:`.integrators`, event detection and location in
+:mod:`.events`, the result in :mod:`.trajectory`.
+
+Default tolerances: ``rtol = 1e-10``, ``atol = 1e-12`` (local error per step). The
+*global* error grows with the integration time and with the instability of the flow
+(errors are amplified along an unstable manifold); ``benchmarks/README.md`` ("Time
+integrators") gives measured global errors against a tight DOP853 reference.
+
+The solution is returned on a uniform grid of spacing ``dt`` (shortened so that it
+divides ``t_span``).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+import numpy as np
+
+from ..errors import ContinuationError
+from ..status import Status
+from ..typing import FloatArray
+from ._common import param_vector, positive, state_period
+from .events import (
+    PoincareSection,
+    SimEvent,
+    _adapt_event,
+    _FnWatch,
+    _hermite,
+    _locate,
+    _SectionWatch,
+    _Watch,
+)
+from .integrators import (
+    CVODES_METHODS,
+    DEFAULT_ATOL,
+    DEFAULT_RTOL,
+    METHODS,
+    _CvodesBackend,
+    _IntegrationFailure,
+    _ScipyBackend,
+    sigint_recorded,
+)
+from .trajectory import EventHits, Trajectory
+
+log = logging.getLogger(__name__)
+
+#: Samples per CVODES call: one call integrates this many output intervals at once.
+_CHUNK = 50
+#: Number of halvings used to get as close as possible to an integrator failure.
+_FAILURE_BISECTIONS = 12
+
+
+class Simulator:
+    """A reusable integrator for one system and parameter vector.
+
+    Building it once (e.g. inside fate classification, which integrates in many
+    segments) avoids re-validating input and re-compiling the CVODES integrator;
+    :func:`simulate` is a one-shot wrapper around :meth:`run`.
+
+    Parameters
+    ----------
+    system : System
+        The dynamical system.
+    params : Params, mapping or array_like, shape (m,)
+        Parameter values.
+    method : str
+        ``"cvodes"`` (BDF), ``"cvodes_adams"`` or a SciPy method name
+        (``"RK45"``, ``"RK23"``, ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"LSODA"``).
+        ``None``: ``"cvodes"`` when the system has a CasADi trace, else ``"DOP853"``.
+    rtol, atol : float
+        Relative and absolute local error tolerances of the integrator (defaults
+        ``1e-10`` and ``1e-12``).
+    max_step : float
+        Largest internal step (``inf``: no limit).
+    """
+
+    def __init__(
+        self,
+        system: Any,
+        params: Any,
+        *,
+        method: str | None = None,
+        rtol: float = DEFAULT_RTOL,
+        atol: float = DEFAULT_ATOL,
+        max_step: float = math.inf,
+    ) -> None:
+        if not hasattr(system, "state_names") or not hasattr(system, "f"):
+            raise ValueError("`system` must be a System (with `state_names` and `f`)")
+        self.system = system
+        self.n = len(system.state_names)
+        self.p = param_vector(system, params)
+        has_ca = bool(getattr(system, "has_casadi", False))
+        if method is None:
+            method = "cvodes" if has_ca else "DOP853"
+        if method not in METHODS:
+            raise ValueError(f"`method` must be one of {METHODS}, got {method!r}")
+        if method in CVODES_METHODS and not has_ca:
+            raise ValueError(
+                f"`method`={method!r} needs a system with a CasADi trace; use a SciPy method"
+            )
+        positive("rtol", rtol)
+        positive("atol", atol)
+        if not (isinstance(max_step, (int, float)) and max_step > 0):
+            raise ValueError(f"`max_step` must be positive, got {max_step!r}")
+        self.method = method
+        self.rtol = float(rtol)
+        self.atol = float(atol)
+        self.max_step = float(max_step)
+        self.period = state_period(system, self.n)
+        backend_cls = _CvodesBackend if method in CVODES_METHODS else _ScipyBackend
+        self._backend = backend_cls(system, self.p, method, self.rtol, self.atol, self.max_step)
+
+    # ------------------------------------------------------------------ helpers
+    def _check_x0(self, x0: Any) -> FloatArray:
+        if hasattr(self.system, "check_state"):
+            return np.array(self.system.check_state(x0, "x0"), dtype=float)
+        x = np.asarray(x0, dtype=float).reshape(-1)
+        if x.shape != (self.n,) or not np.all(np.isfinite(x)):
+            raise ValueError(f"`x0` must be a finite array of shape ({self.n},)")
+        return x
+
+    def _watches(self, events: Sequence[Any]) -> list[_Watch]:
+        if isinstance(events, (SimEvent, PoincareSection)):
+            events = (events,)
+        watches: list[_Watch] = []
+        seen: set[str] = set()
+        for ev in events:
+            e = _adapt_event(ev, self.p)
+            if e.name in seen:
+                raise ValueError(f"`events` has two events named {e.name!r}")
+            seen.add(e.name)
+            if isinstance(e, PoincareSection):
+                i = e.index(self.system.state_names)
+                watches.append(_SectionWatch(e, i, float(self.period[i])))
+            else:
+                watches.append(_FnWatch(e))
+        return watches
+
+    def derivatives(self, x: FloatArray) -> FloatArray:
+        """``f(x_k)`` for every row of ``x`` (shape ``(M, n)``), shape ``(M, n)``."""
+        if x.shape[0] == 0:
+            return np.zeros_like(x)
+        if getattr(self.system, "has_casadi", False):
+            f = self.system.casadi_functions()["f"]
+            return np.asarray(f(x.T, self.p), dtype=float).reshape(self.n, -1).T
+        return np.array([self.system.f(xi, self.p) for xi in x])
+
+    # ------------------------------------------------------------------ main loop
+    def run(
+        self,
+        x0: Any,
+        t_span: tuple[float, float],
+        *,
+        events: Sequence[Any] = (),
+        dt: float | None = None,
+        dense: bool = False,
+        progress: Callable[[float, FloatArray], None] | None = None,
+    ) -> Trajectory:
+        """Integrate from ``x0`` over ``t_span``; see :func:`simulate`."""
+        x0 = self._check_x0(x0)
+        try:
+            t0, t1 = (float(v) for v in t_span)
+        except (TypeError, ValueError):
+            raise ValueError(f"`t_span` must be a pair of numbers, got {t_span!r}") from None
+        if not (math.isfinite(t0) and math.isfinite(t1)) or t0 == t1:
+            raise ValueError(f"`t_span` must be two distinct finite times, got {t_span!r}")
+        span = t1 - t0
+        if dt is None:
+            dt = abs(span) / 1000.0
+            if math.isfinite(self.max_step):
+                dt = min(dt, self.max_step)
+        positive("dt", dt)
+        n_samples = max(1, math.ceil(abs(span) / dt - 1e-9))
+        watches = self._watches(events)
+        with sigint_recorded():
+            return self._loop(x0, t0, t1, n_samples, watches, dense, progress)
+
+    def _intervals(self, x0: FloatArray, t0: float, t1: float, n_samples: int) -> Iterator[Any]:
+        """Yield blocks ``(t (k+1,), x (k+1, n), interp, is_output (k+1,))``.
+
+        Consecutive blocks share their boundary sample. ``interp(ta, t, xa)`` gives the
+        state at a time ``t`` of the block from the block sample ``(ta, xa)`` at or
+        before ``t``; ``is_output`` marks the samples that belong to the output grid.
+        Raises ``_IntegrationFailure`` after yielding what could be integrated.
+        """
+        times = t0 + (t1 - t0) * np.arange(n_samples + 1) / n_samples
+        if isinstance(self._backend, _CvodesBackend):
+            be = self._backend
+            chunk_span = (t1 - t0) * min(_CHUNK, n_samples) / n_samples
+
+            def interp(ta: float, t: float, xa: FloatArray) -> FloatArray:
+                return be.advance(xa, t - ta, chunk_span)
+
+            k0 = 0
+            x = x0
+            while k0 < n_samples:
+                k1 = min(k0 + _CHUNK, n_samples)
+                tt = times[k0 : k1 + 1]
+                try:
+                    xs = be.run(x, tt[-1] - tt[0], k1 - k0, chunk_span)
+                except _IntegrationFailure:
+                    # retry sample by sample, bisecting towards a failure
+                    x = yield from self._salvage(be, x, tt, chunk_span, interp)
+                else:
+                    yield tt, np.vstack([x[None, :], xs]), interp, np.ones(tt.size, dtype=bool)
+                    x = xs[-1]
+                k0 = k1
+            return
+        # SciPy: one block per internal step, with the grid samples inside it
+        solver = self._backend.solver(t0, x0, t1)
+        sgn = 1.0 if t1 > t0 else -1.0
+        k = 1
+        t_prev, x_prev = t0, x0
+        while True:
+            msg = solver.step()
+            if solver.status == "failed":
+                raise _IntegrationFailure(str(msg or "SciPy solver failed"))
+            t_new, x_new = float(solver.t), np.array(solver.y, dtype=float)
+            if not np.all(np.isfinite(x_new)):
+                raise _IntegrationFailure(f"non-finite state at t={t_new:.10g}")
+            dense_out = solver.dense_output()
+            tol = 1e-13 * max(1.0, abs(t_new))
+            inner = []
+            while k <= n_samples and sgn * (times[k] - t_new) < -tol:
+                inner.append(times[k])
+                k += 1
+            end_on_grid = k <= n_samples and abs(times[k] - t_new) <= tol
+            if end_on_grid:
+                k += 1
+            tt = np.array([t_prev, *inner, t_new])
+            xs = np.array([x_prev, *[dense_out(s) for s in inner], x_new])
+            is_out = np.ones(tt.size, dtype=bool)
+            is_out[-1] = end_on_grid
+
+            def interp_s(ta: float, t: float, xa: FloatArray, _d: Any = dense_out) -> FloatArray:
+                return np.asarray(_d(t), dtype=float)
+
+            yield tt, xs, interp_s, is_out
+            t_prev, x_prev = t_new, x_new
+            if solver.status == "finished":
+                return
+
+    def _salvage(
+        self,
+        be: _CvodesBackend,
+        x: FloatArray,
+        tt: FloatArray,
+        chunk_span: float,
+        interp: Callable[..., Any],
+    ) -> Any:
+        """Integrate a chunk that failed sample by sample; return its last state.
+
+        (Sample by sample rather than by halving: near a blow-up a failing call is
+        far more expensive than a successful one.) A failing sample interval is
+        bisected ``_FAILURE_BISECTIONS`` times for the furthest reachable time; that
+        piece is yielded (so that events before the failure are still found) and
+        ``_IntegrationFailure`` is raised.
+        """
+        for j in range(tt.size - 1):
+            try:
+                xb = be.advance(x, tt[j + 1] - tt[j], chunk_span)
+            except _IntegrationFailure as exc:
+                lo, hi = 0.0, tt[j + 1] - tt[j]
+                x_lo = x
+                for _ in range(_FAILURE_BISECTIONS):
+                    mid = 0.5 * (lo + hi)
+                    try:
+                        x_mid = be.advance(x, mid, chunk_span)
+                    except _IntegrationFailure:
+                        hi = mid
+                    else:
+                        lo, x_lo = mid, x_mid
+                if lo != 0.0:
+                    piece = np.array([tt[j], tt[j] + lo])
+                    yield piece, np.vstack([x, x_lo]), interp, np.ones(2, dtype=bool)
+                msg = f"integrator failed near t={tt[j] + hi:.10g}: {exc}"
+                raise _IntegrationFailure(msg) from None
+            yield tt[j : j + 2], np.vstack([x, xb]), interp, np.ones(2, dtype=bool)
+            x = xb
+        return x
+
+    def _loop(
+        self,
+        x0: FloatArray,
+        t0: float,
+        t1: float,
+        n_samples: int,
+        watches: list[_Watch],
+        dense: bool,
+        progress: Callable[[float, FloatArray], None] | None,
+    ) -> Trajectory:
+        t_out: list[float] = [t0]
+        x_out: list[FloatArray] = [x0]
+        hits: dict[str, tuple[list[float], list[FloatArray]]] = {w.name: ([], []) for w in watches}
+        status, message, terminal = Status.SUCCESS, "reached the end of t_span", None
+        # Event times are located to xtol: near machine precision on smooth dense
+        # output (SciPy); for CVODES not below ~10 rtol dt, the noise of re-integration.
+        xtol = 1e-13 * max(1.0, abs(t0), abs(t1))
+        if isinstance(self._backend, _CvodesBackend):
+            xtol = max(xtol, 10.0 * self.rtol * abs(t1 - t0) / n_samples)
+        g_prev = [
+            float(vals[0]) if (vals := w.values(np.array([t0]), x0[None, :])) is not None else 0.0
+            for w in watches
+        ]
+        scipy_backend = isinstance(self._backend, _ScipyBackend)
+        try:
+            for tt, xs, interp, is_out in self._intervals(x0, t0, t1, n_samples):
+                stop = None
+                found: list[tuple[float, int, FloatArray]] = []
+                gvals = [w.values(tt[1:], xs[1:]) for w in watches]
+                fx = None  # derivatives at the block samples, computed on demand
+                for j in range(tt.size - 1):
+                    ta, tb, xa, xb = tt[j], tt[j + 1], xs[j], xs[j + 1]
+                    found.clear()
+                    for iw, w in enumerate(watches):
+                        gv = gvals[iw]
+                        gb = float(gv[j]) if gv is not None else 0.0
+                        ga = g_prev[iw]
+                        g_prev[iw] = gb
+                        cands = w.candidates(ga, gb, xa, xb)
+                        if not cands:
+                            continue
+                        exact = lambda s, _ta=ta, _xa=xa, _ip=interp: _ip(_ta, s, _xa)  # noqa: E731
+                        approx = None
+                        if not scipy_backend:
+                            if fx is None:
+                                fx = self.derivatives(xs)
+                            approx = _hermite(ta, tb, xa, xb, fx[j], fx[j + 1])
+                        for gfun in cands:
+                            tr, xr = _locate(gfun, ta, tb, xa, xb, exact, approx, xtol)
+                            found.append((tr, iw, np.asarray(xr, dtype=float)))
+                    if found:
+                        sgn = 1.0 if t1 > t0 else -1.0
+                        found.sort(key=lambda h: (sgn * h[0], h[1]))
+                        for tr, iw, xr in found:
+                            w = watches[iw]
+                            hits[w.name][0].append(tr)
+                            hits[w.name][1].append(xr)
+                            if w.terminal:
+                                stop = (tr, xr, w.name)
+                                break
+                    if stop is not None:
+                        t_out.append(stop[0])
+                        x_out.append(stop[1])
+                        status, terminal = Status.EVENT, stop[2]
+                        message = f"terminal event {stop[2]!r} at t={stop[0]:.10g}"
+                        break
+                    if is_out[j + 1]:
+                        t_out.append(float(tb))
+                        x_out.append(np.asarray(xb, dtype=float))
+                if stop is not None:
+                    break
+                if progress is not None:
+                    progress(float(t_out[-1]), x_out[-1])
+        except _IntegrationFailure as exc:
+            status, message = Status.INTEGRATION_FAILED, str(exc)
+            log.info("simulation stopped: %s", message)
+        except KeyboardInterrupt:
+            status, message = Status.INTERRUPTED, f"interrupted at t={t_out[-1]:.10g}"
+        t_arr = np.array(t_out)
+        x_arr = np.array(x_out)
+        # drop non-grid step ends (SciPy) duplicated in time
+        keep = np.ones(t_arr.size, dtype=bool)
+        keep[1:] = np.diff(t_arr) != 0
+        t_arr, x_arr = t_arr[keep], x_arr[keep]
+        n = self.n
+        events = {
+            nm: EventHits(np.array(ts), np.array(xs).reshape(len(ts), n))
+            for nm, (ts, xs) in hits.items()
+        }
+        xdot = self.derivatives(x_arr) if dense else None
+        return Trajectory(
+            t=t_arr,
+            x=x_arr,
+            events=events,
+            status=status,
+            message=message,
+            state_names=tuple(self.system.state_names),
+            period=self.period,
+            terminal_event=terminal,
+            xdot=xdot,
+            params=self.p,
+            method=self.method,
+        )
+
+
+def simulate(
+    system: Any,
+    x0: Any,
+    params: Any,
+    t_span: tuple[float, float],
+    *,
+    events: Sequence[Any] = (),
+    method: str | None = None,
+    rtol: float = DEFAULT_RTOL,
+    atol: float = DEFAULT_ATOL,
+    max_step: float = math.inf,
+    dt: float | None = None,
+    dense: bool = False,
+    progress: Callable[[float, FloatArray], None] | None = None,
+    throw: bool = False,
+) -> Trajectory:
+    r"""Integrate :math:`\dot x = f(x, p)` from ``x0`` over ``t_span``.
+
+    Parameters
+    ----------
+    system : System
+        The dynamical system (its CasADi trace is used when present).
+    x0 : array_like, shape (n,)
+        Initial state. Periodic states are integrated unwrapped.
+    params : Params, mapping or array_like, shape (m,)
+        Parameter values.
+    t_span : (float, float)
+        Start and end times; ``t1 < t0`` integrates backwards.
+    events : sequence of SimEvent, PoincareSection or continuation Event
+        Watched events; a terminal one stops the run (``Status.EVENT``).
+    method : str, optional
+        ``"cvodes"`` (default with a CasADi trace: SUNDIALS CVODES, BDF orders 1-5,
+        Newton on the exact Jacobian), ``"cvodes_adams"``, or a SciPy ``OdeSolver``
+        name (``"DOP853"`` is the default without a CasADi trace).
+    rtol, atol : float
+        Local error tolerances (default ``1e-10``, ``1e-12``).
+    max_step : float
+        Largest internal step.
+    dt : float, optional
+        Output sample spacing (default ``|t1 - t0| / 1000``, at most ``max_step``);
+        also the event-detection resolution with CVODES.
+    dense : bool
+        Also store ``f`` at the samples so that :meth:`Trajectory.at` interpolates.
+    progress : callable, optional
+        ``progress(t, x)`` called after every integrated block.
+    throw : bool
+        Raise :class:`~continuation.errors.ContinuationError` if the integrator fails.
+
+    Returns
+    -------
+    Trajectory
+        Samples ``t (M,)``, ``x (M, n)``, events and status. On failure or
+        ``KeyboardInterrupt`` the part computed so far, with the status
+        ``INTEGRATION_FAILED`` / ``INTERRUPTED``.
+
+    Raises
+    ------
+    ValueError
+        For a bad ``x0``, ``params``, ``t_span``, ``method``, tolerance or event.
+
+    Examples
+    --------
+    >>> traj = simulate(pendulum, [3.0, 0.0], {"g": 0.1}, (0.0, 50.0),
+    ...                 events=[PoincareSection("theta", 0.0, direction=1)])  # doctest: +SKIP
+    """
+    sim = Simulator(system, params, method=method, rtol=rtol, atol=atol, max_step=max_step)
+    traj = sim.run(x0, t_span, events=events, dt=dt, dense=dense, progress=progress)
+    if throw and not traj.status.ok and traj.status is not Status.INTERRUPTED:
+        raise ContinuationError(f"simulation failed: {traj.message}")
+    return traj
+
+
+
+__all__ = [
+    "METHODS",
+    "EventHits",
+    "PoincareSection",
+    "SimEvent",
+    "Simulator",
+    "Trajectory",
+    "simulate",
+]
