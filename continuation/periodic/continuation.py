@@ -1,0 +1,383 @@
+r"""Continuation of periodic orbits: :func:`continue_periodic` and its helpers.
+
+The branch is computed by the ordinary pseudo-arclength driver
+(:func:`~continuation.driver.continue_branch`) on a
+:class:`~continuation.periodic.problem.PeriodicOrbitProblem`. Special points of
+cycles (see :mod:`continuation.periodic.floquet`):
+
+* ``LPC`` -- fold of cycles: the driver's fold (kind ``fold``, relabelled ``LPC1``...);
+* ``BPC`` -- branch point of cycles: the driver's branch point (kind ``bp``, ``BPC1``);
+* ``PD`` -- period doubling, a located zero of :math:`\prod (\mu_i + 1)` (a user-kind
+  point named ``"PD"``); :func:`switch_period_doubling` starts the doubled branch;
+* ``NS`` -- Neimark-Sacker, a located zero of :math:`\prod_{i<j} (\mu_i \mu_j - 1)`
+  with a complex pair on the unit circle (named ``"NS"``; neutral saddles dropped).
+
+All carry the driver's ``located`` flag and ``bracket``. The driver's Hopf test is
+switched off on cycle branches (its eigenvalues are Floquet exponents).
+
+*Period without bound.* With ``period_max``, a terminal event stops the branch where
+``T`` reaches it; the branch then ends with ``Status.PERIOD_UNBOUNDED`` and a message
+giving the last period and parameter, and :func:`period_limit` fits
+:math:`T \approx a - b \ln|p^* - p|` to the last rows (the law of a cycle approaching a
+homoclinic or heteroclinic orbit of saddles) and returns the limit ``p*`` with a
+guess of the connecting orbit for a connection solver.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import scipy.optimize as so
+
+from .._types import FloatArray
+from ..algorithms.base import correct
+from ..branch import Branch, SpecialKind, SpecialPoint
+from ..bvp.collocation import CollocationMesh
+from ..driver import continue_branch
+from ..errors import ConvergenceError
+from ..events import Event
+from ..params import Params
+from ..settings import ContinuationSettings, NewtonSettings
+from ..status import Status
+from .floquet import is_neimark_sacker
+from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
+from .problem import PeriodicOrbitProblem
+
+log = logging.getLogger(__name__)
+
+
+def _as_orbit(system: Any, start: Any, params: Any, mesh: CollocationMesh | None,
+              winding: Any) -> PeriodicOrbit:  # fmt: skip
+    if isinstance(start, PeriodicOrbit):
+        orb = start
+        if not isinstance(params, Params):
+            params = Params(system.param_names, system.check_params(params, "params"))
+        orb = dataclasses.replace(orb, params=params)
+        if mesh is not None and (
+            mesh.degree != orb.mesh.degree or mesh.n_intervals != orb.mesh.n_intervals
+        ):
+            orb = orb.on_mesh(mesh)
+        return orb
+    if hasattr(start, "t") and hasattr(start, "x"):
+        return orbit_from_array(system, params, start.t, start.x, mesh=mesh, winding=winding)
+    if isinstance(start, tuple) and len(start) == 2:
+        return orbit_from_array(system, params, start[0], start[1], mesh=mesh, winding=winding)
+    raise ValueError(
+        "`orbit_start` must be a PeriodicOrbit, a (t, x) pair of arrays or a Trajectory, "
+        f"got {type(start).__name__}"
+    )
+
+
+def solve_orbit(
+    orbit: PeriodicOrbit, free: str | None = None, newton: NewtonSettings | None = None
+) -> PeriodicOrbit:
+    """Correct a cycle guess by Newton's method at fixed parameters.
+
+    Parameters
+    ----------
+    orbit : PeriodicOrbit
+        The guess (also the first phase reference).
+    free : str, optional
+        Any parameter name (only fixes the problem's layout; default the first).
+    newton : NewtonSettings, optional
+
+    Raises
+    ------
+    ConvergenceError
+        If Newton's method does not converge.
+    """
+    free = free if free is not None else orbit.system.param_names[0]
+    prob = PeriodicOrbitProblem.from_orbit(orbit, free)
+    newton = newton if newton is not None else NewtonSettings(max_iter=40)
+    p0 = orbit.param(free)
+    u0 = np.append(prob.reference, p0)
+    e_p = np.zeros(u0.size)
+    e_p[-1] = 1.0
+    res = correct(prob, u0, u0, e_p, 0.0, newton)
+    if not res.converged:
+        raise ConvergenceError(f"the cycle did not converge at {free}={p0:.10g}: {res.message}")
+    return prob.orbit(res.z, p0)
+
+
+def adapt_mesh(
+    orbit: PeriodicOrbit,
+    n_intervals: int | None = None,
+    *,
+    rounds: int = 2,
+    free: str | None = None,
+    newton: NewtonSettings | None = None,
+) -> PeriodicOrbit:
+    """Equidistribute the mesh on ``orbit`` and re-solve, ``rounds`` times.
+
+    The new nodes equidistribute the local error monitor
+    (:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`);
+    ``n_intervals`` changes the number of intervals (default: the same).
+    """
+    for _ in range(max(1, int(rounds))):
+        X = orbit.X
+        new = orbit.mesh.equidistributed(X, n_intervals)
+        orbit = solve_orbit(orbit.on_mesh(new), free, newton)
+    return orbit
+
+
+def _relabel(specials: Sequence[SpecialPoint], prob: PeriodicOrbitProblem) -> tuple[
+    SpecialPoint, ...
+]:
+    out = []
+    count = {"LPC": 0, "BPC": 0}
+    for sp in specials:
+        if sp.kind == SpecialKind.FOLD:
+            count["LPC"] += 1
+            sp = dataclasses.replace(sp, label=f"LPC{count['LPC']}")
+        elif sp.kind == SpecialKind.BRANCH_POINT:
+            count["BPC"] += 1
+            sp = dataclasses.replace(sp, label=f"BPC{count['BPC']}")
+        elif sp.kind == SpecialKind.USER and sp.label == "NS":
+            ok, theta = is_neimark_sacker(prob.floquet(sp.x, sp.p).multipliers)
+            if not ok:
+                log.info("NS test zero at p=%.8g is a neutral saddle: not reported", sp.p)
+                continue
+            sp = dataclasses.replace(sp, data={**sp.data, "theta": theta})
+        elif sp.kind == SpecialKind.USER and sp.label == "PD":
+            mu = prob.floquet(sp.x, sp.p).multipliers
+            k = int(np.argmin(np.abs(mu + 1.0)))
+            sp = dataclasses.replace(sp, data={**sp.data, "mu": float(mu[k].real)})
+        out.append(sp)
+    return tuple(out)
+
+
+def continue_periodic(
+    system: Any,
+    orbit_start: Any,
+    params: Any,
+    free: str,
+    settings: ContinuationSettings | None = None,
+    *,
+    mesh: CollocationMesh | None = None,
+    winding: Any = None,
+    period_max: float | None = None,
+    detect_pd: bool = True,
+    detect_ns: bool = True,
+    events: Sequence[Event] = (),
+    direction: Literal["forward", "backward"] = "forward",
+    progress: Callable[[Any], None] | None = None,
+    throw: bool = False,
+) -> Branch:
+    r"""Continue a branch of periodic orbits in the parameter ``free``.
+
+    Parameters
+    ----------
+    system : System
+    orbit_start : PeriodicOrbit, (t, x) pair or Trajectory
+        The start cycle or a guess of it (one period of samples, periodic states
+        unwrapped); corrected by Newton's method at ``params`` first.
+    params : Params, mapping or array
+        Parameter values at the start.
+    free : str
+        Continuation parameter.
+    settings : ContinuationSettings, optional
+        As for :func:`~continuation.driver.continue_branch`; ``detect.hopf`` is forced
+        off (see the module doc).
+    mesh : CollocationMesh, optional
+        Mesh for a ``(t, x)`` guess (default 40 intervals, degree 4), or a new mesh
+        size for a :class:`PeriodicOrbit` start (interpolated onto it).
+    winding : mapping of str to int, optional
+        Rotation numbers of periodic states for a ``(t, x)`` guess (a
+        :class:`PeriodicOrbit` carries its own).
+    period_max : float, optional
+        Stop where the period reaches this value (``Status.PERIOD_UNBOUNDED``).
+    detect_pd, detect_ns : bool
+        Monitor the period-doubling and Neimark-Sacker test functions.
+    events : sequence of Event
+        More user events, ``fn(z, p)`` of the cycle unknowns.
+    direction : {"forward", "backward"}
+    progress : callable, optional
+        Called with every accepted :class:`~continuation.branch.BranchPoint`.
+    throw : bool
+        As for :func:`~continuation.driver.continue_branch`.
+
+    Returns
+    -------
+    Branch
+        Rows: the unknowns ``[vec X, T]`` (``branch.problem.orbit(branch.x[k],
+        branch.p[k])`` gives the cycle), records ``T``, ``max_*``, ``min_*``, ``L2``,
+        ``mu_max``, ``trivial_error``, ``error``; ``eigenvalues`` are the Floquet
+        exponents ``ln|mu| + i arg mu`` (nontrivial ones; :func:`multipliers` gives the
+        multipliers); ``stable`` is "all nontrivial ``|mu| < 1``".
+
+    Raises
+    ------
+    ValueError
+        Bad input (names, shapes, ``period_max``, ``direction``).
+    ConvergenceError
+        With ``throw=True``, if the start cycle does not converge.
+    """
+    if free not in system.param_names:
+        raise ValueError(f"`free` must be one of {system.param_names}, got {free!r}")
+    if direction not in ("forward", "backward"):
+        raise ValueError(f"`direction` must be 'forward' or 'backward', got {direction!r}")
+    if period_max is not None and not (math.isfinite(period_max) and period_max > 0):
+        raise ValueError(f"`period_max` must be a positive number, got {period_max!r}")
+    if winding is not None:
+        winding_vector(system, winding)
+    orb = _as_orbit(system, orbit_start, params, mesh, winding)
+    settings = settings if settings is not None else ContinuationSettings()
+    settings = dataclasses.replace(
+        settings, detect=dataclasses.replace(settings.detect, hopf=False)
+    )
+    prob = PeriodicOrbitProblem.from_orbit(orb, free)
+    T_col = prob.layout.T_col
+    evs: list[Event] = []
+    if detect_pd:
+        evs.append(Event("PD", prob.pd_test))
+    if detect_ns:
+        evs.append(Event("NS", prob.ns_test))
+    if period_max is not None:
+        evs.append(Event("T_max", lambda z, p: period_max - z[T_col], terminal=True))
+    evs.extend(events)
+
+    def accept(bp: Any) -> None:
+        prob.accept(np.asarray(bp.x))
+        if progress is not None:
+            progress(bp)
+
+    br = continue_branch(
+        prob, prob.reference, orb.param(free), settings=settings, events=evs,
+        direction=direction, throw=throw, progress=accept,
+    )  # fmt: skip
+    specials = _relabel(br.special_points, prob)
+    status, message = br.status, br.message
+    if period_max is not None and status == Status.EVENT and len(br) and (
+        br.records["T"][-1] >= period_max * (1 - 1e-6)
+    ):
+        status = Status.PERIOD_UNBOUNDED
+        message = (
+            f"{Status.PERIOD_UNBOUNDED.value} Last period T={br.records['T'][-1]:.10g} at "
+            f"{free}={br.p[-1]:.10g} (period_max={period_max:g})."
+        )
+        specials = tuple(s for s in specials if s.label != "T_max")
+        log.info(message)
+    return dataclasses.replace(br, special_points=specials, status=status, message=message)
+
+
+def multipliers(branch: Branch) -> np.ndarray:
+    """Nontrivial Floquet multipliers at every row of a cycle branch, ``(N, n - 1)``."""
+    prob = branch.problem
+    if not isinstance(prob, PeriodicOrbitProblem):
+        raise ValueError("`branch` must be a branch of periodic orbits (continue_periodic)")
+    return np.array([prob.floquet(branch.x[k], branch.p[k]).multipliers
+                     for k in range(len(branch))])  # fmt: skip
+
+
+def orbit_at(branch: Branch, k: int | SpecialPoint) -> PeriodicOrbit:
+    """The cycle at row ``k`` (or at a special point) of a cycle branch."""
+    prob = branch.problem
+    if not isinstance(prob, PeriodicOrbitProblem):
+        raise ValueError("`branch` must be a branch of periodic orbits (continue_periodic)")
+    if isinstance(k, SpecialPoint):
+        return prob.orbit(k.x, k.p)
+    return prob.orbit(branch.x[k], branch.p[k])
+
+
+@dataclass(frozen=True)
+class PeriodLimit:
+    r"""The end of a cycle branch whose period grows without bound.
+
+    Attributes
+    ----------
+    p_star : float
+        Fitted limit of the parameter, from :math:`T = a - b \ln|p^* - p|` over the
+        last rows (NaN if the fit failed).
+    rate : float
+        ``b``; ``1/b`` estimates the unstable eigenvalue of the saddle that the cycle
+        approaches (for a homoclinic orbit of a saddle with ``lambda_u < |lambda_s|``).
+    p_last, T_last : float
+        Parameter and period of the last row.
+    saddle : ndarray, shape (n,)
+        The point of the last cycle where ``|f|`` is smallest: a guess of the saddle.
+    t, x : ndarray
+        The last cycle as one period starting and ending at that point, ``(K,)`` and
+        ``(K, n)``: a guess of the connecting orbit for a connection solver.
+    fit_residual : float
+        RMS residual of the fit in ``T``.
+    """
+
+    p_star: float
+    rate: float
+    p_last: float
+    T_last: float
+    saddle: FloatArray
+    t: FloatArray
+    x: FloatArray
+    fit_residual: float
+
+
+def _log_fit(p: FloatArray, T: FloatArray) -> tuple[float, float, float, float]:
+    """Fit ``T = a - b ln|p* - p|``; returns ``(p*, a, b, rms)``."""
+    sgn = 1.0 if p[-1] > p[0] else -1.0
+    span = float(abs(p[-1] - p[0])) + 1e-300
+
+    def lsq(d: float) -> tuple[float, float, float]:
+        L = np.log(np.abs(p[-1] + sgn * d - p))
+        A = np.column_stack([np.ones_like(L), -L])
+        coef, *_ = np.linalg.lstsq(A, T, rcond=None)
+        r = A @ coef - T
+        return float(coef[0]), float(coef[1]), float(np.sqrt(np.mean(r**2)))
+
+    res = so.minimize_scalar(lambda q: lsq(span * math.exp(q))[2], bounds=(-40.0, 3.0),
+                             method="bounded", options={"xatol": 1e-10})  # fmt: skip
+    d = span * math.exp(float(res.x))
+    a, b, rms = lsq(d)
+    return float(p[-1] + sgn * d), a, b, rms
+
+
+def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
+    """The limit of a cycle branch whose period grows (see :class:`PeriodLimit`).
+
+    Parameters
+    ----------
+    branch : Branch
+        A branch of :func:`continue_periodic` (typically ended with
+        ``Status.PERIOD_UNBOUNDED``).
+    n_fit : int
+        Number of last rows in the fit (at least 4).
+    """
+    prob = branch.problem
+    if not isinstance(prob, PeriodicOrbitProblem):
+        raise ValueError("`branch` must be a branch of periodic orbits (continue_periodic)")
+    if not (isinstance(n_fit, int) and n_fit >= 4):
+        raise ValueError(f"`n_fit` must be an integer >= 4, got {n_fit!r}")
+    if len(branch) < 4:
+        raise ValueError("`branch` needs at least 4 rows for the period fit")
+    k = min(n_fit, len(branch))
+    p = np.asarray(branch.p[-k:], dtype=float)
+    T = np.asarray(branch.records["T"][-k:], dtype=float)
+    try:
+        p_star, _, b, rms = _log_fit(p, T)
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError):
+        p_star, b, rms = math.nan, math.nan, math.nan
+    orb = orbit_at(branch, len(branch) - 1)
+    F = np.array([orb.system.f(x, orb.params.values) for x in orb.X])
+    q = int(np.argmin(np.linalg.norm(F, axis=1)))
+    t0 = float(orb.t[q])
+    t = np.linspace(t0, t0 + orb.T, 4 * orb.mesh.n_points)
+    x = orb(t)
+    return PeriodLimit(p_star, b, float(branch.p[-1]), float(T[-1]), orb.X[q].copy(),
+                       t - t0, x, rms)  # fmt: skip
+
+
+__all__ = [
+    "PeriodLimit",
+    "adapt_mesh",
+    "continue_periodic",
+    "multipliers",
+    "orbit_at",
+    "period_limit",
+    "solve_orbit",
+]
