@@ -12,8 +12,10 @@ from .continuation import (
     solve_orbit,
 )
 from .floquet import FloquetResult, floquet, ns_test, pd_test
+from .hopf import first_lyapunov_coefficient, periodic_orbit_from_hopf
 from .orbit import PeriodicOrbit, orbit_from_array
 from .problem import PeriodicOrbitProblem, error_estimate
+from .starts import continue_from_hopf, orbit_from_trajectory
 
 __all__ = [
     "CollocationLayout",
@@ -22,15 +24,19 @@ __all__ = [
     "PeriodicOrbit",
     "PeriodicOrbitProblem",
     "adapt_mesh",
+    "continue_from_hopf",
     "continue_periodic",
     "error_estimate",
+    "first_lyapunov_coefficient",
     "floquet",
     "monodromy_factors",
     "multipliers",
     "ns_test",
     "orbit_at",
     "orbit_from_array",
+    "orbit_from_trajectory",
     "pd_test",
     "period_limit",
+    "periodic_orbit_from_hopf",
     "solve_orbit",
 ]

@@ -51,6 +51,11 @@ from .problem import PeriodicOrbitProblem
 
 log = logging.getLogger(__name__)
 
+#: Rows whose trivial multiplier is farther than this from 1 have unreliable
+#: multipliers (the discretisation error, amplified by the cycle's sensitivity); the
+#: branch message says so.
+TRIVIAL_TOL = 1e-3
+
 
 def _as_orbit(system: Any, start: Any, params: Any, mesh: CollocationMesh | None,
               winding: Any) -> PeriodicOrbit:  # fmt: skip
@@ -263,6 +268,17 @@ def continue_periodic(
         )
         specials = tuple(s for s in specials if s.label != "T_max")
         log.info(message)
+    if len(br) and "trivial_error" in br.records:
+        bad = np.flatnonzero(br.records["trivial_error"] > TRIVIAL_TOL)
+        if bad.size:
+            worst = float(np.max(br.records["trivial_error"]))
+            note = (
+                f" Floquet multipliers unreliable at {bad.size} of {len(br)} rows (from "
+                f"{free}={br.p[bad[0]]:.8g}; |mu_trivial - 1| up to {worst:.3g} > "
+                f"{TRIVIAL_TOL:g}): refine the mesh (more intervals)."
+            )
+            log.warning(note.strip())
+            message = message + note
     return dataclasses.replace(br, special_points=specials, status=status, message=message)
 
 
@@ -305,7 +321,7 @@ class PeriodLimit:
         The last cycle as one period starting and ending at that point, ``(K,)`` and
         ``(K, n)``: a guess of the connecting orbit for a connection solver.
     fit_residual : float
-        RMS residual of the fit in ``T``.
+        RMS residual of the fit in ``p``.
     """
 
     p_star: float
@@ -318,23 +334,23 @@ class PeriodLimit:
     fit_residual: float
 
 
-def _log_fit(p: FloatArray, T: FloatArray) -> tuple[float, float, float, float]:
-    """Fit ``T = a - b ln|p* - p|``; returns ``(p*, a, b, rms)``."""
-    sgn = 1.0 if p[-1] > p[0] else -1.0
-    span = float(abs(p[-1] - p[0])) + 1e-300
+def _log_fit(p: FloatArray, T: FloatArray) -> tuple[float, float, float]:
+    """Fit ``p = p* + c exp(-T / b)`` (i.e. ``T = a - b ln|p - p*|``); returns
+    ``(p*, b, rms of the fit in p)``. For fixed ``b`` the fit is linear in ``(p*, c)``;
+    ``b`` is found by a bounded scalar search on ``ln b``."""
+    Tn = T - T[-1]
 
-    def lsq(d: float) -> tuple[float, float, float]:
-        L = np.log(np.abs(p[-1] + sgn * d - p))
-        A = np.column_stack([np.ones_like(L), -L])
-        coef, *_ = np.linalg.lstsq(A, T, rcond=None)
-        r = A @ coef - T
+    def lsq(lb: float) -> tuple[float, float, float]:
+        A = np.column_stack([np.ones_like(Tn), np.exp(-Tn / math.exp(lb))])
+        coef, *_ = np.linalg.lstsq(A, p, rcond=None)
+        r = A @ coef - p
         return float(coef[0]), float(coef[1]), float(np.sqrt(np.mean(r**2)))
 
-    res = so.minimize_scalar(lambda q: lsq(span * math.exp(q))[2], bounds=(-40.0, 3.0),
+    span = float(np.ptp(T)) + 1e-300
+    res = so.minimize_scalar(lambda q: lsq(q)[2], bounds=(math.log(span) - 8, math.log(span) + 4),
                              method="bounded", options={"xatol": 1e-10})  # fmt: skip
-    d = span * math.exp(float(res.x))
-    a, b, rms = lsq(d)
-    return float(p[-1] + sgn * d), a, b, rms
+    p_star, _, rms = lsq(float(res.x))
+    return p_star, math.exp(float(res.x)), rms
 
 
 def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
@@ -359,7 +375,7 @@ def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
     p = np.asarray(branch.p[-k:], dtype=float)
     T = np.asarray(branch.records["T"][-k:], dtype=float)
     try:
-        p_star, _, b, rms = _log_fit(p, T)
+        p_star, b, rms = _log_fit(p, T)
     except (ValueError, np.linalg.LinAlgError, FloatingPointError):
         p_star, b, rms = math.nan, math.nan, math.nan
     orb = orbit_at(branch, len(branch) - 1)
