@@ -29,7 +29,7 @@ def orbit_from_trajectory(
     *,
     mesh: CollocationMesh | None = None,
     winding: Any = None,
-    tol: float = 1e-3,
+    tol: float = 1e-2,
     correct: bool = True,
 ) -> PeriodicOrbit:
     """One period cut from the end of a simulated trajectory, optionally corrected.
