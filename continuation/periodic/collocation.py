@@ -133,9 +133,7 @@ class CollocationLayout:
         self._const_cols = np.concatenate(
             [cols_c, cols_c2, (self.M - 1) * n + np.arange(n), np.arange(n)]
         )
-        self._const_vals = np.concatenate(
-            [vals_c, -np.ones(rows_c2.size), np.ones(n), -np.ones(n)]
-        )
+        self._const_vals = np.concatenate([vals_c, -np.ones(rows_c2.size), np.ones(n), -np.ones(n)])
         # T column of the collocation rows
         j, k, i = np.meshgrid(np.arange(N), np.arange(m), np.arange(n), indexing="ij")
         self._T_rows = (j * m1 * n + k * n + i).ravel()
@@ -181,7 +179,12 @@ class CollocationLayout:
         return sp.csc_matrix((vals, (rows, cols)), shape=(n * M + 1, n * M + 1))
 
     def residual(
-        self, X: FloatArray, T: float, F: FloatArray, shift: FloatArray, ref: FloatArray,
+        self,
+        X: FloatArray,
+        T: float,
+        F: FloatArray,
+        shift: FloatArray,
+        ref: FloatArray,
         dref: FloatArray,
     ) -> FloatArray:
         """``G`` (see module doc); ``F`` is ``f`` at the stages ``(N m, n)``, ``ref`` and

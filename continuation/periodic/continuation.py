@@ -131,9 +131,9 @@ def adapt_mesh(
     return orbit
 
 
-def _relabel(specials: Sequence[SpecialPoint], prob: PeriodicOrbitProblem) -> tuple[
-    SpecialPoint, ...
-]:
+def _relabel(
+    specials: Sequence[SpecialPoint], prob: PeriodicOrbitProblem
+) -> tuple[SpecialPoint, ...]:
     out = []
     count = {"LPC": 0, "BPC": 0}
     for sp in specials:
@@ -258,8 +258,11 @@ def continue_periodic(
     )  # fmt: skip
     specials = _relabel(br.special_points, prob)
     status, message = br.status, br.message
-    if period_max is not None and status == Status.EVENT and len(br) and (
-        br.records["T"][-1] >= period_max * (1 - 1e-6)
+    if (
+        period_max is not None
+        and status == Status.EVENT
+        and len(br)
+        and (br.records["T"][-1] >= period_max * (1 - 1e-6))
     ):
         status = Status.PERIOD_UNBOUNDED
         message = (

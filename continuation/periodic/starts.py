@@ -68,7 +68,7 @@ def orbit_from_trajectory(
     xe = x[-1]
     fe = system.f(xe, params.values)
     g = (x + shift[None, :] - xe[None, :]) @ fe
-    scale = 1.0 + float(np.max(np.abs(x[-max(2, t.size // 4):])))
+    scale = 1.0 + float(np.max(np.abs(x[-max(2, t.size // 4) :])))
     cand = np.flatnonzero((g[:-1] < 0) & (g[1:] >= 0))[::-1]
     for i in cand:
         if i >= t.size - 3:
