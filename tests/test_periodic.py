@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -14,10 +15,12 @@ from continuation.bvp import CollocationMesh
 from continuation.periodic import (
     PeriodicOrbitProblem,
     continue_from_hopf,
+    continue_period_doubled,
     continue_periodic,
     error_estimate,
     first_lyapunov_coefficient,
     multipliers,
+    orbit_at,
     orbit_from_array,
     orbit_from_trajectory,
     period_limit,
@@ -237,7 +240,65 @@ def test_rossler_period_doubling_against_shooting():
     assert y[2] == pytest.approx(br.problem.orbit(pd.x, pd.p).T, abs=1e-7)
 
 
-# ------------------------------------------------------------------ rotation orbits
+def test_rossler_switch_onto_doubled_branch():
+    """From the first PD the doubled branch (period 2 T) starts; along it the next PD
+    lies near c = 3.837 (published cascade values c_1 = 2.83, c_2 = 3.84); a doubled
+    cycle is confirmed by direct integration (it closes after 2 T, not after T)."""
+    s = System(_rossler, ("x", "y", "z"), ("a", "b", "c"))
+    P = {"a": 0.2, "b": 0.2, "c": 2.5}
+    tr = simulate(s, [1.0, 1.0, 0.0], P, (0.0, 300.0), dt=0.01)
+    orb = orbit_from_trajectory(s, P, tr, mesh=CollocationMesh(40, 4, 1.0))
+    st = ContinuationSettings(ds=0.05, ds_max=0.1, max_steps=60, p_max=3.0)
+    br = continue_periodic(s, orb, P, "c", st)
+    (pd,) = br.find("PD")
+    T1 = orbit_at(br, pd).T
+    b2 = continue_period_doubled(br, pd, dataclasses.replace(st, p_max=4.0))
+    assert b2.records["T"][0] == pytest.approx(2 * T1, rel=1e-4)
+    assert np.all(np.diff(b2.p) > 0)
+    (pd2,) = b2.find("PD")
+    assert pd2.located and pd2.p == pytest.approx(3.837, abs=0.005)
+    k = int(np.argmin(np.abs(b2.p - 3.3)))
+    o2 = orbit_at(b2, k)
+    pv = np.array([0.2, 0.2, b2.p[k]])
+    r = solve_ivp(lambda t, x: s.f(x, pv), (0, o2.T), o2.X[0], rtol=1e-12, atol=1e-12,
+                  method="DOP853", dense_output=True)  # fmt: skip
+    assert np.max(np.abs(r.y[:, -1] - o2.X[0])) < 1e-6
+    assert np.max(np.abs(r.sol(o2.T / 2) - o2.X[0])) > 0.1
+
+
+def _torus(x, p, ops):
+    """A Hopf-normal-form cycle (x, y) times a decoupled focus (u, w) with rate p - 1
+    and a pitchfork direction s with rate p - 2: multipliers exp(2 pi (p - 1 +- 2.3 i)) and
+    exp(2 pi (p - 2)) on the cycle r = 1, s = 0."""
+    r2 = x[0] ** 2 + x[1] ** 2
+    a = p[0] - 1.0
+    return ops.stack([
+        x[0] - x[1] - x[0] * r2,
+        x[0] + x[1] - x[1] * r2,
+        a * x[2] - 2.3 * x[3],
+        2.3 * x[2] + a * x[3],
+        (p[0] - 2.0) * x[4] - x[4] ** 3,
+    ])  # fmt: skip
+
+
+def test_neimark_sacker_and_branch_point_of_cycles_closed_form():
+    """NS at p = 1 (the pair exp(+-4.6 pi i) on the unit circle, angle 0.6 pi) and a
+    pitchfork of cycles (BPC) at p = 2, both in closed form."""
+    s = System(_torus, ("x", "y", "u", "w", "s"), ("p",))
+    t = np.linspace(0, 2 * np.pi, 100)
+    X = np.column_stack([np.cos(t), np.sin(t), 0 * t, 0 * t, 0 * t])
+    orb = orbit_from_array(s, {"p": 0.5}, t, X, mesh=CollocationMesh(20, 4, 1.0))
+    br = continue_periodic(s, orb, {"p": 0.5}, "p", ContinuationSettings(ds=0.05, ds_max=0.1,
+                           max_steps=60, p_max=2.5))  # fmt: skip
+    (ns,) = br.find("NS")
+    assert ns.located and ns.p == pytest.approx(1.0, abs=1e-8)
+    assert ns.data["theta"] == pytest.approx(0.6 * np.pi, abs=1e-6)
+    bpc = br.find("bp")
+    assert [b.label for b in bpc] == ["BPC1"]
+    assert bpc[0].p == pytest.approx(2.0, abs=1e-6)
+    assert br.n_unstable[0] == 0 and br.n_unstable[-1] == 3
+
+
 def _pendulum_homoclinic(gamma: float) -> float:
     """I at which the saddle's unstable manifold returns to the saddle one turn later
     (an independent shooting + bisection computation)."""

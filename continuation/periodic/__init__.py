@@ -11,6 +11,7 @@ from .continuation import (
     period_limit,
     solve_orbit,
 )
+from .doubling import continue_period_doubled, doubled_orbit, switch_period_doubling
 from .floquet import FloquetResult, floquet, ns_test, pd_test
 from .hopf import first_lyapunov_coefficient, periodic_orbit_from_hopf
 from .orbit import PeriodicOrbit, orbit_from_array
@@ -25,7 +26,9 @@ __all__ = [
     "PeriodicOrbitProblem",
     "adapt_mesh",
     "continue_from_hopf",
+    "continue_period_doubled",
     "continue_periodic",
+    "doubled_orbit",
     "error_estimate",
     "first_lyapunov_coefficient",
     "floquet",
@@ -39,4 +42,5 @@ __all__ = [
     "period_limit",
     "periodic_orbit_from_hopf",
     "solve_orbit",
+    "switch_period_doubling",
 ]

@@ -205,7 +205,7 @@ class CollocationLayout:
         return out
 
 
-def monodromy_factors(layout: CollocationLayout, B: FloatArray) -> FloatArray:
+def monodromy_factors(layout: CollocationLayout, B: FloatArray, stages: bool = False) -> Any:
     r"""Transfer matrices :math:`\Phi_j` of the linearised collocation equations.
 
     Condensation of the block structure: on interval ``j`` the linearised collocation
@@ -224,13 +224,16 @@ def monodromy_factors(layout: CollocationLayout, B: FloatArray) -> FloatArray:
     Returns
     -------
     ndarray, shape (N, n, n)
+        The ``Phi_j``; with ``stages=True`` also the stage responses
+        ``S[j, l] = dX_{j,l} / dx_j``, shape ``(N, m, n, n)``.
     """
     N, m, n = layout.N, layout.m, layout.n
     e = layout.mesh.e
     K = B[:, :, 1:].transpose(0, 1, 3, 2, 4).reshape(N, m * n, m * n)
     R = B[:, :, 0].reshape(N, m * n, n)
     S = -np.linalg.solve(K, R).reshape(N, m, n, n)  # stage responses
-    return e[0] * np.eye(n)[None] + np.einsum("l,jlab->jab", e[1:], S)
+    Phi = e[0] * np.eye(n)[None] + np.einsum("l,jlab->jab", e[1:], S)
+    return (Phi, S) if stages else Phi
 
 
 __all__ = ["CollocationLayout", "StageEvaluator", "monodromy_factors"]
