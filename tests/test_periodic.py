@@ -28,9 +28,9 @@ from continuation.periodic import (
     solve_orbit,
 )
 
-#: van der Pol x'' - mu (1 - x^2) x' + x = 0 at mu = 1: period 6.66328685932313
-#: (e.g. Grimshaw, "Nonlinear ODEs", 1990; OEIS-tabulated to more digits; checked here
-#: against an independent scipy shooting computation as well).
+#: van der Pol x'' - mu (1 - x^2) x' + x = 0 at mu = 1: the commonly tabulated period
+#: 6.6632868593... (the digits beyond the tenth are from our own independent scipy
+#: shooting computation, which test_van_der_pol_period_published_and_shooting repeats).
 VDP_T_MU1 = 6.663286859323130
 
 
@@ -161,6 +161,20 @@ def test_error_estimate_tracks_the_true_error():
         out.append((true, est))
     for true, est in out:
         assert 0.1 * true < est < 10 * true, out
+
+
+def test_adapted_mesh_resolves_a_relaxation_oscillation():
+    """van der Pol mu = 10 (fast jumps, slow drifts): 60 equidistributed intervals beat
+    120 uniform ones by orders of magnitude in the period (reference: 240 adapted)."""
+    s = System(_vdp, ("x", "y"), ("mu",))
+    tr = simulate(s, [2.0, 0.0], {"mu": 10.0}, (0.0, 200.0), dt=0.005)
+    ref = orbit_from_trajectory(s, {"mu": 10.0}, tr, mesh=CollocationMesh(240, 4, 1.0), adapt=True)
+    uni = orbit_from_trajectory(s, {"mu": 10.0}, tr, mesh=CollocationMesh(120, 4, 1.0))
+    ada = orbit_from_trajectory(s, {"mu": 10.0}, tr, mesh=CollocationMesh(60, 4, 1.0), adapt=True)
+    assert ref.T == pytest.approx(19.0784, abs=1e-4)  # tabulated: T(10) = 19.0784
+    e_uni, e_ada = abs(uni.T - ref.T), abs(ada.T - ref.T)
+    assert e_ada < 1e-3 * e_uni
+    assert error_estimate(ada.mesh, ada.X) < error_estimate(uni.mesh, uni.X)
 
 
 # ------------------------------------------------------------------ Floquet

@@ -17,7 +17,7 @@ from ..branch import Branch, SpecialPoint
 from ..bvp.collocation import CollocationMesh
 from ..params import Params
 from ..settings import ContinuationSettings
-from .continuation import continue_periodic, solve_orbit
+from .continuation import adapt_mesh, continue_periodic, solve_orbit
 from .hopf import _hopf_point, periodic_orbit_from_hopf
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
 
@@ -31,6 +31,7 @@ def orbit_from_trajectory(
     winding: Any = None,
     tol: float = 1e-2,
     correct: bool = True,
+    adapt: bool = False,
 ) -> PeriodicOrbit:
     """One period cut from the end of a simulated trajectory, optionally corrected.
 
@@ -49,6 +50,12 @@ def orbit_from_trajectory(
         Largest return distance, relative to the size ``1 + max |x|`` of the cycle.
     correct : bool
         Correct the cut by Newton's method on the collocation system.
+    adapt : bool
+        Place the nodes by equidistribution
+        (:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`) of the
+        samples on a mesh four times finer before solving, then once more on the
+        solution (:func:`~continuation.periodic.continuation.adapt_mesh`); for cycles
+        with fast and slow phases (relaxation oscillations).
 
     Raises
     ------
@@ -80,8 +87,16 @@ def orbit_from_trajectory(
             tt = np.concatenate([[tc], t[i + 1 :]])
             xx = np.vstack([xc[None, :], x[i + 1 :]])
             xx[-1] = xx[0] + shift  # close exactly (the guess)
+            mesh = mesh if mesh is not None else CollocationMesh(40, 4, 1.0)
+            if adapt:
+                fine = CollocationMesh(4 * mesh.n_intervals, mesh.degree, 1.0)
+                g = orbit_from_array(system, params, tt, xx, mesh=fine, winding=winding)
+                mesh = fine.equidistributed(g.X, mesh.n_intervals)
             orb = orbit_from_array(system, params, tt, xx, mesh=mesh, winding=winding)
-            return solve_orbit(orb) if correct else orb
+            if not correct:
+                return orb
+            orb = solve_orbit(orb)
+            return adapt_mesh(orb, rounds=1) if adapt else orb
     raise ValueError(
         f"`trajectory` does not return to its end point within tol={tol:g} (relative): "
         "simulate longer so that it settles on the cycle, or check `winding`"
