@@ -25,6 +25,7 @@ from continuation.periodic import (
     orbit_from_trajectory,
     period_limit,
     periodic_orbit_from_hopf,
+    problem_at,
     solve_orbit,
 )
 
@@ -357,8 +358,38 @@ def test_pendulum_rotation_period_blows_up_at_homoclinic():
     ths = math.pi - math.asin(I_hc)
     lam_u = 0.5 * (-g + math.sqrt(g * g - 4 * math.cos(ths)))
     assert lim.rate == pytest.approx(1 / lam_u, rel=0.05)
+    # 2D: the nontrivial multiplier is exp(-gamma T) (Liouville), down to 1e-9 here
+    mu = multipliers(br)[:, 0].real
+    np.testing.assert_allclose(np.log(mu), -g * br.records["T"], rtol=1e-6)
     assert lim.saddle == pytest.approx(np.array([ths - 2 * math.pi * round((ths - lim.saddle[0])
                                        / (2 * math.pi)), 0.0]), abs=1e-2)  # fmt: skip
+
+
+@pytest.mark.slow
+def test_adaptive_segments_follow_the_period_blow_up_on_a_coarse_mesh():
+    """40 intervals: a uniform mesh misses the homoclinic parameter by > 1e-6, segments
+    with an equidistributed mesh every 10 steps hit it to 1e-8 (reference: shooting);
+    the restart near the connection (fixed-parameter start correction, ill-conditioned
+    there) fails and the branch says so."""
+    g = 0.5
+    s = System(_pendulum, ("theta", "v"), ("I", "gamma"), periodic={"theta": 2 * math.pi})
+    P = {"I": 1.2, "gamma": g}
+    tr = simulate(s, [0.0, 2.0], P, (0.0, 60.0), dt=0.01)
+    orb = orbit_from_trajectory(s, P, tr, mesh=CollocationMesh(40, 4, 1.0), winding={"theta": 1})
+    st = ContinuationSettings(ds=-0.02, ds_max=0.05, max_steps=300, p_min=0.0)
+    I_hc = _pendulum_homoclinic(g)
+    uni = continue_periodic(s, orb, P, "I", st, period_max=40.0)
+    ada = continue_periodic(s, orb, P, "I", st, period_max=40.0, adapt_every=10)
+    assert abs(uni.p[-1] - I_hc) > 1e-6
+    assert abs(ada.p[-1] - I_hc) < 1e-8
+    assert len(ada.problem.problems) > 1
+    if ada.status != Status.PERIOD_UNBOUNDED:
+        assert "restart after mesh adaptation failed" in ada.message
+    # every row's cycle is a solution on its own mesh
+    for k in (0, len(ada) // 2, len(ada) - 1):
+        prob = problem_at(ada, k)
+        # (all equations but the phase condition, whose reference moved on)
+        assert np.max(np.abs(prob.residual(ada.x[k], ada.p[k])[:-1])) < 1e-8
 
 
 def test_rotation_orbit_period_against_simulation():

@@ -3,12 +3,14 @@ cycles (see :mod:`continuation.periodic.continuation`)."""
 
 from .collocation import CollocationLayout, monodromy_factors
 from .continuation import (
+    CycleSegments,
     PeriodLimit,
     adapt_mesh,
     continue_periodic,
     multipliers,
     orbit_at,
     period_limit,
+    problem_at,
     solve_orbit,
 )
 from .doubling import continue_period_doubled, doubled_orbit, switch_period_doubling
@@ -19,6 +21,7 @@ from .problem import PeriodicOrbitProblem, error_estimate
 from .starts import continue_from_hopf, orbit_from_trajectory
 
 __all__ = [
+    "CycleSegments",
     "CollocationLayout",
     "FloquetResult",
     "PeriodLimit",
@@ -41,6 +44,7 @@ __all__ = [
     "pd_test",
     "period_limit",
     "periodic_orbit_from_hopf",
+    "problem_at",
     "solve_orbit",
     "switch_period_doubling",
 ]

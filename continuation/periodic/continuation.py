@@ -80,17 +80,26 @@ def _as_orbit(system: Any, start: Any, params: Any, mesh: CollocationMesh | None
 
 
 def solve_orbit(
-    orbit: PeriodicOrbit, free: str | None = None, newton: NewtonSettings | None = None
+    orbit: PeriodicOrbit,
+    free: str | None = None,
+    newton: NewtonSettings | None = None,
+    *,
+    fix_period: bool = False,
 ) -> PeriodicOrbit:
-    """Correct a cycle guess by Newton's method at fixed parameters.
+    """Correct a cycle guess by Newton's method at fixed parameters (or fixed period).
 
     Parameters
     ----------
     orbit : PeriodicOrbit
         The guess (also the first phase reference).
     free : str, optional
-        Any parameter name (only fixes the problem's layout; default the first).
+        Any parameter name (default the first); with ``fix_period`` the parameter
+        that is solved for instead of the period.
     newton : NewtonSettings, optional
+    fix_period : bool
+        Keep ``T`` at ``orbit.T`` and solve for the parameter ``free`` (well
+        conditioned where the period is very sensitive to the parameter, near a
+        homoclinic orbit).
 
     Raises
     ------
@@ -103,11 +112,11 @@ def solve_orbit(
     p0 = orbit.param(free)
     u0 = np.append(prob.reference, p0)
     e_p = np.zeros(u0.size)
-    e_p[-1] = 1.0
+    e_p[prob.layout.T_col if fix_period else -1] = 1.0
     res = correct(prob, u0, u0, e_p, 0.0, newton)
     if not res.converged:
         raise ConvergenceError(f"the cycle did not converge at {free}={p0:.10g}: {res.message}")
-    return prob.orbit(res.z, p0)
+    return prob.orbit(res.z, res.p)
 
 
 def adapt_mesh(
@@ -117,17 +126,19 @@ def adapt_mesh(
     rounds: int = 2,
     free: str | None = None,
     newton: NewtonSettings | None = None,
+    fix_period: bool = False,
 ) -> PeriodicOrbit:
     """Equidistribute the mesh on ``orbit`` and re-solve, ``rounds`` times.
 
     The new nodes equidistribute the local error monitor
     (:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`);
-    ``n_intervals`` changes the number of intervals (default: the same).
+    ``n_intervals`` changes the number of intervals (default: the same);
+    ``fix_period`` as in :func:`solve_orbit`.
     """
     for _ in range(max(1, int(rounds))):
         X = orbit.X
         new = orbit.mesh.equidistributed(X, n_intervals)
-        orbit = solve_orbit(orbit.on_mesh(new), free, newton)
+        orbit = solve_orbit(orbit.on_mesh(new), free, newton, fix_period=fix_period)
     return orbit
 
 
@@ -173,6 +184,7 @@ def continue_periodic(
     direction: Literal["forward", "backward"] = "forward",
     progress: Callable[[Any], None] | None = None,
     throw: bool = False,
+    adapt_every: int = 0,
 ) -> Branch:
     r"""Continue a branch of periodic orbits in the parameter ``free``.
 
@@ -206,12 +218,18 @@ def continue_periodic(
         Called with every accepted :class:`~continuation.branch.BranchPoint`.
     throw : bool
         As for :func:`~continuation.driver.continue_branch`.
+    adapt_every : int
+        ``> 0``: continue in segments of this many steps and equidistribute the mesh
+        (same number of intervals) on the last cycle of each segment before the next
+        (:func:`adapt_mesh`); ``settings.max_steps`` counts all steps. The branch's
+        ``problem`` is then a :class:`CycleSegments` (one problem per mesh). 0: one
+        mesh throughout.
 
     Returns
     -------
     Branch
-        Rows: the unknowns ``[vec X, T]`` (``branch.problem.orbit(branch.x[k],
-        branch.p[k])`` gives the cycle), records ``T``, ``max_*``, ``min_*``, ``L2``,
+        Rows: the unknowns ``[vec X, T]`` (:func:`orbit_at` gives the cycle), records
+        ``T``, ``max_*``, ``min_*``, ``L2``,
         ``mu_max``, ``trivial_error``, ``error``; ``eigenvalues`` are the Floquet
         exponents ``ln|mu| + i arg mu`` (nontrivial ones; :func:`multipliers` gives the
         multipliers); ``stable`` is "all nontrivial ``|mu| < 1``".
@@ -231,11 +249,37 @@ def continue_periodic(
         raise ValueError(f"`period_max` must be a positive number, got {period_max!r}")
     if winding is not None:
         winding_vector(system, winding)
+    if isinstance(adapt_every, bool) or not (isinstance(adapt_every, int) and adapt_every >= 0):
+        raise ValueError(f"`adapt_every` must be an integer >= 0, got {adapt_every!r}")
     orb = _as_orbit(system, orbit_start, params, mesh, winding)
     settings = settings if settings is not None else ContinuationSettings()
     settings = dataclasses.replace(
         settings, detect=dataclasses.replace(settings.detect, hopf=False)
     )
+    run = dict(period_max=period_max, detect_pd=detect_pd, detect_ns=detect_ns,
+               events=events, progress=progress, throw=throw)  # fmt: skip
+    if direction == "backward":
+        settings = dataclasses.replace(settings, ds=-settings.ds)
+    if adapt_every == 0:
+        br = _continue_once(orb, free, settings, **run)  # type: ignore[arg-type]
+    else:
+        br = _continue_segments(orb, free, settings, adapt_every, run)
+    return _finish(br, free, period_max)
+
+
+def _continue_once(
+    orb: PeriodicOrbit,
+    free: str,
+    settings: ContinuationSettings,
+    *,
+    period_max: float | None,
+    detect_pd: bool,
+    detect_ns: bool,
+    events: Sequence[Event],
+    progress: Callable[[Any], None] | None,
+    throw: bool,
+) -> Branch:
+    """One driver run on one mesh (PD/NS/T_max events, phase reference per step)."""
     prob = PeriodicOrbitProblem.from_orbit(orb, free)
     T_col = prob.layout.T_col
     evs: list[Event] = []
@@ -254,9 +298,147 @@ def continue_periodic(
 
     br = continue_branch(
         prob, prob.reference, orb.param(free), settings=settings, events=evs,
-        direction=direction, throw=throw, progress=accept,
+        throw=throw, progress=accept,
     )  # fmt: skip
-    specials = _relabel(br.special_points, prob)
+    return dataclasses.replace(br, special_points=_relabel(br.special_points, prob))
+
+
+@dataclass(frozen=True, eq=False)
+class CycleSegments:
+    """The problems of a cycle branch computed on several meshes (``adapt_every``).
+
+    Attributes
+    ----------
+    problems : tuple of PeriodicOrbitProblem
+        One per segment (each with its own mesh).
+    first_row : tuple of int
+        Branch row where each segment starts.
+    """
+
+    problems: tuple[PeriodicOrbitProblem, ...]
+    first_row: tuple[int, ...]
+
+    @property
+    def free(self) -> str:
+        """The continuation parameter."""
+        return self.problems[0].free
+
+    @property
+    def system(self) -> Any:
+        """The dynamical system."""
+        return self.problems[0].system
+
+    @property
+    def params(self) -> Params:
+        """The parameters of the first segment."""
+        return self.problems[0].params
+
+    def at_row(self, k: int) -> PeriodicOrbitProblem:
+        """The problem (mesh) of branch row ``k``."""
+        i = int(np.searchsorted(np.asarray(self.first_row), k, side="right")) - 1
+        return self.problems[max(i, 0)]
+
+
+def _continue_segments(
+    orb: PeriodicOrbit,
+    free: str,
+    settings: ContinuationSettings,
+    every: int,
+    run: dict[str, Any],
+) -> Branch:
+    """Segments of ``every`` steps with an equidistributed mesh each (see
+    :func:`continue_periodic`), merged into one branch."""
+    segs: list[Branch] = []
+    left = settings.max_steps
+    st = settings
+    while True:
+        br = _continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)), **run)
+        if segs and len(br) == 0:
+            # the restart on the new mesh failed (e.g. near a homoclinic orbit, where the
+            # start correction at fixed parameter is ill-conditioned): keep the branch
+            msg = (
+                f"the restart after mesh adaptation failed at {free}={orb.param(free):.10g} "
+                f"({br.message}); the branch up to there is kept."
+            )
+            log.warning(msg)
+            segs[-1] = dataclasses.replace(segs[-1], status=br.status, message=msg)
+            break
+        segs.append(br)
+        left -= max(len(br) - 1, 0)
+        if br.status != Status.MAX_STEPS or left <= 0 or len(br) < 2:
+            break
+        last = orbit_at(br, len(br) - 1)
+        try:
+            orb = adapt_mesh(last, rounds=1, free=free, newton=st.newton, fix_period=True)
+        except ConvergenceError as exc:
+            log.warning("mesh adaptation failed at %s=%.8g (%s); mesh kept", free, br.p[-1], exc)
+            orb = last
+        sgn = 1.0 if br.p[-1] >= br.p[-2] else -1.0
+        ds = min(max(abs(float(br.ds[-1])), abs(st.ds)), st.ds_max)
+        st = dataclasses.replace(st, ds=sgn * ds)
+    return _merge_segments(segs)
+
+
+def _merge_segments(segs: list[Branch]) -> Branch:
+    """One branch from consecutive segments (the first row of each later segment, the
+    previous segment's last cycle on the new mesh, is dropped)."""
+    rows: dict[str, list[Any]] = {k: [] for k in ("p", "x", "eig", "nun", "ds", "it")}
+    recs: dict[str, list[float]] = {}
+    specials: list[SpecialPoint] = []
+    first_row, probs = [], []
+    base, s_base = 0, 0.0
+    for k, b in enumerate(segs):
+        lo = 0 if k == 0 else 1
+        first_row.append(base + lo if k else 0)
+        probs.append(b.problem)
+        rows["p"].append(b.p[lo:])
+        rows["x"].append(b.x[lo:])
+        rows["eig"].append(b.eigenvalues[lo:])
+        rows["nun"].append(b.n_unstable[lo:])
+        rows["ds"].append(b.ds[lo:])
+        rows["it"].append(b.newton_iters[lo:])
+        for name, col in b.records.items():
+            recs.setdefault(name, []).extend(col[lo:].tolist())
+        for sp in b.special_points:
+            specials.append(dataclasses.replace(sp, index=base + sp.index, s=s_base + sp.s))
+        base += len(b) - 1
+        s_base += float(b.arclength[-1]) if len(b) else 0.0
+    last = segs[-1]
+    ev = [e for e in rows["eig"] if e.size]
+    width = max((e.shape[1] for e in ev), default=0)
+    eig = np.vstack([np.pad(e, ((0, 0), (0, width - e.shape[1])), constant_values=np.nan)
+                     for e in rows["eig"]]) if width else np.zeros((base + 1, 0))  # fmt: skip
+    count = {"LPC": 0, "BPC": 0}
+    relabelled = []
+    for sp in specials:
+        for key in count:
+            if sp.label.startswith(key):
+                count[key] += 1
+                sp = dataclasses.replace(sp, label=f"{key}{count[key]}")
+        relabelled.append(sp)
+    return Branch(
+        problem=CycleSegments(tuple(probs), tuple(first_row)),
+        free=last.free,
+        p=np.concatenate(rows["p"]),
+        x=np.vstack(rows["x"]),
+        eigenvalues=eig,
+        n_unstable=np.concatenate(rows["nun"]),
+        ds=np.concatenate(rows["ds"]),
+        newton_iters=np.concatenate(rows["it"]),
+        records={k: np.array(v) for k, v in recs.items()},
+        special_points=tuple(relabelled),
+        status=last.status,
+        message=last.message,
+        settings=segs[0].settings,
+        state_names=last.state_names,
+        param_values=segs[0].param_values,
+        event_names=last.event_names,
+    )
+
+
+def _finish(br: Branch, free: str, period_max: float | None) -> Branch:
+    """Status PERIOD_UNBOUNDED and the multiplier-accuracy note."""
+    specials = br.special_points
     status, message = br.status, br.message
     if (
         period_max is not None
@@ -271,6 +453,16 @@ def continue_periodic(
         )
         specials = tuple(s for s in specials if s.label != "T_max")
         log.info(message)
+    out = []
+    for sp in specials:
+        if sp.kind == SpecialKind.USER and sp.label in ("PD", "NS") and sp.located:
+            err = problem_at(br, sp.index).floquet(sp.x, sp.p).trivial_error
+            if err > TRIVIAL_TOL:
+                log.warning("%s at %s=%.8g: multipliers unreliable (%.3g); reported as "
+                            "bracketed, not located", sp.label, free, sp.p, err)  # fmt: skip
+                sp = dataclasses.replace(sp, located=False, data={**sp.data, "trivial_error": err})
+        out.append(sp)
+    specials = tuple(out)
     if len(br) and "trivial_error" in br.records:
         bad = np.flatnonzero(br.records["trivial_error"] > TRIVIAL_TOL)
         if bad.size:
@@ -285,23 +477,28 @@ def continue_periodic(
     return dataclasses.replace(br, special_points=specials, status=status, message=message)
 
 
-def multipliers(branch: Branch) -> np.ndarray:
-    """Nontrivial Floquet multipliers at every row of a cycle branch, ``(N, n - 1)``."""
+def problem_at(branch: Branch, k: int) -> PeriodicOrbitProblem:
+    """The :class:`PeriodicOrbitProblem` (mesh) of row ``k`` of a cycle branch."""
     prob = branch.problem
+    if isinstance(prob, CycleSegments):
+        return prob.at_row(k)
     if not isinstance(prob, PeriodicOrbitProblem):
         raise ValueError("`branch` must be a branch of periodic orbits (continue_periodic)")
-    return np.array([prob.floquet(branch.x[k], branch.p[k]).multipliers
+    return prob
+
+
+def multipliers(branch: Branch) -> np.ndarray:
+    """Nontrivial Floquet multipliers at every row of a cycle branch, ``(N, n - 1)``."""
+    return np.array([problem_at(branch, k).floquet(branch.x[k], branch.p[k]).multipliers
                      for k in range(len(branch))])  # fmt: skip
 
 
 def orbit_at(branch: Branch, k: int | SpecialPoint) -> PeriodicOrbit:
     """The cycle at row ``k`` (or at a special point) of a cycle branch."""
-    prob = branch.problem
-    if not isinstance(prob, PeriodicOrbitProblem):
-        raise ValueError("`branch` must be a branch of periodic orbits (continue_periodic)")
     if isinstance(k, SpecialPoint):
-        return prob.orbit(k.x, k.p)
-    return prob.orbit(branch.x[k], branch.p[k])
+        return problem_at(branch, k.index).orbit(k.x, k.p)
+    k = int(k) + len(branch) if k < 0 else int(k)
+    return problem_at(branch, k).orbit(branch.x[k], branch.p[k])
 
 
 @dataclass(frozen=True)
@@ -367,9 +564,7 @@ def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
     n_fit : int
         Number of last rows in the fit (at least 4).
     """
-    prob = branch.problem
-    if not isinstance(prob, PeriodicOrbitProblem):
-        raise ValueError("`branch` must be a branch of periodic orbits (continue_periodic)")
+    problem_at(branch, 0)  # (checks the branch)
     if not (isinstance(n_fit, int) and n_fit >= 4):
         raise ValueError(f"`n_fit` must be an integer >= 4, got {n_fit!r}")
     if len(branch) < 4:
@@ -397,6 +592,8 @@ __all__ = [
     "continue_periodic",
     "multipliers",
     "orbit_at",
+    "CycleSegments",
     "period_limit",
+    "problem_at",
     "solve_orbit",
 ]

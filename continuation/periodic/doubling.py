@@ -25,7 +25,7 @@ from ..bvp.collocation import CollocationMesh
 from ..errors import ConvergenceError
 from ..settings import ContinuationSettings, NewtonSettings
 from .collocation import monodromy_factors
-from .continuation import continue_periodic
+from .continuation import continue_periodic, problem_at
 from .floquet import monodromy
 from .orbit import PeriodicOrbit
 from .problem import PeriodicOrbitProblem
@@ -82,14 +82,12 @@ def switch_period_doubling(
     ConvergenceError
         If the corrector fails.
     """
-    prob = branch.problem
-    if not isinstance(prob, PeriodicOrbitProblem):
-        raise ValueError("`branch` must be a branch of periodic orbits (continue_periodic)")
     if not (isinstance(amplitude, int | float) and math.isfinite(amplitude) and amplitude > 0):
         raise ValueError(f"`amplitude` must be a positive number, got {amplitude!r}")
     sp = _pd_point(branch, which)
     if not sp.located:
         raise ValueError("the PD point was bracketed, not located")
+    prob = problem_at(branch, sp.index)
     orbit = prob.orbit(sp.x, sp.p)
     B, _ = prob._blocks(sp.x, sp.p)
     Phi, S = monodromy_factors(prob.layout, B, stages=True)

@@ -3,8 +3,10 @@ r"""Floquet multipliers of a collocated cycle and the test functions of its bifu
 The multipliers are the eigenvalues of the monodromy matrix obtained by condensing
 the collocation Jacobian (:func:`~continuation.periodic.collocation.monodromy_factors`),
 not by a new simulation. One multiplier of an autonomous cycle is exactly 1
-(eigenvector :math:`f(x(0))`); it is identified by its eigenvector, removed, and its
-distance from 1 is kept as an accuracy check (``trivial_error``).
+(eigenvector :math:`f(x(0))`); it is deflated in the frames of ``f`` along the cycle
+(:func:`floquet`) and the others come from a periodic QR iteration on the deflated
+factors (:func:`periodic_eigenvalues`); the departure of the deflated structure from
+exactness is kept as an accuracy check (``trivial_error``).
 
 Test functions of the codimension-one bifurcations of cycles (nontrivial multipliers
 :math:`\mu_1 \dots \mu_{n-1}`; Kuznetsov 2004, *Elements of Applied Bifurcation
@@ -131,45 +133,61 @@ def periodic_eigenvalues(factors: FloatArray) -> tuple[ComplexArray, bool]:
     return mu, False
 
 
-def floquet(factors: FloatArray, f0: FloatArray) -> FloquetResult:
-    """Multipliers from the transfer matrices; ``f0 = f(x(0))`` picks the trivial one.
+def _frame(v: FloatArray) -> FloatArray:
+    """An orthonormal basis whose first column is ``v / |v|``, shape ``(n, n)``."""
+    n = v.size
+    Q, _ = np.linalg.qr(np.column_stack([v, np.eye(n)]))
+    Q = Q[:, :n]
+    if float(Q[:, 0] @ v) < 0:
+        Q = -Q
+    return Q
 
-    The multipliers are the eigenvalues of the monodromy matrix by
-    :func:`periodic_eigenvalues` (falling back on the eigenvalues of the formed
-    product when the iteration does not converge). The trivial multiplier is the one
-    whose eigenvector (of the formed product, or the nearest of its eigenvalues) is
-    most nearly parallel to ``f0`` among those within 0.5 of 1 (the nearest to 1 if
-    none qualifies).
+
+def floquet(factors: FloatArray, f_nodes: FloatArray) -> FloquetResult:
+    r"""Multipliers from the transfer matrices, the trivial one deflated.
+
+    ``f_nodes``: ``f(x_j)`` at the mesh nodes ``j = 0..N`` (``(N + 1, n)``; the last is
+    replaced by the first, the cycle being closed). For the exact cycle the
+    variational flow maps :math:`f(x_j)` to :math:`f(x_{j+1})`, so in the orthonormal
+    frames :math:`Q_j = [f_j / |f_j|, Q_j^\perp]` (:math:`Q_N = Q_0`)
+
+    .. math:: Q_{j+1}^T \Phi_j Q_j = egin{pmatrix} r_j & b_j \ arepsilon_j &
+              C_j \end{pmatrix}, \qquad arepsilon_j = 0 ,
+
+    and the monodromy matrix is similar to a block-triangular product: the trivial
+    multiplier is :math:`\prod r_j` and the nontrivial ones are the eigenvalues of
+    :math:`C_{N-1} \cdots C_0`, computed by :func:`periodic_eigenvalues` (Lust 2001,
+    "Improved numerical Floquet multipliers", Int. J. Bif. Chaos 11:2389-2410, on
+    deflation and periodic Schur methods). The discretisation leaves
+    :math:`arepsilon_j = O(h^{2m})`; it is neglected: near a homoclinic orbit the
+    off-diagonal :math:`b_j` products grow like :math:`e^{\lambda_u T}` and would
+    multiply these errors into the eigenvalues of the undeflated product.
+
+    ``trivial_error`` is the larger of ``|prod r_j - 1|`` and the relative size
+    ``max_j |epsilon_j| / |Phi_j|`` of the neglected coupling.
     """
-    Mo = monodromy(factors)
-    mu, V = np.linalg.eig(Mo)
-    mu_p, ok = periodic_eigenvalues(factors)
-    if ok and mu_p.size == mu.size:
-        # pair the accurate values with the eigenvectors of the product (by value;
-        # the product's eigenvalues near 1 are accurate enough to be matched)
-        order = []
-        free = list(range(mu.size))
-        for v in mu_p:
-            j = min(free, key=lambda i: abs(mu[i] - v) / max(1.0, abs(v)))
-            order.append(j)
-            free.remove(j)
-        V = V[:, order]
-        mu = mu_p
-    f0 = np.asarray(f0, dtype=float)
-    nf = float(np.linalg.norm(f0))
-    if nf > 0:
-        align = np.abs(V.conj().T @ f0) / (np.linalg.norm(V, axis=0) * nf)
-    else:
-        align = np.zeros(mu.size)
-    near = np.abs(mu - 1.0) < 0.5
-    if np.any(near):
-        score = np.where(near, align, -1.0)
-        k = int(np.argmax(score))
-    else:
-        k = int(np.argmin(np.abs(mu - 1.0)))
-    rest = np.delete(mu, k)
-    rest = rest[np.argsort(-np.abs(rest), kind="stable")]
-    return FloquetResult(np.asarray(rest, dtype=complex), complex(mu[k]), float(abs(mu[k] - 1)))
+    N, n, _ = factors.shape
+    f = np.asarray(f_nodes, dtype=float)
+    if n == 1:
+        mu1 = complex(np.prod(factors[:, 0, 0]))
+        return FloquetResult(np.zeros(0, dtype=complex), mu1, float(abs(mu1 - 1)))
+    frames = [_frame(f[j]) for j in range(N)]
+    frames.append(frames[0])
+    C = np.empty((N, n - 1, n - 1))
+    log_r, sign_r, eps = 0.0, 1.0, 0.0
+    for j in range(N):
+        A = frames[j + 1].T @ factors[j] @ frames[j]
+        C[j] = A[1:, 1:]
+        log_r += math.log(max(abs(A[0, 0]), 5e-324))
+        sign_r *= 1.0 if A[0, 0] >= 0 else -1.0
+        eps = max(eps, float(np.max(np.abs(A[1:, 0]))) / max(float(np.linalg.norm(A)), 1e-300))
+    trivial = sign_r * math.exp(min(log_r, 709.0))
+    mu, ok = periodic_eigenvalues(C)
+    if not ok:
+        mu = np.linalg.eigvals(monodromy(C))
+    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+    return FloquetResult(np.asarray(mu, dtype=complex), complex(trivial),
+                         max(abs(trivial - 1.0), eps))  # fmt: skip
 
 
 def exponents(mu: ComplexArray, imag_tol: float = 1e-8) -> ComplexArray:

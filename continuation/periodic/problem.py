@@ -215,8 +215,9 @@ class PeriodicOrbitProblem:
             return memo[1]  # type: ignore[no-any-return]
         B, _ = self._blocks(z, p)
         X, _ = self.layout.split(np.asarray(z, dtype=float))
-        f0 = self.system.f(X[0], self.param_vector(p))
-        res = floquet(monodromy_factors(self.layout, B), f0)
+        P = self.param_vector(p)
+        f_nodes = np.array([self.system.f(x, P) for x in X[:: self.layout.m + 1]])
+        res = floquet(monodromy_factors(self.layout, B), f_nodes)
         self._slot["floquet"] = (key, res)
         return res
 
