@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -314,6 +315,7 @@ def test_neimark_sacker_and_branch_point_of_cycles_closed_form():
     assert br.n_unstable[0] == 0 and br.n_unstable[-1] == 3
 
 
+@functools.lru_cache(maxsize=4)
 def _pendulum_homoclinic(gamma: float) -> float:
     """I at which the saddle's unstable manifold returns to the saddle one turn later
     (an independent shooting + bisection computation)."""
@@ -328,9 +330,9 @@ def _pendulum_homoclinic(gamma: float) -> float:
         ev1.terminal = True
         ev2 = lambda t, x: x[1]  # noqa: E731
         ev2.terminal, ev2.direction = True, -1
-        r = solve_ivp(lambda t, x: [x[1], I - gamma * x[1] - math.sin(x[0])], (0, 200),
+        r = solve_ivp(lambda t, x: [x[1], I - gamma * x[1] - math.sin(x[0])], (0, 100),
                       np.array([ths, 0.0]) + 1e-9 * v, events=[ev1, ev2], rtol=1e-12,
-                      atol=1e-14)  # fmt: skip
+                      atol=1e-14, method="DOP853")  # fmt: skip
         return 1.0 if r.t_events[0].size else -1.0
 
     return brentq(arrive, 0.3, 0.95, xtol=1e-13)

@@ -1,5 +1,34 @@
-"""Periodic orbits: collocation, Floquet multipliers, continuation and bifurcations of
-cycles (see :mod:`continuation.periodic.continuation`)."""
+r"""Periodic orbits: orthogonal collocation, Floquet multipliers, continuation and the
+bifurcations of cycles.
+
+* :class:`PeriodicOrbitProblem` -- the collocation system (Gauss-Legendre, degree
+  ``m``, ``N`` intervals on ``[0, 1]``, period unknown, integral phase condition,
+  rotation orbits by a winding number per periodic state) as a continuation problem;
+* :func:`continue_periodic` -- its branch by the pseudo-arclength driver, with LPC,
+  BPC, PD and NS located; :func:`continue_from_hopf`, :func:`continue_period_doubled`
+  start at a Hopf point or at a PD point; ``period_max`` ends a branch whose period
+  grows without bound (``Status.PERIOD_UNBOUNDED``; :func:`period_limit` fits the limit
+  and gives a guess of the connecting orbit);
+* starts: :func:`periodic_orbit_from_hopf`, :func:`orbit_from_trajectory`,
+  :func:`orbit_from_array`; :func:`solve_orbit`, :func:`adapt_mesh`;
+* :func:`multipliers`, :func:`orbit_at`, :func:`problem_at` along a branch.
+
+Example (the van der Pol oscillator, period 6.6632868593 at ``mu = 1``)::
+
+    def rhs(x, p, ops):
+        return ops.stack([x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0]])
+
+    s = System(rhs, ("x", "y"), ("mu",))
+    tr = simulate(s, [2.0, 0.0], {"mu": 1.0}, (0.0, 60.0), dt=0.01)
+    orb = orbit_from_trajectory(s, {"mu": 1.0}, tr, mesh=CollocationMesh(60, 4, 1.0))
+    orb.T                                            # 6.66328685932...
+    br = continue_periodic(s, orb, {"mu": 1.0}, "mu", ContinuationSettings(p_max=5.0))
+    br.records["T"], multipliers(br)
+
+A rotation orbit of a circle coordinate (the ship's ``xi_G`` with period 1, advancing
+one wavelength per cycle) is declared by ``System(..., periodic={"xi_G": 1.0})`` and
+``winding={"xi_G": 1}`` (or ``-1``) in the start.
+"""
 
 from .collocation import CollocationLayout, monodromy_factors
 from .continuation import (

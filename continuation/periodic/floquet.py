@@ -93,7 +93,30 @@ def _blocks_of(D: FloatArray, Rd: list[FloatArray], Rlog: FloatArray, Rsign: Flo
     return np.array(out, dtype=complex)
 
 
-def periodic_eigenvalues(factors: FloatArray) -> tuple[ComplexArray, bool]:
+#: The factors are first multiplied in at most this many consecutive groups (each
+#: product spans a fraction ``1/GROUPS`` of the period, so its own conditioning is
+#: mild); the periodic QR iteration then runs on the group products.
+GROUPS = 16
+
+
+def grouped(factors: FloatArray, groups: int = GROUPS) -> FloatArray:
+    """Products of consecutive factors in ``min(N, groups)`` groups, ``(G, n, n)``."""
+    N = factors.shape[0]
+    if N <= groups:
+        return factors
+    edges = np.linspace(0, N, groups + 1).round().astype(int)
+    out = np.empty((groups,) + factors.shape[1:])
+    for g in range(groups):
+        P = factors[edges[g]]
+        for j in range(edges[g] + 1, edges[g + 1]):
+            P = factors[j] @ P
+        out[g] = P
+    return out
+
+
+def periodic_eigenvalues(
+    factors: FloatArray, Q_start: FloatArray | None = None
+) -> tuple[ComplexArray, bool, FloatArray]:
     r"""Eigenvalues of :math:`\Phi_{N-1} \cdots \Phi_0` without forming the product.
 
     Periodic QR (simultaneous) iteration: one sweep computes
@@ -104,10 +127,11 @@ def periodic_eigenvalues(factors: FloatArray) -> tuple[ComplexArray, bool]:
     working precision in each factor even when the multipliers span many orders of
     magnitude (near-homoclinic cycles, stiff systems) where the eigenvalues of the
     explicitly formed product lose all digits of the small ones. Complex pairs come
-    from their 2x2 diagonal blocks. Returns ``(eigenvalues, converged)``.
+    from their 2x2 diagonal blocks. ``Q_start``: the first ``Q_0`` (e.g. the last one
+    of a nearby cycle). Returns ``(eigenvalues, converged, Q_0)``.
     """
     N, n, _ = factors.shape
-    Q = np.eye(n)
+    Q = np.eye(n) if Q_start is None or Q_start.shape != (n, n) else Q_start
     prev = None
     for _ in range(MAX_SWEEPS):
         Q0 = Q
@@ -128,22 +152,30 @@ def periodic_eigenvalues(factors: FloatArray) -> tuple[ComplexArray, bool]:
             srt = np.sort_complex(mu)
             if np.all(np.abs(srt - np.sort_complex(prev)) <= 1e-11 * np.maximum(1.0, np.abs(srt))
                       + 1e-300):  # fmt: skip
-                return mu, True
+                return mu, True, Q0
         prev = mu
-    return mu, False
+    return mu, False, Q
 
 
-def _frame(v: FloatArray) -> FloatArray:
-    """An orthonormal basis whose first column is ``v / |v|``, shape ``(n, n)``."""
-    n = v.size
-    Q, _ = np.linalg.qr(np.column_stack([v, np.eye(n)]))
-    Q = Q[:, :n]
-    if float(Q[:, 0] @ v) < 0:
-        Q = -Q
-    return Q
+def _frames(F: FloatArray) -> FloatArray:
+    """Orthonormal bases whose first columns are ``F[j] / |F[j]|``, ``(K, n, n)``.
+
+    Householder reflections: with ``s = sign(v_0)`` and ``u = (v + s e_1) / |.|``,
+    ``H = I - 2 u u^T`` maps ``e_1`` to ``-s v``, so ``-s H`` has first column ``v``.
+    """
+    K, n = F.shape
+    v = F / np.maximum(np.linalg.norm(F, axis=1), 1e-300)[:, None]
+    s = np.where(v[:, 0] >= 0, 1.0, -1.0)
+    u = v.copy()
+    u[:, 0] += s
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    H = np.eye(n)[None] - 2.0 * u[:, :, None] * u[:, None, :]
+    return -s[:, None, None] * H
 
 
-def floquet(factors: FloatArray, f_nodes: FloatArray) -> FloquetResult:
+def floquet(
+    factors: FloatArray, f_nodes: FloatArray, memo: dict[str, object] | None = None
+) -> FloquetResult:
     r"""Multipliers from the transfer matrices, the trivial one deflated.
 
     ``f_nodes``: ``f(x_j)`` at the mesh nodes ``j = 0..N`` (``(N + 1, n)``; the last is
@@ -164,27 +196,31 @@ def floquet(factors: FloatArray, f_nodes: FloatArray) -> FloquetResult:
     multiply these errors into the eigenvalues of the undeflated product.
 
     ``trivial_error`` is the larger of ``|prod r_j - 1|`` and the relative size
-    ``max_j |epsilon_j| / |Phi_j|`` of the neglected coupling.
+    ``max_j |epsilon_j| / |Phi_j|`` of the neglected coupling. ``memo``: a dict that
+    keeps the last Schur basis (a warm start for the next, nearby cycle).
     """
     N, n, _ = factors.shape
     f = np.asarray(f_nodes, dtype=float)
     if n == 1:
         mu1 = complex(np.prod(factors[:, 0, 0]))
         return FloquetResult(np.zeros(0, dtype=complex), mu1, float(abs(mu1 - 1)))
-    frames = [_frame(f[j]) for j in range(N)]
-    frames.append(frames[0])
-    C = np.empty((N, n - 1, n - 1))
-    log_r, sign_r, eps = 0.0, 1.0, 0.0
-    for j in range(N):
-        A = frames[j + 1].T @ factors[j] @ frames[j]
-        C[j] = A[1:, 1:]
-        log_r += math.log(max(abs(A[0, 0]), 5e-324))
-        sign_r *= 1.0 if A[0, 0] >= 0 else -1.0
-        eps = max(eps, float(np.max(np.abs(A[1:, 0]))) / max(float(np.linalg.norm(A)), 1e-300))
+    Qf = _frames(f[:N])
+    Qn = np.concatenate([Qf[1:], Qf[:1]])  # Q_{j+1}, with Q_N = Q_0
+    A = np.einsum("jba,jbc,jcd->jad", Qn, factors, Qf)  # Q_{j+1}^T Phi_j Q_j
+    C = A[:, 1:, 1:]
+    r = A[:, 0, 0]
+    log_r = float(np.sum(np.log(np.maximum(np.abs(r), 5e-324))))
+    sign_r = float(np.prod(np.where(r >= 0, 1.0, -1.0)))
+    eps = float(np.max(np.max(np.abs(A[:, 1:, 0]), axis=1)
+                       / np.maximum(np.linalg.norm(A, axis=(1, 2)), 1e-300)))  # fmt: skip
     trivial = sign_r * math.exp(min(log_r, 709.0))
-    mu, ok = periodic_eigenvalues(C)
+    Cg = grouped(C)
+    Q_start = memo.get("Q") if memo is not None else None
+    mu, ok, Q = periodic_eigenvalues(Cg, Q_start)  # type: ignore[arg-type]
+    if memo is not None:
+        memo["Q"] = Q
     if not ok:
-        mu = np.linalg.eigvals(monodromy(C))
+        mu = np.linalg.eigvals(monodromy(Cg))
     mu = mu[np.argsort(-np.abs(mu), kind="stable")]
     return FloquetResult(np.asarray(mu, dtype=complex), complex(trivial),
                          max(abs(trivial - 1.0), eps))  # fmt: skip
@@ -240,6 +276,7 @@ __all__ = [
     "FloquetResult",
     "exponents",
     "floquet",
+    "grouped",
     "is_neimark_sacker",
     "monodromy",
     "ns_test",

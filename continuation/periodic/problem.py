@@ -113,6 +113,7 @@ class PeriodicOrbitProblem:
         per = np.asarray(getattr(self.system, "period", np.zeros(n)), dtype=float)
         object.__setattr__(self, "_layout", lay)
         object.__setattr__(self, "_eval", StageEvaluator(self.system, lay.N * lay.m))
+        object.__setattr__(self, "_nodes_eval", StageEvaluator(self.system, lay.N + 1))
         object.__setattr__(self, "_index", self.system.param_names.index(self.free))
         object.__setattr__(self, "_shift", np.asarray(self.winding, dtype=float) * per)
         self.accept(ref)
@@ -216,8 +217,10 @@ class PeriodicOrbitProblem:
         B, _ = self._blocks(z, p)
         X, _ = self.layout.split(np.asarray(z, dtype=float))
         P = self.param_vector(p)
-        f_nodes = np.array([self.system.f(x, P) for x in X[:: self.layout.m + 1]])
-        res = floquet(monodromy_factors(self.layout, B), f_nodes)
+        f_nodes = self._nodes_eval.f(X[:: self.layout.m + 1], P)  # type: ignore[attr-defined]
+        res = floquet(
+            monodromy_factors(self.layout, B), f_nodes, self._slot.setdefault("schur", {})
+        )
         self._slot["floquet"] = (key, res)
         return res
 
