@@ -422,3 +422,49 @@ def test_bad_input():
         continue_periodic(s, orb, {"mu": 1.0}, "nu")
     with pytest.raises(ValueError, match="`period_max`"):
         continue_periodic(s, orb, {"mu": 1.0}, "mu", period_max=-1.0)
+
+
+def _brusselator(x, p, ops):
+    a, b = p[0], p[1]
+    return ops.stack([a - (b + 1) * x[0] + x[0] ** 2 * x[1], b * x[0] - x[0] ** 2 * x[1]])
+
+
+def test_hopf_start_amplitude_law_on_a_moving_equilibrium():
+    """Brusselator (equilibrium (a, b/a) moves with b; Hopf at b = 1 + a^2, omega = a):
+    the collocated cycles near the Hopf point have T -> 2 pi / a and an amplitude
+    following the normal form |z|^2 = -alpha' (b - b_H) / (omega l1) (two independent
+    computations: the Lyapunov coefficient and the collocation)."""
+    a = 1.0
+    s = System(_brusselator, ("x", "y"), ("a", "b"))
+    eq = continue_equilibria(s, [a, 1.5 / a], {"a": a, "b": 1.5}, "b", p_min=1.0, p_max=3.0,
+                             direction="forward", ds=0.05)  # fmt: skip
+    (h,) = eq.find("hopf")
+    assert h.p == pytest.approx(1 + a * a, abs=1e-9)
+    l1 = first_lyapunov_coefficient(s, h.x, {"a": a, "b": h.p})
+    assert l1 < 0  # supercritical
+    amp = 1e-3
+    orb = periodic_orbit_from_hopf(eq, h.label, amplitude=amp, mesh=CollocationMesh(30, 4, 1.0))
+    assert orb.param("b") > h.p  # cycles where the equilibrium is unstable
+    assert orb.T == pytest.approx(2 * np.pi / a, rel=1e-4)
+    # the corrected cycle's largest distance from the equilibrium is the requested one
+    # (to first order: relative O(amplitude))
+    x_eq = np.array([a, orb.param("b") / a])
+    dist = float(np.max(np.linalg.norm(orb.X - x_eq[None, :], axis=1)))
+    assert dist == pytest.approx(amp, rel=2e-2)
+
+
+def test_user_array_start_and_save_load(tmp_path):
+    """A rough circle as the user's guess converges to the Hopf normal form cycle; the
+    branch is saved and loaded with its records."""
+    s = System(_hopf_nf, ("x", "y"), ("mu",))
+    t = np.linspace(0, 2 * np.pi * 1.1, 50)
+    x = np.column_stack([0.6 * np.cos(t), 0.6 * np.sin(t)])
+    orb = solve_orbit(orbit_from_array(s, {"mu": 0.5}, t, x, mesh=CollocationMesh(20, 4, 1.0)))
+    assert orb.T == pytest.approx(2 * np.pi, abs=1e-9)
+    assert float(np.max(np.hypot(orb.X[:, 0], orb.X[:, 1]))) == pytest.approx(math.sqrt(0.5))
+    br = continue_periodic(s, orb, {"mu": 0.5}, "mu", ContinuationSettings(max_steps=5))
+    from continuation import Branch
+
+    back = Branch.load(br.save(tmp_path / "cycles"))
+    np.testing.assert_allclose(back.records["T"], br.records["T"])
+    np.testing.assert_allclose(back.x, br.x)
