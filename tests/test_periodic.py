@@ -468,3 +468,26 @@ def test_user_array_start_and_save_load(tmp_path):
     back = Branch.load(br.save(tmp_path / "cycles"))
     np.testing.assert_allclose(back.records["T"], br.records["T"])
     np.testing.assert_allclose(back.x, br.x)
+
+
+@pytest.mark.parametrize("adapt_every", [0, 5])
+def test_both_directions_one_branch(adapt_every):
+    """direction="both" from a large Bautin cycle: one branch from the backward end to
+    the forward end, every row a cycle mu = r^4 - r^2 of its own mesh."""
+    s = System(_bautin, ("x", "y"), ("mu", "beta"))
+    t = np.linspace(0, 2 * np.pi, 60)
+    r0 = math.sqrt((1 + math.sqrt(1 - 4 * 0.2)) / 2)
+    guess = orbit_from_array(s, {"mu": -0.2, "beta": 1.0}, t,
+                             np.column_stack([r0 * np.cos(t), r0 * np.sin(t)]),
+                             mesh=CollocationMesh(20, 4, 1.0))  # fmt: skip
+    st = ContinuationSettings(ds=0.02, ds_max=0.05, max_steps=30, p_min=-0.24, p_max=0.5)
+    br = continue_periodic(s, guess, guess.params, "mu", st, direction="both",
+                           adapt_every=adapt_every)  # fmt: skip
+    assert br.p[0] == pytest.approx(-0.24) and br.p[-1] == pytest.approx(0.5)
+    assert np.all(np.diff(br.p) > 0) and np.all(br.ds[1:] > 0)
+    assert np.any(np.abs(br.p + 0.2) < 1e-12)  # the start row, once
+    r = br.records["max_x"]
+    np.testing.assert_allclose(br.p, r**4 - r**2, atol=1e-8)
+    for k in range(len(br)):
+        res = problem_at(br, k).residual(br.x[k], br.p[k])[:-1]
+        assert np.max(np.abs(res)) < 1e-8

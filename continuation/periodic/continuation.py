@@ -181,7 +181,7 @@ def continue_periodic(
     detect_pd: bool = True,
     detect_ns: bool = True,
     events: Sequence[Event] = (),
-    direction: Literal["forward", "backward"] = "forward",
+    direction: Literal["forward", "backward", "both"] = "forward",
     progress: Callable[[Any], None] | None = None,
     throw: bool = False,
     adapt_every: int = 0,
@@ -213,7 +213,11 @@ def continue_periodic(
         Monitor the period-doubling and Neimark-Sacker test functions.
     events : sequence of Event
         More user events, ``fn(z, p)`` of the cycle unknowns.
-    direction : {"forward", "backward"}
+    direction : {"forward", "backward", "both"}
+        ``"both"``: backward, then forward from the start cycle, returned as one
+        branch from the backward end to the forward end (``max_steps`` per direction;
+        the status is the forward run's, the backward run's reason is in the
+        message).
     progress : callable, optional
         Called with every accepted :class:`~continuation.branch.BranchPoint`.
     throw : bool
@@ -243,8 +247,8 @@ def continue_periodic(
     """
     if free not in system.param_names:
         raise ValueError(f"`free` must be one of {system.param_names}, got {free!r}")
-    if direction not in ("forward", "backward"):
-        raise ValueError(f"`direction` must be 'forward' or 'backward', got {direction!r}")
+    if direction not in ("forward", "backward", "both"):
+        raise ValueError(f"`direction` must be 'forward', 'backward' or 'both', got {direction!r}")
     if period_max is not None and not (math.isfinite(period_max) and period_max > 0):
         raise ValueError(f"`period_max` must be a positive number, got {period_max!r}")
     if winding is not None:
@@ -258,13 +262,70 @@ def continue_periodic(
     )
     run = dict(period_max=period_max, detect_pd=detect_pd, detect_ns=detect_ns,
                events=events, progress=progress, throw=throw)  # fmt: skip
-    if direction == "backward":
-        settings = dataclasses.replace(settings, ds=-settings.ds)
-    if adapt_every == 0:
-        br = _continue_once(orb, free, settings, **run)  # type: ignore[arg-type]
+
+    def one(st: ContinuationSettings) -> Branch:
+        if adapt_every == 0:
+            return _continue_once(orb, free, st, **run)  # type: ignore[arg-type]
+        return _continue_segments(orb, free, st, adapt_every, run)
+
+    back = dataclasses.replace(settings, ds=-settings.ds)
+    if direction == "forward":
+        br = one(settings)
+    elif direction == "backward":
+        br = one(back)
     else:
-        br = _continue_segments(orb, free, settings, adapt_every, run)
+        b, f = one(back), one(settings)
+        if len(b) == 0 or len(f) == 0:
+            br = f if len(f) else b
+        else:
+            br = _merge_segments([_reverse(b), f])
+            br = dataclasses.replace(
+                br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
+            )
     return _finish(br, free, period_max)
+
+
+def _segments_of(br: Branch) -> tuple[list[PeriodicOrbitProblem], list[int]]:
+    prob = br.problem
+    if isinstance(prob, CycleSegments):
+        return list(prob.problems), list(prob.first_row)
+    return [prob], [0]
+
+
+def _reverse(br: Branch) -> Branch:
+    """The branch in the opposite order (rows, steps, special points, segments)."""
+    N = len(br)
+    ds = np.zeros(N)
+    ds[1:] = br.ds[1:][::-1]
+    L = float(br.arclength[-1])
+    sps = [
+        dataclasses.replace(
+            sp,
+            index=N - 2 - sp.index,
+            s=L - sp.s,
+            bracket=(sp.bracket[1], sp.bracket[0]),
+            delta_unstable=(-sp.delta_unstable[0], -sp.delta_unstable[1]),
+            tangent=None if sp.tangent is None else -np.asarray(sp.tangent),
+        )
+        for sp in reversed(br.special_points)
+    ]
+    probs, first = _segments_of(br)
+    ends = [f - 1 for f in first[1:]] + [N - 1]  # last row of each segment
+    problem: Any = br.problem
+    if len(probs) > 1:
+        problem = CycleSegments(tuple(probs[::-1]), tuple(N - 1 - e for e in ends[::-1]))
+    return dataclasses.replace(
+        br,
+        problem=problem,
+        p=br.p[::-1],
+        x=br.x[::-1],
+        eigenvalues=br.eigenvalues[::-1],
+        n_unstable=br.n_unstable[::-1],
+        ds=ds,
+        newton_iters=br.newton_iters[::-1],
+        records={k: v[::-1] for k, v in br.records.items()},
+        special_points=tuple(sps),
+    )
 
 
 def _continue_once(
@@ -368,11 +429,19 @@ def _continue_segments(
         if br.status != Status.MAX_STEPS or left <= 0 or len(br) < 2:
             break
         last = orbit_at(br, len(br) - 1)
-        try:
-            orb = adapt_mesh(last, rounds=1, free=free, newton=st.newton, fix_period=True)
-        except ConvergenceError as exc:
-            log.warning("mesh adaptation failed at %s=%.8g (%s); mesh kept", free, br.p[-1], exc)
-            orb = last
+        orb = last
+        # at fixed parameter first; at fixed period where that fails (near a homoclinic
+        # orbit the period is far more sensitive than the parameter)
+        for fix_period in (False, True):
+            try:
+                orb = adapt_mesh(last, rounds=1, free=free, newton=st.newton,
+                                 fix_period=fix_period)  # fmt: skip
+                break
+            except ConvergenceError as exc:
+                log.info("mesh adaptation (fix_period=%s) failed at %s=%.8g: %s",
+                         fix_period, free, br.p[-1], exc)  # fmt: skip
+        else:
+            log.warning("mesh adaptation failed at %s=%.8g; mesh kept", free, br.p[-1])
         sgn = 1.0 if br.p[-1] >= br.p[-2] else -1.0
         ds = min(max(abs(float(br.ds[-1])), abs(st.ds)), st.ds_max)
         st = dataclasses.replace(st, ds=sgn * ds)
@@ -389,8 +458,10 @@ def _merge_segments(segs: list[Branch]) -> Branch:
     base, s_base = 0, 0.0
     for k, b in enumerate(segs):
         lo = 0 if k == 0 else 1
-        first_row.append(base + lo if k else 0)
-        probs.append(b.problem)
+        sub_p, sub_f = _segments_of(b)
+        for q, fr in zip(sub_p, sub_f, strict=True):
+            probs.append(q)
+            first_row.append(base + max(fr, lo) if k else fr)
         rows["p"].append(b.p[lo:])
         rows["x"].append(b.x[lo:])
         rows["eig"].append(b.eigenvalues[lo:])
