@@ -12,7 +12,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from continuation import ContinuationSettings, Status, System, continue_equilibria, simulate
-from continuation.bvp import CollocationMesh
+from continuation.bvp import CollocationMesh, solve_connection
 from continuation.periodic import (
     PeriodicOrbitProblem,
     continue_from_hopf,
@@ -365,6 +365,11 @@ def test_pendulum_rotation_period_blows_up_at_homoclinic():
     np.testing.assert_allclose(np.log(mu), -g * br.records["T"], rtol=1e-6)
     assert lim.saddle == pytest.approx(np.array([ths - 2 * math.pi * round((ths - lim.saddle[0])
                                        / (2 * math.pi)), 0.0]), abs=1e-2)  # fmt: skip
+    # the limit as the guess of the connection solver: the saddle loop around the
+    # cylinder (x_+ = x_- + (2 pi, 0)) is found at I_hc
+    res = solve_connection(lim.connection_problem(), (lim.t, lim.x))
+    assert res.status == Status.SUCCESS
+    assert res.value("I") == pytest.approx(I_hc, abs=1e-8)
 
 
 @pytest.mark.slow

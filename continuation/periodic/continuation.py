@@ -593,6 +593,10 @@ class PeriodLimit:
         ``(K, n)``: a guess of the connecting orbit for a connection solver.
     fit_residual : float
         RMS residual of the fit in ``p``.
+    orbit : PeriodicOrbit
+        The last cycle.
+    free : str
+        The continuation parameter.
     """
 
     p_star: float
@@ -603,6 +607,41 @@ class PeriodLimit:
     t: FloatArray
     x: FloatArray
     fit_residual: float
+    orbit: PeriodicOrbit
+    free: str
+
+    def connection_problem(self, mesh: CollocationMesh | None = None) -> Any:
+        """A :class:`~continuation.bvp.HeteroclinicProblem` for the limiting connection.
+
+        The saddle is :attr:`saddle` corrected by Newton's method on ``f = 0``; the
+        connection returns to it shifted by the cycle's winding (``x_+ = x_- + k o
+        period``, a homoclinic orbit when ``k = 0``); the free parameter is solved for,
+        at :attr:`p_last` to start. Solve it with
+        ``solve_connection(problem, (limit.t, limit.x))``. ``mesh``: default 80
+        intervals of degree 4 over ``T_last``. Only a connection of *one* saddle to
+        itself is set up (a cycle approaching a heteroclinic cycle of several saddles
+        needs its own problem).
+
+        Raises
+        ------
+        ConvergenceError
+            If Newton's method on the saddle fails.
+        """
+        from ..bvp import HeteroclinicProblem
+
+        orb = self.orbit
+        P = np.array(orb.params.values, dtype=float)
+        x = np.array(self.saddle, dtype=float)
+        for _ in range(30):
+            dx = np.linalg.solve(orb.system.jacobian(x, P), orb.system.f(x, P))
+            x = x - dx
+            if np.max(np.abs(dx)) <= 1e-13 * (1.0 + np.max(np.abs(x))):
+                break
+        else:
+            raise ConvergenceError("the saddle of the period limit did not converge")
+        mesh = mesh if mesh is not None else CollocationMesh(80, 4, self.T_last)
+        return HeteroclinicProblem(orb.system, orb.params, unknown_params=(self.free,),
+                                   saddle_from=x, shift=orb.shift, mesh=mesh)  # fmt: skip
 
 
 def _log_fit(p: FloatArray, T: FloatArray) -> tuple[float, float, float]:
@@ -654,7 +693,7 @@ def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
     t = np.linspace(t0, t0 + orb.T, 4 * orb.mesh.n_points)
     x = orb(t)
     return PeriodLimit(p_star, b, float(branch.p[-1]), float(T[-1]), orb.X[q].copy(),
-                       t - t0, x, rms)  # fmt: skip
+                       t - t0, x, rms, orb, branch.free)  # fmt: skip
 
 
 __all__ = [
