@@ -55,12 +55,16 @@ class StageEvaluator:
     def __post_init__(self) -> None:
         fns = None
         if getattr(self.system, "has_casadi", False):
+            import casadi as ca
+
             c = self.system.casadi_functions()
             K = self.n_points
+            n, m = self.system.n_states, self.system.n_params
+            x, p = ca.SX.sym("x", n), ca.SX.sym("p", max(m, 0))
+            both = ca.Function("fjp", [x, p], [c["f"](x, p), c["jac"](x, p), c["dfdp"](x, p)])
             fns = (
                 c["f"].map("f_map", "serial", K, [1], []),
-                c["jac"].map("j_map", "serial", K, [1], []),
-                c["dfdp"].map("p_map", "serial", K, [1], []),
+                both.map("fjp_map", "serial", K, [1], []),
             )
         object.__setattr__(self, "_fns", fns)
 
@@ -75,12 +79,11 @@ class StageEvaluator:
         K, n = Xs.shape
         npar = int(np.size(P))
         if self._fns is not None:
-            F = np.asarray(self._fns[0](Xs.T, P), dtype=float).T
-            J = np.asarray(self._fns[1](Xs.T, P), dtype=float)  # (n, n K)
-            J = J.reshape(n, K, n).transpose(1, 0, 2)
+            Fd, Jd, Pd = self._fns[1](Xs.T, P)
+            F = np.asarray(Fd, dtype=float).T
+            J = np.asarray(Jd, dtype=float).reshape(n, K, n).transpose(1, 0, 2)  # (n, n K)
             if npar:
-                Jp = np.asarray(self._fns[2](Xs.T, P), dtype=float).reshape(n, K, npar)
-                Jp = Jp.transpose(1, 0, 2)
+                Jp = np.asarray(Pd, dtype=float).reshape(n, K, npar).transpose(1, 0, 2)
             else:
                 Jp = np.zeros((K, n, 0))
             return F, J, Jp

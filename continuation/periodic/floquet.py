@@ -214,6 +214,12 @@ def floquet(
     eps = float(np.max(np.max(np.abs(A[:, 1:, 0]), axis=1)
                        / np.maximum(np.linalg.norm(A, axis=(1, 2)), 1e-300)))  # fmt: skip
     trivial = sign_r * math.exp(min(log_r, 709.0))
+    if n == 2:  # one nontrivial multiplier: the product of the 1x1 blocks
+        c = C[:, 0, 0]
+        lg = float(np.sum(np.log(np.maximum(np.abs(c), 5e-324))))
+        sg = float(np.prod(np.where(c >= 0, 1.0, -1.0)))
+        mu1 = np.array([sg * math.exp(min(lg, 709.0))], dtype=complex)
+        return FloquetResult(mu1, complex(trivial), max(abs(trivial - 1.0), eps))
     Cg = grouped(C)
     Q_start = memo.get("Q") if memo is not None else None
     mu, ok, Q = periodic_eigenvalues(Cg, Q_start)  # type: ignore[arg-type]
