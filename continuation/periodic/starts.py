@@ -9,6 +9,7 @@ back within ``tol`` of :math:`x_e` ends one period.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -123,8 +124,6 @@ def continue_from_hopf(
     orb = periodic_orbit_from_hopf(branch, sp, amplitude=amplitude, mesh=mesh)
     settings = settings if settings is not None else ContinuationSettings()
     side = 1.0 if orb.param(branch.free) > sp.p else -1.0
-    import dataclasses
-
     settings = dataclasses.replace(settings, ds=side * abs(settings.ds))
     return continue_periodic(orb.system, orb, orb.params, branch.free, settings, **kwargs)
 
