@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .._types import FloatArray
 from ..bvp.collocation import CollocationMesh
+from ..typing import FloatArray
 
 
 @dataclass(frozen=True, eq=False)

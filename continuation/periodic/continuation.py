@@ -35,8 +35,7 @@ from typing import Any, Literal
 import numpy as np
 import scipy.optimize as so
 
-from .._types import FloatArray
-from ..algorithms.base import correct
+from ..algorithms.corrector import correct
 from ..branch import Branch, SpecialKind, SpecialPoint
 from ..bvp.collocation import CollocationMesh
 from ..driver import continue_branch
@@ -45,6 +44,7 @@ from ..events import Event
 from ..params import Params
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
+from ..typing import FloatArray
 from .floquet import is_neimark_sacker
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
 from .problem import PeriodicOrbitProblem

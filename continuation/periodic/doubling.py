@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..algorithms.base import correct
+from ..algorithms.corrector import correct
 from ..branch import Branch, SpecialPoint
 from ..bvp.collocation import CollocationMesh
 from ..errors import ConvergenceError

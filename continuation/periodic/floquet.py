@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._types import ComplexArray, FloatArray
+from ..typing import ComplexArray, FloatArray
 
 
 @dataclass(frozen=True)

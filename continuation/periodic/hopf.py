@@ -23,11 +23,11 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .._types import FloatArray
 from ..branch import Branch, SpecialKind, SpecialPoint
 from ..bvp.collocation import CollocationMesh
 from ..params import Params
 from ..settings import NewtonSettings
+from ..typing import FloatArray
 from .continuation import solve_orbit
 from .orbit import PeriodicOrbit
 

@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
 from ..bvp.collocation import CollocationMesh
 from ..params import Params
+from ..typing import FloatArray
 
 
 def winding_vector(system: Any, winding: Any) -> tuple[int, ...]:

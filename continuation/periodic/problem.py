@@ -21,9 +21,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .._types import ComplexArray, FloatArray
 from ..bvp.collocation import CollocationMesh
 from ..params import Params
+from ..typing import ComplexArray, FloatArray
 from .collocation import CollocationLayout, StageEvaluator, monodromy_factors
 from .floquet import FloquetResult, exponents, floquet, ns_test, pd_test
 from .orbit import PeriodicOrbit
