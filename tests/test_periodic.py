@@ -496,3 +496,20 @@ def test_both_directions_one_branch(adapt_every):
     for k in range(len(br)):
         res = problem_at(br, k).residual(br.x[k], br.p[k])[:-1]
         assert np.max(np.abs(res)) < 1e-8
+
+
+def test_numpy_only_system():
+    """A System without a CasADi trace (NumPy right-hand side, finite-difference
+    derivatives) gives the same van der Pol period."""
+
+    def f(x, p):
+        return np.array([x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0]])
+
+    s = System(f, ("x", "y"), ("mu",), backend="numpy")
+    assert not s.has_casadi
+    tr = simulate(System(_vdp, ("x", "y"), ("mu",)), [2.0, 0.0], {"mu": 1.0}, (0.0, 60.0),
+                  dt=0.01)  # fmt: skip
+    orb = orbit_from_trajectory(s, {"mu": 1.0}, (tr.t, tr.x), mesh=CollocationMesh(40, 4, 1.0))
+    assert orb.T == pytest.approx(VDP_T_MU1, abs=1e-7)
+    br = continue_periodic(s, orb, {"mu": 1.0}, "mu", ContinuationSettings(max_steps=3))
+    assert br.status == Status.MAX_STEPS and len(br) == 4
