@@ -179,6 +179,11 @@ def periodic_orbit_from_hopf(
     if not sp.located:
         raise ValueError(f"the Hopf point {sp.label!r} was bracketed, not located")
     prob = branch.problem
+    if prob is None or not hasattr(prob, "system") or not hasattr(prob, "param_vector"):
+        raise ValueError(
+            "`branch` must be an equilibrium branch with its problem (a loaded branch has "
+            "none: pass problem= to Branch.load)"
+        )
     system, free = prob.system, branch.free
     x_h = np.asarray(sp.x, dtype=float)
     P_h = np.array(prob.param_vector(sp.p), dtype=float)
