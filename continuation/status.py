@@ -30,6 +30,10 @@ class Status(enum.Enum):
         "An evaluation ended undecided (time limit reached before its fate was known); "
         "increase `t_max`."
     )
+    PERIOD_UNBOUNDED = (
+        "The period of the cycles grew past `period_max`: the branch approaches a "
+        "homoclinic or heteroclinic orbit."
+    )
     MAX_ITER = "The maximum number of iterations/evaluations was reached before the tolerance."
 
     @property
@@ -41,6 +45,7 @@ class Status(enum.Enum):
             Status.PARAM_BOUND,
             Status.CLOSED_LOOP,
             Status.EVENT,
+            Status.PERIOD_UNBOUNDED,
         )
 
 

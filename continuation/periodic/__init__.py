@@ -1,0 +1,79 @@
+r"""Periodic orbits: orthogonal collocation, Floquet multipliers, continuation and the
+bifurcations of cycles.
+
+* :class:`PeriodicOrbitProblem` -- the collocation system (Gauss-Legendre, degree
+  ``m``, ``N`` intervals on ``[0, 1]``, period unknown, integral phase condition,
+  rotation orbits by a winding number per periodic state) as a continuation problem;
+* :func:`continue_periodic` -- its branch by the pseudo-arclength driver, with LPC,
+  BPC, PD and NS located; :func:`continue_from_hopf`, :func:`continue_period_doubled`
+  start at a Hopf point or at a PD point; ``period_max`` ends a branch whose period
+  grows without bound (``Status.PERIOD_UNBOUNDED``; :func:`period_limit` fits the limit
+  and gives a guess of the connecting orbit);
+* starts: :func:`periodic_orbit_from_hopf`, :func:`orbit_from_trajectory`,
+  :func:`orbit_from_array`; :func:`solve_orbit`, :func:`adapt_mesh`;
+* :func:`multipliers`, :func:`orbit_at`, :func:`problem_at` along a branch.
+
+Example (the van der Pol oscillator, period 6.6632868593 at ``mu = 1``)::
+
+    def rhs(x, p, ops):
+        return ops.stack([x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0]])
+
+    s = System(rhs, ("x", "y"), ("mu",))
+    tr = simulate(s, [2.0, 0.0], {"mu": 1.0}, (0.0, 60.0), dt=0.01)
+    orb = orbit_from_trajectory(s, {"mu": 1.0}, tr, mesh=CollocationMesh(60, 4, 1.0))
+    orb.T                                            # 6.66328685932...
+    br = continue_periodic(s, orb, {"mu": 1.0}, "mu", ContinuationSettings(p_max=5.0))
+    br.records["T"], multipliers(br)
+
+A rotation orbit of a circle coordinate (the ship's ``xi_G`` with period 1, advancing
+one wavelength per cycle) is declared by ``System(..., periodic={"xi_G": 1.0})`` and
+``winding={"xi_G": 1}`` (or ``-1``) in the start.
+"""
+
+from .collocation import CollocationLayout, monodromy_factors
+from .continuation import (
+    CycleSegments,
+    PeriodLimit,
+    adapt_mesh,
+    continue_periodic,
+    multipliers,
+    orbit_at,
+    period_limit,
+    problem_at,
+    solve_orbit,
+)
+from .doubling import continue_period_doubled, doubled_orbit, switch_period_doubling
+from .floquet import FloquetResult, floquet, ns_test, pd_test
+from .hopf import first_lyapunov_coefficient, periodic_orbit_from_hopf
+from .orbit import PeriodicOrbit, orbit_from_array
+from .problem import PeriodicOrbitProblem, error_estimate
+from .starts import continue_from_hopf, orbit_from_trajectory
+
+__all__ = [
+    "CycleSegments",
+    "CollocationLayout",
+    "FloquetResult",
+    "PeriodLimit",
+    "PeriodicOrbit",
+    "PeriodicOrbitProblem",
+    "adapt_mesh",
+    "continue_from_hopf",
+    "continue_period_doubled",
+    "continue_periodic",
+    "doubled_orbit",
+    "error_estimate",
+    "first_lyapunov_coefficient",
+    "floquet",
+    "monodromy_factors",
+    "multipliers",
+    "ns_test",
+    "orbit_at",
+    "orbit_from_array",
+    "orbit_from_trajectory",
+    "pd_test",
+    "period_limit",
+    "periodic_orbit_from_hopf",
+    "problem_at",
+    "solve_orbit",
+    "switch_period_doubling",
+]

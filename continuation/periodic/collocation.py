@@ -1,0 +1,242 @@
+r"""Orthogonal collocation of a periodic orbit: residual, sparse Jacobian, blocks.
+
+A cycle of :math:`\dot x = f(x, p)` with period ``T`` is written in the scaled time
+:math:`\tau = t / T \in [0, 1]` as :math:`x'(\tau) = T f(x, p)`. On the
+:class:`~continuation.bvp.collocation.CollocationMesh` (``N`` intervals, Gauss-Legendre
+degree ``m``) the unknowns are the values at all ``M = N (m + 1) + 1`` points
+(mesh nodes and collocation points) and ``T``::
+
+    z = [X_0, X_1, ..., X_{M-1}, T]         X_q in R^n, point-major (z[q n + i])
+
+and the equations, interval by interval (so the Jacobian is block banded)::
+
+    collocation  (1/h_j) sum_l D[k,l] X_{j,l} - T f(X_{j,k}, P) = 0   k = 1..m  (n m)
+    continuity   sum_l e[l] X_{j,l} - x_{j+1} = 0                              (n)
+    periodicity  x_N - x_0 - k o period = 0                                   (n)
+    phase        sum_j h_j sum_k b_k <X_{j,k} - ref_{j,k}, ref'_{j,k}> = 0    (1)
+
+``X_{j,0} = x_j`` is mesh node ``j``; ``k o period`` is the winding ``k_i`` times the
+period of each periodic state (a *rotation orbit* advances a circle coordinate by
+``k_i`` periods per cycle; ``k = 0`` is an ordinary cycle). The phase condition is
+the integral condition of Doedel (AUTO) against a reference orbit ``ref`` (the
+previous point of the branch), which removes the time-shift invariance.
+
+The right-hand side and its derivatives come from the system's CasADi trace mapped
+over the ``N m`` collocation points in one call (NumPy loop for systems without a
+trace). Everything is assembled into a SciPy CSC matrix on a fixed pattern.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..bvp.collocation import CollocationMesh
+from ..typing import FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class StageEvaluator:
+    """``f``, ``f_x`` and ``f_p`` of a system on many points at once.
+
+    Parameters
+    ----------
+    system : System
+    n_points : int
+        Number of points evaluated per call.
+    """
+
+    system: Any
+    n_points: int
+
+    def __post_init__(self) -> None:
+        fns = None
+        if getattr(self.system, "has_casadi", False):
+            import casadi as ca
+
+            c = self.system.casadi_functions()
+            K = self.n_points
+            n, m = self.system.n_states, self.system.n_params
+            x, p = ca.SX.sym("x", n), ca.SX.sym("p", max(m, 0))
+            both = ca.Function("fjp", [x, p], [c["f"](x, p), c["jac"](x, p), c["dfdp"](x, p)])
+            fns = (
+                c["f"].map("f_map", "serial", K, [1], []),
+                both.map("fjp_map", "serial", K, [1], []),
+            )
+        object.__setattr__(self, "_fns", fns)
+
+    def f(self, Xs: FloatArray, P: FloatArray) -> FloatArray:
+        """``f`` at the rows of ``Xs`` (K, n) -> (K, n)."""
+        if self._fns is not None:
+            return np.asarray(self._fns[0](Xs.T, P), dtype=float).T
+        return np.array([self.system.f(x, P) for x in Xs])
+
+    def all(self, Xs: FloatArray, P: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(f (K, n), f_x (K, n, n), f_p (K, n, n_par))`` at the rows of ``Xs``."""
+        K, n = Xs.shape
+        npar = int(np.size(P))
+        if self._fns is not None:
+            Fd, Jd, Pd = self._fns[1](Xs.T, P)
+            F = np.asarray(Fd, dtype=float).T
+            J = np.asarray(Jd, dtype=float).reshape(n, K, n).transpose(1, 0, 2)  # (n, n K)
+            if npar:
+                Jp = np.asarray(Pd, dtype=float).reshape(n, K, npar).transpose(1, 0, 2)
+            else:
+                Jp = np.zeros((K, n, 0))
+            return F, J, Jp
+        F = np.array([self.system.f(x, P) for x in Xs])
+        J = np.array([self.system.jacobian(x, P) for x in Xs])
+        Jp = np.array([np.asarray(self.system.dfdp(x, P)).reshape(n, npar) for x in Xs])
+        return F, J, Jp
+
+
+class CollocationLayout:
+    """Index bookkeeping of the discretised cycle on one mesh (see module doc).
+
+    Parameters
+    ----------
+    n : int
+        State dimension.
+    mesh : CollocationMesh
+        Nodes and degree (its ``T`` is not used).
+    """
+
+    def __init__(self, n: int, mesh: CollocationMesh) -> None:
+        self.n = n
+        self.mesh = mesh
+        N, m = mesh.n_intervals, mesh.degree
+        self.N, self.m = N, m
+        self.M = mesh.n_points
+        self.n_unknowns = n * self.M + 1
+        m1 = m + 1
+        # stage point indices (N m,) in interval order
+        self.stage_points = np.array([j * m1 + k for j in range(N) for k in range(1, m1)])
+        # block pattern of the collocation rows: (N, m, m+1, n, n)
+        j, k, l, i, ii = np.meshgrid(
+            np.arange(N), np.arange(m), np.arange(m1), np.arange(n), np.arange(n), indexing="ij"
+        )
+        self._col_rows = (j * m1 * n + k * n + i).ravel()
+        self._col_cols = ((j * m1 + l) * n + ii).ravel()
+        # continuity rows: d/dX_{j,l} = e[l] I, d/dx_{j+1} = -I
+        j, l, i = np.meshgrid(np.arange(N), np.arange(m1), np.arange(n), indexing="ij")
+        rows_c = (j * m1 * n + m * n + i).ravel()
+        cols_c = ((j * m1 + l) * n + i).ravel()
+        vals_c = np.broadcast_to(mesh.e[None, :, None], (N, m1, n)).ravel()
+        j, i = np.meshgrid(np.arange(N), np.arange(n), indexing="ij")
+        rows_c2 = (j * m1 * n + m * n + i).ravel()
+        cols_c2 = ((j + 1) * m1 * n + i).ravel()
+        # periodicity rows
+        rp = N * m1 * n + np.arange(n)
+        self.row_period = int(rp[0])
+        self.row_phase = N * m1 * n + n
+        self._const_rows = np.concatenate([rows_c, rows_c2, rp, rp])
+        self._const_cols = np.concatenate(
+            [cols_c, cols_c2, (self.M - 1) * n + np.arange(n), np.arange(n)]
+        )
+        self._const_vals = np.concatenate([vals_c, -np.ones(rows_c2.size), np.ones(n), -np.ones(n)])
+        # T column of the collocation rows
+        j, k, i = np.meshgrid(np.arange(N), np.arange(m), np.arange(n), indexing="ij")
+        self._T_rows = (j * m1 * n + k * n + i).ravel()
+        self.T_col = n * self.M
+        # quadrature weights of the stage points (sum = 1)
+        self.weights = (mesh.h[:, None] * mesh.b[None, :]).ravel()  # (N m,)
+        self.stage_rows = self._T_rows.reshape(N, m, n).reshape(N * m, n)  # row of stage s, i
+
+    # ------------------------------------------------------------------ unpacking
+    def split(self, z: FloatArray) -> tuple[FloatArray, float]:
+        """``(X (M, n), T)`` from the unknown vector."""
+        n, M = self.n, self.M
+        return z[: n * M].reshape(M, n), float(z[n * M])
+
+    def join(self, X: FloatArray, T: float) -> FloatArray:
+        """Inverse of :meth:`split`."""
+        return np.concatenate([np.asarray(X, dtype=float).reshape(-1), [float(T)]])
+
+    def blocks(self, X: FloatArray, T: float, J: FloatArray) -> FloatArray:
+        r"""Collocation Jacobian blocks ``B[j, k, l] = D[k,l]/h_j I - [l = k+1] T f_x``,
+        shape ``(N, m, m + 1, n, n)`` (``J``: ``f_x`` at the stages, ``(N m, n, n)``)."""
+        N, m, n = self.N, self.m, self.n
+        D, h = self.mesh.D, self.mesh.h
+        B = np.zeros((N, m, m + 1, n, n))
+        B += (D[None, :, :] / h[:, None, None])[..., None, None] * np.eye(n)
+        Js = J.reshape(N, m, n, n)
+        for k in range(m):
+            B[:, k, k + 1] -= T * Js[:, k]
+        return B
+
+    def assemble(self, B: FloatArray, F: FloatArray, dref: FloatArray) -> sp.csc_matrix:
+        """The sparse ``dG/dz`` from the blocks, ``f`` at the stages and the phase row."""
+        n, M = self.n, self.M
+        ph_cols = (self.stage_points[:, None] * n + np.arange(n)[None, :]).ravel()
+        ph_vals = (self.weights[:, None] * dref).ravel()
+        rows = np.concatenate(
+            [self._col_rows, self._const_rows, self._T_rows, np.full(ph_cols.size, self.row_phase)]
+        )
+        cols = np.concatenate(
+            [self._col_cols, self._const_cols, np.full(self._T_rows.size, self.T_col), ph_cols]
+        )
+        vals = np.concatenate([B.ravel(), self._const_vals, -F.ravel(), ph_vals])
+        return sp.csc_matrix((vals, (rows, cols)), shape=(n * M + 1, n * M + 1))
+
+    def residual(
+        self,
+        X: FloatArray,
+        T: float,
+        F: FloatArray,
+        shift: FloatArray,
+        ref: FloatArray,
+        dref: FloatArray,
+    ) -> FloatArray:
+        """``G`` (see module doc); ``F`` is ``f`` at the stages ``(N m, n)``, ``ref`` and
+        ``dref`` the reference orbit and its ``tau``-derivative at the stages."""
+        N, m, n = self.N, self.m, self.n
+        m1 = m + 1
+        D, e, h = self.mesh.D, self.mesh.e, self.mesh.h
+        Xb = X[: N * m1].reshape(N, m1, n)
+        coll = np.einsum("kl,jln->jkn", D, Xb) / h[:, None, None] - T * F.reshape(N, m, n)
+        Xnext = X[m1::m1]  # x_{j+1}, (N, n)
+        cont = np.einsum("l,jln->jn", e, Xb) - Xnext
+        out = np.empty(n * self.M + 1)
+        body = np.concatenate([coll, cont[:, None, :]], axis=1)  # (N, m+1, n)
+        out[: N * m1 * n] = body.ravel()
+        out[self.row_period : self.row_period + n] = X[-1] - X[0] - shift
+        Xs = X[self.stage_points]
+        out[self.row_phase] = float(np.sum(self.weights[:, None] * (Xs - ref) * dref))
+        return out
+
+
+def monodromy_factors(layout: CollocationLayout, B: FloatArray, stages: bool = False) -> Any:
+    r"""Transfer matrices :math:`\Phi_j` of the linearised collocation equations.
+
+    Condensation of the block structure: on interval ``j`` the linearised collocation
+    rows :math:`\sum_l B_{j,k,l} \delta X_{j,l} = 0` are solved for the stage
+    perturbations in terms of the left node, :math:`\delta X_{j,1..m} = -K_j^{-1}
+    B_{j,:,0} \delta x_j` (:math:`K_j = [B_{j,k,l}]_{k, l \ge 1}`), and continuity gives
+    :math:`\delta x_{j+1} = \Phi_j \delta x_j` with
+
+    .. math:: \Phi_j = e_0 I - \sum_{l \ge 1} e_l\,[K_j^{-1} B_{j,:,0}]_l .
+
+    ``Phi_{N-1} ... Phi_0`` is the monodromy matrix of the Gauss-Legendre (Runge-Kutta)
+    discretisation of the variational equation :math:`y' = T f_x(x(\tau)) y`, i.e.
+    of the collocation system itself; its eigenvalues are the Floquet multipliers to
+    the order ``2 m`` of the method.
+
+    Returns
+    -------
+    ndarray, shape (N, n, n)
+        The ``Phi_j``; with ``stages=True`` also the stage responses
+        ``S[j, l] = dX_{j,l} / dx_j``, shape ``(N, m, n, n)``.
+    """
+    N, m, n = layout.N, layout.m, layout.n
+    e = layout.mesh.e
+    K = B[:, :, 1:].transpose(0, 1, 3, 2, 4).reshape(N, m * n, m * n)
+    R = B[:, :, 0].reshape(N, m * n, n)
+    S = -np.linalg.solve(K, R).reshape(N, m, n, n)  # stage responses
+    Phi = e[0] * np.eye(n)[None] + np.einsum("l,jlab->jab", e[1:], S)
+    return (Phi, S) if stages else Phi
+
+
+__all__ = ["CollocationLayout", "StageEvaluator", "monodromy_factors"]

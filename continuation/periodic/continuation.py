@@ -1,0 +1,709 @@
+r"""Continuation of periodic orbits: :func:`continue_periodic` and its helpers.
+
+The branch is computed by the ordinary pseudo-arclength driver
+(:func:`~continuation.driver.continue_branch`) on a
+:class:`~continuation.periodic.problem.PeriodicOrbitProblem`. Special points of
+cycles (see :mod:`continuation.periodic.floquet`):
+
+* ``LPC`` -- fold of cycles: the driver's fold (kind ``fold``, relabelled ``LPC1``...);
+* ``BPC`` -- branch point of cycles: the driver's branch point (kind ``bp``, ``BPC1``);
+* ``PD`` -- period doubling, a located zero of :math:`\prod (\mu_i + 1)` (a user-kind
+  point named ``"PD"``); :func:`switch_period_doubling` starts the doubled branch;
+* ``NS`` -- Neimark-Sacker, a located zero of :math:`\prod_{i<j} (\mu_i \mu_j - 1)`
+  with a complex pair on the unit circle (named ``"NS"``; neutral saddles dropped).
+
+All carry the driver's ``located`` flag and ``bracket``. The driver's Hopf test is
+switched off on cycle branches (its eigenvalues are Floquet exponents).
+
+*Period without bound.* With ``period_max``, a terminal event stops the branch where
+``T`` reaches it; the branch then ends with ``Status.PERIOD_UNBOUNDED`` and a message
+giving the last period and parameter, and :func:`period_limit` fits
+:math:`T \approx a - b \ln|p^* - p|` to the last rows (the law of a cycle approaching a
+homoclinic or heteroclinic orbit of saddles) and returns the limit ``p*`` with a
+guess of the connecting orbit for a connection solver.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import scipy.optimize as so
+
+from ..algorithms.corrector import correct
+from ..branch import Branch, SpecialKind, SpecialPoint
+from ..bvp.collocation import CollocationMesh
+from ..driver import continue_branch
+from ..errors import ConvergenceError
+from ..events import Event
+from ..params import Params
+from ..settings import ContinuationSettings, NewtonSettings
+from ..status import Status
+from ..typing import FloatArray
+from .floquet import is_neimark_sacker
+from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
+from .problem import PeriodicOrbitProblem
+
+log = logging.getLogger(__name__)
+
+#: Rows whose trivial multiplier is farther than this from 1 have unreliable
+#: multipliers (the discretisation error, amplified by the cycle's sensitivity); the
+#: branch message says so.
+TRIVIAL_TOL = 1e-3
+
+
+def _as_orbit(system: Any, start: Any, params: Any, mesh: CollocationMesh | None,
+              winding: Any) -> PeriodicOrbit:  # fmt: skip
+    if isinstance(start, PeriodicOrbit):
+        orb = start
+        if not isinstance(params, Params):
+            params = Params(system.param_names, system.check_params(params, "params"))
+        orb = dataclasses.replace(orb, params=params)
+        if mesh is not None and (
+            mesh.degree != orb.mesh.degree or mesh.n_intervals != orb.mesh.n_intervals
+        ):
+            orb = orb.on_mesh(mesh)
+        return orb
+    if hasattr(start, "t") and hasattr(start, "x"):
+        return orbit_from_array(system, params, start.t, start.x, mesh=mesh, winding=winding)
+    if isinstance(start, tuple) and len(start) == 2:
+        return orbit_from_array(system, params, start[0], start[1], mesh=mesh, winding=winding)
+    raise ValueError(
+        "`orbit_start` must be a PeriodicOrbit, a (t, x) pair of arrays or a Trajectory, "
+        f"got {type(start).__name__}"
+    )
+
+
+def solve_orbit(
+    orbit: PeriodicOrbit,
+    free: str | None = None,
+    newton: NewtonSettings | None = None,
+    *,
+    fix_period: bool = False,
+) -> PeriodicOrbit:
+    """Correct a cycle guess by Newton's method at fixed parameters (or fixed period).
+
+    Parameters
+    ----------
+    orbit : PeriodicOrbit
+        The guess (also the first phase reference).
+    free : str, optional
+        Any parameter name (default the first); with ``fix_period`` the parameter
+        that is solved for instead of the period.
+    newton : NewtonSettings, optional
+    fix_period : bool
+        Keep ``T`` at ``orbit.T`` and solve for the parameter ``free`` (well
+        conditioned where the period is very sensitive to the parameter, near a
+        homoclinic orbit).
+
+    Raises
+    ------
+    ConvergenceError
+        If Newton's method does not converge.
+    """
+    free = free if free is not None else orbit.system.param_names[0]
+    prob = PeriodicOrbitProblem.from_orbit(orbit, free)
+    newton = newton if newton is not None else NewtonSettings(max_iter=40)
+    p0 = orbit.param(free)
+    u0 = np.append(prob.reference, p0)
+    e_p = np.zeros(u0.size)
+    e_p[prob.layout.T_col if fix_period else -1] = 1.0
+    res = correct(prob, u0, u0, e_p, 0.0, newton)
+    if not res.converged:
+        raise ConvergenceError(f"the cycle did not converge at {free}={p0:.10g}: {res.message}")
+    return prob.orbit(res.z, res.p)
+
+
+def adapt_mesh(
+    orbit: PeriodicOrbit,
+    n_intervals: int | None = None,
+    *,
+    rounds: int = 2,
+    free: str | None = None,
+    newton: NewtonSettings | None = None,
+    fix_period: bool = False,
+) -> PeriodicOrbit:
+    """Equidistribute the mesh on ``orbit`` and re-solve, ``rounds`` times.
+
+    The new nodes equidistribute the local error monitor
+    (:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`);
+    ``n_intervals`` changes the number of intervals (default: the same);
+    ``fix_period`` as in :func:`solve_orbit`.
+    """
+    for _ in range(max(1, int(rounds))):
+        X = orbit.X
+        new = orbit.mesh.equidistributed(X, n_intervals)
+        orbit = solve_orbit(orbit.on_mesh(new), free, newton, fix_period=fix_period)
+    return orbit
+
+
+def _relabel(
+    specials: Sequence[SpecialPoint], prob: PeriodicOrbitProblem
+) -> tuple[SpecialPoint, ...]:
+    out = []
+    count = {"LPC": 0, "BPC": 0}
+    for sp in specials:
+        if sp.kind == SpecialKind.FOLD:
+            count["LPC"] += 1
+            sp = dataclasses.replace(sp, label=f"LPC{count['LPC']}")
+        elif sp.kind == SpecialKind.BRANCH_POINT:
+            count["BPC"] += 1
+            sp = dataclasses.replace(sp, label=f"BPC{count['BPC']}")
+        elif sp.kind == SpecialKind.USER and sp.label == "NS":
+            ok, theta = is_neimark_sacker(prob.floquet(sp.x, sp.p).multipliers)
+            if not ok:
+                log.info("NS test zero at p=%.8g is a neutral saddle: not reported", sp.p)
+                continue
+            sp = dataclasses.replace(sp, data={**sp.data, "theta": theta})
+        elif sp.kind == SpecialKind.USER and sp.label == "PD":
+            mu = prob.floquet(sp.x, sp.p).multipliers
+            k = int(np.argmin(np.abs(mu + 1.0)))
+            sp = dataclasses.replace(sp, data={**sp.data, "mu": float(mu[k].real)})
+        out.append(sp)
+    return tuple(out)
+
+
+def continue_periodic(
+    system: Any,
+    orbit_start: Any,
+    params: Any,
+    free: str,
+    settings: ContinuationSettings | None = None,
+    *,
+    mesh: CollocationMesh | None = None,
+    winding: Any = None,
+    period_max: float | None = None,
+    detect_pd: bool = True,
+    detect_ns: bool = True,
+    events: Sequence[Event] = (),
+    direction: Literal["forward", "backward", "both"] = "forward",
+    progress: Callable[[Any], None] | None = None,
+    throw: bool = False,
+    adapt_every: int = 0,
+) -> Branch:
+    r"""Continue a branch of periodic orbits in the parameter ``free``.
+
+    Parameters
+    ----------
+    system : System
+    orbit_start : PeriodicOrbit, (t, x) pair or Trajectory
+        The start cycle or a guess of it (one period of samples, periodic states
+        unwrapped); corrected by Newton's method at ``params`` first.
+    params : Params, mapping or array
+        Parameter values at the start.
+    free : str
+        Continuation parameter.
+    settings : ContinuationSettings, optional
+        As for :func:`~continuation.driver.continue_branch`; ``detect.hopf`` is forced
+        off (see the module doc).
+    mesh : CollocationMesh, optional
+        Mesh for a ``(t, x)`` guess (default 40 intervals, degree 4), or a new mesh
+        size for a :class:`PeriodicOrbit` start (interpolated onto it).
+    winding : mapping of str to int, optional
+        Rotation numbers of periodic states for a ``(t, x)`` guess (a
+        :class:`PeriodicOrbit` carries its own).
+    period_max : float, optional
+        Stop where the period reaches this value (``Status.PERIOD_UNBOUNDED``).
+    detect_pd, detect_ns : bool
+        Monitor the period-doubling and Neimark-Sacker test functions.
+    events : sequence of Event
+        More user events, ``fn(z, p)`` of the cycle unknowns.
+    direction : {"forward", "backward", "both"}
+        ``"both"``: backward, then forward from the start cycle, returned as one
+        branch from the backward end to the forward end (``max_steps`` per direction;
+        the status is the forward run's, the backward run's reason is in the
+        message).
+    progress : callable, optional
+        Called with every accepted :class:`~continuation.branch.BranchPoint`.
+    throw : bool
+        As for :func:`~continuation.driver.continue_branch`.
+    adapt_every : int
+        ``> 0``: continue in segments of this many steps and equidistribute the mesh
+        (same number of intervals) on the last cycle of each segment before the next
+        (:func:`adapt_mesh`); ``settings.max_steps`` counts all steps. The branch's
+        ``problem`` is then a :class:`CycleSegments` (one problem per mesh). 0: one
+        mesh throughout.
+
+    Returns
+    -------
+    Branch
+        Rows: the unknowns ``[vec X, T]`` (:func:`orbit_at` gives the cycle), records
+        ``T``, ``max_*``, ``min_*``, ``L2``,
+        ``mu_max``, ``trivial_error``, ``error``; ``eigenvalues`` are the Floquet
+        exponents ``ln|mu| + i arg mu`` (nontrivial ones; :func:`multipliers` gives the
+        multipliers); ``stable`` is "all nontrivial ``|mu| < 1``".
+
+    Raises
+    ------
+    ValueError
+        Bad input (names, shapes, ``period_max``, ``direction``).
+    ConvergenceError
+        With ``throw=True``, if the start cycle does not converge.
+    """
+    if free not in system.param_names:
+        raise ValueError(f"`free` must be one of {system.param_names}, got {free!r}")
+    if direction not in ("forward", "backward", "both"):
+        raise ValueError(f"`direction` must be 'forward', 'backward' or 'both', got {direction!r}")
+    if period_max is not None and not (math.isfinite(period_max) and period_max > 0):
+        raise ValueError(f"`period_max` must be a positive number, got {period_max!r}")
+    if winding is not None:
+        winding_vector(system, winding)
+    if isinstance(adapt_every, bool) or not (isinstance(adapt_every, int) and adapt_every >= 0):
+        raise ValueError(f"`adapt_every` must be an integer >= 0, got {adapt_every!r}")
+    orb = _as_orbit(system, orbit_start, params, mesh, winding)
+    settings = settings if settings is not None else ContinuationSettings()
+    settings = dataclasses.replace(
+        settings, detect=dataclasses.replace(settings.detect, hopf=False)
+    )
+    run = dict(period_max=period_max, detect_pd=detect_pd, detect_ns=detect_ns,
+               events=events, progress=progress, throw=throw)  # fmt: skip
+
+    def one(st: ContinuationSettings) -> Branch:
+        if adapt_every == 0:
+            return _continue_once(orb, free, st, **run)  # type: ignore[arg-type]
+        return _continue_segments(orb, free, st, adapt_every, run)
+
+    back = dataclasses.replace(settings, ds=-settings.ds)
+    if direction == "forward":
+        br = one(settings)
+    elif direction == "backward":
+        br = one(back)
+    else:
+        b, f = one(back), one(settings)
+        if len(b) == 0 or len(f) == 0:
+            br = f if len(f) else b
+        else:
+            br = _merge_segments([_reverse(b), f])
+            br = dataclasses.replace(
+                br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
+            )
+    return _finish(br, free, period_max)
+
+
+def _segments_of(br: Branch) -> tuple[list[PeriodicOrbitProblem], list[int]]:
+    prob = br.problem
+    if isinstance(prob, CycleSegments):
+        return list(prob.problems), list(prob.first_row)
+    return [prob], [0]
+
+
+def _reverse(br: Branch) -> Branch:
+    """The branch in the opposite order (rows, steps, special points, segments)."""
+    N = len(br)
+    ds = np.zeros(N)
+    ds[1:] = br.ds[1:][::-1]
+    L = float(br.arclength[-1])
+    sps = [
+        dataclasses.replace(
+            sp,
+            index=N - 2 - sp.index,
+            s=L - sp.s,
+            bracket=(sp.bracket[1], sp.bracket[0]),
+            delta_unstable=(-sp.delta_unstable[0], -sp.delta_unstable[1]),
+            tangent=None if sp.tangent is None else -np.asarray(sp.tangent),
+        )
+        for sp in reversed(br.special_points)
+    ]
+    probs, first = _segments_of(br)
+    ends = [f - 1 for f in first[1:]] + [N - 1]  # last row of each segment
+    problem: Any = br.problem
+    if len(probs) > 1:
+        problem = CycleSegments(tuple(probs[::-1]), tuple(N - 1 - e for e in ends[::-1]))
+    return dataclasses.replace(
+        br,
+        problem=problem,
+        p=br.p[::-1],
+        x=br.x[::-1],
+        eigenvalues=br.eigenvalues[::-1],
+        n_unstable=br.n_unstable[::-1],
+        ds=ds,
+        newton_iters=br.newton_iters[::-1],
+        records={k: v[::-1] for k, v in br.records.items()},
+        special_points=tuple(sps),
+    )
+
+
+def _continue_once(
+    orb: PeriodicOrbit,
+    free: str,
+    settings: ContinuationSettings,
+    *,
+    period_max: float | None,
+    detect_pd: bool,
+    detect_ns: bool,
+    events: Sequence[Event],
+    progress: Callable[[Any], None] | None,
+    throw: bool,
+) -> Branch:
+    """One driver run on one mesh (PD/NS/T_max events, phase reference per step)."""
+    prob = PeriodicOrbitProblem.from_orbit(orb, free)
+    T_col = prob.layout.T_col
+    evs: list[Event] = []
+    if detect_pd:
+        evs.append(Event("PD", prob.pd_test))
+    if detect_ns:
+        evs.append(Event("NS", prob.ns_test))
+    if period_max is not None:
+        evs.append(Event("T_max", lambda z, p: period_max - z[T_col], terminal=True))
+    evs.extend(events)
+
+    def accept(bp: Any) -> None:
+        prob.accept(np.asarray(bp.x))
+        if progress is not None:
+            progress(bp)
+
+    br = continue_branch(
+        prob, prob.reference, orb.param(free), settings=settings, events=evs,
+        throw=throw, progress=accept,
+    )  # fmt: skip
+    return dataclasses.replace(br, special_points=_relabel(br.special_points, prob))
+
+
+@dataclass(frozen=True, eq=False)
+class CycleSegments:
+    """The problems of a cycle branch computed on several meshes (``adapt_every``).
+
+    Attributes
+    ----------
+    problems : tuple of PeriodicOrbitProblem
+        One per segment (each with its own mesh).
+    first_row : tuple of int
+        Branch row where each segment starts.
+    """
+
+    problems: tuple[PeriodicOrbitProblem, ...]
+    first_row: tuple[int, ...]
+
+    @property
+    def free(self) -> str:
+        """The continuation parameter."""
+        return self.problems[0].free
+
+    @property
+    def system(self) -> Any:
+        """The dynamical system."""
+        return self.problems[0].system
+
+    @property
+    def params(self) -> Params:
+        """The parameters of the first segment."""
+        return self.problems[0].params
+
+    def at_row(self, k: int) -> PeriodicOrbitProblem:
+        """The problem (mesh) of branch row ``k``."""
+        i = int(np.searchsorted(np.asarray(self.first_row), k, side="right")) - 1
+        return self.problems[max(i, 0)]
+
+
+def _continue_segments(
+    orb: PeriodicOrbit,
+    free: str,
+    settings: ContinuationSettings,
+    every: int,
+    run: dict[str, Any],
+) -> Branch:
+    """Segments of ``every`` steps with an equidistributed mesh each (see
+    :func:`continue_periodic`), merged into one branch."""
+    segs: list[Branch] = []
+    left = settings.max_steps
+    st = settings
+    while True:
+        br = _continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)), **run)
+        if segs and len(br) == 0:
+            # the restart on the new mesh failed (e.g. near a homoclinic orbit, where the
+            # start correction at fixed parameter is ill-conditioned): keep the branch
+            msg = (
+                f"the restart after mesh adaptation failed at {free}={orb.param(free):.10g} "
+                f"({br.message}); the branch up to there is kept."
+            )
+            log.warning(msg)
+            segs[-1] = dataclasses.replace(segs[-1], status=br.status, message=msg)
+            break
+        segs.append(br)
+        left -= max(len(br) - 1, 0)
+        if br.status != Status.MAX_STEPS or left <= 0 or len(br) < 2:
+            break
+        last = orbit_at(br, len(br) - 1)
+        orb = last
+        # at fixed parameter first; at fixed period where that fails (near a homoclinic
+        # orbit the period is far more sensitive than the parameter)
+        for fix_period in (False, True):
+            try:
+                orb = adapt_mesh(last, rounds=1, free=free, newton=st.newton,
+                                 fix_period=fix_period)  # fmt: skip
+                break
+            except ConvergenceError as exc:
+                log.info("mesh adaptation (fix_period=%s) failed at %s=%.8g: %s",
+                         fix_period, free, br.p[-1], exc)  # fmt: skip
+        else:
+            log.warning("mesh adaptation failed at %s=%.8g; mesh kept", free, br.p[-1])
+        sgn = 1.0 if br.p[-1] >= br.p[-2] else -1.0
+        ds = min(max(abs(float(br.ds[-1])), abs(st.ds)), st.ds_max)
+        st = dataclasses.replace(st, ds=sgn * ds)
+    return _merge_segments(segs)
+
+
+def _merge_segments(segs: list[Branch]) -> Branch:
+    """One branch from consecutive segments (the first row of each later segment, the
+    previous segment's last cycle on the new mesh, is dropped)."""
+    rows: dict[str, list[Any]] = {k: [] for k in ("p", "x", "eig", "nun", "ds", "it")}
+    recs: dict[str, list[float]] = {}
+    specials: list[SpecialPoint] = []
+    first_row, probs = [], []
+    base, s_base = 0, 0.0
+    for k, b in enumerate(segs):
+        lo = 0 if k == 0 else 1
+        sub_p, sub_f = _segments_of(b)
+        for q, fr in zip(sub_p, sub_f, strict=True):
+            probs.append(q)
+            first_row.append(base + max(fr, lo) if k else fr)
+        rows["p"].append(b.p[lo:])
+        rows["x"].append(b.x[lo:])
+        rows["eig"].append(b.eigenvalues[lo:])
+        rows["nun"].append(b.n_unstable[lo:])
+        rows["ds"].append(b.ds[lo:])
+        rows["it"].append(b.newton_iters[lo:])
+        for name, col in b.records.items():
+            recs.setdefault(name, []).extend(col[lo:].tolist())
+        for sp in b.special_points:
+            specials.append(dataclasses.replace(sp, index=base + sp.index, s=s_base + sp.s))
+        base += len(b) - 1
+        s_base += float(b.arclength[-1]) if len(b) else 0.0
+    last = segs[-1]
+    ev = [e for e in rows["eig"] if e.size]
+    width = max((e.shape[1] for e in ev), default=0)
+    eig = np.vstack([np.pad(e, ((0, 0), (0, width - e.shape[1])), constant_values=np.nan)
+                     for e in rows["eig"]]) if width else np.zeros((base + 1, 0))  # fmt: skip
+    count = {"LPC": 0, "BPC": 0}
+    relabelled = []
+    for sp in specials:
+        for key in count:
+            if sp.label.startswith(key):
+                count[key] += 1
+                sp = dataclasses.replace(sp, label=f"{key}{count[key]}")
+        relabelled.append(sp)
+    return Branch(
+        problem=CycleSegments(tuple(probs), tuple(first_row)),
+        free=last.free,
+        p=np.concatenate(rows["p"]),
+        x=np.vstack(rows["x"]),
+        eigenvalues=eig,
+        n_unstable=np.concatenate(rows["nun"]),
+        ds=np.concatenate(rows["ds"]),
+        newton_iters=np.concatenate(rows["it"]),
+        records={k: np.array(v) for k, v in recs.items()},
+        special_points=tuple(relabelled),
+        status=last.status,
+        message=last.message,
+        settings=segs[0].settings,
+        state_names=last.state_names,
+        param_values=segs[0].param_values,
+        event_names=last.event_names,
+    )
+
+
+def _finish(br: Branch, free: str, period_max: float | None) -> Branch:
+    """Status PERIOD_UNBOUNDED and the multiplier-accuracy note."""
+    specials = br.special_points
+    status, message = br.status, br.message
+    if (
+        period_max is not None
+        and status == Status.EVENT
+        and len(br)
+        and (br.records["T"][-1] >= period_max * (1 - 1e-6))
+    ):
+        status = Status.PERIOD_UNBOUNDED
+        message = (
+            f"{Status.PERIOD_UNBOUNDED.value} Last period T={br.records['T'][-1]:.10g} at "
+            f"{free}={br.p[-1]:.10g} (period_max={period_max:g})."
+        )
+        specials = tuple(s for s in specials if s.label != "T_max")
+        log.info(message)
+    out = []
+    for sp in specials:
+        if sp.kind == SpecialKind.USER and sp.label in ("PD", "NS") and sp.located:
+            err = problem_at(br, sp.index).floquet(sp.x, sp.p).trivial_error
+            if err > TRIVIAL_TOL:
+                log.warning("%s at %s=%.8g: multipliers unreliable (%.3g); reported as "
+                            "bracketed, not located", sp.label, free, sp.p, err)  # fmt: skip
+                sp = dataclasses.replace(sp, located=False, data={**sp.data, "trivial_error": err})
+        out.append(sp)
+    specials = tuple(out)
+    if len(br) and "trivial_error" in br.records:
+        bad = np.flatnonzero(br.records["trivial_error"] > TRIVIAL_TOL)
+        if bad.size:
+            worst = float(np.max(br.records["trivial_error"]))
+            note = (
+                f" Floquet multipliers unreliable at {bad.size} of {len(br)} rows (from "
+                f"{free}={br.p[bad[0]]:.8g}; |mu_trivial - 1| up to {worst:.3g} > "
+                f"{TRIVIAL_TOL:g}): refine the mesh (more intervals)."
+            )
+            log.warning(note.strip())
+            message = message + note
+    return dataclasses.replace(br, special_points=specials, status=status, message=message)
+
+
+def problem_at(branch: Branch, k: int) -> PeriodicOrbitProblem:
+    """The :class:`PeriodicOrbitProblem` (mesh) of row ``k`` of a cycle branch."""
+    prob = branch.problem
+    if isinstance(prob, CycleSegments):
+        return prob.at_row(k)
+    if not isinstance(prob, PeriodicOrbitProblem):
+        raise ValueError("`branch` must be a branch of periodic orbits (continue_periodic)")
+    return prob
+
+
+def multipliers(branch: Branch) -> np.ndarray:
+    """Nontrivial Floquet multipliers at every row of a cycle branch, ``(N, n - 1)``."""
+    return np.array([problem_at(branch, k).floquet(branch.x[k], branch.p[k]).multipliers
+                     for k in range(len(branch))])  # fmt: skip
+
+
+def orbit_at(branch: Branch, k: int | SpecialPoint) -> PeriodicOrbit:
+    """The cycle at row ``k`` (or at a special point) of a cycle branch."""
+    if isinstance(k, SpecialPoint):
+        return problem_at(branch, k.index).orbit(k.x, k.p)
+    k = int(k) + len(branch) if k < 0 else int(k)
+    return problem_at(branch, k).orbit(branch.x[k], branch.p[k])
+
+
+@dataclass(frozen=True)
+class PeriodLimit:
+    r"""The end of a cycle branch whose period grows without bound.
+
+    Attributes
+    ----------
+    p_star : float
+        Fitted limit of the parameter, from :math:`T = a - b \ln|p^* - p|` over the
+        last rows (NaN if the fit failed).
+    rate : float
+        ``b``; ``1/b`` estimates the unstable eigenvalue of the saddle that the cycle
+        approaches (for a homoclinic orbit of a saddle with ``lambda_u < |lambda_s|``).
+    p_last, T_last : float
+        Parameter and period of the last row.
+    saddle : ndarray, shape (n,)
+        The point of the last cycle where ``|f|`` is smallest: a guess of the saddle.
+    t, x : ndarray
+        The last cycle as one period starting and ending at that point, ``(K,)`` and
+        ``(K, n)``: a guess of the connecting orbit for a connection solver.
+    fit_residual : float
+        RMS residual of the fit in ``p``.
+    orbit : PeriodicOrbit
+        The last cycle.
+    free : str
+        The continuation parameter.
+    """
+
+    p_star: float
+    rate: float
+    p_last: float
+    T_last: float
+    saddle: FloatArray
+    t: FloatArray
+    x: FloatArray
+    fit_residual: float
+    orbit: PeriodicOrbit
+    free: str
+
+    def connection_problem(self, mesh: CollocationMesh | None = None) -> Any:
+        """A :class:`~continuation.bvp.HeteroclinicProblem` for the limiting connection.
+
+        The saddle is :attr:`saddle` corrected by Newton's method on ``f = 0``; the
+        connection returns to it shifted by the cycle's winding (``x_+ = x_- + k o
+        period``, a homoclinic orbit when ``k = 0``); the free parameter is solved for,
+        at :attr:`p_last` to start. Solve it with
+        ``solve_connection(problem, (limit.t, limit.x))``. ``mesh``: default 80
+        intervals of degree 4 over ``T_last``. Only a connection of *one* saddle to
+        itself is set up (a cycle approaching a heteroclinic cycle of several saddles
+        needs its own problem).
+
+        Raises
+        ------
+        ConvergenceError
+            If Newton's method on the saddle fails.
+        """
+        from ..bvp import HeteroclinicProblem
+
+        orb = self.orbit
+        P = np.array(orb.params.values, dtype=float)
+        x = np.array(self.saddle, dtype=float)
+        for _ in range(30):
+            dx = np.linalg.solve(orb.system.jacobian(x, P), orb.system.f(x, P))
+            x = x - dx
+            if np.max(np.abs(dx)) <= 1e-13 * (1.0 + np.max(np.abs(x))):
+                break
+        else:
+            raise ConvergenceError("the saddle of the period limit did not converge")
+        mesh = mesh if mesh is not None else CollocationMesh(80, 4, self.T_last)
+        return HeteroclinicProblem(orb.system, orb.params, unknown_params=(self.free,),
+                                   saddle_from=x, shift=orb.shift, mesh=mesh)  # fmt: skip
+
+
+def _log_fit(p: FloatArray, T: FloatArray) -> tuple[float, float, float]:
+    """Fit ``p = p* + c exp(-T / b)`` (i.e. ``T = a - b ln|p - p*|``); returns
+    ``(p*, b, rms of the fit in p)``. For fixed ``b`` the fit is linear in ``(p*, c)``;
+    ``b`` is found by a bounded scalar search on ``ln b``."""
+    Tn = T - T[-1]
+
+    def lsq(lb: float) -> tuple[float, float, float]:
+        A = np.column_stack([np.ones_like(Tn), np.exp(-Tn / math.exp(lb))])
+        coef, *_ = np.linalg.lstsq(A, p, rcond=None)
+        r = A @ coef - p
+        return float(coef[0]), float(coef[1]), float(np.sqrt(np.mean(r**2)))
+
+    span = float(np.ptp(T)) + 1e-300
+    res = so.minimize_scalar(lambda q: lsq(q)[2], bounds=(math.log(span) - 8, math.log(span) + 4),
+                             method="bounded", options={"xatol": 1e-10})  # fmt: skip
+    p_star, _, rms = lsq(float(res.x))
+    return p_star, math.exp(float(res.x)), rms
+
+
+def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
+    """The limit of a cycle branch whose period grows (see :class:`PeriodLimit`).
+
+    Parameters
+    ----------
+    branch : Branch
+        A branch of :func:`continue_periodic` (typically ended with
+        ``Status.PERIOD_UNBOUNDED``).
+    n_fit : int
+        Number of last rows in the fit (at least 4).
+    """
+    problem_at(branch, 0)  # (checks the branch)
+    if not (isinstance(n_fit, int) and n_fit >= 4):
+        raise ValueError(f"`n_fit` must be an integer >= 4, got {n_fit!r}")
+    if len(branch) < 4:
+        raise ValueError("`branch` needs at least 4 rows for the period fit")
+    k = min(n_fit, len(branch))
+    p = np.asarray(branch.p[-k:], dtype=float)
+    T = np.asarray(branch.records["T"][-k:], dtype=float)
+    try:
+        p_star, b, rms = _log_fit(p, T)
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError):
+        p_star, b, rms = math.nan, math.nan, math.nan
+    orb = orbit_at(branch, len(branch) - 1)
+    F = np.array([orb.system.f(x, orb.params.values) for x in orb.X])
+    q = int(np.argmin(np.linalg.norm(F, axis=1)))
+    t0 = float(orb.t[q])
+    t = np.linspace(t0, t0 + orb.T, 4 * orb.mesh.n_points)
+    x = orb(t)
+    return PeriodLimit(p_star, b, float(branch.p[-1]), float(T[-1]), orb.X[q].copy(),
+                       t - t0, x, rms, orb, branch.free)  # fmt: skip
+
+
+__all__ = [
+    "PeriodLimit",
+    "adapt_mesh",
+    "continue_periodic",
+    "multipliers",
+    "orbit_at",
+    "CycleSegments",
+    "period_limit",
+    "problem_at",
+    "solve_orbit",
+]
