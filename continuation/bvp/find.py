@@ -1,0 +1,2 @@
+def find_connection(*a, **k):
+    raise NotImplementedError
