@@ -53,7 +53,8 @@ class ConnectionAccuracy:
         Absolute tolerance of both estimates (default ``1e-8``).
     adapt_rounds : int
         Equidistribution rounds on each mesh size (default 2; fewer when the nodes stop
-        moving: largest move below a tenth of the local interval).
+        moving: largest move below a tenth of the local interval; none on the starting
+        mesh when the guess is a result estimated on exactly that mesh).
     max_refinements : int
         How often the number of intervals may be doubled when the discretisation
         estimate fails (default 3: at most 8 times the starting intervals).

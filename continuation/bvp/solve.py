@@ -223,10 +223,11 @@ def solve_connection(
                     progress(result)
         elif result.success:
             rounds = accuracy.adapt_rounds if adapt is None else adapt
+            first = 0 if _already_adapted(guess, prob) else rounds
             last = [result]
             try:
                 result = _controlled(
-                    result, accuracy, rounds, settings, method, progress, last.append
+                    result, accuracy, rounds, settings, method, progress, last.append, first
                 )
             except KeyboardInterrupt:
                 result = last[-1]
@@ -236,6 +237,18 @@ def solve_connection(
     if throw and not result.success:
         raise ConvergenceError(result.message)
     return result
+
+
+def _already_adapted(guess: Any, prob: HeteroclinicProblem) -> bool:
+    """``guess`` is an estimated result on exactly this mesh: it was adapted already."""
+    return (
+        isinstance(guess, ConnectionResult)
+        and guess.errors is not None
+        and guess.mesh.n_intervals == prob.mesh.n_intervals
+        and guess.mesh.degree == prob.mesh.degree
+        and guess.mesh.T == prob.mesh.T
+        and bool(np.array_equal(guess.mesh.nodes, prob.mesh.nodes))
+    )
 
 
 def _plain(
@@ -288,12 +301,17 @@ def _controlled(
     method: str,
     progress: Callable[[ConnectionResult], None] | None,
     keep: Callable[[ConnectionResult], None],
+    first_rounds: int | None = None,
 ) -> ConnectionResult:
-    """Adapt, refine and lengthen until both estimates meet ``acc`` (see solve_connection)."""
+    """Adapt, refine and lengthen until both estimates meet ``acc`` (see solve_connection).
+
+    ``first_rounds``: adaptation rounds on the starting mesh (default ``rounds``).
+    """
     for n_ext in range(acc.max_extensions + 1):
         # ---- discretisation: adapt, halve, compare; double the intervals if needed
         for n_ref in range(acc.max_refinements + 1):
-            result = _adapted(result, rounds, settings, method, progress, keep)
+            k = rounds if (n_ext or n_ref or first_rounds is None) else first_rounds
+            result = _adapted(result, k, settings, method, progress, keep)
             if not result.success:
                 return result
             tol = {u: acc.tolerance(result.params[u]) for u in result.free}
