@@ -1,0 +1,210 @@
+"""Accuracy claims of connecting orbits: find_connection, the adaptive mesh, the estimates.
+
+Every case of :mod:`tests.connection_problems` is found from its saddle alone
+(:func:`find_connection`) and checked against its reference (closed form, shooting or
+published digits). The property tests check the claim behind ``SUCCESS``: the result
+is within its own error estimate (discretisation + truncation) of the reference, plus
+the reference's own uncertainty, at the defaults and at deliberately coarse settings;
+a result that is not SUCCESS must say which estimate failed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from continuation.bvp import (
+    CollocationMesh,
+    ConnectionAccuracy,
+    HeteroclinicProblem,
+    check_convergence,
+    continue_connection,
+    find_connection,
+    solve_connection,
+)
+from continuation.bvp.find import cut_at_closest_approach
+from continuation.manifolds import unstable_manifold
+from continuation.settings import ContinuationSettings
+from continuation.status import Status
+from tests.connection_problems import ConnectionCase, cases, cir, kpr
+
+CASES = {c.name: c for c in cases()}
+PUBLISHED = ("cir", "kpr", "lorenz", "she")
+
+COARSE = {
+    "n_intervals": 6,
+    "degree": 2,
+    "end_distance": 1e-2,
+    "accuracy": ConnectionAccuracy(
+        rtol=1e-4, atol=1e-6, adapt_rounds=1, max_refinements=1, max_extensions=0
+    ),
+}
+SETTINGS = {"defaults": {}, "coarse": COARSE}
+
+
+def _find(case: ConnectionCase, **kw):
+    return find_connection(case.system, case.system.params(**case.params), case.free,
+                           **case.kwargs(), **kw)  # fmt: skip
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_find_connection_reaches_the_reference_from_the_saddle_alone(name):
+    """Defaults: SUCCESS, and the value within max(estimate, 1e-6 |p| + 1e-8) of the reference."""
+    case = CASES[name]
+    res = _find(case)
+    assert res.success, res.message
+    err = abs(res.value(case.free) - case.reference)
+    assert err <= res.error(case.free) + case.reference_uncertainty, (err, res.errors)
+    # the defaults' tolerances hold for the estimates
+    tol = 1e-8 + 1e-6 * abs(res.value(case.free))
+    assert res.errors.discretisation[case.free] <= tol
+    assert res.errors.truncation[case.free] <= tol
+    # both ends near the saddles
+    assert np.linalg.norm(res.x[0] - res.x_from) < 1e-2
+    assert np.linalg.norm(res.x[-1] - res.x_to) < 1e-2
+
+
+@pytest.mark.parametrize("name", PUBLISHED)
+def test_published_digits(name):
+    """Rounded to the published digits, the value is the published one."""
+    case = CASES[name]
+    res = _find(case)
+    digits = {"cir": 7, "kpr": 5, "lorenz": 7, "she": 6}[name]
+    assert round(res.value(case.free), digits) == pytest.approx(case.reference, abs=1e-12)
+
+
+@pytest.mark.parametrize("setting", list(SETTINGS))
+@pytest.mark.parametrize("name", list(CASES))
+def test_success_is_within_its_error_estimate(name, setting):
+    """The claim of SUCCESS: |p - p_ref| <= discretisation + truncation estimate."""
+    case = CASES[name]
+    res = _find(case, **SETTINGS[setting])
+    if res.success:
+        err = abs(res.value(case.free) - case.reference)
+        assert err <= res.error(case.free) + case.reference_uncertainty, (
+            name, setting, err, res.errors,
+        )  # fmt: skip
+    else:
+        assert res.status in (
+            Status.DISCRETISATION_ERROR, Status.TRUNCATION_ERROR, Status.NEWTON_FAILED,
+            Status.NONFINITE, Status.SINGULAR,
+        ), res.message  # fmt: skip
+        if res.status is Status.DISCRETISATION_ERROR:
+            assert "discretisation" in res.message
+        if res.status is Status.TRUNCATION_ERROR:
+            assert "truncation" in res.message and "T" in res.message
+
+
+def _kpr_guess(T: float):
+    s = kpr()
+    par = s.params(lam=-1.8512, k=-0.15, ie1=10.0)
+    wu = unstable_manifold(s, par, [-0.9591016] * 3, eps=1e-4, t_max=60.0, branches=(-1,))
+    t, x = wu.minus.as_guess()
+    k, _ = cut_at_closest_approach(t, x, wu.x_saddle, wu.x_saddle)
+    return s, par, wu.x_saddle, (t[: k + 1], x[: k + 1])
+
+
+def test_fast_excursion_homoclinic_at_the_old_default_mesh():
+    """kpr (fast x, 1/eps_1 = 10) on the old default: 40 uniform intervals, T = 30.
+
+    The adaptive default must either reach the published value within its estimate or
+    say it could not; the plain solve on that mesh (the old default) is the foil.
+    """
+    s, par, xs, guess = _kpr_guess(30.0)
+    prob = HeteroclinicProblem(s, par, "lam", saddle_from=xs, shift=0, T=30.0)
+    assert prob.mesh.n_intervals == 40 and prob.mesh.T == 30.0
+    res = solve_connection(prob, guess)
+    ref = CASES["kpr"]
+    if res.success:
+        err = abs(res.value("lam") - ref.reference)
+        assert err <= res.error("lam") + ref.reference_uncertainty
+    else:
+        assert res.status in (Status.DISCRETISATION_ERROR, Status.TRUNCATION_ERROR)
+
+
+def test_check_convergence_lengthens_T_at_the_same_resolution():
+    """delta_T is the truncation error alone: the adapted mesh is kept, not re-made uniform."""
+    case = CASES["cir"]
+    res = _find(case)
+    ck = check_convergence(res)
+    assert ck.ok
+    # interior nodes of the base mesh (in t) are nodes of the extended mesh
+    off = 0.5 * (ck.extended.T - res.T)
+    t_base = res.mesh.nodes * res.T + off
+    t_ext = ck.extended.mesh.nodes * ck.extended.T
+    assert np.min(np.abs(t_base[:, None] - t_ext[None, :]), axis=1).max() < 1e-9
+    # a saddle-focus homoclinic at T ~ 50: the change with T is tiny, and so is the
+    # discretisation change of the adapted mesh
+    assert ck.delta_T["nu"] < 1e-9
+    assert ck.delta_mesh["nu"] < 1e-8
+
+
+def test_cir_curve_in_beta_against_auto():
+    """Continued in beta, the cir saddle-focus homoclinic passes AUTO-07p's published points.
+
+    AUTO-07p manual, HomCont demo cir, runs 2 and 3: (beta, nu) = (0.4535645,
+    -0.7256925) and (0.5912315, -0.7204001) (7 digits). The branch rows are
+    corrected at those beta by the solver with its estimates.
+    """
+    res = _find(CASES["cir"])
+    br = continue_connection(
+        res, "beta", ContinuationSettings(ds=-0.02, ds_max=0.05, p_min=0.44, p_max=0.62),
+        direction="both",
+    )  # fmt: skip
+    assert br.status is Status.PARAM_BOUND, br.message
+    for beta, nu in ((0.4535645, -0.7256925), (0.5912315, -0.7204001)):
+        nu_b = np.interp(beta, *zip(*sorted(zip(br.p, br.records["nu"], strict=True))))
+        assert nu_b == pytest.approx(nu, abs=1e-3)  # linear interpolation between rows
+        s = cir()
+        par = dict(res.params.items())
+        par.update(beta=beta, nu=float(nu_b))
+        at = find_connection(s, s.params(**par), "nu", source=[0, 0, 0], shift=0)
+        assert at.success, at.message
+        assert at.value("nu") == pytest.approx(nu, abs=5e-8 + at.error("nu"))
+
+
+def test_names_and_layouts():
+    """free = solved, vary = continuation parameter; T= keyword; shift=0; (n, K) guesses."""
+    case = CASES["kdv"]
+    s = case.system
+    with pytest.raises(ValueError, match="T="):
+        HeteroclinicProblem(s, s.params(mu=0.05), "mu", saddle_from=[0, 0], shift=0)
+    with pytest.raises(ValueError, match="scalar `shift` must be 0"):
+        HeteroclinicProblem(s, s.params(mu=0.05), "mu", saddle_from=[0, 0], shift=1.0, T=20.0)
+    with pytest.raises(ValueError, match="disagrees"):
+        HeteroclinicProblem(s, s.params(mu=0.05), "mu", saddle_from=[0, 0], shift=0,
+                            T=20.0, mesh=CollocationMesh(10, 4, 30.0))  # fmt: skip
+    prob = HeteroclinicProblem(s, s.params(mu=0.05), "mu", saddle_from=[0, 0], shift=0, T=30.0)
+    assert prob.free == ("mu",) and prob.vary is None and prob.T == 30.0
+    assert prob.replace(T=40.0).mesh.T == 40.0
+    t = np.linspace(-15, 15, 301)
+    u = 1.6 / np.cosh(t / 2.2) ** 2
+    x_kn = np.column_stack([u, np.gradient(u, t)])
+    a = solve_connection(prob, (t, x_kn))
+    b = solve_connection(prob, (t, x_kn.T))  # SciPy's layout
+    assert a.success and b.success
+    assert b.value("mu") == a.value("mu")
+    with pytest.raises(ValueError, match="ambiguous"):
+        solve_connection(prob, np.ones((2, 2)))
+    with pytest.raises(ValueError, match="`vary`"):
+        prob.replace(vary="mu")
+    with pytest.raises(ValueError, match="exactly one of `target` and `shift`"):
+        find_connection(s, s.params(mu=0.05), "mu", source=[0, 0])
+    with pytest.raises(ValueError, match="unstable manifold"):
+        find_connection(CASES["nagumo"].system, CASES["nagumo"].system.params(a=0.25, c=0.3),
+                        "c", source=[0.25, 0.0], target=[0.0, 0.0])  # fmt: skip
+
+
+def test_failed_estimate_is_a_distinct_status_with_advice():
+    """Too few refinements for a tight tolerance: DISCRETISATION_ERROR naming the fix."""
+    case = CASES["kpr"]
+    acc = ConnectionAccuracy(rtol=1e-13, atol=0.0, max_refinements=0, adapt_rounds=0)
+    res = _find(case, n_intervals=10, degree=2, accuracy=acc)
+    assert res.status is Status.DISCRETISATION_ERROR
+    assert "max_refinements" in res.message and "lam" in res.message
+    assert not res.success and res.errors is not None
+    acc_T = ConnectionAccuracy(rtol=1e-14, atol=0.0, max_extensions=0, safety=1.0)
+    res_T = _find(CASES["nagumo"], end_distance=0.3, accuracy=acc_T)
+    assert res_T.status in (Status.TRUNCATION_ERROR, Status.DISCRETISATION_ERROR)
+    if res_T.status is Status.TRUNCATION_ERROR:
+        assert "longer T" in res_T.message
