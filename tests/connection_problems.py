@@ -195,9 +195,7 @@ def san() -> System:
             ]
         )
 
-    return System(
-        rhs, ("x", "y", "z"), ("a", "b", "c", "alpha", "beta", "gamma", "mu", "mut")
-    )
+    return System(rhs, ("x", "y", "z"), ("a", "b", "c", "alpha", "beta", "gamma", "mu", "mut"))
 
 
 def she() -> System:

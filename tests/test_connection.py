@@ -33,13 +33,11 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from continuation.bvp.accuracy import ConnectionAccuracy
 from continuation.bvp.collocation import CollocationMesh
 from continuation.bvp.connection import HeteroclinicProblem, PinPhase
 from continuation.bvp.result import ConnectionResult
-from continuation.bvp.accuracy import ConnectionAccuracy
 from continuation.bvp.solve import check_convergence, solve_connection
-
-PLAIN = ConnectionAccuracy(estimate=False)  # a plain solve on the given mesh
 from continuation.differentiation import fd_jacobian
 from continuation.errors import ConvergenceError
 from continuation.settings import NewtonSettings
@@ -47,6 +45,8 @@ from continuation.status import Status
 from continuation.system import System
 
 matplotlib.use("Agg")
+
+PLAIN = ConnectionAccuracy(estimate=False)  # a plain solve on the given mesh
 
 SQ2 = np.sqrt(2.0)
 

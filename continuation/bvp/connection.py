@@ -173,6 +173,10 @@ class HeteroclinicProblem:
         either the constructor raises (a connection has no natural default ``T``;
         :func:`~continuation.bvp.find.find_connection` picks one from the saddles'
         eigenvalues).
+    T : float, optional
+        Truncation time; with ``mesh`` omitted the mesh is 40 uniform intervals of
+        degree 4 on ``[0, T]`` (the adaptive solve refines it). Given with ``mesh`` it
+        must equal ``mesh.T``.
     vary : str or None
         The continuation parameter (None for one-shot solves).
     phase : "integral" or PinPhase

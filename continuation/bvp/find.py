@@ -241,9 +241,7 @@ def find_connection(
     if T is not None:
         mesh = CollocationMesh(n_intervals, degree, T_used)
     kw: dict[str, Any] = {"saddle_to": x_p} if shift is None else {"shift": shift}
-    prob = HeteroclinicProblem(
-        system, params, free, saddle_from=x_m, mesh=mesh, phase=phase, **kw
-    )
+    prob = HeteroclinicProblem(system, params, free, saddle_from=x_m, mesh=mesh, phase=phase, **kw)
     note = (
         f"guess: branch {branch:+d} of W^u(source), closest approach {d_min:.2e} to the "
         f"target at t = {t[k] if k < t.size else t[-1]:.4g}; T = {T_used:.6g}"
