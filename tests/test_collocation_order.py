@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from scipy.stats import linregress
 
+from continuation.bvp.accuracy import ConnectionAccuracy
 from continuation.bvp.collocation import CollocationMesh
 from continuation.bvp.connection import HeteroclinicProblem, PinPhase
-from continuation.bvp.accuracy import ConnectionAccuracy
 from continuation.bvp.solve import solve_connection
 from continuation.system import System
 
