@@ -232,3 +232,23 @@ def test_failed_estimate_is_a_distinct_status_with_advice():
     assert res_T.status in (Status.TRUNCATION_ERROR, Status.DISCRETISATION_ERROR)
     if res_T.status is Status.TRUNCATION_ERROR:
         assert "longer T" in res_T.message
+
+
+def test_estimates_survive_save_and_load(tmp_path):
+    case = CASES["san"]
+    res = _find(case)
+    back = type(res).load(res.save(tmp_path / "san"))
+    assert back.errors == res.errors
+    assert back.error("mut") == res.error("mut") and "+-" in repr(res)
+    with pytest.raises(ValueError, match="not a solved parameter"):
+        res.error("a")
+
+
+def test_wrong_branch_says_so():
+    """The other branch of the Nagumo saddle runs off: no SUCCESS, and the message says why."""
+    case = CASES["nagumo"]
+    s = case.system
+    kw = {**case.kwargs(), "branch": -case.branch}
+    res = find_connection(s, s.params(**case.params), case.free, **kw)
+    assert not res.success
+    assert "other `branch`" in res.message

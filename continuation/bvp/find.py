@@ -242,10 +242,17 @@ def find_connection(
         mesh = CollocationMesh(n_intervals, degree, T_used)
     kw: dict[str, Any] = {"saddle_to": x_p} if shift is None else {"shift": shift}
     prob = HeteroclinicProblem(system, params, free, saddle_from=x_m, mesh=mesh, phase=phase, **kw)
+    t_cut = float(t[k])
+    reach = float(np.max(np.linalg.norm(x[: k + 1] - x_m, axis=1)))
     note = (
         f"guess: branch {branch:+d} of W^u(source), closest approach {d_min:.2e} to the "
-        f"target at t = {t[k] if k < t.size else t[-1]:.4g}; T = {T_used:.6g}"
+        f"target at t = {t_cut:.4g}; T = {T_used:.6g}"
     )
+    if d_min > 0.5 * max(reach, float(np.linalg.norm(x_p - x_m))):
+        note += (
+            "; the manifold does not come near the target: try the other `branch` or a "
+            "better guess of the free parameter(s)"
+        )
     log.info(note)
     res = solve_connection(
         prob, (t, x), accuracy=accuracy, newton=newton, method=method, throw=False

@@ -282,7 +282,10 @@ class ConnectionResult:
         return ax
 
     def __repr__(self) -> str:
-        unk = ", ".join(f"{k}={v:.10g}" for k, v in self.unknowns.items())
+        unk = ", ".join(
+            f"{k}={v:.10g}" + ("" if self.errors is None else f" +- {self.error(k):.1e}")
+            for k, v in self.unknowns.items()
+        )
         return (
             f"ConnectionResult({unk}; status={self.status.name}, |G|={self.residual_norm:.2e}, "
             f"{self.mesh!r})"
