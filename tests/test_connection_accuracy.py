@@ -208,6 +208,8 @@ def test_names_and_layouts():
     b = solve_connection(prob, (t, x_kn.T))  # SciPy's layout
     assert a.success and b.success
     assert b.value("mu") == a.value("mu")
+    sol_t = type("S", (), {"t": t, "y": x_kn.T})()  # an object with t and SciPy's y (n, K)
+    assert solve_connection(prob, sol_t, accuracy=ConnectionAccuracy(estimate=False)).success
     with pytest.raises(ValueError, match="ambiguous"):
         solve_connection(prob, np.ones((2, 2)))
     with pytest.raises(ValueError, match="`vary`"):

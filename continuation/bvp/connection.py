@@ -576,8 +576,10 @@ class HeteroclinicProblem:
 
         Parameters
         ----------
-        guess : ConnectionResult, (t, x) tuple, object with ``t`` and ``x``, or ndarray (K, n)
-            ``t`` (K,) strictly increasing, ``x`` (K, n), in the time of the system. A
+        guess : ConnectionResult, (t, x) pair, object with ``t`` and ``x`` or ``y``, or ndarray
+            ``t`` (K,) strictly increasing, ``x`` (K, n) or (n, K) (:func:`_states_layout`:
+            the axis of length K is time; a square ambiguous array raises), in the
+            time of the system. A
             guess whose time span ``T_g = t[-1] - t[0]`` equals ``T`` is shifted onto
             ``[0, T]``. One whose span differs is *not* stretched (that would rescale
             time, slowing or speeding up the orbit by ``T / T_g``, and a stretched orbit
@@ -749,9 +751,11 @@ def _as_trajectory(guess: Any, n: int) -> tuple[FloatArray, FloatArray]:
     if isinstance(guess, np.ndarray) and guess.ndim == 2:
         x = _states_layout(np.asarray(guess, dtype=float), None, n)
         t = np.linspace(0.0, 1.0, x.shape[0])
-    elif hasattr(guess, "t") and hasattr(guess, "x"):
+    elif hasattr(guess, "t") and (hasattr(guess, "x") or hasattr(guess, "y")):
+        # ``y``: a SciPy solve_ivp / solve_bvp result, states as (n, K)
         t = np.asarray(guess.t, dtype=float).reshape(-1)
-        x = _states_layout(np.asarray(guess.x, dtype=float), t.size, n)
+        xs = guess.x if hasattr(guess, "x") else guess.y
+        x = _states_layout(np.asarray(xs, dtype=float), t.size, n)
     elif isinstance(guess, (tuple, list)) and len(guess) == 2:
         t = np.asarray(guess[0], dtype=float).reshape(-1)
         x = _states_layout(np.asarray(guess[1], dtype=float), t.size, n)
