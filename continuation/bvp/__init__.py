@@ -34,6 +34,11 @@ Example: the Nagumo front ``u'' + c u' + u (1 - u)(u - a) = 0`` from ``u = 1`` t
     br = continue_connection(res, "a", ContinuationSettings(p_min=0.1, p_max=0.4))
     br.records["c"]                                  # c along the branch
 
+From the saddle alone (branch -1 of its unstable manifold heads for ``u = 0``)::
+
+    res = find_connection(s, s.params(a=0.25, c=0.2), "c", source=[1, 0],
+                          target=[0, 0], branch=-1)
+
 A connection to the same equilibrium shifted by a period (a front on a circle, the
 ship's wave-relative position ``xi_G`` with period 1) uses ``shift={"xi_G": -1.0}``
 instead of ``saddle_to``; the state must be declared periodic in the System.
