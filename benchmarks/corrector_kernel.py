@@ -6,7 +6,7 @@ JIT part needs a C compiler, CasADi's ``shell`` plugin calls ``gcc``/``cc``).
 For the eight-state cubic of the continuation benchmark (``n = 8``), a continuation
 step's corrector is 2-3 Newton iterations of the bordered system, each one compiled
 CasADi call plus one LAPACK ``gesv`` and a few NumPy operations from Python
-(``continuation.algorithms.base._correct_fused``). This script builds the alternative
+(``continuation.algorithms.corrector._correct_fused``). This script builds the alternative
 that issue 2's last target (beating native AUTO-07p on that problem) suggested: ``K``
 unrolled Newton iterations -- bordered residual and Jacobian, a Householder QR solve
 for the correction and the tangent (Golub & Van Loan 2013, Alg. 5.2.1), the
@@ -52,7 +52,7 @@ if str(ROOT) not in sys.path:
 
 from benchmarks.engine_per_step import PROBLEMS  # noqa: E402
 from continuation.algorithms import PALC  # noqa: E402
-from continuation.algorithms.base import correct  # noqa: E402
+from continuation.algorithms.corrector import correct  # noqa: E402
 from continuation.problem import EquilibriumProblem  # noqa: E402
 from continuation.settings import ContinuationSettings  # noqa: E402
 

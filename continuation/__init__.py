@@ -1,136 +1,92 @@
 """broachkit's generic continuation and bifurcation engine.
 
-Knows nothing of ships. The public API is exactly what this module exports.
+Knows nothing of ships. This module is the designed front door: the names a user of the
+engine needs to define a model, follow its equilibria, switch branches, follow fold and
+Hopf points in two parameters, compute connecting orbits and integrate in time.
+Everything else is importable from its sub-module (``continuation.stability``,
+``continuation.newton``, ``continuation.algorithms``, ``continuation.bvp``, ...).
 """
 
-from .algorithms import PALC, ContinuationAlgorithm, Natural, StepOutcome, StepState
-from .api import continue_equilibria
-from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
-from .bvp import (
-    CollocationMesh,
-    ConnectionResult,
-    ConvergenceCheck,
-    HeteroclinicProblem,
-    JacobianCache,
-    PinPhase,
-    check_convergence,
-    connection_at,
-    continue_connection,
-    simplified_newton,
-    solve_connection,
-)
-from .codim2 import FoldProblem, HopfProblem, continue_codim2
-from .driver import continue_branch
-from .equilibria import EquilibriumResult, solve_equilibrium, unique_equilibria
-from .errors import ContinuationError, ConvergenceError, ModelError
-from .events import Event
-from .fate_bisection import (
-    BisectionResult,
-    EquilibriumTracker,
-    bisect_fate,
-    manifold_fate_function,
-)
-from .fates import Fate, FateClassifier, FateKind, SaddleVisit, classify_fate, passage_side
-from .global_graph import EdgeChange, GraphDiff, build_global_graph, compare_graphs
-from .manifolds import ManifoldBranch, ManifoldResult, unstable_manifold
-from .newton import NewtonResult, newton
-from .ops import CASADI_OPS, NUMPY_OPS, Ops
+# (imports grouped by topic, as in __all__, not sorted)
+# ruff: noqa: I001
+
+# the model: a system, its parameter values, its operator set
+from .system import System
 from .params import Params
-from .problem import ContinuationProblem, EquilibriumProblem
+from .ops import Ops
+
+# one-parameter continuation: entry points, settings, algorithms, events, problems
+from .api import continue_equilibria
+from .driver import continue_branch
+from .equilibria import solve_equilibrium
 from .settings import ContinuationSettings, DetectionSettings, NewtonSettings
-from .simulate import EventHits, PoincareSection, SimEvent, Simulator, Trajectory, simulate
-from .stability import (
-    EigenResult,
-    count_unstable,
-    dense_stability,
-    eigen,
-    eigenvalues,
-    n_unstable,
-    sort_eigenvalues,
-)
+from .algorithms import PALC, Natural
+from .events import Event
+from .problem import ContinuationProblem, EquilibriumProblem
+
+# results, status and errors
+from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .status import Status
-from .switching import CrossingTangents, crossing_tangents, switch_branch
-from .system import DynamicalSystem, System, check_jacobian
+from .errors import ContinuationError, ConvergenceError, ModelError
+
+# branch switching at branch points
+from .switching import crossing_tangents, switch_branch
+
+# two-parameter continuation of folds and Hopf points
+from .codim2 import FoldProblem, HopfProblem, continue_codim2
+
+# connecting orbits (boundary-value problems)
+from .bvp import ConnectionResult, HeteroclinicProblem, continue_connection, solve_connection
+
+# time domain: simulation, manifolds, fates (their modules move to continuation.dynamics)
+from .simulate import Trajectory, simulate
+from .manifolds import unstable_manifold
+from .fates import FateKind, classify_fate
+from .fate_bisection import bisect_fate
 
 __all__ = [
-    "dense_stability",
-    "JacobianCache",
-    "simplified_newton",
-    "passage_side",
-    "simulate",
-    "Simulator",
-    "SimEvent",
-    "PoincareSection",
-    "Trajectory",
-    "EventHits",
-    "unstable_manifold",
-    "ManifoldResult",
-    "ManifoldBranch",
-    "classify_fate",
-    "FateClassifier",
-    "Fate",
-    "FateKind",
-    "SaddleVisit",
-    "build_global_graph",
-    "compare_graphs",
-    "GraphDiff",
-    "EdgeChange",
-    "bisect_fate",
-    "BisectionResult",
-    "EquilibriumTracker",
-    "manifold_fate_function",
+    # the model
+    "System",
+    "Params",
+    "Ops",
+    # one-parameter continuation
+    "continue_equilibria",
+    "continue_branch",
+    "solve_equilibrium",
+    "ContinuationSettings",
+    "NewtonSettings",
+    "DetectionSettings",
     "PALC",
+    "Natural",
+    "Event",
+    "ContinuationProblem",
+    "EquilibriumProblem",
+    # results, status and errors
     "Branch",
     "BranchPoint",
-    "ContinuationAlgorithm",
-    "EigenResult",
-    "EquilibriumResult",
-    "Event",
-    "Natural",
-    "StepOutcome",
-    "StepState",
-    "n_unstable",
-    "sort_eigenvalues",
-    "SpecialKind",
     "SpecialPoint",
-    "CollocationMesh",
-    "ConnectionResult",
-    "ConvergenceCheck",
-    "HeteroclinicProblem",
-    "PinPhase",
-    "check_convergence",
-    "connection_at",
-    "continue_connection",
-    "solve_connection",
-    "FoldProblem",
-    "HopfProblem",
-    "continue_branch",
-    "continue_codim2",
+    "SpecialKind",
+    "Status",
+    "ContinuationError",
+    "ConvergenceError",
+    "ModelError",
+    # branch switching
     "switch_branch",
     "crossing_tangents",
-    "CrossingTangents",
-    "continue_equilibria",
-    "count_unstable",
-    "eigen",
-    "eigenvalues",
-    "solve_equilibrium",
-    "unique_equilibria",
-    "CASADI_OPS",
-    "NUMPY_OPS",
-    "ContinuationError",
-    "ContinuationProblem",
-    "ContinuationSettings",
-    "ConvergenceError",
-    "DetectionSettings",
-    "DynamicalSystem",
-    "EquilibriumProblem",
-    "ModelError",
-    "NewtonResult",
-    "NewtonSettings",
-    "Ops",
-    "Params",
-    "Status",
-    "System",
-    "check_jacobian",
-    "newton",
+    # two-parameter continuation
+    "continue_codim2",
+    "FoldProblem",
+    "HopfProblem",
+    # connecting orbits
+    "solve_connection",
+    "continue_connection",
+    "HeteroclinicProblem",
+    "ConnectionResult",
+    # time domain
+    "simulate",
+    "Trajectory",
+    "unstable_manifold",
+    "classify_fate",
+    "FateKind",
+    "bisect_fate",
 ]

@@ -8,7 +8,7 @@ its Python driving some ten times that. :func:`_step` does one whole step of
 
 * the predictor (tangent, or cubic Hermite from the last two points);
 * Newton's method on the bordered system with the iteration and acceptance rules of
-  the Python corrector (``continuation.algorithms.base._correct_fused`` with
+  the Python corrector (``continuation.algorithms.corrector._correct_fused`` with
   ``exact=False``), the residual and ``[G_z G_p]`` from the system's instruction tape
   (:mod:`continuation._tape`) run by a compiled interpreter, so that the compiled code
   is generic, cached on disk once and never recompiled per system;
@@ -86,7 +86,8 @@ from ._tape import (
     _K_TWICE,
     Tape,
 )  # fmt: skip
-from .algorithms.base import BorderedLU, PointInfo
+from .algorithms.point import PointInfo
+from .linalg import BorderedLU
 
 log = logging.getLogger(__name__)
 
@@ -311,7 +312,7 @@ if HAVE_NUMBA:
 
     @_jit
     def _backward_error(M, r, u):  # pragma: no cover - compiled
-        """``base._backward_error`` of the bordered residual ``r`` at ``u``: ``max(max_i
+        """``corrector._backward_error`` of the bordered residual ``r`` at ``u``: ``max(max_i
         |G_i| / max_i (|M| |u|)_i, |r_n| / (|M| |u|)_n)``, ``i < n``."""
         n1 = u.size
         n = n1 - 1
@@ -461,7 +462,7 @@ if HAVE_NUMBA:
         for i in range(n1):
             hlev += c[i] * ua[i]
         hlev += ds
-        # the componentwise step scale max(|u_pred,i|, |u_ref,i|) + a (base._step_ok)
+        # the componentwise step scale max(|u_pred,i|, |u_ref,i|) + a (corrector._step_ok)
         su = np.empty(n1)
         ur = 0.0
         for i in range(n1):
@@ -665,7 +666,7 @@ class StepKernel:
         sc : ndarray, shape (13,)
             ``(ds, prev_h, cos_hermite, max_contraction, max_distance, cos_max, tol,
             step_tol, max_iter, eig_tol, imag_tol, NOISE_SLACK, ROUNDOFF_FLOOR)``
-            (the last two: :mod:`continuation.algorithms.base`).
+            (the last two: :mod:`continuation.algorithms.corrector`).
         hermite, guarded, want_eig : bool
             Try the Hermite predictor; apply the step safeguards; compute eigenvalues.
 
@@ -726,7 +727,7 @@ def _lu_of(pt: KernelPoint) -> BorderedLU:
 
 
 class KernelPoint(PointInfo):
-    """A :class:`~continuation.algorithms.base.PointInfo` of the compiled step.
+    """A :class:`~continuation.algorithms.point.PointInfo` of the compiled step.
 
     The fields the continuation needs at every row (``z``, ``p``, ``u``, ``tau``,
     ``border``, ``ctau``, the sign of the branch-point test, eigenvalues and counts in

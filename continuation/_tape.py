@@ -11,8 +11,8 @@ system's residual and Jacobian without compiling code per system.
 CasADi trace, at most ``MAX_KERNEL_SIZE - 1`` states, a tape of at most
 ``MAX_TAPE_INSTRUCTIONS`` supported operations, and Numba installed (imported only
 then). Large tapes stay on CasADi's own virtual machine, which evaluates them faster
-than the interpreted tape (measured: 26 476 instructions of the ship model, 183 us
-against 132 us), while small systems gain from the step as one call.
+than the interpreted tape (measurement in ``benchmarks/README.md``, *Engine design
+measurements*), while small systems gain from the step as one call.
 """
 
 from __future__ import annotations

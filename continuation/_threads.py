@@ -4,16 +4,11 @@ A continuation step factorises and solves systems of the problem's size and comp
 eigenvalues of its Jacobian, hundreds of times in sequence. For dense systems of up to a
 few hundred unknowns (and for the sparse path, where SuperLU is single-threaded and
 ARPACK's dense work is on ``n x k`` blocks) a second BLAS thread gains little on an idle
-machine, while on a loaded one its synchronisation costs several times the work:
-``numpy.linalg.eigvals`` of a 150 x 150 matrix measured 15.8 ms with OpenBLAS's two
-threads against 6.6 ms with one, with two other busy processes on the 2 cores
-(2026-11-22). Tiny systems are not spared: with the compiled step of an 8-state
-system (LAPACK ``dgetrf``/``dgetrs``/``dgeev`` on 9 x 9 and 8 x 8 matrices, called from
-Numba), a run took 24 ms wall and 33 ms CPU with OpenBLAS's two threads on a loaded
-machine against 13 ms with one (2026-12-01), and the benchmark's wall time doubled.
-:func:`blas_threads_for` limits BLAS to one thread for all such runs with threadpoolctl
-(a controller built once, about 3 us per limit), and does nothing for large dense
-systems.
+machine, while on a loaded one its synchronisation costs several times the work, for
+tiny systems too (the compiled step of an 8-state system included; measurements in
+``benchmarks/README.md``, *Engine design measurements*). :func:`blas_threads_for`
+limits BLAS to one thread for all such runs with threadpoolctl (a controller built
+once), and does nothing for large dense systems.
 """
 
 from __future__ import annotations

@@ -44,9 +44,9 @@ from typing import Any
 
 import numpy as np
 
-from ._types import BoolArray, ComplexArray, FloatArray, IntArray
 from .settings import ContinuationSettings, DetectionSettings, NewtonSettings
 from .status import Status
+from .typing import BoolArray, ComplexArray, FloatArray, IntArray
 
 FORMAT_VERSION = 1
 

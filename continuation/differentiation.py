@@ -6,7 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._types import FloatArray
+from .typing import FloatArray
 
 VectorFn = Callable[[FloatArray], FloatArray]
 

@@ -9,13 +9,13 @@ from typing import Any
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
 from .errors import ConvergenceError
 from .newton import NewtonResult, newton
 from .params import Params
 from .settings import NewtonSettings
 from .stability import n_unstable, sort_eigenvalues
 from .status import Status
+from .typing import ComplexArray, FloatArray
 
 log = logging.getLogger(__name__)
 

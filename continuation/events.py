@@ -57,8 +57,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
-from .algorithms.base import _inf_norm
+from .linalg import inf_norm as _inf_norm
+from .typing import ComplexArray, FloatArray
 
 Direction = Literal["both", "up", "down"]
 

@@ -33,7 +33,6 @@ from typing import Any
 
 import numpy as np
 
-from ._types import FloatArray
 from .errors import ContinuationError, ConvergenceError
 from .fates import Fate, FateClassifier, FateKind, passage_side, refine_equilibrium
 from .manifolds import unstable_manifold
@@ -41,6 +40,7 @@ from .newton import newton
 from .params import Params
 from .settings import NewtonSettings
 from .status import Status
+from .typing import FloatArray
 
 log = logging.getLogger(__name__)
 

@@ -68,7 +68,6 @@ from typing import Any
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
 from .errors import ContinuationError
 from .newton import newton
 from .settings import NewtonSettings
@@ -84,6 +83,7 @@ from .simulate import (
     _period,
 )
 from .status import Status
+from .typing import ComplexArray, FloatArray
 
 log = logging.getLogger(__name__)
 

@@ -24,14 +24,11 @@ from typing import Any
 
 import numpy as np
 
-from .algorithms.base import (
-    PointInfo,
-    _inf_norm,
-    correct,
-    linearize,
-    make_point,
-    theta_norm,
-)
+from .algorithms.base import theta_norm
+from .algorithms.corrector import correct
+from .algorithms.point import PointInfo, make_point
+from .linalg import inf_norm as _inf_norm
+from .problem import linearize
 from .settings import NewtonSettings
 
 log = logging.getLogger(__name__)

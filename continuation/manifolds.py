@@ -33,10 +33,10 @@ from typing import Any
 
 import numpy as np
 
-from ._types import ComplexArray, FloatArray
 from .fates import Fate, FateClassifier, refine_equilibrium
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, Simulator, Trajectory, _param_vector, _period
 from .status import Status
+from .typing import ComplexArray, FloatArray
 
 log = logging.getLogger(__name__)
 

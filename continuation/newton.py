@@ -11,10 +11,10 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ._types import FloatArray
 from .errors import ConvergenceError
 from .settings import NewtonSettings
 from .status import Status
+from .typing import FloatArray
 
 _GETRF, _GETRS = la.get_lapack_funcs(("getrf", "getrs"), (np.zeros(1),))
 

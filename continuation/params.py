@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._types import FloatArray
+from .typing import FloatArray
 
 
 @dataclass(frozen=True, eq=False)

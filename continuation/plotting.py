@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from ._types import FloatArray
 from .branch import Branch, SpecialKind
+from .typing import FloatArray
 
 _MARKERS = {
     SpecialKind.FOLD: "o",

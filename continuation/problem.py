@@ -3,19 +3,39 @@ r"""Continuation problems :math:`G(z, p) = 0` in one free scalar parameter ``p``
 Every problem the engine continues (equilibria, fold and Hopf curves, connecting
 orbits) implements :class:`ContinuationProblem`, so one pseudo-arclength driver
 serves all of them.
+
+The contract has two parts:
+
+* :class:`ContinuationProblem`, the five methods and two attributes every problem has
+  (checked by ``isinstance``);
+* :class:`ProblemHooks`, the *optional* attributes and fast paths the engine uses when
+  a problem has them (``jacobian_is_stability``, ``linearize``, ``linearizer``,
+  ``bordered_evaluator``, ``step_kernel``, ``difference``, ...). They never change a
+  result beyond round-off, only what it costs (or, for ``difference`` and
+  ``state_names``, how rows are compared and labelled). The engine reads them only
+  through the accessor functions at the end of this module (:func:`linearize`,
+  :func:`linearizer`, :func:`bordered_evaluator`, :func:`step_kernel`,
+  :func:`jacobian_is_stability`, :func:`is_sparse`, :func:`difference`,
+  :func:`record_function`, :func:`state_names`, :func:`param_values`): this module is
+  the one place where a hook is looked up.
+
+:class:`EquilibriumProblem` (equilibria of a :class:`~continuation.system.System`)
+implements every hook.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
+import scipy.sparse as sp
 
-from ._types import ComplexArray, FloatArray
 from .params import Params
 from .system import System
+from .typing import ComplexArray, FloatArray
 
 
 @runtime_checkable
@@ -134,7 +154,7 @@ class EquilibriumProblem:
         """No extra records for plain equilibria."""
         return {}
 
-    # -- optional extensions used by the continuation driver (not part of the protocol) --
+    # -- the optional hooks of ProblemHooks (not part of the protocol) --
     #: The stability eigenvalues are those of :meth:`jacobian`, so the driver may
     #: compute them from the Jacobian it already has instead of calling :meth:`stability`.
     jacobian_is_stability: ClassVar[bool] = True
@@ -207,4 +227,229 @@ class EquilibriumProblem:
         return self.system.difference(z1, z2)
 
 
-__all__ = ["ContinuationProblem", "EquilibriumProblem"]
+class BorderedEvaluatorLike(Protocol):
+    r"""What the corrector needs of ``problem.bordered_evaluator()`` (the fused path).
+
+    One object per problem, not thread-safe; see
+    :class:`continuation.system.BorderedEvaluator`, the implementation.
+
+    Attributes
+    ----------
+    u : ndarray, shape (N + 1,)
+        Input buffer: the point ``(z, p)`` is written here before each call.
+    c : ndarray, shape (N + 1,)
+        Border row of ``M``.
+    h : ndarray, shape (1,)
+        Level of the constraint ``c . u = h``.
+    r : ndarray, shape (N + 1,)
+        Bordered residual ``(G, c . u - h)`` after a call.
+    M : ndarray, shape (N + 1, N + 1), Fortran order
+        Bordered matrix ``[[G_z, G_p], [c^T]]`` after a call.
+    rt : ndarray, shape (N + 1, 2), optional
+        ``[r, e_{N+1}]`` in one Fortran array (``r`` a view of its first column), so
+        that one ``gesv`` gives the Newton correction and the unnormalised tangent.
+    norms : ndarray, shape (5,), or None
+        ``(max |r|, r . r, max |u|, max |G|, sum M_ij^2)`` of the last call.
+    run : callable, optional
+        The compiled call itself (``ev()`` otherwise).
+    """
+
+    u: FloatArray
+    c: FloatArray
+    h: FloatArray
+    r: FloatArray
+    M: FloatArray
+    norms: FloatArray | None
+
+    def __call__(self) -> None:
+        """Evaluate ``r`` and ``M`` (and ``norms``) at ``u``."""
+        ...
+
+    def lin(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Copies ``(G (N,), G_z (N, N), G_p (N,))`` of the last call."""
+        ...
+
+
+class ProblemHooks(Protocol):
+    r"""Optional attributes and fast paths of a :class:`ContinuationProblem`.
+
+    None is required; each is looked up by the accessor of the same name in this
+    module, with the fallback given here. Implementing one must not change any result
+    beyond round-off.
+
+    Attributes
+    ----------
+    jacobian_is_stability : bool
+        (default False) The stability eigenvalues are those of :meth:`jacobian`
+        (equilibria). The driver then computes them from the Jacobian it already has
+        (dense LAPACK or sparse shift-invert Arnoldi, :mod:`continuation.row_eigs`)
+        instead of calling ``stability``, refuses steps across which two real
+        eigenvalues cross zero, and checks sparse saddle indices against the rightmost
+        eigenvalues. Not so for augmented (codim-2) problems, whose Jacobian is not the
+        linearisation of the flow.
+    sparse : bool
+        (default False) ``G_z`` is a SciPy sparse matrix: the BLAS thread count is left
+        alone and the sparse linear algebra is used.
+    state_names : tuple of str
+        (default ``system.state_names``, else ``z0, z1, ...``) Names of the unknowns.
+    params : Params
+        (optional) All parameter values; stored on the branch.
+    system : object
+        (optional) The underlying system (``state_names``, ``period``).
+    """
+
+    jacobian_is_stability: bool
+    sparse: bool
+
+    def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
+        """``(G (N,), G_z (N, N) dense or sparse, G_p (N,))`` in one evaluation.
+
+        Fallback: ``(residual, jacobian, dp)``, three calls.
+        """
+        ...
+
+    def linearizer(
+        self,
+    ) -> Callable[[FloatArray, float], tuple[FloatArray, Any, FloatArray]] | None:
+        """A fast evaluator ``(z, p) -> (G, G_z, G_p)`` with the values of
+        :meth:`linearize` (built once; None: use :meth:`linearize`). May be cached in
+        the instance ``__dict__`` as ``_linearizer``."""
+        ...
+
+    def bordered_evaluator(self) -> BorderedEvaluatorLike | None:
+        """The fused evaluator of the bordered Newton system (dense problems; built
+        once; None: no fused path). May be cached in the instance ``__dict__`` as
+        ``_bordered``. The corrector then runs one compiled call and one LAPACK
+        ``gesv`` per Newton iteration (:func:`continuation.algorithms.corrector.correct`)."""
+        ...
+
+    def step_kernel(self) -> Any:
+        """The compiled pseudo-arclength step (:class:`continuation._kernel.StepKernel`)
+        or None. Used by :class:`~continuation.algorithms.palc.PALC` with
+        ``kernel=True``; a step the kernel does not accept is redone in Python."""
+        ...
+
+    def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
+        """``z1 - z2``, shape ``(N,)``, with periodic unknowns reduced modulo their
+        period (closed-loop detection and distances). Fallback: ``z1 - z2``."""
+        ...
+
+
+# ---------------------------------------------------------------------------- accessors
+# The engine's only look-ups of the optional hooks of ProblemHooks.
+def jacobian_is_stability(problem: Any) -> bool:
+    """``problem.jacobian_is_stability`` (default False)."""
+    return bool(getattr(problem, "jacobian_is_stability", False))
+
+
+def is_sparse(problem: Any) -> bool:
+    """``problem.sparse`` (default False)."""
+    return bool(getattr(problem, "sparse", False))
+
+
+def linearize(problem: Any, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
+    """``(G, G_z, G_p)`` at ``(z, p)``: one call of ``problem.linearize`` if it has one."""
+    lin = getattr(problem, "linearize", None)
+    if lin is not None:
+        G, Gz, Gp = lin(z, p)
+    else:
+        G, Gz, Gp = problem.residual(z, p), problem.jacobian(z, p), problem.dp(z, p)
+    G = np.asarray(G, dtype=float).reshape(-1)
+    Gp = np.asarray(Gp, dtype=float).reshape(-1)
+    if not sp.issparse(Gz):
+        Gz = np.asarray(Gz, dtype=float)
+    return G, Gz, Gp
+
+
+def has_linearize(problem: Any) -> bool:
+    """The problem has its own ``linearize`` (one evaluation for ``G, G_z, G_p``)."""
+    return bool(getattr(problem, "linearize", None))
+
+
+def linearizer(problem: Any) -> Callable[[FloatArray, float], tuple[FloatArray, Any, FloatArray]]:
+    """The problem's fast evaluator (``problem.linearizer()``) or :func:`linearize`."""
+    fn = getattr(problem, "__dict__", {}).get("_linearizer")  # cached by the problem
+    if fn is None:
+        get = getattr(problem, "linearizer", None)
+        fn = get() if get is not None else None
+    if fn is None:
+        return partial(linearize, problem)
+    return fn  # type: ignore[no-any-return]
+
+
+def bordered_evaluator(problem: Any) -> Any:
+    """The problem's fused bordered evaluator (``problem.bordered_evaluator()``) or None."""
+    ev = getattr(problem, "__dict__", {}).get("_bordered", False)
+    if ev is False:
+        get = getattr(problem, "bordered_evaluator", None)
+        ev = get() if get is not None else None
+    return ev
+
+
+def step_kernel(problem: Any) -> Any:
+    """The problem's compiled step (``problem.step_kernel()``) or None."""
+    get = getattr(problem, "step_kernel", None)
+    return get() if get is not None else None
+
+
+def difference(problem: Any) -> Callable[[FloatArray, FloatArray], FloatArray] | None:
+    """``problem.difference`` if it has one, else None (plain ``z1 - z2``)."""
+    diff = getattr(problem, "difference", None)
+    return diff if callable(diff) else None
+
+
+def has_periodic_states(problem: Any) -> bool:
+    """``problem.difference`` may differ from ``z1 - z2``: the problem has one and its
+    system does not declare all periods zero (``system.period``)."""
+    if difference(problem) is None:
+        return False
+    period = getattr(getattr(problem, "system", None), "period", None)
+    return period is None or bool(np.any(np.asarray(period) > 0))
+
+
+def record_function(problem: Any) -> Callable[[FloatArray, float], Mapping[str, float]] | None:
+    """``problem.record``, or None when it is :class:`EquilibriumProblem`'s (always
+    empty, so not worth a call per row)."""
+    if getattr(type(problem), "record", None) is EquilibriumProblem.record:
+        return None
+    return problem.record  # type: ignore[no-any-return]
+
+
+def state_names(problem: Any, n: int) -> tuple[str, ...]:
+    """Names of the ``n`` unknowns: ``problem.state_names``, else
+    ``problem.system.state_names``, else ``("z0", ..., "z{n-1}")``."""
+    names = getattr(problem, "state_names", None)
+    if names is None and hasattr(problem, "system"):
+        names = getattr(problem.system, "state_names", None)
+    names = tuple(names) if names is not None else ()
+    return names if len(names) == n else tuple(f"z{k}" for k in range(n))
+
+
+def param_values(problem: Any, p0: float) -> dict[str, float]:
+    """``{name: value}`` of ``problem.params`` (if any) with the free one set to ``p0``."""
+    params = getattr(problem, "params", None)
+    out: dict[str, float] = {}
+    if params is not None and hasattr(params, "names") and hasattr(params, "values"):
+        out = {str(k): float(v) for k, v in zip(params.names, params.values, strict=False)}
+    out[str(problem.free)] = float(p0)
+    return out
+
+
+__all__ = [
+    "BorderedEvaluatorLike",
+    "ContinuationProblem",
+    "EquilibriumProblem",
+    "ProblemHooks",
+    "bordered_evaluator",
+    "difference",
+    "has_linearize",
+    "has_periodic_states",
+    "is_sparse",
+    "jacobian_is_stability",
+    "linearize",
+    "linearizer",
+    "param_values",
+    "record_function",
+    "state_names",
+    "step_kernel",
+]

@@ -20,7 +20,7 @@ class NewtonSettings:
     tol : float
         Converged when ``||G(z)||_inf <= tol`` and the last Newton step is below
         ``step_tol``. The continuation corrector
-        (:func:`continuation.algorithms.base.correct`) also accepts a stalled iteration
+        (:func:`continuation.algorithms.corrector.correct`) also accepts a stalled iteration
         whose residual is above ``tol`` but at the round-off level of ``G``'s terms
         (backward error ``<= 64 eps``), never any other residual.
     step_tol : float

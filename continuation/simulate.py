@@ -80,10 +80,10 @@ import numpy as np
 import scipy.integrate as si
 from scipy.optimize import brentq
 
-from ._types import FloatArray
 from .errors import ContinuationError
 from .params import Params
 from .status import Status
+from .typing import FloatArray
 
 log = logging.getLogger(__name__)
 

@@ -24,7 +24,8 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ._types import ComplexArray
+from .problem import jacobian_is_stability
+from .typing import ComplexArray
 
 log = logging.getLogger(__name__)
 
@@ -341,9 +342,9 @@ def _jacobian_of(obj: Any, x: Any, p: Any) -> Any:
         return obj.jacobian(xv, pv)
     if hasattr(obj, "residual") and hasattr(obj, "jacobian"):
         xv = np.asarray(x, dtype=float)
-        if hasattr(obj, "system") and getattr(obj, "jacobian_is_stability", False):
+        if hasattr(obj, "system") and jacobian_is_stability(obj):
             return obj.system.jacobian(xv, obj.param_vector(float(p)))
-        if not getattr(obj, "jacobian_is_stability", False):
+        if not jacobian_is_stability(obj):
             raise ValueError(
                 "`problem_or_system`: this problem's stability is not the spectrum of its "
                 "Jacobian; call its `stability` method instead"

@@ -102,25 +102,24 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ._types import FloatArray
 from .algorithms.base import (
     ContinuationAlgorithm,
     StepOutcome,
     StepState,
-    correct,
-    linearize,
-    make_point,
     theta_norm,
     theta_weights,
 )
+from .algorithms.corrector import correct
 from .algorithms.palc import PALC
+from .algorithms.point import make_point
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .driver import continue_branch
 from .errors import ContinuationError, ConvergenceError
 from .events import Event
-from .problem import EquilibriumProblem
+from .problem import EquilibriumProblem, difference, linearize
 from .settings import ContinuationSettings, NewtonSettings
 from .status import Status
+from .typing import FloatArray
 
 log = logging.getLogger(__name__)
 
@@ -642,8 +641,8 @@ def _check_crossing(
 
 def _delta(problem: Any, z1: FloatArray, p1: float, z0: FloatArray, p0: float) -> FloatArray:
     """``(z1, p1) - (z0, p0)``, periodic states reduced modulo their period."""
-    diff = getattr(problem, "difference", None)
-    dz = diff(z1, z0) if callable(diff) else np.asarray(z1) - np.asarray(z0)
+    diff = difference(problem)
+    dz = diff(z1, z0) if diff is not None else np.asarray(z1) - np.asarray(z0)
     return np.append(np.asarray(dz, dtype=float), float(p1) - float(p0))
 
 

@@ -24,12 +24,12 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from ._types import FloatArray
-from .algorithms.base import csc_with_data
 from .differentiation import fd_jacobian
 from .errors import ModelError
+from .linalg import csc_with_data
 from .ops import CASADI_OPS, NUMPY_OPS, Ops
 from .params import Params
+from .typing import FloatArray
 
 log = logging.getLogger(__name__)
 

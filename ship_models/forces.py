@@ -31,8 +31,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from continuation._types import FloatArray
 from continuation.ops import NUMPY_OPS, Ops
+from continuation.typing import FloatArray
 
 from .hydro.propeller import revolutions, thrust
 from .hydro.resistance import ResistanceFit

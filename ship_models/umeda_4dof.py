@@ -49,12 +49,12 @@ from typing import Any
 import numpy as np
 import scipy.optimize as so
 
-from continuation._types import FloatArray
 from continuation.newton import NewtonResult, newton
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.params import Params
 from continuation.settings import NewtonSettings
 from continuation.system import System
+from continuation.typing import FloatArray
 
 from .estimation import VesselModelData, resolve_vessel
 from .forces import ShipForces

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import brusselator, fold_normal_form
+from helpers import brusselator, fold_normal_form
 
 from continuation.api import continue_equilibria
 from continuation.branch import SpecialPoint

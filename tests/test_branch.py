@@ -9,7 +9,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-from conftest import brusselator, cstr, fold_normal_form, hopf_normal_form, periodic_sine  # noqa: E402
+from helpers import brusselator, cstr, fold_normal_form, hopf_normal_form, periodic_sine  # noqa: E402
 
 from continuation.api import continue_equilibria  # noqa: E402
 from continuation.branch import Branch, SpecialKind  # noqa: E402

@@ -150,7 +150,7 @@ def test_bordered_lu_sign_small_dense_against_slogdet() -> None:
     """Sign of det M of small dense bordered matrices (the branch-point test) against
     ``numpy.linalg.slogdet``, including entries spread over 1e-150..1e150 where the
     product of the pivots over- or underflows."""
-    from continuation.algorithms.base import BorderedLU
+    from continuation.linalg import BorderedLU
 
     rng = np.random.default_rng(3)
     checked = 0

@@ -9,16 +9,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from continuation.algorithms.base import (
-    BorderedLU,
-    _perm_parity_uncached,
-    assemble_bordered_csc,
-    correct,
-    make_point,
-    theta_norm,
-    theta_weights,
-)
+from continuation.algorithms.base import theta_norm, theta_weights
+from continuation.algorithms.corrector import correct
+from continuation.algorithms.point import make_point
 from continuation.errors import ConvergenceError
+from continuation.linalg import BorderedLU, _perm_parity_uncached, assemble_bordered_csc
 from continuation.newton import newton
 from continuation.settings import NewtonSettings
 from continuation.status import Status
@@ -196,7 +191,7 @@ class _Generic:
 def test_fused_corrector_matches_generic(exact):
     """The fused CasADi path of the corrector (EquilibriumProblem) and the generic path
     (protocol methods only) follow the same iteration: same point, iterations, tangent."""
-    from conftest import lorenz84
+    from helpers import lorenz84
 
     from continuation.problem import EquilibriumProblem
 
@@ -227,7 +222,7 @@ def test_bordered_rcond_against_exact_condition_number():
     """Hager-Higham estimate of the column-scaled 1-norm condition (from the existing LU)
     against the exact value from the explicit inverse; badly scaled columns do not
     matter."""
-    from continuation.algorithms.base import bordered_rcond
+    from continuation.linalg import bordered_rcond
 
     rng = np.random.default_rng(3)
     for n in (1, 2, 5, 20):

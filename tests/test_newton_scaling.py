@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from continuation.algorithms.base import ROUNDOFF_FLOOR, _backward_error, correct
+from continuation.algorithms.corrector import ROUNDOFF_FLOOR, _backward_error, correct
 from continuation.api import continue_equilibria
 from continuation.problem import EquilibriumProblem
 from continuation.settings import NewtonSettings

@@ -7,10 +7,18 @@ import math
 
 import numpy as np
 import pytest
-from conftest import bratu, brusselator, circle, fold_normal_form, hopf_normal_form
-from test_special_points import assert_invariants
+from helpers import (
+    assert_invariants,
+    bratu,
+    brusselator,
+    circle,
+    fold_normal_form,
+    hopf_normal_form,
+)
 
 import continuation.algorithms.base as base
+import continuation.algorithms.corrector as corrector
+import continuation.linalg as linalg
 from continuation.algorithms import PALC, Natural, StepOutcome, adapt_ds
 from continuation.api import continue_equilibria
 from continuation.driver import continue_branch
@@ -164,7 +172,7 @@ def test_both_directions_single_ordered_branch():
 def test_bratu_200_uses_sparse_lu_and_shift_invert(monkeypatch):
     n = 200
     calls = {"splu": 0, "getrf": 0}
-    real_splu, real_getrf = base.spla.splu, base._getrf
+    real_splu, real_getrf = linalg.spla.splu, linalg._getrf
 
     def splu(*a, **k):
         calls["splu"] += 1
@@ -174,8 +182,8 @@ def test_bratu_200_uses_sparse_lu_and_shift_invert(monkeypatch):
         calls["getrf"] += 1
         return real_getrf(*a, **k)
 
-    monkeypatch.setattr(base.spla, "splu", splu)
-    monkeypatch.setattr(base, "_getrf", getrf)
+    monkeypatch.setattr(linalg.spla, "splu", splu)
+    monkeypatch.setattr(linalg, "_getrf", getrf)
     br = continue_equilibria(
         bratu(n),
         np.zeros(n),
@@ -244,7 +252,7 @@ def test_codim2_fold_curve_does_not_jump_to_a_distant_family():
     closed form derived in tests/test_codim2.py::TestCSTR); the curve passes the cusp at
     beta = B/4 - 1 = 2.5, turns, and reaches p_min = -0.99 as x1 -> 0.
     """
-    from conftest import cstr
+    from helpers import cstr
 
     from continuation.codim2 import continue_codim2
 
@@ -297,13 +305,13 @@ def test_corrector_contraction_safeguard():
     e_p = np.array([0.0, 1.0])
     u0 = np.array([1.3, 0.0])
     newton = ContinuationSettings().newton
-    free = base.correct(Atan(), u0, np.zeros(2), e_p, 0.0, newton)
+    free = corrector.correct(Atan(), u0, np.zeros(2), e_p, 0.0, newton)
     assert free.converged and abs(free.z[0]) < 1e-12
-    guarded = base.correct(Atan(), u0, np.zeros(2), e_p, 0.0, newton, max_contraction=0.8)
+    guarded = corrector.correct(Atan(), u0, np.zeros(2), e_p, 0.0, newton, max_contraction=0.8)
     assert not guarded.converged and "contracts too slowly" in guarded.message
     assert guarded.iters == 2
     # from a good predictor the guard never triggers (quadratic convergence)
-    near = base.correct(
+    near = corrector.correct(
         Atan(), np.array([0.3, 0.0]), np.zeros(2), e_p, 0.0, newton, max_contraction=0.8
     )
     assert near.converged and abs(near.z[0]) < 1e-12
@@ -318,12 +326,12 @@ def test_palc_distance_safeguard_rejects_far_corrections(monkeypatch):
     st = ContinuationSettings(ds=-0.1, ds_max=0.1, p_min=-1.0, p_max=2.0)
     alg = PALC(kernel=False)
     state = alg.init(prob, np.array([1.0]), 1.0, st)
-    real = base.correct
+    real = corrector.correct
 
     def far(*args, **kw):  # the corrector lands 3 ds away, on the same curve
         res = real(*args, **kw)
         x = -math.sqrt(0.4)
-        return base.CorrectorResult(True, np.array([x]), 0.4, res.lin, res.iters, 0.0)
+        return corrector.CorrectorResult(True, np.array([x]), 0.4, res.lin, res.iters, 0.0)
 
     monkeypatch.setattr("continuation.algorithms.palc.correct", far)
     _, out = alg.step(prob, state, st)
@@ -381,21 +389,21 @@ def test_bordered_csc_pattern_cache_matches_dense_assembly():
         A = sp.random(n, n, density=density, format="csc", random_state=rng) + sp.eye(n)
         A = sp.csc_matrix(A)
         for _ in range(3):
-            B = base.csc_with_data(A, rng.standard_normal(A.nnz))  # same pattern, new data
+            B = linalg.csc_with_data(A, rng.standard_normal(A.nnz))  # same pattern, new data
             gp, c = rng.standard_normal(n), rng.standard_normal(n + 1)
-            M = base.assemble_bordered_csc(B, gp, c)
+            M = linalg.assemble_bordered_csc(B, gp, c)
             ref = np.block([[B.toarray(), gp[:, None]], [c[None, :]]])
             np.testing.assert_array_equal(M.toarray(), ref)
             assert M.has_canonical_format
             # a factorisation of the assembled matrix solves the dense system
-            lu = base.BorderedLU(B, gp, c)
+            lu = linalg.BorderedLU(B, gp, c)
             rhs = rng.standard_normal(n + 1)
             np.testing.assert_allclose(ref @ lu.solve(rhs), rhs, atol=1e-9)
             assert lu.sign == np.sign(np.linalg.det(ref))
     # duplicates (non-canonical): summed like SciPy does, the input left untouched
     D = sp.csc_matrix((np.array([1.0, 2.0, 3.0]), np.array([0, 0, 1]), np.array([0, 2, 3])),
                       shape=(2, 2))  # fmt: skip
-    M = base.assemble_bordered_csc(D, np.array([1.0, 1.0]), np.array([0.0, 0.0, 1.0]))
+    M = linalg.assemble_bordered_csc(D, np.array([1.0, 1.0]), np.array([0.0, 0.0, 1.0]))
     np.testing.assert_array_equal(M.toarray(), [[3.0, 0.0, 1.0], [0.0, 3.0, 1.0], [0, 0, 1]])
     assert D.nnz == 3
 
@@ -403,25 +411,25 @@ def test_bordered_csc_pattern_cache_matches_dense_assembly():
 def test_sparse_eigs_reuse_the_corrector_factorisation():
     """Along a sparse Bratu branch the eigenvalues near 0 from ARPACK with the bordered
     factorisation as G_z^{-1} equal dense LAPACK eigenvalues of G_z."""
-    import continuation.driver as drv
+    import continuation.row_eigs as drv
 
     n = 150
     sys = bratu(n)
     prob = EquilibriumProblem(sys, sys.params(lam=0.0), "lam")
     st = ContinuationSettings(ds=0.3, ds_max=0.3, max_steps=8, p_max=3.0)
     used = []
-    real_opinv = drv._SparseEigs._opinv
+    real_opinv = drv.SparseEigs._opinv
 
     def spy(self, pt):
         op = real_opinv(self, pt)
         used.append(op is not None)
         return op
 
-    drv._SparseEigs._opinv = spy
+    drv.SparseEigs._opinv = spy
     try:
         br = continue_branch(prob, np.zeros(n), 0.0, settings=st)
     finally:
-        drv._SparseEigs._opinv = real_opinv
+        drv.SparseEigs._opinv = real_opinv
     assert len(br) == 9 and all(used) and len(used) >= 9
     for k in range(len(br)):
         J = prob.jacobian(br.x[k], br.p[k]).toarray()

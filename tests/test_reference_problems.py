@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import bratu, brusselator, cstr, lorenz84, selkov
+from helpers import assert_invariants, bratu, brusselator, cstr, lorenz84, selkov
 from scipy.optimize import fsolve
-from test_special_points import assert_invariants
 
 from continuation.algorithms.palc import PALC
 from continuation.api import continue_equilibria

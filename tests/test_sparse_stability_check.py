@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import brusselator_rd
+from helpers import brusselator_rd
 
 from continuation import DetectionSettings, System, continue_equilibria
 from continuation.settings import ContinuationSettings

@@ -6,7 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from conftest import (
+from helpers import (
+    assert_invariants,
     fold_normal_form,
     hopf_normal_form,
     periodic_sine,
@@ -25,26 +26,6 @@ from continuation.status import Status
 from continuation.system import System
 
 TOL = 1e-8  # required location accuracy on normal forms
-
-
-def assert_invariants(br, tol=1e-9):
-    """Branch invariants that must hold on every run."""
-    prob = br.problem
-    for k in range(len(br)):
-        assert np.max(np.abs(prob.residual(br.x[k], br.p[k]))) < tol
-    s = br.arclength
-    sp_idx = {sp.index for sp in br.special_points}
-    for k in range(len(br) - 1):
-        if br.n_unstable[k] != br.n_unstable[k + 1]:
-            assert k in sp_idx, f"saddle index changes at row {k} without a special point"
-    for sp in br.special_points:
-        if sp.located:
-            assert s[sp.index] - 1e-12 <= sp.s <= s[sp.index + 1] + 1e-12
-            assert np.max(np.abs(prob.residual(sp.x, sp.p))) < tol
-            if sp.kind is not SpecialKind.FOLD:
-                lo, hi = sorted(sp.bracket)
-                assert lo - 1e-12 <= sp.p <= hi + 1e-12
-        assert sp.bracket == (br.p[sp.index], br.p[sp.index + 1])
 
 
 def test_fold_normal_form_located():

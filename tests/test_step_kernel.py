@@ -10,11 +10,11 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-from conftest import bratu, brusselator, hopf_normal_form, lorenz84, periodic_sine
+from helpers import bratu, brusselator, hopf_normal_form, lorenz84, periodic_sine
 
 import continuation._kernel as K
 import continuation._tape as T
-from continuation.algorithms.base import NOISE_SLACK, ROUNDOFF_FLOOR
+from continuation.algorithms.corrector import NOISE_SLACK, ROUNDOFF_FLOOR
 from continuation.algorithms.palc import PALC
 from continuation.api import continue_equilibria
 from continuation.problem import EquilibriumProblem

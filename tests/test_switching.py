@@ -14,7 +14,7 @@ from functools import cache
 
 import numpy as np
 import pytest
-from conftest import bratu, pitchfork, transcritical
+from helpers import bratu, pitchfork, transcritical
 
 import continuation.switching as sw
 from continuation.algorithms.base import theta_weights

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import TOY_SYSTEMS, bratu, fold_normal_form, periodic_sine
+from helpers import TOY_SYSTEMS, bratu, fold_normal_form, periodic_sine
 
 from continuation.api import continue_equilibria
 from continuation.differentiation import fd_jacobian

@@ -10,20 +10,18 @@ and simple smooth branches; use :class:`~continuation.algorithms.palc.PALC` othe
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..settings import ContinuationSettings
-from .base import (
-    ContinuationAlgorithm,
-    StepOutcome,
-    StepState,
-    correct,
-    make_point,
-)
+from .base import ContinuationAlgorithm, StepOutcome, StepState
+from .corrector import correct
+from .point import make_point
 
 
+@dataclass(frozen=True, kw_only=True)
 class Natural(ContinuationAlgorithm):
     """Natural parameter stepping (``ds`` is a step in the free parameter).
 
@@ -33,13 +31,12 @@ class Natural(ContinuationAlgorithm):
         The step grows by ``settings.grow`` after at most this many Newton iterations.
     """
 
-    def __init__(self, *, grow_iters: int = 3) -> None:
+    grow_iters: int = 3
+
+    def __post_init__(self) -> None:
+        grow_iters = self.grow_iters
         if not (isinstance(grow_iters, int) and grow_iters >= 0):
             raise ValueError(f"`grow_iters` must be an integer >= 0, got {grow_iters!r}")
-        self.grow_iters = grow_iters
-
-    def __repr__(self) -> str:
-        return f"Natural(grow_iters={self.grow_iters})"
 
     def step(
         self, problem: Any, state: StepState, settings: ContinuationSettings

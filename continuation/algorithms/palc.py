@@ -18,7 +18,7 @@ one step of length ``ds``
 3. computes the new tangent from ``[[G_z, G_p], [(w o tau_a)^T]] t = e_{N+1}`` at the
    converged point, ``tau = t / ||t||_theta``; the last equation gives
    ``<tau_a, tau>_theta > 0``, so the orientation is kept through folds. The same LU
-   factorisation gives the branch-point test function (see :mod:`.base`).
+   factorisation gives the branch-point test function (see :mod:`.point`).
 
 A step is rejected (and retried by the driver with a smaller ``ds``) when
 
@@ -64,20 +64,17 @@ retry after a rejected step, which always uses the tangent predictor.
 from __future__ import annotations
 
 import math
+import threading
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from ..problem import jacobian_is_stability, step_kernel
 from ..settings import ContinuationSettings
-from .base import (
-    NOISE_SLACK,
-    ROUNDOFF_FLOOR,
-    ContinuationAlgorithm,
-    StepOutcome,
-    StepState,
-    correct,
-    make_point,
-)
+from .base import ContinuationAlgorithm, StepOutcome, StepState
+from .corrector import NOISE_SLACK, ROUNDOFF_FLOOR, correct
+from .point import make_point
 
 #: The Hermite predictor is used only where consecutive tangents differ by at most this
 #: angle (degrees, ``theta``-metric): where the steps resolve the branch's turning, so
@@ -85,9 +82,18 @@ from .base import (
 HERMITE_MAX_TURN_DEG = 30.0
 _COS_HERMITE = math.cos(math.radians(HERMITE_MAX_TURN_DEG))
 
+#: The compiled step's scalar arguments for the last ``(settings, PALC)`` pair used in
+#: this thread, ``last = (array, settings, palc)`` (entries 0 and 1, ``ds`` and ``h``,
+#: are overwritten every step; per thread, so concurrent runs never share it).
+_SCALARS = threading.local()
 
+
+@dataclass(frozen=True, kw_only=True)
 class PALC(ContinuationAlgorithm):
     """Pseudo-arclength continuation with a bordered tangent predictor.
+
+    A small frozen object: its parameters only (the compiled step's scalar arguments
+    are cached per thread in this module, not on the object).
 
     Parameters
     ----------
@@ -115,16 +121,18 @@ class PALC(ContinuationAlgorithm):
         which decides. ``False``: always the Python step.
     """
 
-    def __init__(
-        self,
-        *,
-        max_angle_deg: float = 60.0,
-        grow_iters: int = 3,
-        max_contraction: float = 0.8,
-        max_distance: float = 1.0,
-        predictor: str = "hermite",
-        kernel: bool = True,
-    ) -> None:
+    max_angle_deg: float = 60.0
+    grow_iters: int = 3
+    max_contraction: float = 0.8
+    max_distance: float = 1.0
+    predictor: str = "hermite"
+    kernel: bool = True
+    _cos_max: float = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        max_angle_deg, grow_iters = self.max_angle_deg, self.grow_iters
+        max_contraction, max_distance = self.max_contraction, self.max_distance
+        predictor, kernel = self.predictor, self.kernel
         if not (0 < max_angle_deg <= 180):
             raise ValueError(f"`max_angle_deg` must be in (0, 180], got {max_angle_deg}")
         if not (isinstance(grow_iters, int) and grow_iters >= 0):
@@ -137,30 +145,18 @@ class PALC(ContinuationAlgorithm):
             raise ValueError(f"`predictor` must be 'hermite' or 'tangent', got {predictor!r}")
         if not isinstance(kernel, bool):
             raise ValueError(f"`kernel` must be True or False, got {kernel!r}")
-        self.predictor = predictor
-        self.kernel = kernel
-        # the kernel's scalar arguments for the last settings object: (array, settings)
-        self._scalars: tuple[Any, ContinuationSettings] | None = None
-        self.max_angle_deg = float(max_angle_deg)
-        self.grow_iters = grow_iters
-        self.max_contraction = float(max_contraction)
-        self.max_distance = float(max_distance)
-        self._cos_max = math.cos(math.radians(max_angle_deg))
-
-    def __repr__(self) -> str:
-        return (
-            f"PALC(max_angle_deg={self.max_angle_deg}, grow_iters={self.grow_iters}, "
-            f"max_contraction={self.max_contraction}, max_distance={self.max_distance}, "
-            f"predictor={self.predictor!r}, kernel={self.kernel})"
-        )
+        set_ = object.__setattr__  # (frozen: the normalised values set once, here)
+        set_(self, "max_angle_deg", float(max_angle_deg))
+        set_(self, "max_contraction", float(max_contraction))
+        set_(self, "max_distance", float(max_distance))
+        set_(self, "_cos_max", math.cos(math.radians(max_angle_deg)))
 
     def step(
         self, problem: Any, state: StepState, settings: ContinuationSettings
     ) -> tuple[StepState, StepOutcome]:
         """One predictor-corrector step of length ``state.ds``."""
         if self.kernel:
-            get = getattr(problem, "step_kernel", None)
-            kern = get() if get is not None else None
+            kern = step_kernel(problem)
             if kern is not None:
                 done = self._kernel_step(kern, problem, state, settings)
                 if done is not None:
@@ -253,18 +249,18 @@ class PALC(ContinuationAlgorithm):
         guarded = ds > settings.ds_min * (1 + 1e-12)
         d_prev = state.prev_d
         hermite = d_prev is not None and not state.retries and self.predictor == "hermite"
-        sc = self._scalars
-        if sc is None or sc[1] is not settings:
+        sc = getattr(_SCALARS, "last", None)
+        if sc is None or sc[1] is not settings or sc[2] is not self:
             nw, det = settings.newton, settings.detect
             arr = np.array([0.0, 1.0, _COS_HERMITE, self.max_contraction, self.max_distance,
                             self._cos_max, nw.tol, nw.step_tol, nw.max_iter, det.eig_tol,
                             det.imag_tol, NOISE_SLACK, ROUNDOFF_FLOOR])  # fmt: skip
-            sc = self._scalars = (arr, settings)
+            sc = _SCALARS.last = (arr, settings, self)
         arr = sc[0]
         arr[0] = ds
         arr[1] = state.prev_h if hermite else 1.0
         got = kern.step(a.u, a.tau, state.w, d_prev, state.prev_tau, arr, hermite, guarded,
-                        bool(getattr(problem, "jacobian_is_stability", False)))  # fmt: skip
+                        jacobian_is_stability(problem))  # fmt: skip
         if got is None:
             return None
         b, it, rn, d = got

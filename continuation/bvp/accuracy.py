@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
+from ..typing import FloatArray
 from .collocation import CollocationMesh
 
 

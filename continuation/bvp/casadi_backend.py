@@ -50,7 +50,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from .._types import FloatArray
+from ..typing import FloatArray
 from .collocation import CollocationMesh
 
 

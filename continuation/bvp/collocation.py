@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
+from ..typing import FloatArray
 
 MAX_DEGREE = 12
 

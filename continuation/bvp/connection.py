@@ -65,11 +65,11 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
 
-from .._types import FloatArray
 from ..newton import newton as _newton
 from ..params import Params
 from ..settings import NewtonSettings
 from ..status import Status
+from ..typing import FloatArray
 from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
 

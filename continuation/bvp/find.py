@@ -32,10 +32,10 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
 from ..manifolds import unstable_manifold
 from ..params import Params
 from ..settings import NewtonSettings
+from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, _linear_flow
 from .collocation import CollocationMesh
 from .connection import DEFAULT_N_INTERVALS, HeteroclinicProblem, PinPhase, _refine_equilibrium

@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
 from ..params import Params
 from ..status import Status
+from ..typing import FloatArray
 from .collocation import CollocationMesh
 
 

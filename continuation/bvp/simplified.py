@@ -35,11 +35,11 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .._types import FloatArray
 from ..errors import ConvergenceError
 from ..newton import NewtonResult
 from ..settings import NewtonSettings
 from ..status import Status
+from ..typing import FloatArray
 
 #: Largest number of Broyden updates kept before the Jacobian is refreshed.
 MAX_UPDATES = 30

@@ -21,11 +21,11 @@ from typing import Any
 
 import numpy as np
 
-from .._types import FloatArray
 from ..errors import ConvergenceError
 from ..newton import NewtonResult, newton
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
+from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, extended_problem, refined_problem
 from .connection import HeteroclinicProblem, _replace_fast
 from .result import ConnectionResult, ErrorEstimates

@@ -15,11 +15,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .._types import ComplexArray, FloatArray
 from ..newton import NewtonResult, newton
 from ..params import Params
 from ..settings import NewtonSettings
 from ..system import System
+from ..typing import ComplexArray, FloatArray
 from ._build import AugmentedFunctions, Recipe, augmented_functions, param_vector
 
 

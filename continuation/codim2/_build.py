@@ -24,9 +24,9 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from .._types import FloatArray
 from ..differentiation import fd_jacobian
 from ..system import System
+from ..typing import FloatArray
 
 Recipe = Callable[..., Any]
 

@@ -41,10 +41,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .._types import FloatArray
 from ..params import Params
 from ..settings import NewtonSettings
 from ..system import System
+from ..typing import FloatArray
 from ._base import AugmentedProblem, adjugate, null_vector, scaled_adjugate, signed_product
 from ._build import fold_recipe
 

@@ -50,10 +50,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .._types import FloatArray
 from ..params import Params
 from ..settings import NewtonSettings
 from ..system import System
+from ..typing import FloatArray
 from ._base import AugmentedProblem, signed_product
 from ._build import hopf_recipe
 from .fold import _pair_sum_product

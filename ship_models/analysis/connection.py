@@ -46,7 +46,6 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
 from continuation.bvp import (
     CollocationMesh,
     ConnectionResult,
@@ -63,6 +62,7 @@ from continuation.params import Params
 from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.simulate import SimEvent, Simulator, Trajectory
 from continuation.status import Status
+from continuation.typing import FloatArray
 
 from .events import capsize_event
 

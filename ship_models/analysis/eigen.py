@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import ComplexArray, FloatArray
 from continuation.params import Params
 from continuation.stability import eigen
+from continuation.typing import ComplexArray, FloatArray
 
 #: Ship state names (Umeda 1999, Eq. 1), in the order of the state vector.
 SHIP_STATES = ("xi_G", "u", "v", "chi", "r", "phi", "p_roll", "delta")

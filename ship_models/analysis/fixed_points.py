@@ -27,13 +27,13 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
 from continuation.api import continue_equilibria
 from continuation.branch import Branch, BranchPoint
 from continuation.equilibria import solve_equilibrium, unique_equilibria
 from continuation.params import Params
 from continuation.settings import NewtonSettings
 from continuation.status import Status
+from continuation.typing import FloatArray
 
 from ..surge import SurgeModel
 from .eigen import EigenStructure, eigen_structure

@@ -65,12 +65,12 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
 from continuation.errors import ContinuationError
 from continuation.fates import Fate, FateClassifier, FateKind
 from continuation.params import Params
 from continuation.simulate import EventHits, PoincareSection, SimEvent, Trajectory
 from continuation.status import Status
+from continuation.typing import FloatArray
 
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of

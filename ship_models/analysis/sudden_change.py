@@ -45,11 +45,11 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
 from continuation.errors import ContinuationError
 from continuation.params import Params
 from continuation.simulate import PoincareSection, SimEvent, Trajectory, simulate
 from continuation.status import Status
+from continuation.typing import FloatArray
 
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 
 
 def lewis_coefficients(H: FloatArray, sigma: FloatArray) -> tuple[FloatArray, FloatArray]:

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.optimize as so
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 
 
 def gauss_stations(x0: float, x1: float, n: int) -> tuple[FloatArray, FloatArray]:

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize as so
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 
 from .hull import HullForm
 

@@ -37,8 +37,8 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
 from continuation.ops import NUMPY_OPS, Ops
+from continuation.typing import FloatArray
 
 # Oosterveld & van Oossanen (1975), K_T = sum C J^s (P/D)^t (AE/A0)^u Z^v.
 # Columns: C, s, t, u, v.

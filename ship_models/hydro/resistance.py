@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from continuation._types import FloatArray
 from continuation.ops import NUMPY_OPS, Ops
+from continuation.typing import FloatArray
 
 
 def ittc57_cf(Re: FloatArray | float) -> FloatArray:

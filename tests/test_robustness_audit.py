@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 import pytest
-from conftest import bratu
+from helpers import bratu
 from scipy.optimize import brentq
 
 from continuation.api import continue_equilibria

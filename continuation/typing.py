@@ -1,4 +1,5 @@
-"""Shared type aliases for the continuation engine."""
+"""Public type aliases of the continuation engine (array shapes are given in the
+docstrings that use them)."""
 
 from __future__ import annotations
 

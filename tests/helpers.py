@@ -1,0 +1,222 @@
+"""Shared test helpers: toy systems with exactly known bifurcations, and the branch
+invariants every run must satisfy.
+
+Each factory returns a :class:`continuation.system.System` whose right-hand side is
+written once against ``ops`` (so it has exact CasADi Jacobians). The known answers
+are given in the docstrings; tests assert against them. Test modules import these
+from here (``from helpers import ...``); ``conftest.py`` holds only the fixtures.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from continuation.branch import SpecialKind
+from continuation.system import System
+
+
+def fold_normal_form() -> System:
+    """x' = mu - x**2: fold at (x, mu) = (0, 0); x = +sqrt(mu) stable."""
+    return System(lambda x, p, ops: ops.stack([p[0] - x[0] ** 2]), ("x",), ("mu",), name="fold")
+
+
+def hopf_normal_form() -> System:
+    """Hopf normal form; equilibrium 0 with eigenvalues mu +- i: Hopf at mu=0, omega=1.
+
+    x' = mu x - y - x (x^2 + y^2),  y' = x + mu y - y (x^2 + y^2).
+    """
+
+    def rhs(x, p, ops):
+        r2 = x[0] ** 2 + x[1] ** 2
+        return ops.stack([p[0] * x[0] - x[1] - x[0] * r2, x[0] + p[0] * x[1] - x[1] * r2])
+
+    return System(rhs, ("x", "y"), ("mu",), name="hopf")
+
+
+def transcritical() -> System:
+    """x' = mu x - x**2: branches x=0 and x=mu cross at mu=0 (transcritical BP)."""
+    return System(
+        lambda x, p, ops: ops.stack([p[0] * x[0] - x[0] ** 2]), ("x",), ("mu",), name="tc"
+    )
+
+
+def pitchfork() -> System:
+    """x' = mu x - x**3: supercritical pitchfork at mu=0 on the branch x=0."""
+    return System(
+        lambda x, p, ops: ops.stack([p[0] * x[0] - x[0] ** 3]), ("x",), ("mu",), name="pf"
+    )
+
+
+def pitchfork_2d() -> System:
+    """Pitchfork in x plus a stable passive state: x' = mu x - x^3, y' = -y + x^2."""
+    return System(
+        lambda x, p, ops: ops.stack([p[0] * x[0] - x[0] ** 3, -x[1] + x[0] ** 2]),
+        ("x", "y"),
+        ("mu",),
+        name="pf2",
+    )
+
+
+def brusselator() -> System:
+    """Brusselator x' = A - (B+1) x + x^2 y, y' = B x - x^2 y.
+
+    Equilibrium (A, B/A); Hopf at B = 1 + A^2 with omega = A
+    (Lefever & Prigogine 1968; Nicolis & Prigogine 1977, Self-Organization in
+    Nonequilibrium Systems, Wiley, Ch. 7).
+    """
+
+    def rhs(x, p, ops):
+        A, B = p[0], p[1]
+        return ops.stack([A - (B + 1) * x[0] + x[0] ** 2 * x[1], B * x[0] - x[0] ** 2 * x[1]])
+
+    return System(rhs, ("x", "y"), ("A", "B"), defaults={"A": 1.0, "B": 1.0}, name="bruss")
+
+
+def cstr() -> System:
+    """Exothermic CSTR, A -> B (Uppal, Ray & Poore 1974; AUTO-07p demo ``ab``).
+
+    u1' = -u1 + Da (1 - u1) exp(u2)
+    u2' = -u2 + Da B (1 - u1) exp(u2) - beta u2
+    """
+
+    def rhs(x, p, ops):
+        Da, B, beta = p[0], p[1], p[2]
+        e = Da * (1 - x[0]) * ops.exp(x[1])
+        return ops.stack([-x[0] + e, -x[1] + B * e - beta * x[1]])
+
+    return System(
+        rhs, ("u1", "u2"), ("Da", "B", "beta"), defaults={"Da": 0.0, "B": 14.0, "beta": 2.0}
+    )
+
+
+def selkov() -> System:
+    """Sel'kov glycolysis model x' = -x + a y + x^2 y, y' = b - a y - x^2 y.
+
+    Equilibrium (b, b / (a + b^2)); Hopf where the trace vanishes:
+    b^2 = (1 - 2a +- sqrt(1 - 8a)) / 2 (Strogatz 2015, Nonlinear Dynamics and Chaos,
+    2nd ed., Example 7.3.2).
+    """
+
+    def rhs(x, p, ops):
+        a, b = p[0], p[1]
+        return ops.stack([-x[0] + a * x[1] + x[0] ** 2 * x[1], b - a * x[1] - x[0] ** 2 * x[1]])
+
+    return System(rhs, ("x", "y"), ("a", "b"), defaults={"a": 0.08, "b": 0.2})
+
+
+def bratu(n: int) -> System:
+    """Finite-difference Bratu problem -u'' = lam exp(u), u(0) = u(1) = 0, n interior nodes.
+
+    ``f_i = (u_{i-1} - 2 u_i + u_{i+1}) / h^2 + lam exp(u_i)``, ``h = 1 / (n + 1)``.
+    The discrete fold ``lam*_h`` converges at second order to the continuous
+    ``lam* = 3.513830719125161``.
+    """
+    h2 = (1.0 / (n + 1)) ** 2
+
+    def rhs(x, p, ops):
+        out = []
+        for i in range(n):
+            left = x[i - 1] if i > 0 else 0.0
+            right = x[i + 1] if i < n - 1 else 0.0
+            out.append((left - 2 * x[i] + right) / h2 + p[0] * ops.exp(x[i]))
+        return ops.stack(out)
+
+    return System(rhs, tuple(f"u{i}" for i in range(n)), ("lam",), name=f"bratu{n}")
+
+
+def circle() -> System:
+    """x' = x^2 + mu^2 - 1: the equilibria form the closed curve x^2 + mu^2 = 1."""
+    return System(lambda x, p, ops: ops.stack([x[0] ** 2 + p[0] ** 2 - 1]), ("x",), ("mu",))
+
+
+def periodic_sine() -> System:
+    """theta' = mu - sin(theta), theta periodic (2 pi): a closed branch on the cylinder.
+
+    Folds at (theta, mu) = (pi/2, 1) and (3 pi/2, -1).
+    """
+    return System(
+        lambda x, p, ops: ops.stack([p[0] - ops.sin(x[0])]),
+        ("theta",),
+        ("mu",),
+        periodic={"theta": 2 * np.pi},
+    )
+
+
+def lorenz84() -> System:
+    """Lorenz-84 model (Lorenz 1984; Shil'nikov, Nicolis & Nicolis 1995).
+
+    x' = -y^2 - z^2 - a x + a F, y' = x y - b x z - y + G, z' = b x y + x z - z.
+    """
+
+    def rhs(x, p, ops):
+        a, b, F, G = p[0], p[1], p[2], p[3]
+        X, Y, Z = x[0], x[1], x[2]
+        return ops.stack(
+            [-(Y**2) - Z**2 - a * X + a * F, X * Y - b * X * Z - Y + G, b * X * Y + X * Z - Z]
+        )
+
+    return System(
+        rhs,
+        ("X", "Y", "Z"),
+        ("a", "b", "F", "G"),
+        defaults={"a": 0.25, "b": 4.0, "F": 2.0, "G": 0.2},
+    )
+
+
+TOY_SYSTEMS = {
+    "fold": fold_normal_form,
+    "hopf": hopf_normal_form,
+    "transcritical": transcritical,
+    "pitchfork": pitchfork,
+    "pitchfork_2d": pitchfork_2d,
+    "brusselator": brusselator,
+    "cstr": cstr,
+    "selkov": selkov,
+    "circle": circle,
+    "periodic_sine": periodic_sine,
+    "lorenz84": lorenz84,
+    "bratu10": lambda: bratu(10),
+}
+
+
+def brusselator_rd(N: int, D1: float, D2: float) -> System:
+    """Brusselator on [0, 1] with Dirichlet data (A, B/A), second-order differences."""
+    h2 = (1.0 / (N + 1)) ** 2
+
+    def rhs(x, p, ops):
+        A, B = p[0], p[1]
+        out = []
+        for i in range(N):
+            ul = x[i - 1] if i > 0 else A
+            ur = x[i + 1] if i < N - 1 else A
+            u, v = x[i], x[N + i]
+            out.append(D1 * (ul - 2 * u + ur) / h2 + A - (B + 1) * u + u * u * v)
+        for i in range(N):
+            vl = x[N + i - 1] if i > 0 else B / A
+            vr = x[N + i + 1] if i < N - 1 else B / A
+            u, v = x[i], x[N + i]
+            out.append(D2 * (vl - 2 * v + vr) / h2 + B * u - u * u * v)
+        return ops.stack(out)
+
+    names = tuple(f"u{i}" for i in range(N)) + tuple(f"v{i}" for i in range(N))
+    return System(rhs, names, ("A", "B"))
+
+
+def assert_invariants(br, tol=1e-9):
+    """Branch invariants that must hold on every run."""
+    prob = br.problem
+    for k in range(len(br)):
+        assert np.max(np.abs(prob.residual(br.x[k], br.p[k]))) < tol
+    s = br.arclength
+    sp_idx = {sp.index for sp in br.special_points}
+    for k in range(len(br) - 1):
+        if br.n_unstable[k] != br.n_unstable[k + 1]:
+            assert k in sp_idx, f"saddle index changes at row {k} without a special point"
+    for sp in br.special_points:
+        if sp.located:
+            assert s[sp.index] - 1e-12 <= sp.s <= s[sp.index + 1] + 1e-12
+            assert np.max(np.abs(prob.residual(sp.x, sp.p))) < tol
+            if sp.kind is not SpecialKind.FOLD:
+                lo, hi = sorted(sp.bracket)
+                assert lo - 1e-12 <= sp.p <= hi + 1e-12
+        assert sp.bracket == (br.p[sp.index], br.p[sp.index + 1])
