@@ -35,6 +35,14 @@ class Status(enum.Enum):
         "homoclinic or heteroclinic orbit."
     )
     MAX_ITER = "The maximum number of iterations/evaluations was reached before the tolerance."
+    DISCRETISATION_ERROR = (
+        "The estimated discretisation error of a solved parameter exceeds its tolerance; "
+        "allow more mesh refinements or a higher collocation degree."
+    )
+    TRUNCATION_ERROR = (
+        "The estimated truncation error of a solved parameter exceeds its tolerance; "
+        "lengthen the truncation interval T (or allow more extensions)."
+    )
 
     @property
     def ok(self) -> bool:

@@ -14,12 +14,15 @@ import numpy as np
 import pytest
 from scipy.stats import linregress
 
+from continuation.bvp.accuracy import ConnectionAccuracy
 from continuation.bvp.collocation import CollocationMesh
 from continuation.bvp.connection import HeteroclinicProblem, PinPhase
 from continuation.bvp.solve import solve_connection
 from continuation.system import System
 
 T = 40.0
+
+PLAIN = ConnectionAccuracy(estimate=False)  # the plain solve on a fixed mesh
 
 
 def pendulum() -> System:
@@ -60,13 +63,13 @@ def solve(n_intervals: int, degree: int, phase="pin"):
         phase=ph,
     )
     if phase == "pin":
-        res = solve_connection(prob, perturbed_guess())
+        res = solve_connection(prob, perturbed_guess(), accuracy=PLAIN)
     else:
         # integral phase condition against the exact orbit as reference
         tt = np.linspace(-T / 2, T / 2, 4001)
         ref = prob.mesh.t - T / 2
         prob = prob.replace(reference=exact(ref))
-        res = solve_connection(prob, (tt, exact(tt) * 1.02))
+        res = solve_connection(prob, (tt, exact(tt) * 1.02), accuracy=PLAIN)
     assert res.success, res.message
     return res
 
@@ -169,8 +172,8 @@ def test_mesh_adaptation_reduces_error():
     t = np.linspace(0, Tf, 300)
     u = 1 / (1 + np.exp((t - Tf / 3) / 2))
     guess = (t, np.column_stack([u, np.gradient(u, t)]))
-    uniform = solve_connection(prob, guess)
-    adapted = solve_connection(prob, guess, adapt=2)
+    uniform = solve_connection(prob, guess, accuracy=PLAIN)
+    adapted = solve_connection(prob, guess, accuracy=PLAIN, adapt=2)
     assert uniform.success and adapted.success
     assert adapted.mesh.n_intervals == 40
     assert not np.allclose(np.diff(adapted.mesh.nodes), 1 / 40)

@@ -33,6 +33,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from continuation.bvp.accuracy import ConnectionAccuracy
 from continuation.bvp.collocation import CollocationMesh
 from continuation.bvp.connection import HeteroclinicProblem, PinPhase
 from continuation.bvp.result import ConnectionResult
@@ -44,6 +45,8 @@ from continuation.status import Status
 from continuation.system import System
 
 matplotlib.use("Agg")
+
+PLAIN = ConnectionAccuracy(estimate=False)  # a plain solve on the given mesh
 
 SQ2 = np.sqrt(2.0)
 
@@ -249,7 +252,7 @@ def test_fisher_kpp_exact_profile_without_free_parameter():
         mesh=CollocationMesh(160, 4, T),
         phase=PinPhase("u", 0.25),
     )
-    assert prob.dims == {"n": 2, "unstable_from": 1, "stable_to": 2, "unknown_params": 0}
+    assert prob.dims == {"n": 2, "unstable_from": 1, "stable_to": 2, "free": 0}
     res = solve_connection(prob, front_guess(T, width=2.0))
     assert res.success, res.message
     t_pin = res.t_mesh[80]
@@ -308,8 +311,8 @@ def test_four_dimensional_complex_spectrum_and_exact_jacobian():
     assert np.allclose(res.x_from, eq(1.0), atol=1e-12)
     # exact Jacobians, away from the solution so that the Riccati unknowns are nonzero
     small = prob.replace(mesh=CollocationMesh(8, 3, 40.0), reference=None)
-    sres = solve_connection(small, res)  # coarse, so the difference Jacobian is cheap
-    pr = sres.problem.with_free("a")
+    sres = solve_connection(small, res, accuracy=PLAIN)  # coarse: the difference Jacobian is cheap
+    pr = sres.problem.with_vary("a")
     z = sres.z + 1e-3 * np.random.default_rng(0).standard_normal(sres.z.size)
     J = pr.jacobian(z, a).toarray()
     Jfd = fd_jacobian(lambda zz: pr.residual(zz, a), z)
@@ -324,7 +327,7 @@ def test_four_dimensional_complex_spectrum_and_exact_jacobian():
 
 def test_convergence_check_estimates_the_error():
     """Halving the mesh: |delta c| matches the true error (order 8: ratio 1 - 2^-8)."""
-    res = solve_connection(nagumo_problem(0.25, N=40), front_guess(40.0))
+    res = solve_connection(nagumo_problem(0.25, N=40), front_guess(40.0), accuracy=PLAIN)
     ck = check_convergence(res, T_factor=1.5)
     assert ck.ok
     err = abs(res.value("c") - SQ2 * 0.25)
@@ -340,7 +343,7 @@ def test_save_load_and_plot(tmp_path):
     path = res.save(tmp_path / "front")
     assert path.suffix == ".npz"
     meta = json.loads(path.with_suffix(".json").read_text())
-    assert meta["unknown_params"] == ["c"] and meta["status"] == "SUCCESS"
+    assert meta["free"] == ["c"] and meta["status"] == "SUCCESS"
     back = ConnectionResult.load(path)
     assert back.problem is None
     assert back.status is Status.SUCCESS and back.value("c") == res.value("c")
@@ -374,7 +377,7 @@ def test_bad_input_raises_value_error_naming_the_argument():
     s = nagumo()
     kw = dict(saddle_from=[1.0, 0.0], saddle_to=[0.0, 0.0], mesh=CollocationMesh(10, 2, 20.0))
     params = s.params(a=0.25, c=0.2)
-    with pytest.raises(ValueError, match="unknown_params"):
+    with pytest.raises(ValueError, match="free"):
         HeteroclinicProblem(s, params, "speed", **kw)
     with pytest.raises(ValueError, match=r"count does not close.*1 \+ 1 = 2.*n \+ 1 - q = 3"):
         HeteroclinicProblem(s, params, (), **kw)
@@ -390,10 +393,10 @@ def test_bad_input_raises_value_error_naming_the_argument():
         HeteroclinicProblem(s, params, "c", saddle_from=[1.0, 0.0])
     with pytest.raises(ValueError, match="shift"):  # u is not periodic
         HeteroclinicProblem(s, params, "c", saddle_from=[1.0, 0.0], shift={"u": 1.0})
-    with pytest.raises(ValueError, match="free"):
-        HeteroclinicProblem(s, params, "c", free="c", **kw)
-    with pytest.raises(ValueError, match="free"):
-        HeteroclinicProblem(s, params, "c", free="b", **kw)
+    with pytest.raises(ValueError, match="vary"):
+        HeteroclinicProblem(s, params, "c", vary="c", **kw)
+    with pytest.raises(ValueError, match="vary"):
+        HeteroclinicProblem(s, params, "c", vary="b", **kw)
     with pytest.raises(ValueError, match="phase"):
         HeteroclinicProblem(s, params, "c", phase="midpoint", **kw)
     with pytest.raises(ValueError, match="unknown state"):

@@ -1,12 +1,18 @@
 """Connecting orbits by Gauss-Legendre collocation, built once in CasADi.
 
+Names follow :func:`~continuation.equilibria.continue_equilibria`: ``free`` are the
+*solved* parameters, ``vary`` is the continuation parameter.
+
 Public names:
 
 * :class:`CollocationMesh` — nodes, degree, truncation time ``T``;
 * :class:`HeteroclinicProblem`, :class:`PinPhase` — the connection and its phase condition;
 * :class:`ConnectionResult` — orbit, equilibria, parameters, status; ``save``/``load``/``plot``;
-* :func:`solve_connection`, :func:`check_convergence`, :func:`continue_connection`,
-  :func:`connection_at`;
+* :func:`find_connection` — from a saddle alone: its unstable manifold, cut at the
+  closest approach to the target, ``T`` from the eigenvalues, solve and check;
+* :func:`solve_connection` (adaptive mesh and error estimates by default,
+  :class:`ConnectionAccuracy`, :class:`ErrorEstimates`), :func:`check_convergence`,
+  :func:`continue_connection`, :func:`connection_at`;
 * :func:`simplified_newton`, :class:`JacobianCache` — Newton with few Jacobians (chord
   steps with Broyden updates; one factorisation shared between nearby solves), behind
   ``solve_connection(..., method="broyden" | "chord")``.
@@ -18,16 +24,20 @@ Example: the Nagumo front ``u'' + c u' + u (1 - u)(u - a) = 0`` from ``u = 1`` t
         return ops.stack([x[1], -p[1] * x[1] - x[0] * (1 - x[0]) * (x[0] - p[0])])
 
     s = System(rhs, ("u", "v"), ("a", "c"))
-    prob = HeteroclinicProblem(s, s.params(a=0.25, c=0.2), unknown_params="c",
-                               saddle_from=[1, 0], saddle_to=[0, 0],
-                               mesh=CollocationMesh(80, 4, T=40.0))
+    prob = HeteroclinicProblem(s, s.params(a=0.25, c=0.2), free="c",
+                               saddle_from=[1, 0], saddle_to=[0, 0], T=40.0)
     t = np.linspace(0, 40, 200)
     u = 1 / (1 + np.exp(t - 20))
     res = solve_connection(prob, (t, np.column_stack([u, np.gradient(u, t)])))
-    res.value("c")                                   # 0.35355339059...
+    res.value("c"), res.error("c")                   # 0.35355339059..., its error bound
     check_convergence(res).delta_mesh                # change of c on the halved mesh
     br = continue_connection(res, "a", ContinuationSettings(p_min=0.1, p_max=0.4))
     br.records["c"]                                  # c along the branch
+
+From the saddle alone (branch -1 of its unstable manifold heads for ``u = 0``)::
+
+    res = find_connection(s, s.params(a=0.25, c=0.2), "c", source=[1, 0],
+                          target=[0, 0], branch=-1)
 
 A connection to the same equilibrium shifted by a period (a front on a circle, the
 ship's wave-relative position ``xi_G`` with period 1) uses ``shift={"xi_G": -1.0}``
@@ -35,11 +45,14 @@ instead of ``saddle_to``; the state must be declared periodic in the System.
 ``shift=0`` gives a homoclinic orbit (``x_+ = x_-``).
 """
 
+from .accuracy import ConnectionAccuracy
 from .collocation import CollocationMesh
 from .connection import HeteroclinicProblem, PinPhase
-from .result import ConnectionResult
+from .find import find_connection
+from .result import ConnectionResult, ErrorEstimates
 from .simplified import JacobianCache, simplified_newton
 from .solve import (
+    ContinuedConnection,
     ConvergenceCheck,
     check_convergence,
     connection_at,
@@ -49,13 +62,17 @@ from .solve import (
 
 __all__ = [
     "CollocationMesh",
+    "ConnectionAccuracy",
     "ConnectionResult",
+    "ContinuedConnection",
     "ConvergenceCheck",
+    "ErrorEstimates",
     "HeteroclinicProblem",
     "JacobianCache",
     "PinPhase",
     "check_convergence",
     "connection_at",
+    "find_connection",
     "continue_connection",
     "simplified_newton",
     "solve_connection",

@@ -309,7 +309,12 @@ class CollocationMesh:
         blocks = np.stack([X[j * m1 : j * m1 + m1] for j in range(self.n_intervals)])
         return np.einsum("l,jln->jn", lead, blocks) / self.h[:, None] ** m
 
-    def equidistributed(self, X: FloatArray, n_intervals: int | None = None) -> CollocationMesh:
+    def equidistributed(
+        self,
+        X: FloatArray,
+        n_intervals: int | None = None,
+        fixed: tuple[int, float] | None = None,
+    ) -> CollocationMesh:
         r"""A new mesh that equidistributes the local error monitor of ``X``.
 
         The local error of degree-``m`` collocation on interval ``j`` behaves like
@@ -327,6 +332,9 @@ class CollocationMesh:
             Solution values at all points of this mesh.
         n_intervals : int, optional
             Number of intervals of the new mesh (default: the same).
+        fixed : (int, float), optional
+            ``(j, tau)``: node ``j`` of the new mesh is placed at ``tau`` (a pinned phase
+            condition keeps its node); the two sides are equidistributed separately.
         """
         N = self.n_intervals if n_intervals is None else int(n_intervals)
         if N < 1:
@@ -346,8 +354,21 @@ class CollocationMesh:
         floor = 0.05 * float(np.sum(rho * self.h)) + 1e-300
         rho = rho + floor
         cum = np.concatenate(([0.0], np.cumsum(rho * self.h)))
-        targets = np.linspace(0.0, cum[-1], N + 1)
+        if fixed is None:
+            targets = np.linspace(0.0, cum[-1], N + 1)
+        else:
+            j, at = int(fixed[0]), float(fixed[1])
+            if not (0 < j < N and 0.0 < at < 1.0):
+                raise ValueError(
+                    f"`fixed` must be (j, tau) with 0 < j < N, 0 < tau < 1, got {fixed}"
+                )
+            c_at = float(np.interp(at, self.nodes, cum))
+            targets = np.concatenate(
+                (np.linspace(0.0, c_at, j + 1), np.linspace(c_at, cum[-1], N - j + 1)[1:])
+            )
         nodes = np.interp(targets, cum, self.nodes)
+        if fixed is not None:
+            nodes[int(fixed[0])] = float(fixed[1])
         nodes[0], nodes[-1] = 0.0, 1.0
         # guard against coincident nodes from a degenerate monitor
         if np.any(np.diff(nodes) <= 1e-12):

@@ -79,6 +79,9 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 HYPERBOLIC_TOL = 1e-8
+#: Mesh of a problem given ``T`` but no ``mesh`` (the adaptive solve refines it).
+DEFAULT_N_INTERVALS = 40
+DEFAULT_DEGREE = 4
 
 
 @dataclass(frozen=True)
@@ -141,15 +144,19 @@ class HeteroclinicProblem:
 
     Implements the :class:`~continuation.problem.ContinuationProblem` protocol with
     ``z`` the discretised orbit, the equilibria, the Riccati unknowns and the
-    ``unknown_params``; the continuation parameter is ``free``.
+    solved parameters ``free``; the continuation parameter is ``vary`` (the names of
+    :func:`~continuation.equilibria.continue_equilibria`: ``free`` is what is solved).
+    The driver's protocol attribute ``free`` (its continuation parameter) is served by
+    the adapter :func:`continued` that :func:`~continuation.bvp.solve.continue_connection`
+    builds.
 
     Parameters
     ----------
     system : System
         The dynamical system; it must have a CasADi trace (``rhs(x, p, ops)``).
     params : Params or mapping or array_like
-        Values of all parameters; the entries of ``unknown_params`` are initial guesses.
-    unknown_params : str or sequence of str
+        Values of all parameters; the entries of ``free`` are initial guesses.
+    free : str or sequence of str
         Parameters solved for (``q`` of them; the connection count must close).
     saddle_from : array_like, shape (n,)
         Guess of the start saddle ``x_-``; refined by Newton at construction.
@@ -161,9 +168,16 @@ class HeteroclinicProblem:
         of ``saddle_to`` and ``shift``. ``shift=0`` asks for a homoclinic orbit
         (``x_+ = x_-``); then the constant solution ``x = x_-`` also satisfies every
         equation but the phase condition, so start from a good guess.
-    mesh : CollocationMesh
-        Intervals, degree and truncation time ``T``.
-    free : str or None
+    mesh : CollocationMesh, optional
+        Intervals, degree and truncation time ``T``. Give ``mesh`` or ``T``; without
+        either the constructor raises (a connection has no natural default ``T``;
+        :func:`~continuation.bvp.find.find_connection` picks one from the saddles'
+        eigenvalues).
+    T : float, optional
+        Truncation time; with ``mesh`` omitted the mesh is 40 uniform intervals of
+        degree 4 on ``[0, T]`` (the adaptive solve refines it). Given with ``mesh`` it
+        must equal ``mesh.T``.
+    vary : str or None
         The continuation parameter (None for one-shot solves).
     phase : "integral" or PinPhase
         The phase condition.
@@ -184,12 +198,13 @@ class HeteroclinicProblem:
 
     system: Any
     params: Params
-    unknown_params: tuple[str, ...]
+    free: tuple[str, ...]
     saddle_from: FloatArray
     saddle_to: FloatArray | None = None
     shift: FloatArray | None = None
-    mesh: CollocationMesh = field(default_factory=lambda: CollocationMesh(40, 4, 20.0))
-    free: str | None = None  # type: ignore[assignment]
+    mesh: CollocationMesh | None = None  # type: ignore[assignment]
+    T: float | None = None
+    vary: str | None = None
     phase: str | PinPhase = "integral"
     reference: FloatArray | None = field(default=None, repr=False)
     bases: tuple[FloatArray, FloatArray] | None = field(default=None, repr=False)
@@ -217,32 +232,21 @@ class HeteroclinicProblem:
             )
         object.__setattr__(self, "params", params)
         # unknown parameters
-        unk = self.unknown_params
+        unk = self.free
         unk = (unk,) if isinstance(unk, str) else tuple(str(u) for u in unk)
         for u in unk:
             if u not in system.param_names:
                 raise ValueError(
-                    f"`unknown_params` names unknown parameter {u!r}; valid names are "
-                    f"{system.param_names}"
+                    f"`free` names unknown parameter {u!r}; valid names are {system.param_names}"
                 )
         if len(set(unk)) != len(unk):
-            raise ValueError(f"`unknown_params` must be unique, got {unk}")
-        object.__setattr__(self, "unknown_params", unk)
-        if self.free is not None:
-            if self.free not in system.param_names:
-                raise ValueError(f"`free` must be one of {system.param_names}, got {self.free!r}")
-            if self.free in unk:
-                raise ValueError(f"`free` {self.free!r} is also in `unknown_params` {unk}")
-        if not isinstance(self.mesh, CollocationMesh):
-            raise ValueError(f"`mesh` must be a CollocationMesh, got {type(self.mesh).__name__}")
-        # phase
-        pin = None
-        if isinstance(self.phase, PinPhase):
-            i_state = system.state_index(self.phase.state)
-            i_node = int(np.argmin(np.abs(self.mesh.nodes - self.phase.at)))
-            pin = (i_state, i_node)
-        elif self.phase != "integral":
-            raise ValueError(f"`phase` must be 'integral' or a PinPhase, got {self.phase!r}")
+            raise ValueError(f"`free` must be unique, got {unk}")
+        object.__setattr__(self, "free", unk)
+        if self.vary is not None:
+            if self.vary not in system.param_names:
+                raise ValueError(f"`vary` must be one of {system.param_names}, got {self.vary!r}")
+            if self.vary in unk:
+                raise ValueError(f"`vary` {self.vary!r} is also a solved (`free`) parameter {unk}")
         # end point
         pvec = np.array(params.values, dtype=float)
         x_from = _refine_equilibrium(
@@ -288,17 +292,39 @@ class HeteroclinicProblem:
         if nu_m + ns_p != n + 1 - q:
             raise ValueError(
                 f"connection count does not close: dim W^u(x_-) + dim W^s(x_+) = {nu_m} + {ns_p}"
-                f" = {nu_m + ns_p}, but an orbit with {q} unknown parameter(s) {unk} in "
+                f" = {nu_m + ns_p}, but an orbit with {q} solved parameter(s) {unk} in "
                 f"dimension n = {n} needs n + 1 - q = {n + 1 - q}"
             )
         if nu_m == 0:
             raise ValueError("`saddle_from` has no unstable direction: no orbit can leave it")
         if ns_p == 0:
             raise ValueError("the end equilibrium has no stable direction: no orbit can reach it")
+        if self.mesh is None:
+            if self.T is None:
+                raise ValueError(
+                    "give `T=` (the truncation interval) or `mesh=`; there is no default "
+                    "T (find_connection picks T from the saddles' eigenvalues)"
+                )
+            object.__setattr__(
+                self, "mesh", CollocationMesh(DEFAULT_N_INTERVALS, DEFAULT_DEGREE, self.T)
+            )
+        if not isinstance(self.mesh, CollocationMesh):
+            raise ValueError(f"`mesh` must be a CollocationMesh, got {type(self.mesh).__name__}")
+        if self.T is not None and abs(float(self.T) - self.mesh.T) > 1e-12 * self.mesh.T:
+            raise ValueError(f"`T` = {self.T!r} disagrees with `mesh.T` = {self.mesh.T!r}")
+        object.__setattr__(self, "T", self.mesh.T)
+        # phase
+        pin = None
+        if isinstance(self.phase, PinPhase):
+            i_state = system.state_index(self.phase.state)
+            i_node = int(np.argmin(np.abs(self.mesh.nodes - self.phase.at)))
+            pin = (i_state, i_node)
+        elif self.phase != "integral":
+            raise ValueError(f"`phase` must be 'integral' or a PinPhase, got {self.phase!r}")
         object.__setattr__(
             self,
             "dims",
-            {"n": n, "unstable_from": nu_m, "stable_to": ns_p, "unknown_params": q},
+            {"n": n, "unstable_from": nu_m, "stable_to": ns_p, "free": q},
         )
         # bases
         if self.bases is None:
@@ -344,6 +370,13 @@ class HeteroclinicProblem:
             vec = np.zeros(n)
             for k, v in shift.items():
                 vec[system.state_index(k)] = float(v)
+        elif np.ndim(shift) == 0:
+            if float(shift) != 0.0:
+                raise ValueError(
+                    f"a scalar `shift` must be 0 (a homoclinic orbit), got {shift!r}; give a "
+                    "mapping such as {'theta': 2 * pi} for a shift by periods"
+                )
+            vec = np.zeros(n)
         else:
             vec = np.asarray(shift, dtype=float).reshape(-1)
             if vec.shape != (n,):
@@ -391,12 +424,15 @@ class HeteroclinicProblem:
         return tuple(self.system.state_names)
 
     def replace(self, **changes: Any) -> HeteroclinicProblem:
-        """A copy with some fields changed (re-validated; derived data recomputed)."""
-        return dataclasses.replace(self, **changes)
+        """A copy with some fields changed (re-validated; derived data recomputed).
 
-    def with_free(self, free: str | None) -> HeteroclinicProblem:
-        """The same problem with continuation parameter ``free``."""
-        return self.replace(free=free)
+        A new ``mesh`` brings its own ``T``; a new ``T`` alone keeps the nodes.
+        """
+        return dataclasses.replace(self, **_mesh_changes(self, changes))
+
+    def with_vary(self, vary: str | None) -> HeteroclinicProblem:
+        """The same problem with continuation parameter ``vary``."""
+        return self.replace(vary=vary)
 
     # ------------------------------------------------------------------ packing
     def pack(
@@ -427,7 +463,7 @@ class HeteroclinicProblem:
         if R_plus is not None:
             z[sl["R_plus"]] = np.asarray(R_plus, dtype=float).reshape(-1, order="F")
         if unknown_values is None:
-            unknown_values = [self.params[u] for u in self.unknown_params]
+            unknown_values = [self.params[u] for u in self.free]
         z[sl["params"]] = np.asarray(unknown_values, dtype=float)
         return z
 
@@ -447,14 +483,14 @@ class HeteroclinicProblem:
             "x_to": x_to,
             "R_minus": z[sl["R_minus"]].reshape((n - km, km), order="F"),
             "R_plus": z[sl["R_plus"]].reshape((n - kp, kp), order="F"),
-            "params": dict(zip(self.unknown_params, z[sl["params"]].tolist(), strict=True)),
+            "params": dict(zip(self.free, z[sl["params"]].tolist(), strict=True)),
         }
 
     def param_vector(self, z: FloatArray, p: float | None = None) -> FloatArray:
-        """Full parameter vector: ``params``, ``free`` set to ``p``, unknowns from ``z``."""
+        """Full parameter vector: ``params``, ``vary`` set to ``p``, ``free`` from ``z``."""
         v = np.array(self.params.values, dtype=float)
-        if self.free is not None and p is not None:
-            v[self.system.param_index(self.free)] = float(p)
+        if self.vary is not None and p is not None:
+            v[self.system.param_index(self.vary)] = float(p)
         sl = self.layout.slices()
         v[list(self.layout.unknown_param_index)] = np.asarray(z)[sl["params"]]
         return v
@@ -493,7 +529,7 @@ class HeteroclinicProblem:
         return [z, self.param_vector(z, p), *cache]
 
     def residual(self, z: FloatArray, p: float | None = None) -> FloatArray:
-        """``G(z, p)``, shape ``(N_z,)`` (``p``: value of ``free``; ignored if ``free`` is None)."""
+        """``G(z, p)``, shape ``(N_z,)`` (``p``: value of ``vary``; ignored if ``vary`` is None)."""
         return self.functions.residual(self._args(z, p))
 
     def jacobian(self, z: FloatArray, p: float | None = None) -> sp.csc_matrix:
@@ -501,21 +537,21 @@ class HeteroclinicProblem:
         return self.functions.jacobian(self._args(z, p))
 
     def dp(self, z: FloatArray, p: float | None = None) -> FloatArray:
-        """Exact ``dG/dp`` for the ``free`` parameter, shape ``(N_z,)``."""
-        if self.free is None:
-            raise ValueError("`free` is None: set a continuation parameter with with_free(name)")
+        """Exact ``dG/dp`` for the ``vary`` parameter, shape ``(N_z,)``."""
+        if self.vary is None:
+            raise ValueError("`vary` is None: set a continuation parameter with with_vary(name)")
         J = self.functions.param_jacobian(self._args(z, p))
-        col = J[:, self.system.param_index(self.free)]
+        col = J[:, self.system.param_index(self.vary)]
         return np.asarray(col.toarray(), dtype=float).reshape(-1)
 
     def linearize(
         self, z: FloatArray, p: float | None = None
     ) -> tuple[FloatArray, sp.csc_matrix, FloatArray]:
         """``(G, dG/dz, dG/dp)`` in one CasADi evaluation (used by the PALC driver)."""
-        if self.free is None:
-            raise ValueError("`free` is None: set a continuation parameter with with_free(name)")
+        if self.vary is None:
+            raise ValueError("`vary` is None: set a continuation parameter with with_vary(name)")
         g, jz, jp = self.functions.linearize(self._args(z, p))
-        col = jp[:, self.system.param_index(self.free)]
+        col = jp[:, self.system.param_index(self.vary)]
         return g, jz, np.asarray(col.toarray(), dtype=float).reshape(-1)
 
     def stability(self, z: FloatArray, p: float | None = None) -> None:
@@ -540,8 +576,10 @@ class HeteroclinicProblem:
 
         Parameters
         ----------
-        guess : ConnectionResult, (t, x) tuple, object with ``t`` and ``x``, or ndarray (K, n)
-            ``t`` (K,) strictly increasing, ``x`` (K, n), in the time of the system. A
+        guess : ConnectionResult, (t, x) pair, object with ``t`` and ``x`` or ``y``, or ndarray
+            ``t`` (K,) strictly increasing, ``x`` (K, n) or (n, K) (:func:`_states_layout`:
+            the axis of length K is time; a square ambiguous array raises), in the
+            time of the system. A
             guess whose time span ``T_g = t[-1] - t[0]`` equals ``T`` is shifted onto
             ``[0, T]``. One whose span differs is *not* stretched (that would rescale
             time, slowing or speeding up the orbit by ``T / T_g``, and a stretched orbit
@@ -572,7 +610,7 @@ class HeteroclinicProblem:
             T_g = float(guess.mesh.T)
             X0 = guess.mesh.interpolate(guess.x, _guess_times(T_g, mesh) / T_g)
             x_from, x_to = guess.x_from, guess.x_to
-            unknown_values = [guess.params[u] for u in self.unknown_params]
+            unknown_values = [guess.params[u] for u in self.free]
         else:
             t, x = _as_trajectory(guess, n)
             if isinstance(guess, np.ndarray):  # no time axis: equally spaced on [0, T]
@@ -596,7 +634,7 @@ class HeteroclinicProblem:
         """Refresh the Schur bases and the phase reference at the solution ``z``.
 
         Returns a new problem whose ``params`` hold the solved unknown parameters (and
-        ``p`` for ``free``), whose saddle guesses are the solved equilibria, whose bases
+        ``p`` for ``vary``), whose saddle guesses are the solved equilibria, whose bases
         are the Schur bases at those equilibria (so ``R = 0``) and whose integral-phase
         reference is the solution itself; and the matching ``z``.
         """
@@ -630,7 +668,7 @@ class HeteroclinicProblem:
         newton_iters: int = 0,
         residual_norm: float | None = None,
     ) -> ConnectionResult:
-        """Wrap ``z`` (at ``free = p``) as a :class:`ConnectionResult`."""
+        """Wrap ``z`` (at ``vary = p``) as a :class:`ConnectionResult`."""
         from .result import ConnectionResult
 
         parts = self.unpack(z)
@@ -638,7 +676,7 @@ class HeteroclinicProblem:
             residual_norm = float(np.max(np.abs(self.residual(z, p))))
         return ConnectionResult(
             params=self.params.with_vector(self.param_vector(z, p)),
-            unknown_params=self.unknown_params,
+            free=self.free,
             state_names=self.state_names,
             t=self.mesh.t,
             x=np.array(parts["X"]),
@@ -666,29 +704,66 @@ def _guess_times(T_g: float, mesh: CollocationMesh) -> FloatArray:
     return np.clip(mesh.tau * mesh.T - 0.5 * (mesh.T - T_g), 0.0, T_g)
 
 
+def _mesh_changes(prob: HeteroclinicProblem, changes: dict[str, Any]) -> dict[str, Any]:
+    """Keep ``mesh`` and ``T`` consistent in ``replace``."""
+    changes = dict(changes)
+    if "mesh" in changes and "T" not in changes:
+        changes["T"] = None
+    elif "T" in changes and "mesh" not in changes and changes["T"] is not None:
+        changes["mesh"] = prob.mesh.with_T(float(changes["T"]))
+    return changes
+
+
 def _replace_fast(prob: HeteroclinicProblem, **changes: Any) -> HeteroclinicProblem:
     """``dataclasses.replace`` that keeps the compiled functions of an unchanged layout."""
-    new = dataclasses.replace(prob, **changes)
+    new = dataclasses.replace(prob, **_mesh_changes(prob, changes))
     if new.layout == prob.layout and prob._fns:
         new._fns.append(prob._fns[0])
     return new
 
 
+def _states_layout(x: FloatArray, K: int | None, n: int) -> FloatArray:
+    """``x`` as (K, n): accept (K, n) or SciPy's (n, K); refuse an ambiguous square array.
+
+    Rule: with times (``K`` known) the axis of length ``K`` is time; without, the axis
+    of length ``n`` is the state. When both axes fit (``K == n``, or a bare (n, n)
+    array) the layout cannot be told and a ValueError asks for more samples.
+    """
+    if x.ndim != 2:
+        raise ValueError(f"`guess` states must be a 2-D array (K, n) or (n, K), got {x.shape}")
+    if K is None:
+        fits_kn, fits_nk = x.shape[1] == n, x.shape[0] == n
+    else:
+        fits_kn = x.shape == (K, n)
+        fits_nk = x.shape == (n, K)
+    if fits_kn and fits_nk:
+        raise ValueError(
+            f"`guess` of shape {x.shape} is ambiguous: both (K, n) and (n, K) fit with n = {n}; "
+            "give more (or fewer) than n time samples"
+        )
+    if fits_nk:
+        return np.ascontiguousarray(x.T)
+    return x
+
+
 def _as_trajectory(guess: Any, n: int) -> tuple[FloatArray, FloatArray]:
     """Normalise a guess to ``(t (K,), x (K, n))``; raise ValueError naming ``guess``."""
     if isinstance(guess, np.ndarray) and guess.ndim == 2:
-        x = np.asarray(guess, dtype=float)
+        x = _states_layout(np.asarray(guess, dtype=float), None, n)
         t = np.linspace(0.0, 1.0, x.shape[0])
-    elif hasattr(guess, "t") and hasattr(guess, "x"):
-        t, x = np.asarray(guess.t, dtype=float), np.asarray(guess.x, dtype=float)
+    elif hasattr(guess, "t") and (hasattr(guess, "x") or hasattr(guess, "y")):
+        # ``y``: a SciPy solve_ivp / solve_bvp result, states as (n, K)
+        t = np.asarray(guess.t, dtype=float).reshape(-1)
+        xs = guess.x if hasattr(guess, "x") else guess.y
+        x = _states_layout(np.asarray(xs, dtype=float), t.size, n)
     elif isinstance(guess, (tuple, list)) and len(guess) == 2:
-        t, x = np.asarray(guess[0], dtype=float), np.asarray(guess[1], dtype=float)
+        t = np.asarray(guess[0], dtype=float).reshape(-1)
+        x = _states_layout(np.asarray(guess[1], dtype=float), t.size, n)
     else:
         raise ValueError(
             "`guess` must be a ConnectionResult, a (t, x) pair, an object with `t` and `x`, "
-            f"or an (K, n) array; got {type(guess).__name__}"
+            f"or an (K, n) / (n, K) array; got {type(guess).__name__}"
         )
-    t = t.reshape(-1)
     if x.ndim != 2 or x.shape != (t.size, n):
         raise ValueError(
             f"`guess` states must have shape (len(t), n) = ({t.size}, {n}), got {x.shape}"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -15,6 +16,62 @@ from ..typing import FloatArray
 from .collocation import CollocationMesh
 
 
+@dataclass(frozen=True)
+class ErrorEstimates:
+    r"""Error estimates of the solved parameters of a connection.
+
+    Attributes
+    ----------
+    discretisation : dict of str to float
+        ``safety * |p(2N) - p(N)|``: the change on the mesh with every interval halved
+        (same nodes, so the adapted mesh is kept), times the safety factor. For
+        collocation of degree ``m`` the parameter error is :math:`O(h^{2m})`, so
+        :math:`|p(2N) - p(N)| pprox (1 - 2^{-2m})\,|p(N) - p^*|`.
+    truncation : dict of str to float
+        ``safety * |p(T_factor T) - p(T)|``: the change on an interval ``T_factor``
+        times longer with the same resolution (the added end intervals as long as
+        the end intervals of the mesh); the truncation error of projection boundary
+        conditions decays exponentially with ``T`` (Beyn 1990).
+    tolerance : dict of str to float
+        The tolerance each estimate was compared with.
+    n_intervals_fine : int
+        Intervals of the halved mesh.
+    T_long : float
+        The longer truncation interval.
+    """
+
+    discretisation: dict[str, float]
+    truncation: dict[str, float]
+    tolerance: dict[str, float]
+    n_intervals_fine: int = 0
+    T_long: float = math.nan
+
+    def total(self, name: str) -> float:
+        """``discretisation[name] + truncation[name]``."""
+        return float(self.discretisation[name] + self.truncation[name])
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-friendly form."""
+        return {
+            "discretisation": dict(self.discretisation),
+            "truncation": dict(self.truncation),
+            "tolerance": dict(self.tolerance),
+            "n_intervals_fine": self.n_intervals_fine,
+            "T_long": self.T_long,
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> ErrorEstimates:
+        """Inverse of :meth:`to_dict`."""
+        return cls(
+            {k: float(v) for k, v in d["discretisation"].items()},
+            {k: float(v) for k, v in d["truncation"].items()},
+            {k: float(v) for k, v in d["tolerance"].items()},
+            int(d.get("n_intervals_fine", 0)),
+            float(d.get("T_long", math.nan)),
+        )
+
+
 @dataclass(frozen=True, eq=False)
 class ConnectionResult:
     """A (possibly failed) connecting orbit computed by collocation.
@@ -22,8 +79,8 @@ class ConnectionResult:
     Attributes
     ----------
     params : Params
-        All parameter values, the solved ``unknown_params`` included.
-    unknown_params : tuple of str
+        All parameter values, the solved ``free`` parameters included.
+    free : tuple of str
         Names of the parameters that were solved for.
     state_names : tuple of str
         Names of the ``n`` states.
@@ -47,10 +104,14 @@ class ConnectionResult:
         The raw unknown vector (for restarts and continuation).
     problem : HeteroclinicProblem or None
         The (rebased) problem ``z`` belongs to; None after :meth:`load`.
+    errors : ErrorEstimates or None
+        Discretisation and truncation error estimates of the solved parameters (None
+        when they were not estimated: ``ConnectionAccuracy(estimate=False)``, a branch
+        row, a failed solve).
     """
 
     params: Params
-    unknown_params: tuple[str, ...]
+    free: tuple[str, ...]
     state_names: tuple[str, ...]
     t: FloatArray
     x: FloatArray
@@ -63,6 +124,7 @@ class ConnectionResult:
     newton_iters: int = 0
     z: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
     problem: Any = field(default=None, repr=False)
+    errors: ErrorEstimates | None = None
 
     def __post_init__(self) -> None:
         for name in ("t", "x", "x_from", "x_to", "z"):
@@ -76,6 +138,17 @@ class ConnectionResult:
         """True when the solve converged."""
         return self.status is Status.SUCCESS
 
+    def error(self, name: str) -> float:
+        """Estimated error bound of solved parameter ``name``: discretisation + truncation.
+
+        ``nan`` when the errors were not estimated.
+        """
+        if name not in self.free:
+            raise ValueError(f"`name` {name!r} is not a solved parameter; they are {self.free}")
+        if self.errors is None:
+            return math.nan
+        return self.errors.total(name)
+
     @property
     def T(self) -> float:
         """Truncation time."""
@@ -88,7 +161,7 @@ class ConnectionResult:
     @property
     def unknowns(self) -> dict[str, float]:
         """The solved parameters ``{name: value}``."""
-        return {u: self.params[u] for u in self.unknown_params}
+        return {u: self.params[u] for u in self.free}
 
     def state(self, name: str) -> FloatArray:
         """Orbit component ``name``, shape ``(M,)``."""
@@ -136,7 +209,8 @@ class ConnectionResult:
         meta = {
             "kind": "ConnectionResult",
             "param_names": list(self.params.names),
-            "unknown_params": list(self.unknown_params),
+            "free": list(self.free),
+            "errors": None if self.errors is None else self.errors.to_dict(),
             "state_names": list(self.state_names),
             "residual_norm": self.residual_norm,
             "mesh": {
@@ -168,7 +242,8 @@ class ConnectionResult:
         )
         return cls(
             params=Params(tuple(meta["param_names"]), arrays["param_values"]),
-            unknown_params=tuple(meta["unknown_params"]),
+            free=tuple(meta.get("free", meta.get("unknown_params", ()))),
+            errors=None if not meta.get("errors") else ErrorEstimates.from_dict(meta["errors"]),
             state_names=tuple(meta["state_names"]),
             t=arrays["t"],
             x=arrays["x"],
@@ -207,11 +282,14 @@ class ConnectionResult:
         return ax
 
     def __repr__(self) -> str:
-        unk = ", ".join(f"{k}={v:.10g}" for k, v in self.unknowns.items())
+        unk = ", ".join(
+            f"{k}={v:.10g}" + ("" if self.errors is None else f" +- {self.error(k):.1e}")
+            for k, v in self.unknowns.items()
+        )
         return (
             f"ConnectionResult({unk}; status={self.status.name}, |G|={self.residual_norm:.2e}, "
             f"{self.mesh!r})"
         )
 
 
-__all__ = ["ConnectionResult"]
+__all__ = ["ConnectionResult", "ErrorEstimates"]

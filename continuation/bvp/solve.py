@@ -26,9 +26,9 @@ from ..newton import NewtonResult, newton
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
 from ..typing import FloatArray
-from .collocation import CollocationMesh
+from .accuracy import ConnectionAccuracy, extended_problem, refined_problem
 from .connection import HeteroclinicProblem, _replace_fast
-from .result import ConnectionResult
+from .result import ConnectionResult, ErrorEstimates
 from .simplified import simplified_newton
 
 log = logging.getLogger(__name__)
@@ -43,7 +43,7 @@ METHODS = ("newton", "broyden", "chord")
 def _newton_solve(
     prob: HeteroclinicProblem, z0: FloatArray, settings: NewtonSettings, method: str = "newton"
 ) -> NewtonResult:
-    p = prob.params[prob.free] if prob.free is not None else None
+    p = prob.params[prob.vary] if prob.vary is not None else None
 
     def res(z: FloatArray) -> FloatArray:
         return prob.residual(z, p)
@@ -65,7 +65,7 @@ def _finish(
     prob: HeteroclinicProblem, res: NewtonResult, settings: NewtonSettings, method: str = "newton"
 ) -> ConnectionResult:
     """Rebase at a converged solution (one more Newton if needed) and wrap as a result."""
-    p = prob.params[prob.free] if prob.free is not None else None
+    p = prob.params[prob.vary] if prob.vary is not None else None
     if not res.converged:
         return prob.to_result(
             res.z,
@@ -117,32 +117,53 @@ def solve_connection(
     problem: HeteroclinicProblem,
     guess: Any,
     *,
+    accuracy: ConnectionAccuracy | None = None,
     newton: NewtonSettings | None = None,
     throw: bool = False,
-    adapt: int = 0,
+    adapt: int | None = None,
     progress: Callable[[ConnectionResult], None] | None = None,
     method: str = "newton",
 ) -> ConnectionResult:
-    r"""Solve the collocation system of a connecting orbit once.
+    r"""Solve a connecting orbit: adapted mesh, error estimates of the solved parameters.
+
+    Steps (settings in ``accuracy``, :class:`ConnectionAccuracy`):
+
+    1. Newton on ``problem.mesh`` from ``guess``.
+    2. Mesh adaptation: ``adapt_rounds`` rounds of equidistribution of the local
+       collocation error :math:`h_j^{m+1} |x^{(m+1)}|` (as AUTO-07p), each followed
+       by a solve on the same number of intervals (the compiled functions are reused).
+    3. Discretisation estimate: re-solve on the adapted mesh with every interval
+       halved; ``safety * |p(2N) - p(N)|`` per solved parameter. Above its tolerance
+       ``atol + rtol |p|`` the halved mesh becomes the mesh (at most
+       ``max_refinements`` times) and step 2 repeats.
+    4. Truncation estimate: re-solve on ``[0, T_factor T]`` with the same resolution;
+       ``safety * |p(T_factor T) - p(T)|``. Above its tolerance the longer interval
+       becomes the problem (at most ``max_extensions`` times) and steps 2-4 repeat.
+
+    The result is the solution on the last adapted mesh (not the halved one), with
+    both estimates in ``result.errors``.
 
     Parameters
     ----------
     problem : HeteroclinicProblem
         The connection (system, parameters, saddles, mesh, phase condition).
-    guess : ConnectionResult, (t, x) pair, object with ``t``, ``x``, or ndarray (K, n)
-        Starting orbit, e.g. an unstable-manifold trajectory; mapped linearly onto
-        ``[0, T]`` and interpolated onto the mesh (see
-        :meth:`HeteroclinicProblem.initial_vector`). It is also the reference of the
-        integral phase condition unless ``problem.reference`` is set.
+    guess : ConnectionResult, (t, x) pair, object with ``t``, ``x``, or ndarray
+        Starting orbit, e.g. an unstable-manifold trajectory (see
+        :meth:`HeteroclinicProblem.initial_vector`); ``x`` as (K, n) or SciPy's
+        (n, K). It is also the reference of the integral phase condition unless
+        ``problem.reference`` is set.
+    accuracy : ConnectionAccuracy, optional
+        Tolerances and bounds (defaults: ``rtol=1e-6``, ``atol=1e-8``, 2 adaptation
+        rounds, at most 3 doublings of the intervals and 2 extensions of ``T`` by
+        1.5). ``ConnectionAccuracy(estimate=False)``: a plain solve on the given mesh.
     newton : NewtonSettings, optional
         Default: ``tol=1e-10`` (max-norm of the residual), ``max_iter=40``, damped.
     throw : bool
-        Raise :class:`~continuation.errors.ConvergenceError` when Newton fails.
-    adapt : int
-        Rounds of mesh adaptation after the first solve: each round moves the nodes
-        to equidistribute the local error monitor
-        (:meth:`CollocationMesh.equidistributed`), re-interpolates the solution and
-        solves again (the compiled functions are reused: same number of intervals).
+        Raise :class:`~continuation.errors.ConvergenceError` when the result is not
+        ``SUCCESS``.
+    adapt : int, optional
+        Overrides ``accuracy.adapt_rounds``; with ``accuracy.estimate=False`` it is the
+        number of adaptation rounds of the plain solve (default 0).
     progress : callable, optional
         Called with each intermediate :class:`ConnectionResult` (after every solve).
     method : {"newton", "broyden", "chord"}
@@ -150,26 +171,29 @@ def solve_connection(
         Jacobian per iteration. ``"broyden"``: the Jacobian of the guess is kept
         while the residual contracts fast and corrected by Broyden rank-one updates,
         refreshed otherwise (:func:`continuation.bvp.simplified.simplified_newton`);
-        ``"chord"``: the same without the updates (Shamanskii). Both save time when
-        the guess is good and the Jacobian costs several residuals (collocation of
-        an expensive model: about five); both fall back to Newton if they fail. The
-        convergence test is the same (``max |G| <= newton.tol``), so all three give
-        the same solution to that tolerance.
+        ``"chord"``: the same without the updates (Shamanskii). Both fall back to
+        Newton if they fail; the convergence test is the same.
 
     Returns
     -------
     ConnectionResult
-        ``status`` is ``SUCCESS``, a Newton failure status, or ``INTERRUPTED`` (the
-        last finished solve is returned on KeyboardInterrupt during adaptation).
-        ``result.problem`` is the problem rebased at the solution (Schur bases and
-        phase reference refreshed), with which ``result.z`` has zero residual.
+        ``status``: ``SUCCESS`` (Newton converged and both estimates within their
+        tolerances), ``DISCRETISATION_ERROR`` or ``TRUNCATION_ERROR`` (the message
+        names the parameter, the estimate, the tolerance and what to change), a Newton
+        failure status, or ``INTERRUPTED`` (the last finished solve is returned).
+        ``result.problem`` is the problem rebased at the solution, with which
+        ``result.z`` has zero residual.
     """
     if not isinstance(problem, HeteroclinicProblem):
         raise ValueError(f"`problem` must be a HeteroclinicProblem, got {type(problem).__name__}")
-    if isinstance(adapt, bool) or not isinstance(adapt, int) or adapt < 0:
+    if adapt is not None and (isinstance(adapt, bool) or not isinstance(adapt, int) or adapt < 0):
         raise ValueError(f"`adapt` must be an integer >= 0, got {adapt!r}")
     if newton is not None and not isinstance(newton, NewtonSettings):
         raise ValueError(f"`newton` must be a NewtonSettings, got {type(newton).__name__}")
+    if accuracy is None:
+        accuracy = ConnectionAccuracy()
+    elif not isinstance(accuracy, ConnectionAccuracy):
+        raise ValueError(f"`accuracy` must be a ConnectionAccuracy, got {type(accuracy).__name__}")
     if method not in METHODS:
         raise ValueError(f"`method` must be one of {METHODS}, got {method!r}")
     settings = DEFAULT_NEWTON if newton is None else newton
@@ -177,7 +201,7 @@ def solve_connection(
     try:
         result = _finish(prob, _newton_solve(prob, z0, settings, method), settings, method)
     except KeyboardInterrupt:
-        p = prob.params[prob.free] if prob.free is not None else None
+        p = prob.params[prob.vary] if prob.vary is not None else None
         result = prob.to_result(
             z0,
             p,
@@ -190,17 +214,191 @@ def solve_connection(
     if progress is not None:
         progress(result)
     try:
-        for _ in range(adapt):
-            if not result.success:
-                break
-            result = _adapt_once(result, settings, method)
-            if progress is not None:
-                progress(result)
+        if not accuracy.estimate:
+            for _ in range(adapt or 0):
+                if not result.success:
+                    break
+                result = _adapt_once(result, settings, method)
+                if progress is not None:
+                    progress(result)
+        elif result.success:
+            rounds = accuracy.adapt_rounds if adapt is None else adapt
+            first = 0 if _already_adapted(guess, prob) else rounds
+            last = [result]
+            try:
+                result = _controlled(
+                    result, accuracy, rounds, settings, method, progress, last.append, first
+                )
+            except KeyboardInterrupt:
+                result = last[-1]
+                raise
     except KeyboardInterrupt:
         result = _with_status(result, Status.INTERRUPTED, Status.INTERRUPTED.value)
     if throw and not result.success:
         raise ConvergenceError(result.message)
     return result
+
+
+def _already_adapted(guess: Any, prob: HeteroclinicProblem) -> bool:
+    """``guess`` is an estimated result on exactly this mesh: it was adapted already."""
+    return (
+        isinstance(guess, ConnectionResult)
+        and guess.errors is not None
+        and guess.mesh.n_intervals == prob.mesh.n_intervals
+        and guess.mesh.degree == prob.mesh.degree
+        and guess.mesh.T == prob.mesh.T
+        and bool(np.array_equal(guess.mesh.nodes, prob.mesh.nodes))
+    )
+
+
+def _plain(
+    problem: HeteroclinicProblem, guess: Any, settings: NewtonSettings, method: str
+) -> ConnectionResult:
+    prob, z0 = problem.initial_vector(guess)
+    return _finish(prob, _newton_solve(prob, z0, settings, method), settings, method)
+
+
+def _changes(a: ConnectionResult, b: ConnectionResult, safety: float) -> dict[str, float]:
+    return {u: safety * abs(b.params[u] - a.params[u]) for u in a.free}
+
+
+def _worst(est: dict[str, float], tol: dict[str, float]) -> str | None:
+    bad = [u for u in est if not est[u] <= tol[u]]
+    return max(bad, key=lambda u: est[u] / max(tol[u], 1e-300)) if bad else None
+
+
+def _adapted(
+    result: ConnectionResult,
+    rounds: int,
+    settings: NewtonSettings,
+    method: str,
+    progress: Callable[[ConnectionResult], None] | None,
+    keep: Callable[[ConnectionResult], None],
+) -> ConnectionResult:
+    """``rounds`` equidistribution solves; stop when the nodes no longer move."""
+    for _ in range(rounds):
+        old = result.mesh.nodes
+        new = _adapt_once(result, settings, method)
+        if new.success:
+            keep(new)
+        if progress is not None:
+            progress(new)
+        if not new.success:
+            return new
+        result = new
+        h = np.minimum(np.diff(old), np.diff(result.mesh.nodes))
+        move = np.abs(result.mesh.nodes - old)
+        if np.all(move[1:-1] <= 0.1 * np.minimum(h[:-1], h[1:])):
+            break
+    return result
+
+
+def _controlled(
+    result: ConnectionResult,
+    acc: ConnectionAccuracy,
+    rounds: int,
+    settings: NewtonSettings,
+    method: str,
+    progress: Callable[[ConnectionResult], None] | None,
+    keep: Callable[[ConnectionResult], None],
+    first_rounds: int | None = None,
+) -> ConnectionResult:
+    """Adapt, refine and lengthen until both estimates meet ``acc`` (see solve_connection).
+
+    ``first_rounds``: adaptation rounds on the starting mesh (default ``rounds``).
+    """
+    for n_ext in range(acc.max_extensions + 1):
+        # ---- discretisation: adapt, halve, compare; double the intervals if needed
+        for n_ref in range(acc.max_refinements + 1):
+            k = rounds if (n_ext or n_ref or first_rounds is None) else first_rounds
+            result = _adapted(result, k, settings, method, progress, keep)
+            if not result.success:
+                return result
+            tol = {u: acc.tolerance(result.params[u]) for u in result.free}
+            fine = _plain(refined_problem(result), result, settings, method)
+            if progress is not None:
+                progress(fine)
+            if not fine.success:
+                return _with_status(
+                    result,
+                    Status.DISCRETISATION_ERROR,
+                    f"{Status.DISCRETISATION_ERROR.value} The re-solve on the halved mesh "
+                    f"({fine.mesh.n_intervals} intervals) failed: {fine.message}",
+                )
+            e_d = _changes(result, fine, acc.safety)
+            bad = _worst(e_d, tol)
+            if bad is None:
+                break
+            if n_ref == acc.max_refinements:
+                return dataclasses.replace(
+                    result,
+                    status=Status.DISCRETISATION_ERROR,
+                    message=(
+                        f"discretisation error of {bad} estimated {e_d[bad]:.2e} > tolerance "
+                        f"{tol[bad]:.2e} after {acc.max_refinements} doublings of the mesh "
+                        f"({result.mesh.n_intervals} intervals, degree {result.mesh.degree}):"
+                        " raise `max_refinements`, the degree or the starting intervals, or "
+                        "loosen rtol/atol"
+                    ),
+                    errors=ErrorEstimates(
+                        e_d, {u: math.nan for u in e_d}, tol, fine.mesh.n_intervals
+                    ),
+                )
+            log.info(
+                "discretisation estimate %.2e > %.2e: %d intervals",
+                e_d[bad],
+                tol[bad],
+                fine.mesh.n_intervals,
+            )
+            result = fine
+            keep(fine)
+        # ---- truncation: same resolution on a longer interval
+        prob_long, guess_long = extended_problem(result, acc.T_factor)
+        long = _plain(prob_long, guess_long, settings, method)
+        if progress is not None:
+            progress(long)
+        if not long.success:
+            return dataclasses.replace(
+                result,
+                status=Status.TRUNCATION_ERROR,
+                message=(
+                    f"{Status.TRUNCATION_ERROR.value} The re-solve on T = {prob_long.mesh.T:.6g}"
+                    f" failed ({long.message}): the truncation error cannot be estimated; "
+                    "check the saddles and the guess, or try a different T"
+                ),
+                errors=ErrorEstimates(
+                    e_d, {u: math.nan for u in e_d}, tol, fine.mesh.n_intervals, prob_long.mesh.T
+                ),
+            )
+        e_T = _changes(result, long, acc.safety)
+        errors = ErrorEstimates(e_d, e_T, tol, fine.mesh.n_intervals, long.mesh.T)
+        bad = _worst(e_T, tol)
+        if bad is None:
+            return dataclasses.replace(
+                result,
+                status=Status.SUCCESS,
+                message=(
+                    f"{result.message}; error estimates within tolerance "
+                    + ", ".join(f"{u}: {e_d[u]:.1e} (mesh) + {e_T[u]:.1e} (T)" for u in e_d)
+                ),
+                errors=errors,
+            )
+        if n_ext == acc.max_extensions:
+            return dataclasses.replace(
+                result,
+                status=Status.TRUNCATION_ERROR,
+                message=(
+                    f"truncation error of {bad} estimated {e_T[bad]:.2e} > tolerance "
+                    f"{tol[bad]:.2e} at T = {result.mesh.T:.6g} (after {acc.max_extensions} "
+                    f"extensions): give a longer T (about {long.mesh.T * acc.T_factor:.4g}) "
+                    "or raise `max_extensions`, or loosen rtol/atol"
+                ),
+                errors=errors,
+            )
+        log.info("truncation estimate %.2e > %.2e: T = %.6g", e_T[bad], tol[bad], long.mesh.T)
+        result = long
+        keep(long)
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 def _with_status(result: ConnectionResult, status: Status, message: str) -> ConnectionResult:
@@ -211,12 +409,16 @@ def _adapt_once(
     result: ConnectionResult, settings: NewtonSettings, method: str = "newton"
 ) -> ConnectionResult:
     prob: HeteroclinicProblem = result.problem
-    new_mesh = prob.mesh.equidistributed(result.x)
+    pin = prob.layout.pin
+    fixed = None
+    if pin is not None and 0 < pin[1] < prob.mesh.n_intervals:
+        # the pinned node keeps its index and its time (same layout: functions reused)
+        fixed = (pin[1], float(prob.mesh.nodes[pin[1]]))
+    new_mesh = prob.mesh.equidistributed(result.x, fixed=fixed)
     X = prob.mesh.interpolate(result.x, new_mesh.tau)
     changes: dict[str, Any] = {"mesh": new_mesh}
-    if prob.layout.pin is not None:
-        # keep the pinned node (same layout: the compiled functions are reused)
-        at = float(new_mesh.nodes[prob.layout.pin[1]])
+    if pin is not None:
+        at = float(new_mesh.nodes[pin[1]])
         changes["phase"] = dataclasses.replace(prob.phase, at=at)
     if prob.layout.pin is None:
         changes["reference"] = X
@@ -233,10 +435,10 @@ class ConvergenceCheck:
     Attributes
     ----------
     base, refined, extended : ConnectionResult
-        The solution, the solution on the halved mesh, and on ``[0, T_factor T]``
-        (same interval length in ``t``).
+        The solution, the solution on its mesh with every interval halved, and on
+        ``[0, T_factor T]`` with the same resolution.
     delta_mesh, delta_T : dict of str to float
-        ``|refined - base|`` and ``|extended - base|`` per unknown parameter.
+        ``|refined - base|`` and ``|extended - base|`` per solved parameter.
     """
 
     base: ConnectionResult
@@ -261,15 +463,17 @@ def check_convergence(
     T_factor: float = 1.5,
     newton: NewtonSettings | None = None,
 ) -> ConvergenceCheck:
-    r"""Re-solve ``result`` on the halved mesh and with ``T`` multiplied by ``T_factor``.
+    r"""Re-solve ``result`` on its mesh halved and on ``T_factor T`` at the same resolution.
 
-    The longer interval keeps the interval length in ``t`` (``ceil(T_factor N)``
-    uniform intervals); its guess is the old orbit placed in the middle and held at
-    its end values outside. The truncation error of projection boundary conditions
-    decays exponentially with ``T``, at a rate set by the weakest eigenvalues at the
-    saddles (Beyn 1990), so ``delta_T`` measures the truncation error and
-    ``delta_mesh`` the discretisation error (for order ``2 m`` it is the error of the
-    coarser solution to a factor ``1 - 2^{-2m}``).
+    The halved mesh keeps the nodes of ``result`` (an adapted mesh stays adapted), so
+    ``delta_mesh`` measures the discretisation error (for order ``2 m``: the error of
+    the coarser solution times ``1 - 2^{-2m}``). The longer interval keeps every
+    node of ``result`` (shifted by ``(T_factor - 1) T / 2``) and adds intervals as
+    long as the end intervals at both ends (:func:`~continuation.bvp.accuracy.extended_mesh`);
+    its guess is the orbit continued by the linearised flow at the saddles. So the
+    two solves have the same discretisation error and ``delta_T`` measures the
+    truncation error, which decays exponentially with ``T`` (Beyn 1990). This is what
+    :func:`solve_connection` does by default; here without the safety factor.
 
     Raises
     ------
@@ -278,38 +482,78 @@ def check_convergence(
     """
     if not isinstance(result, ConnectionResult) or result.problem is None:
         raise ValueError("`result` must be a ConnectionResult with its problem attached")
-    if not result.success:
+    if not (
+        result.success or result.status in (Status.DISCRETISATION_ERROR, Status.TRUNCATION_ERROR)
+    ):
         raise ValueError(f"`result` did not converge ({result.status.name})")
     if not (math.isfinite(T_factor) and T_factor > 1):
         raise ValueError(f"`T_factor` must be > 1, got {T_factor!r}")
     settings = DEFAULT_NEWTON if newton is None else newton
-    prob: HeteroclinicProblem = result.problem
-    mesh = prob.mesh
-    refined = solve_connection(
-        prob.replace(mesh=mesh.refined(), reference=None), result, newton=settings
-    )
-    T2 = mesh.T * T_factor
-    mesh2 = CollocationMesh(int(math.ceil(mesh.n_intervals * T_factor)), mesh.degree, T2)
-    off = 0.5 * (T2 - mesh.T)
-    t2 = mesh2.t
-    x2 = result.interpolate(np.clip(t2 - off, 0.0, mesh.T))
-    guess = _PaddedGuess(t2, x2, result)
-    extended = solve_connection(prob.replace(mesh=mesh2, reference=None), guess, newton=settings)
-    d_mesh = {u: abs(refined.params[u] - result.params[u]) for u in result.unknown_params}
-    d_T = {u: abs(extended.params[u] - result.params[u]) for u in result.unknown_params}
+    refined = _plain(refined_problem(result), result, settings, "newton")
+    prob_long, guess_long = extended_problem(result, T_factor)
+    extended = _plain(prob_long, guess_long, settings, "newton")
+    d_mesh = {u: abs(refined.params[u] - result.params[u]) for u in result.free}
+    d_T = {u: abs(extended.params[u] - result.params[u]) for u in result.free}
     return ConvergenceCheck(result, refined, extended, d_mesh, d_T)
 
 
-@dataclass(frozen=True)
-class _PaddedGuess:
-    t: FloatArray
-    x: FloatArray
-    source: ConnectionResult
+class ContinuedConnection:
+    """A :class:`HeteroclinicProblem` seen by the continuation driver.
+
+    The driver's protocol calls its continuation parameter ``free``; for a connection
+    that is ``problem.vary`` (``problem.free`` are the solved parameters). This adapter
+    maps the one to the other and delegates everything else to ``problem``
+    (``branch.problem`` is this object; ``.problem`` is the connection problem).
+    """
+
+    def __init__(self, problem: HeteroclinicProblem) -> None:
+        if problem.vary is None:
+            raise ValueError("`problem.vary` is None: no continuation parameter")
+        self.problem = problem
+
+    @property
+    def free(self) -> str:
+        """The continuation parameter (``problem.vary``)."""
+        return str(self.problem.vary)
+
+    @property
+    def n_unknowns(self) -> int:
+        """Length of ``z``."""
+        return self.problem.n_unknowns
+
+    def residual(self, z: FloatArray, p: float | None = None) -> FloatArray:
+        """``G(z, p)``."""
+        return self.problem.residual(z, p)
+
+    def jacobian(self, z: FloatArray, p: float | None = None) -> Any:
+        """``dG/dz``."""
+        return self.problem.jacobian(z, p)
+
+    def dp(self, z: FloatArray, p: float | None = None) -> FloatArray:
+        """``dG/dp``."""
+        return self.problem.dp(z, p)
+
+    def linearize(self, z: FloatArray, p: float | None = None) -> Any:
+        """``(G, dG/dz, dG/dp)``."""
+        return self.problem.linearize(z, p)
+
+    def stability(self, z: FloatArray, p: float | None = None) -> None:
+        """None (connections carry no stability eigenvalues)."""
+        return None
+
+    def record(self, z: FloatArray, p: float | None = None) -> dict[str, float]:
+        """Solved parameters, end distances, Riccati norm."""
+        return self.problem.record(z, p)
+
+    def __getattr__(self, name: str) -> Any:
+        if name == "problem":
+            raise AttributeError(name)
+        return getattr(self.problem, name)
 
 
 def continue_connection(
     result: ConnectionResult,
-    free: str,
+    vary: str,
     settings: ContinuationSettings | None = None,
     *,
     algorithm: Any = None,
@@ -319,24 +563,26 @@ def continue_connection(
     progress: Callable[[Any], None] | None = None,
     problem: HeteroclinicProblem | None = None,
 ) -> Any:
-    r"""Continue a connection in a second parameter ``free``: a curve of connections.
+    r"""Continue a connection in a second parameter ``vary``: a curve of connections.
 
     The problem of ``result`` (rebased at the solution: ``R = 0``, phase reference
-    = the solution) gets ``free`` as its continuation parameter; the unknown
-    parameters stay inside ``z`` and appear in ``branch.records``. The projection
-    bases follow the branch through the Riccati unknowns, so the residual seen by the
-    pseudo-arclength corrector is one fixed smooth function: no basis update ever
-    happens between or inside steps. The integral phase condition keeps the start
-    solution as its reference for the whole branch.
+    = the solution) gets ``vary`` as its continuation parameter; the solved
+    parameters (``free``) stay inside ``z`` and appear in ``branch.records``. The
+    projection bases follow the branch through the Riccati unknowns, so the residual
+    seen by the pseudo-arclength corrector is one fixed smooth function: no basis
+    update ever happens between or inside steps. The integral phase condition keeps
+    the start solution as its reference for the whole branch. The mesh is that of
+    ``result`` (adapted by :func:`solve_connection`); branch rows carry no error
+    estimates (``connection_at(branch, i)`` then :func:`solve_connection` gives them).
 
     Parameters
     ----------
     result : ConnectionResult
         A converged connection.
-    free : str
-        The continuation parameter (not one of the unknown parameters).
+    vary : str
+        The continuation parameter (not one of the solved parameters).
     settings : ContinuationSettings, optional
-        Step sizes, bounds ``p_min``/``p_max`` on ``free``, corrector settings.
+        Step sizes, bounds ``p_min``/``p_max`` on ``vary``, corrector settings.
     algorithm, direction, events, throw, progress
         Passed to :func:`continuation.driver.continue_branch`.
     problem : HeteroclinicProblem, optional
@@ -345,8 +591,9 @@ def continue_connection(
     Returns
     -------
     Branch
-        ``branch.p`` holds ``free``; ``branch.records[name]`` the unknown parameters;
-        ``connection_at(branch, i)`` gives the orbit at row ``i``.
+        ``branch.p`` holds ``vary`` (``branch.free`` names it, the driver's word);
+        ``branch.records[name]`` the solved parameters; ``connection_at(branch, i)``
+        the orbit at row ``i``.
     """
     from ..driver import continue_branch
 
@@ -363,10 +610,10 @@ def continue_connection(
         z0 = result.z
     else:
         prob, z0 = problem.initial_vector(result)
-    prob = prob.with_free(free)
-    p0 = prob.params[free]
+    prob = prob.with_vary(vary)
+    p0 = prob.params[vary]
     return continue_branch(
-        prob,
+        ContinuedConnection(prob),
         z0,
         p0,
         algorithm,
@@ -383,9 +630,11 @@ def connection_at(branch: Any, index: int) -> ConnectionResult:
 
     The attached problem is rebased at that row (its ``params`` hold the row's
     parameters), so the result can be refined, checked or continued further.
-    ``residual_norm`` is that of the branch's own residual at the row.
+    ``residual_norm`` is that of the branch's own residual at the row; ``errors``
+    is None (re-solve with :func:`solve_connection` for estimates).
     """
     prob = getattr(branch, "problem", None)
+    prob = getattr(prob, "problem", prob)
     if not isinstance(prob, HeteroclinicProblem):
         raise ValueError("`branch` was not computed by continue_connection")
     n = len(branch.p)
@@ -407,6 +656,7 @@ def connection_at(branch: Any, index: int) -> ConnectionResult:
 
 
 __all__ = [
+    "ContinuedConnection",
     "ConvergenceCheck",
     "check_convergence",
     "connection_at",

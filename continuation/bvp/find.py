@@ -1,0 +1,268 @@
+r"""From a saddle alone to its connecting orbit: :func:`find_connection`.
+
+Steps:
+
+1. Newton-refine the source saddle :math:`x_-` (and the target :math:`x_+`, or set
+   :math:`x_+ = x_- + \text{shift}`); the source must have a one-dimensional unstable
+   manifold.
+2. Integrate the chosen branch of :math:`W^u(x_-)` from :math:`x_- \pm \delta v_u`,
+   :math:`\delta` = ``end_distance`` (:func:`continuation.manifolds.unstable_manifold`).
+3. Cut it at its closest approach to :math:`x_+`: for a heteroclinic target the
+   nearest sample after the orbit has left :math:`x_-` (half its largest distance
+   from :math:`x_-`); for a homoclinic one the first local minimum of the distance
+   to :math:`x_+` below a quarter of that excursion.
+4. Close the gap: the stable part :math:`d_s` of the remaining offset is continued
+   by the linearised flow :math:`x_+ + \mathrm{Re}\,V e^{\Lambda s} c_s` for
+   :math:`S = \ln(|d_s| / \delta) / \mu_s` (:math:`\mu_s` the weakest stable rate at
+   :math:`x_+`), so that both ends lie within about :math:`\delta` of the saddles:
+   ``T`` follows from the eigenvalues (the start leaves :math:`x_-` at rate
+   :math:`\lambda_u`, so :math:`\ln(D/\delta)/\lambda_u` of it is spent near the saddle).
+5. A mesh equidistributing the collocation error monitor of this guess, then
+   :func:`~continuation.bvp.solve.solve_connection` (adaptive mesh, discretisation and
+   truncation estimates, which lengthen ``T`` if needed).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ..manifolds import unstable_manifold
+from ..params import Params
+from ..settings import NewtonSettings
+from ..typing import FloatArray
+from .accuracy import ConnectionAccuracy, _linear_flow
+from .collocation import CollocationMesh
+from .connection import DEFAULT_N_INTERVALS, HeteroclinicProblem, PinPhase, _refine_equilibrium
+from .result import ConnectionResult
+from .solve import solve_connection
+
+log = logging.getLogger(__name__)
+
+
+def _shift_vector(system: Any, shift: Any) -> FloatArray:
+    n = system.n_states
+    if isinstance(shift, Mapping):
+        vec = np.zeros(n)
+        for k, v in shift.items():
+            vec[system.state_index(k)] = float(v)
+        return vec
+    if np.ndim(shift) == 0:
+        return np.zeros(n) if float(shift) == 0.0 else np.full(n, np.nan)
+    vec = np.asarray(shift, dtype=float).reshape(-1)
+    if vec.shape != (n,):
+        raise ValueError(f"`shift` must have shape ({n},), a mapping or 0, got {vec.shape}")
+    return vec
+
+
+def _window_min(d: FloatArray, i_low: int, level: float) -> int:
+    """Argmin of ``d`` from ``i_low`` until ``d`` rises above ``level`` again."""
+    above = np.flatnonzero(d[i_low:] > level)
+    end = d.size if above.size == 0 else i_low + int(above[0])
+    return i_low + int(np.argmin(d[i_low:end]))
+
+
+def cut_at_closest_approach(
+    t: FloatArray, x: FloatArray, x_from: FloatArray, x_to: FloatArray
+) -> tuple[int, float]:
+    """Index of the first close approach to ``x_to`` after the orbit has left ``x_from``.
+
+    Heteroclinic (``x_to != x_from``, distance ``L``): the first time the distance to
+    ``x_to`` falls below ``L / 4`` opens a window that closes when it rises above
+    ``L / 2`` again; the nearest sample in it. Homoclinic: the first local maximum
+    ``d_peak`` of the distance (at least ten times the start distance) after which
+    the distance falls below ``d_peak / 2`` before exceeding ``d_peak`` opens the
+    window (closed when the distance exceeds ``d_peak / 2`` again). Fallback: the
+    nearest sample after the orbit has first gone half its largest distance away.
+
+    Returns ``(k, d)``: the sample index and its distance to ``x_to``.
+    """
+    d_to = np.linalg.norm(x - x_to, axis=1)
+    L = float(np.linalg.norm(x_to - x_from))
+    if L > 1e-12 * (1.0 + float(np.linalg.norm(x_from))):
+        near = np.flatnonzero(d_to < 0.25 * L)
+        if near.size:
+            k = _window_min(d_to, int(near[0]), 0.5 * L)
+            return k, float(d_to[k])
+    else:
+        d = d_to
+        d0 = max(float(d[0]), 1e-300)
+        for k in range(1, d.size - 1):
+            if not (d[k] >= d[k - 1] and d[k] >= d[k + 1] and d[k] >= 10 * d0):
+                continue
+            after = d[k + 1 :]
+            low = np.flatnonzero(after < 0.5 * d[k])
+            high = np.flatnonzero(after > d[k])
+            if low.size and (high.size == 0 or low[0] < high[0]):
+                j = _window_min(d, k + 1 + int(low[0]), 0.5 * d[k])
+                return j, float(d[j])
+    d_from = np.linalg.norm(x - x_from, axis=1)
+    i_far = int(np.argmax(d_from >= 0.5 * float(np.max(d_from))))
+    k = i_far + int(np.argmin(d_to[i_far:]))
+    return k, float(d_to[k])
+
+
+def _end_pad(
+    A: FloatArray, x_to: FloatArray, x_end: FloatArray, end_distance: float, n_samples: int = 60
+) -> tuple[FloatArray, FloatArray]:
+    """Times ``s`` (K,) and states (K, n) of the linear approach to ``x_to`` from ``x_end``."""
+    lam = np.linalg.eigvals(A)
+    stable = lam.real < 0
+    mu = float(np.min(-lam.real[stable]))
+    d = x_end - x_to
+    d_s = float(np.linalg.norm(_linear_flow(A, d, np.array([0.0]), unstable=False)[0]))
+    if d_s <= end_distance:
+        return np.zeros(0), np.zeros((0, x_to.size))
+    S = math.log(d_s / end_distance) / mu
+    s = np.linspace(0.0, S, n_samples + 1)[1:]
+    return s, x_to + _linear_flow(A, d, s, unstable=False)
+
+
+def find_connection(
+    system: Any,
+    params: Any,
+    free: str | tuple[str, ...],
+    *,
+    source: Any,
+    target: Any = None,
+    shift: Any = None,
+    branch: int = 1,
+    T: float | None = None,
+    end_distance: float = 1e-4,
+    t_max: float | None = None,
+    n_intervals: int = DEFAULT_N_INTERVALS,
+    degree: int = 4,
+    phase: str | PinPhase = "integral",
+    accuracy: ConnectionAccuracy | None = None,
+    newton: NewtonSettings | None = None,
+    method: str = "newton",
+    throw: bool = False,
+) -> ConnectionResult:
+    r"""A connecting orbit from the saddle ``source`` alone (steps: module docstring).
+
+    Parameters
+    ----------
+    system : System
+        With a CasADi trace (``rhs(x, p, ops)``).
+    params : Params, mapping or array_like
+        All parameters; the ``free`` entries are the starting guesses.
+    free : str or tuple of str
+        The solved parameter(s) (as in :func:`~continuation.equilibria.continue_equilibria`).
+    source : array_like, shape (n,)
+        The start saddle (or a guess of it); its unstable manifold must be 1-D.
+    target : array_like, shape (n,), optional
+        The end saddle (or a guess). Give exactly one of ``target`` and ``shift``.
+    shift : 0, mapping of str to float, or array_like (n,), optional
+        ``x_+ = x_- + shift``: ``0`` for a homoclinic orbit, ``{"theta": 2 * pi}`` for
+        a saddle-to-shifted-saddle orbit on a cylinder.
+    branch : {+1, -1}
+        Which branch of the unstable manifold (``+1``: along the oriented eigenvector
+        of :func:`continuation.manifolds.oriented_unstable_direction`).
+    T : float, optional
+        Truncation interval; default from the eigenvalues (step 4). A given ``T``
+        centres the guess (held at its ends when ``T`` is longer).
+    end_distance : float
+        Distance (state 2-norm) of both ends of the guess from the saddles.
+    t_max : float, optional
+        Integration time of the manifold; default ``200 + 40 / lambda_u``.
+    n_intervals, degree : int
+        Starting mesh (adapted by the solve).
+    phase : "integral" or PinPhase
+        Phase condition.
+    accuracy, newton, method, throw
+        As for :func:`~continuation.bvp.solve.solve_connection`.
+
+    Returns
+    -------
+    ConnectionResult
+        With error estimates of ``free``; its ``message`` also reports the closest
+        approach of the manifold to the target and the chosen ``T``.
+
+    Raises
+    ------
+    ValueError
+        For bad input, a ``source`` whose unstable manifold is not one-dimensional, or
+        a dimension count that does not close (from :class:`HeteroclinicProblem`).
+    """
+    if (target is None) == (shift is None):
+        raise ValueError("give exactly one of `target` and `shift`")
+    if branch not in (1, -1):
+        raise ValueError(f"`branch` must be +1 or -1, got {branch!r}")
+    if not (isinstance(end_distance, (int, float)) and 0 < end_distance < 1):
+        raise ValueError(f"`end_distance` must be in (0, 1), got {end_distance!r}")
+    if T is not None and not (math.isfinite(T) and T > 0):
+        raise ValueError(f"`T` must be a positive time, got {T!r}")
+    if not isinstance(params, Params):
+        params = Params(system.param_names, system.check_params(params, "params"))
+    pvec = np.array(params.values, dtype=float)
+    x_m = _refine_equilibrium(system, system.check_state(source, "source"), pvec, "source")
+    if shift is not None:
+        x_p = x_m + _shift_vector(system, shift)
+    else:
+        x_p = _refine_equilibrium(system, system.check_state(target, "target"), pvec, "target")
+    lam_m = np.linalg.eigvals(system.jacobian(x_m, pvec))
+    n_u = int(np.sum(lam_m.real > 0))
+    if n_u != 1:
+        raise ValueError(
+            f"`source` has a {n_u}-dimensional unstable manifold (eigenvalues {lam_m}); "
+            "find_connection integrates a one-dimensional one: give a guess to "
+            "solve_connection instead"
+        )
+    lam_u = float(np.max(lam_m.real))
+    if t_max is None:
+        t_max = 200.0 + 40.0 / lam_u
+    man = unstable_manifold(
+        system, pvec, x_m, eps=end_distance, t_max=t_max, branches=(branch,), refine=False
+    )
+    traj = man.branch(branch).trajectory
+    t, x = np.asarray(traj.t, dtype=float), np.asarray(traj.x, dtype=float)
+    k, d_min = cut_at_closest_approach(t, x, x_m, x_p)
+    t, x = t[: k + 1] - t[0], x[: k + 1]
+    if k < 2:
+        raise ValueError(
+            f"branch {branch:+d} of the unstable manifold of `source` never leaves it "
+            f"towards the target within t_max = {t_max:g}; try the other `branch`"
+        )
+    A_p = np.asarray(system.jacobian(x_p, pvec), dtype=float)
+    s, xs = _end_pad(A_p, x_p, x[-1], end_distance)
+    if s.size:
+        t = np.concatenate((t, t[-1] + s))
+        x = np.vstack((x, xs))
+    T_guess = float(t[-1] - t[0])
+    T_used = T_guess if T is None else float(T)
+    fine = CollocationMesh(2 * n_intervals, degree, T_guess)
+    X = np.column_stack([np.interp(fine.t, t, x[:, i]) for i in range(x.shape[1])])
+    mesh = fine.equidistributed(X, n_intervals=n_intervals)
+    if T is not None:
+        mesh = CollocationMesh(n_intervals, degree, T_used)
+    kw: dict[str, Any] = {"saddle_to": x_p} if shift is None else {"shift": shift}
+    prob = HeteroclinicProblem(system, params, free, saddle_from=x_m, mesh=mesh, phase=phase, **kw)
+    t_cut = float(t[k])
+    reach = float(np.max(np.linalg.norm(x[: k + 1] - x_m, axis=1)))
+    note = (
+        f"guess: branch {branch:+d} of W^u(source), closest approach {d_min:.2e} to the "
+        f"target at t = {t_cut:.4g}; T = {T_used:.6g}"
+    )
+    if d_min > 0.5 * max(reach, float(np.linalg.norm(x_p - x_m))):
+        note += (
+            "; the manifold does not come near the target: try the other `branch` or a "
+            "better guess of the free parameter(s)"
+        )
+    log.info(note)
+    res = solve_connection(
+        prob, (t, x), accuracy=accuracy, newton=newton, method=method, throw=False
+    )
+    res = dataclasses.replace(res, message=f"{res.message} ({note})")
+    if throw and not res.success:
+        from ..errors import ConvergenceError
+
+        raise ConvergenceError(res.message)
+    return res
+
+
+__all__ = ["cut_at_closest_approach", "find_connection"]
