@@ -36,7 +36,15 @@ from .switching import crossing_tangents, switch_branch
 from .codim2 import FoldProblem, HopfProblem, continue_codim2
 
 # connecting orbits (boundary-value problems)
-from .bvp import ConnectionResult, HeteroclinicProblem, continue_connection, solve_connection
+from .bvp import (
+    ConnectionResult,
+    HeteroclinicProblem,
+    continue_connection,
+    find_connection,
+    solve_connection,
+)
+# periodic orbits (collocation, Floquet multipliers, cycle bifurcations)
+from .periodic import continue_from_hopf, continue_periodic, periodic_orbit_from_hopf
 
 # time domain (continuation.dynamics): simulation, manifolds, fates
 from .dynamics import FateKind, Trajectory, bisect_fate, classify_fate, simulate, unstable_manifold
@@ -75,10 +83,15 @@ __all__ = [
     "FoldProblem",
     "HopfProblem",
     # connecting orbits
+    "find_connection",
     "solve_connection",
     "continue_connection",
     "HeteroclinicProblem",
     "ConnectionResult",
+    # periodic orbits
+    "continue_periodic",
+    "continue_from_hopf",
+    "periodic_orbit_from_hopf",
     # time domain
     "simulate",
     "Trajectory",

@@ -23,7 +23,7 @@ from continuation.bvp import (
     solve_connection,
 )
 from continuation.bvp.find import cut_at_closest_approach
-from continuation.manifolds import unstable_manifold
+from continuation.dynamics.manifolds import unstable_manifold
 from continuation.settings import ContinuationSettings
 from continuation.status import Status
 from tests.connection_problems import ConnectionCase, cases, cir

@@ -6,7 +6,7 @@ Steps:
    :math:`x_+ = x_- + \text{shift}`); the source must have a one-dimensional unstable
    manifold.
 2. Integrate the chosen branch of :math:`W^u(x_-)` from :math:`x_- \pm \delta v_u`,
-   :math:`\delta` = ``end_distance`` (:func:`continuation.manifolds.unstable_manifold`).
+   :math:`\delta` = ``end_distance`` (:func:`continuation.dynamics.manifolds.unstable_manifold`).
 3. Cut it at its closest approach to :math:`x_+`: for a heteroclinic target the
    nearest sample after the orbit has left :math:`x_-` (half its largest distance
    from :math:`x_-`); for a homoclinic one the first local minimum of the distance
@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ..manifolds import unstable_manifold
+from ..dynamics.manifolds import unstable_manifold
 from ..params import Params
 from ..settings import NewtonSettings
 from ..typing import FloatArray
@@ -162,7 +162,7 @@ def find_connection(
         a saddle-to-shifted-saddle orbit on a cylinder.
     branch : {+1, -1}
         Which branch of the unstable manifold (``+1``: along the oriented eigenvector
-        of :func:`continuation.manifolds.oriented_unstable_direction`).
+        of :func:`continuation.dynamics.saddles.oriented_unstable_direction`).
     T : float, optional
         Truncation interval; default from the eigenvalues (step 4). A given ``T``
         centres the guess (held at its ends when ``T`` is longer).
