@@ -58,6 +58,7 @@ from continuation.system import System
 
 from .estimation import VesselModelData, resolve_vessel
 from .forces import ShipForces
+from .paper import PAPER_CHI_C, PAPER_FN
 from .vessel import VesselData, load_vessel
 
 STATE_NAMES = ("xi_G", "u", "v", "chi", "r", "phi", "p_roll", "delta")
@@ -127,8 +128,8 @@ class Umeda4DOF(System):
         self.wave_lift = bool(wave_lift)
         v = self.vessel
         defaults = {
-            "Fn": 0.3248,
-            "chi_c": float(np.deg2rad(10.0)),
+            "Fn": PAPER_FN,
+            "chi_c": PAPER_CHI_C,
             "H_over_lambda": v.get("waves.H_over_lambda"),
             "lambda_over_L": v.get("waves.lambda_over_L"),
             "K_R": v.get("autopilot.K_R"),
@@ -190,7 +191,7 @@ class Umeda4DOF(System):
         return self.state_index(name)
 
     def default_params(self) -> Params:
-        """Fn = 0.3248, chi_c = 10 deg, the vessel's wave and autopilot (Umeda 1999)."""
+        """Fn = PAPER_FN (0.3248), chi_c = 10 deg, the vessel's wave and autopilot (Umeda 1999)."""
         return self.params()
 
     def celerity(self, params: Params | FloatArray) -> float:

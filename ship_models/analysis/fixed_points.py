@@ -37,6 +37,7 @@ from continuation.status import Status
 
 from ..surge import SurgeModel
 from .eigen import EigenStructure, eigen_structure
+from .params import ship_params
 
 log = logging.getLogger(__name__)
 
@@ -59,12 +60,6 @@ def position_label(xi: float) -> str:
     """``"crest"`` if ``xi_G/lambda`` (mod 1) is nearer the crest (0.5) than the trough (0)."""
     d = float(np.mod(xi, 1.0))
     return "crest" if abs(d - 0.5) < 0.25 else "trough"
-
-
-def _params(model: Any, params: Any) -> Params:
-    if params is None:
-        return model.default_params()
-    return Params(model.param_names, model.check_params(params, "params"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -157,7 +152,7 @@ def surge_roots(model: Any, params: Params | None = None, *, n_grid: int = 400) 
     list of ndarray, shape (8,)
         Sorted by ``xi_G`` in [0, 1); empty when surf-riding is impossible at this ``Fn``.
     """
-    par = _params(model, params)
+    par = ship_params(model, params)
     if not (isinstance(n_grid, int) and n_grid >= 4):
         raise ValueError(f"`n_grid` must be an integer >= 4, got {n_grid!r}")
     sm = surge_model_of(model)
@@ -204,7 +199,7 @@ def trace_in_chi_c(
         folds are located (``branch.find("fold")``). A ``KeyboardInterrupt`` inside
         a branch ends it with ``Status.INTERRUPTED`` and later branches are skipped.
     """
-    par = _params(model, params).replace(chi_c=0.0)
+    par = ship_params(model, params).replace(chi_c=0.0)
     if not (math.isfinite(chi_c_max) and 0 < abs(chi_c_max) < math.pi / 2):
         raise ValueError(f"`chi_c_max` must be nonzero with |chi_c_max| < pi/2, got {chi_c_max}")
     lo, hi = (0.0, chi_c_max) if chi_c_max > 0 else (chi_c_max, 0.0)
@@ -263,7 +258,7 @@ def trace_in_fn(
         the crest and trough points typically merge in a fold at the lowest ``Fn``
         that allows surf-riding).
     """
-    par = _params(model, params)
+    par = ship_params(model, params)
     if not (0 < fn_min < fn_max):
         raise ValueError(f"need 0 < fn_min < fn_max, got fn_min={fn_min}, fn_max={fn_max}")
     if not fn_min <= par["Fn"] <= fn_max:
@@ -351,7 +346,7 @@ def fixed_points(
         Sorted crest first, then by ``xi_G``; labels made unique. Empty when no surge
         root exists at this ``Fn`` (surf-riding impossible).
     """
-    par = _params(model, params)
+    par = ship_params(model, params)
     target = par["chi_c"]
     if not abs(target) < math.radians(85.0):
         raise ValueError(f"`params['chi_c']` must be within +-85 deg, got {target}")
@@ -400,7 +395,7 @@ def find_fixed_point(
         if fp.label == label:
             return fp
     raise ValueError(
-        f"no fixed point labelled {label!r} at {(_params(model, params)).as_dict()}; "
+        f"no fixed point labelled {label!r} at {(ship_params(model, params)).as_dict()}; "
         f"found {[fp.label for fp in pts]}"
     )
 

@@ -68,6 +68,7 @@ import numpy as np
 from continuation._types import FloatArray
 from continuation.errors import ContinuationError
 from continuation.fates import Fate, FateClassifier, FateKind
+from continuation.manifolds import unstable_manifold as engine_unstable_manifold
 from continuation.params import Params
 from continuation.simulate import EventHits, PoincareSection, SimEvent, Trajectory
 from continuation.status import Status
@@ -75,13 +76,11 @@ from continuation.status import Status
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
 from .fixed_points import FixedPoint, find_fixed_point, fixed_points
+from .outcomes import ShipOutcome
+from .params import ship_params
 
 log = logging.getLogger(__name__)
 
-CAPSIZE, PERIODIC, RECURRENT = "capsize", "periodic", "recurrent"
-EQUILIBRIUM, SADDLE, UNDECIDED = "equilibrium", "saddle", "undecided"
-#: Fate kinds, in the order of the module documentation.
-FATE_KINDS = (CAPSIZE, PERIODIC, RECURRENT, EQUILIBRIUM, SADDLE, UNDECIDED)
 #: Branch names: sign of the displacement along the unstable eigenvector.
 BRANCH_SIGNS = {"downslope": 1.0, "upslope": -1.0}
 
@@ -121,8 +120,8 @@ class ShipFate:
 
     Attributes
     ----------
-    kind : str
-        One of :data:`FATE_KINDS`.
+    kind : ShipOutcome
+        One of :data:`~ship_models.analysis.outcomes.FATE_KINDS`.
     t : float
         Time at which the fate was decided (s).
     visits : tuple of SaddleVisit
@@ -143,7 +142,7 @@ class ShipFate:
     message : str
     """
 
-    kind: str
+    kind: ShipOutcome
     t: float
     visits: tuple[SaddleVisit, ...] = ()
     period: float | None = None
@@ -157,7 +156,7 @@ class ShipFate:
     @property
     def label(self) -> str:
         """Short name: ``"capsize"``, ``"periodic"``, ``"equilibrium:<label>"``, ..."""
-        if self.kind in (EQUILIBRIUM, SADDLE):
+        if self.kind in (ShipOutcome.EQUILIBRIUM, ShipOutcome.SADDLE):
             return f"{self.kind}:{self.equilibrium}"
         return self.kind
 
@@ -206,14 +205,18 @@ def _ship_fate(
     shift = int(fate.shift[0]) if fate.shift else 0
     common = {"t": float(fate.t), "visits": visits, "message": fate.message}
     kind = fate.kind
-    if kind is FateKind.EVENT and fate.name == CAPSIZE:
-        return ShipFate(CAPSIZE, **common)
+    if kind is FateKind.EVENT and fate.name == ShipOutcome.CAPSIZE:
+        return ShipFate(ShipOutcome.CAPSIZE, **common)
     if kind is FateKind.PERIODIC:
         return ShipFate(
-            PERIODIC, period=fate.period, drift=shift, returns=fate.multiplicity, **common
+            ShipOutcome.PERIODIC,
+            period=fate.period,
+            drift=shift,
+            returns=fate.multiplicity,
+            **common,
         )
     if kind in (FateKind.EQUILIBRIUM, FateKind.SADDLE):
-        k = EQUILIBRIUM if kind is FateKind.EQUILIBRIUM else SADDLE
+        k = ShipOutcome.EQUILIBRIUM if kind is FateKind.EQUILIBRIUM else ShipOutcome.SADDLE
         name = fate.name
         if fate.index is None and fate.x_equilibrium is not None:
             # an equilibrium the classifier found by itself: match it to a known point
@@ -228,7 +231,7 @@ def _ship_fate(
     if kind is FateKind.UNDECIDED and fate.status is Status.SUCCESS and len(hits) >= n_recurrent:
         m = len(hits) - 1
         return ShipFate(
-            RECURRENT,
+            ShipOutcome.RECURRENT,
             period=float((hits.t[-1] - hits.t[0]) / m),
             drift=int(round((hits.x[-1, 0] - hits.x[0, 0]) / m)),
             t=float(fate.t),
@@ -241,7 +244,7 @@ def _ship_fate(
     status = fate.status
     if kind is FateKind.UNDECIDED and status is Status.SUCCESS:
         status = Status.MAX_STEPS
-    return ShipFate(UNDECIDED, status=status, **common)
+    return ShipFate(ShipOutcome.UNDECIDED, status=status, **common)
 
 
 def classify_ship_fate(
@@ -337,7 +340,7 @@ def classify_ship_fate(
     phi_cap = capsize_angle_of(model, capsize_angle)
     i_phi = model.state_index("phi")
     capsize = SimEvent(
-        CAPSIZE,
+        ShipOutcome.CAPSIZE,
         lambda t, x: np.abs(np.asarray(x)[..., i_phi]) - phi_cap,
         terminal=True,
         direction=1,
@@ -441,10 +444,31 @@ class ShipManifold:
         }
 
 
-def manifold_start(saddle: FixedPoint, eps: float, sign: float) -> FloatArray:
-    """``x_s + sign * eps * S y'_u``: the start of one unstable-manifold branch, shape (8,)."""
+def _engine_eps(saddle: FixedPoint, eps: float) -> float:
+    """``eps |y'_u|_2``: the engine's start distance for the ship's nondimensional ``eps``.
+
+    :func:`continuation.manifolds.unstable_manifold` starts at ``x_s + sign eps_2 v``
+    with ``v`` the unstable eigenvector of unit ``||v / S||_2`` (``S = scales``), i.e.
+    ``v = S y'_u / |y'_u|_2`` with ``y'_u`` the nondimensional eigenvector of max-norm 1.
+    """
     y = saddle.eigen.unstable_vector(0, nondim=True)
-    return np.asarray(saddle.x + sign * eps * saddle.eigen.scales * y, dtype=float)
+    return float(eps) * float(np.linalg.norm(y))
+
+
+def manifold_start(saddle: FixedPoint, eps: float, sign: float) -> FloatArray:
+    """``x_s + sign * eps * S y'_u``: the start of one unstable-manifold branch, shape (8,).
+
+    Computed as the engine's :func:`continuation.manifolds.unstable_manifold` does
+    (``x_s + sign eps_2 v``, ``v`` the real eigenvector of the largest eigenvalue of unit
+    scale-weighted 2-norm, ``xi_G`` component positive, ``eps_2`` from
+    :func:`_engine_eps`), so it is the start point of :func:`unstable_manifold` to the bit.
+    """
+    s = np.asarray(saddle.eigen.scales, dtype=float)
+    v = np.real(saddle.eigen.vectors[:, 0])
+    v = v / np.linalg.norm(v / s)
+    if v[list(saddle.eigen.state_names).index("xi_G")] < 0:
+        v = -v
+    return np.asarray(saddle.x + sign * _engine_eps(saddle, eps) * v, dtype=float)
 
 
 def unstable_manifold(
@@ -496,11 +520,7 @@ def unstable_manifold(
         If the saddle does not have exactly one unstable eigenvalue, which must be
         real; for ``eps`` outside (0, 0.1); for an unknown branch name.
     """
-    par = (
-        model.default_params()
-        if params is None
-        else Params(model.param_names, model.check_params(params, "params"))
-    )
+    par = ship_params(model, params)
     if not (isinstance(eps, (int, float)) and 0 < eps < 0.1):
         raise ValueError(f"`eps` must be in (0, 0.1), got {eps!r}")
     bad = [b for b in branches if b not in BRANCH_SIGNS]
@@ -520,22 +540,42 @@ def unstable_manifold(
     lam = sp.eigen.values[0]
     if lam.imag != 0.0:
         raise ValueError(f"`saddle` {sp.label!r}: unstable eigenvalue {lam} is not real")
+    eps_2 = _engine_eps(sp, eps)  # the engine's distance for x_s + sign eps S y'_u
     out: dict[str, ManifoldBranch] = {}
     for name in branches:
         sign = BRANCH_SIGNS[name]
-        x0 = manifold_start(sp, eps, sign)
         cb = None if progress is None else (lambda t, _n=name: progress(_n, t))
-        traj, fate = classify_ship_fate(
+        found: dict[str, Any] = {}
+
+        def classify_branch(x0: FloatArray, _cb: Any = cb, _found: dict = found) -> ShipFate:
+            _found["trajectory"], fate = classify_ship_fate(
+                model,
+                par,
+                x0,
+                points=pts,
+                capsize_angle=capsize_angle,
+                t_max=t_max,
+                progress=_cb,
+                **classify,
+            )
+            return fate
+
+        man = engine_unstable_manifold(
             model,
-            par,
-            x0,
-            points=pts,
-            capsize_angle=capsize_angle,
-            t_max=t_max,
-            progress=cb,
-            **classify,
+            np.asarray(par.values, dtype=float),
+            sp.x,
+            eps=eps_2,
+            classify=classify_branch,
+            branches=(int(sign),),
+            orient="xi_G",
+            scale=sp.eigen.scales,
+            refine=False,
         )
-        out[name] = ManifoldBranch(name, sign, x0, traj, fate)
+        br = man.branch(int(sign)) if man.branches else None
+        if br is None:  # interrupted before the branch was classified
+            break
+        fate = br.fate
+        out[name] = ManifoldBranch(name, sign, br.x0, found["trajectory"], fate)
         log.debug("%s branch of %s: %s (%s)", name, sp.label, fate.label, fate.message)
         if fate.status is Status.INTERRUPTED:
             break
@@ -544,11 +584,6 @@ def unstable_manifold(
 
 __all__ = [
     "BRANCH_SIGNS",
-    "CAPSIZE",
-    "EQUILIBRIUM",
-    "FATE_KINDS",
-    "PERIODIC",
-    "UNDECIDED",
     "ManifoldBranch",
     "SaddleVisit",
     "ShipFate",
