@@ -14,7 +14,7 @@ model (:mod:`ship_models`); the figure scripts in ``studies/`` and the command l
 - :mod:`.manifold` -- unstable manifolds of a saddle and their fates (Figs. 10-15), on
   the engine's :func:`continuation.manifolds.unstable_manifold`
 - :mod:`.global_picture` -- fixed points, attractors and manifolds as a graph
-- :mod:`.crest_saddle` -- the crest saddle and its upslope unstable direction
+- :mod:`.crest_saddle` -- the crest saddle followed from chi_c = 0 (a ``FixedPoint``)
 - :mod:`.upslope` -- one run of the upslope branch, its fate, a connection guess
 - :mod:`.critical` -- ``critical_fn(model, params, method="bvp"|"bisection")``, one
   result type ``CriticalFn`` (:mod:`.critical_result`)
@@ -66,7 +66,6 @@ _LAZY = {
     "build_global_picture": ".global_picture",
     "CriticalCurve": ".critical_curve",
     "critical_curve": ".critical_curve",
-    "CrestSaddle": ".crest_saddle",
     "crest_saddle": ".crest_saddle",
     "UpslopeRun": ".upslope",
     "upslope_branch": ".upslope",
@@ -92,7 +91,6 @@ def __getattr__(name: str) -> Any:
 __all__ = [
     "BVPSettings",
     "CRITERIA",
-    "CrestSaddle",
     "CriticalCurve",
     "CriticalFn",
     "EigenStructure",

@@ -47,8 +47,9 @@ from continuation.bvp import (
 from continuation.errors import ConvergenceError
 from continuation.settings import NewtonSettings
 
-from .crest_saddle import CrestSaddle, crest_saddle
+from .crest_saddle import crest_saddle
 from .critical_result import CriticalFn
+from .fixed_points import FixedPoint
 from .params import course, ship_model, ship_params
 from .upslope import UpslopeRun, connection_guess, guess_run
 
@@ -160,7 +161,7 @@ def _pads(
     x: FloatArray,
     x_from: FloatArray,
     x_to: FloatArray,
-    saddle: CrestSaddle,
+    saddle: FixedPoint,
     d_start: float,
     d_end: float,
 ) -> tuple[float, float, float, float]:
@@ -168,12 +169,12 @@ def _pads(
 
     ``log(d / d_target) / rate`` with the unstable rate at the start and, at the end,
     the slowest stable rate among the modes present in the end offset
-    (:meth:`CrestSaddle.approach_rate`).
+    (:meth:`~ship_models.analysis.eigen.EigenStructure.approach_rate`).
     """
     d0 = float(np.linalg.norm(x[0] - x_from))
     d1 = float(np.linalg.norm(x[-1] - x_to))
-    pad0 = math.log(d0 / d_start) / saddle.rate if d0 > d_start else 0.0
-    pad1 = math.log(d1 / d_end) / saddle.approach_rate(x[-1] - x_to) if d1 > d_end else 0.0
+    pad0 = math.log(d0 / d_start) / saddle.unstable_rate if d0 > d_start else 0.0
+    pad1 = math.log(d1 / d_end) / saddle.eigen.approach_rate(x[-1] - x_to) if d1 > d_end else 0.0
     return pad0, pad1, d0, d1
 
 
@@ -234,7 +235,7 @@ def critical_fn_bvp(
        saddle (:func:`~ship_models.analysis.upslope.connection_guess`) and pad the
        end with an exponential approach, ``log(d / end_distance) / mu`` longer, ``mu``
        the slowest stable rate present in the end offset
-       (:meth:`CrestSaddle.approach_rate`).
+       (:meth:`~ship_models.analysis.eigen.EigenStructure.approach_rate`).
     2. Mesh: ``ceil(T / interval_length)`` intervals equidistributing the
        collocation error monitor of the guess (``mesh_from_guess``).
     3. Solve the collocation system with ``Fn`` unknown

@@ -91,6 +91,11 @@ class FixedPoint:
         return self.eigen.saddle_index
 
     @property
+    def unstable_rate(self) -> float:
+        """The largest real part of the eigenvalues, ``lambda_u`` of a saddle (1/s)."""
+        return float(self.eigen.values[0].real)
+
+    @property
     def stable(self) -> bool:
         """No eigenvalue with positive real part."""
         return self.eigen.saddle_index == 0

@@ -31,8 +31,9 @@ from continuation.params import Params
 from continuation.simulate import SimEvent, Trajectory
 from continuation.status import Status
 
-from .crest_saddle import CrestSaddle, crest_saddle
+from .crest_saddle import crest_saddle
 from .events import capsize_event
+from .fixed_points import FixedPoint
 from .outcomes import ShipOutcome
 
 #: Shift of ``xi_G/lambda`` from the crest saddle to the saddle the upslope branch meets.
@@ -51,7 +52,8 @@ class UpslopeRun:
     ----------
     trajectory : Trajectory
         From ``x_s + eps v_u`` (``xi_G`` unwrapped).
-    saddle : CrestSaddle
+    saddle : FixedPoint
+        The crest saddle (:func:`~ship_models.analysis.crest_saddle.crest_saddle`).
     params : Params
         The parameters of the run.
     fate : ShipOutcome
@@ -62,7 +64,7 @@ class UpslopeRun:
     """
 
     trajectory: Trajectory
-    saddle: CrestSaddle
+    saddle: FixedPoint
     fate: ShipOutcome
     params: Params
 
@@ -98,7 +100,7 @@ def upslope_branch(
     dt: float = 0.05,
     rtol: float = 1e-9,
     atol: float = 1e-11,
-    saddle: CrestSaddle | None = None,
+    saddle: FixedPoint | None = None,
 ) -> UpslopeRun:
     r"""Simulate the upslope branch ``x_s + eps v_u`` and classify its fate.
 
