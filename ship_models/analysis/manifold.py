@@ -57,6 +57,7 @@ the slope: the first-passage criterion of :mod:`ship_models.analysis.critical`).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections.abc import Callable, Sequence
@@ -247,40 +248,12 @@ def _ship_fate(
     return ShipFate(ShipOutcome.UNDECIDED, status=status, **common)
 
 
-def classify_ship_fate(
-    model: Any,
-    params: Params,
-    x0: FloatArray,
-    *,
-    points: Sequence[FixedPoint],
-    capsize_angle: float | None = None,
-    t_max: float = 600.0,
-    segment: float = 50.0,
-    dt: float = 0.05,
-    section: float | None = None,
-    return_tol: float = 1e-4,
-    max_lag: int = 4,
-    n_recurrent: int = 30,
-    visit_radius: float = 0.1,
-    progress: Callable[[float], None] | None = None,
-    rtol: float = 1e-9,
-    atol: float = 1e-11,
-) -> tuple[Trajectory, ShipFate]:
-    """Integrate from ``x0`` in segments until the fate is known (see module notes).
+@dataclass(frozen=True)
+class ShipFateSettings:
+    """Settings of the ship's fate classification (:func:`classify_ship_fate`).
 
-    The generic :class:`continuation.fates.FateClassifier` does the work; this function
-    supplies the ship's capsize event, Poincare section, nondimensional distance and
-    fixed points, and adds the ``recurrent`` fate.
-
-    Parameters
+    Attributes
     ----------
-    model : Umeda4DOF
-    params : Params
-    x0 : ndarray, shape (8,)
-    points : sequence of FixedPoint
-        The fixed points at ``params`` (saddles for ``visits`` and the ``saddle``
-        fate, stable points for the ``equilibrium`` fate), e.g. from
-        :func:`~ship_models.analysis.fixed_points`.
     capsize_angle : float, optional
         Roll angle (rad) of the capsize event; default: vanishing stability of GZ.
     t_max : float
@@ -304,10 +277,75 @@ def classify_ship_fate(
         fate is ``recurrent``.
     visit_radius : float
         Distance to a saddle that counts as a visit.
-    progress : callable, optional
-        ``progress(t)`` after each segment.
     rtol, atol : float
         Integrator tolerances (CVODES BDF, :mod:`continuation.simulate`).
+
+    Raises
+    ------
+    ValueError
+        On construction, naming a non-positive field.
+    """
+
+    capsize_angle: float | None = None
+    t_max: float = 600.0
+    segment: float = 50.0
+    dt: float = 0.05
+    section: float | None = None
+    return_tol: float = 1e-4
+    max_lag: int = 4
+    n_recurrent: int = 30
+    visit_radius: float = 0.1
+    rtol: float = 1e-9
+    atol: float = 1e-11
+
+    def __post_init__(self) -> None:
+        for name in (
+            "t_max", "segment", "dt", "return_tol", "max_lag", "n_recurrent", "visit_radius",
+            "rtol", "atol",
+        ):  # fmt: skip
+            val = getattr(self, name)
+            if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
+                raise ValueError(f"`{name}` must be a positive number, got {val!r}")
+
+    def replace(self, **changes: Any) -> ShipFateSettings:
+        """A copy with ``changes``; unknown names raise a ValueError naming them."""
+        bad = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
+        if bad:
+            raise ValueError(f"unknown fate setting(s) {bad}")
+        return dataclasses.replace(self, **changes) if changes else self
+
+
+def classify_ship_fate(
+    model: Any,
+    params: Params,
+    x0: FloatArray,
+    *,
+    points: Sequence[FixedPoint],
+    settings: ShipFateSettings | None = None,
+    progress: Callable[[float], None] | None = None,
+    **options: Any,
+) -> tuple[Trajectory, ShipFate]:
+    """Integrate from ``x0`` in segments until the fate is known (see module notes).
+
+    The generic :class:`continuation.fates.FateClassifier` does the work; this function
+    supplies the ship's capsize event, Poincare section, nondimensional distance and
+    fixed points, and adds the ``recurrent`` fate.
+
+    Parameters
+    ----------
+    model : Umeda4DOF
+    params : Params
+    x0 : ndarray, shape (8,)
+    points : sequence of FixedPoint
+        The fixed points at ``params`` (saddles for ``visits`` and the ``saddle``
+        fate, stable points for the ``equilibrium`` fate), e.g. from
+        :func:`~ship_models.analysis.fixed_points`.
+    settings : ShipFateSettings, optional
+        Time limit, segments, tolerances (default ``ShipFateSettings()``).
+    progress : callable, optional
+        ``progress(t)`` after each segment.
+    **options
+        Fields of :class:`ShipFateSettings` replaced in ``settings`` (``t_max=...``).
 
     Returns
     -------
@@ -318,19 +356,12 @@ def classify_ship_fate(
     Raises
     ------
     ValueError
-        For non-positive ``t_max``, ``segment``, ``dt`` or tolerances.
+        For non-positive settings or unknown option names.
     """
-    for name, val in (
-        ("t_max", t_max),
-        ("segment", segment),
-        ("dt", dt),
-        ("return_tol", return_tol),
-        ("max_lag", max_lag),
-        ("n_recurrent", n_recurrent),
-        ("visit_radius", visit_radius),
-    ):
-        if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
-            raise ValueError(f"`{name}` must be a positive number, got {val!r}")
+    cfg = (settings or ShipFateSettings()).replace(**options)
+    capsize_angle, t_max, segment, dt = cfg.capsize_angle, cfg.t_max, cfg.segment, cfg.dt
+    section, return_tol, max_lag = cfg.section, cfg.return_tol, cfg.max_lag
+    n_recurrent, visit_radius, rtol, atol = cfg.n_recurrent, cfg.visit_radius, cfg.rtol, cfg.atol
     x0 = model.check_state(x0, "x0")
     pts = list(points)
     saddles = [fp for fp in pts if fp.saddle_index >= 1]
@@ -477,12 +508,11 @@ def unstable_manifold(
     saddle: FixedPoint | str = "crest",
     *,
     eps: float = 1e-6,
-    t_max: float = 600.0,
     branches: Sequence[str] = ("downslope", "upslope"),
     points: Sequence[FixedPoint] | None = None,
-    capsize_angle: float | None = None,
+    settings: ShipFateSettings | None = None,
     progress: Callable[[str, float], None] | None = None,
-    **classify: Any,
+    **options: Any,
 ) -> ShipManifold:
     """Both branches of the unstable manifold of a ship saddle, with their fates.
 
@@ -490,25 +520,23 @@ def unstable_manifold(
     ----------
     model : Umeda4DOF
     params : Params, optional
-        Default: the model's defaults (Fn = 0.3248, chi_c = 10 deg).
+        Default: the model's defaults (``ship_models.paper``: Fn = 0.3248, chi_c = 10 deg).
     saddle : FixedPoint or str
         The saddle, or its label among :func:`~ship_models.analysis.fixed_points`
         (default ``"crest"``: the point near the wave crest, as in the paper).
     eps : float
         Nondimensional initial displacement along the unstable eigenvector.
-    t_max : float
-        Time limit of each branch (s).
     branches : sequence of str
         Which of ``"downslope"``, ``"upslope"`` to compute.
     points : sequence of FixedPoint, optional
         Fixed points for the classification (default: all at ``params``).
-    capsize_angle : float, optional
-        Roll angle of capsize (rad); default the vanishing angle of GZ.
+    settings : ShipFateSettings, optional
+        The classification of each branch (time limit ``t_max``, ``capsize_angle``,
+        ``segment``, ``dt``, ``return_tol``, ``visit_radius``, ``section``, ...).
     progress : callable, optional
         ``progress(branch_name, t)`` after each integration segment.
-    **classify
-        Further options of :func:`classify_ship_fate` (``segment``, ``dt``,
-        ``return_tol``, ``eq_radius``, ``visit_radius``, ``section``).
+    **options
+        Fields of :class:`ShipFateSettings` replaced in ``settings``.
 
     Returns
     -------
@@ -521,6 +549,7 @@ def unstable_manifold(
         real; for ``eps`` outside (0, 0.1); for an unknown branch name.
     """
     par = ship_params(model, params)
+    cfg = (settings or ShipFateSettings()).replace(**options)
     if not (isinstance(eps, (int, float)) and 0 < eps < 0.1):
         raise ValueError(f"`eps` must be in (0, 0.1), got {eps!r}")
     bad = [b for b in branches if b not in BRANCH_SIGNS]
@@ -549,14 +578,7 @@ def unstable_manifold(
 
         def classify_branch(x0: FloatArray, _cb: Any = cb, _found: dict = found) -> ShipFate:
             _found["trajectory"], fate = classify_ship_fate(
-                model,
-                par,
-                x0,
-                points=pts,
-                capsize_angle=capsize_angle,
-                t_max=t_max,
-                progress=_cb,
-                **classify,
+                model, par, x0, points=pts, settings=cfg, progress=_cb
             )
             return fate
 
