@@ -36,6 +36,7 @@ from continuation.settings import NewtonSettings
 from continuation.status import Status
 
 from ..surge import SurgeModel
+from ..umeda_4dof import follow_in_chi_c
 from .eigen import EigenStructure, eigen_structure
 from .params import ship_params
 
@@ -207,22 +208,11 @@ def trace_in_chi_c(
     par = ship_params(model, params).replace(chi_c=0.0)
     if not (math.isfinite(chi_c_max) and 0 < abs(chi_c_max) < math.pi / 2):
         raise ValueError(f"`chi_c_max` must be nonzero with |chi_c_max| < pi/2, got {chi_c_max}")
-    lo, hi = (0.0, chi_c_max) if chi_c_max > 0 else (chi_c_max, 0.0)
     out: dict[str, Branch] = {}
     for x0 in surge_roots(model, par):
         key = _unique_key(out, position_label(x0[0]))
-        br = continue_equilibria(
-            model,
-            x0,
-            par,
-            "chi_c",
-            ds=math.copysign(ds, chi_c_max),
-            ds_max=ds_max,
-            p_min=lo,
-            p_max=hi,
-            max_steps=max_steps,
-            direction="forward",
-            progress=progress,
+        br = follow_in_chi_c(
+            model, x0, par, chi_c_max, ds=ds, ds_max=ds_max, max_steps=max_steps, progress=progress
         )
         out[key] = br
         if br.status is Status.INTERRUPTED:
