@@ -333,9 +333,9 @@ def periodic_orbit(
     section : float
         The level ``c``.
     direction : {None, 1, -1}
-        Crossing direction of the return map. None: a rotation orbit, the direction of
-        its shift (the transient counts crossings both ways); an orbit that does not
-        rotate then fails with ``Status.UNDECIDED``.
+        Crossing direction of the return map. None (only for a periodic ``state``): a
+        rotation orbit, the direction of its shift (the transient counts crossings both
+        ways); an orbit that does not rotate then fails with ``Status.UNDECIDED``.
     scale : array_like, shape (n,), optional
         Scales of the max-norm (default ones).
     events : sequence of SimEvent
@@ -353,7 +353,8 @@ def periodic_orbit(
     Raises
     ------
     ValueError
-        For a bad ``state``, ``section``, ``direction``, ``scale`` or ``x_guess``.
+        For a bad ``state``, ``section``, ``direction`` (None for a non-periodic
+        ``state``), ``scale`` or ``x_guess``.
     """
     t_start = time.perf_counter()
     cfg = settings or ShootingSettings()
@@ -382,6 +383,11 @@ def periodic_orbit(
     others = [k for k in range(n) if k != i]
     s_o = sc[others]
     per_i = float(_periods(system)[i])
+    if direction is None and per_i <= 0:
+        raise ValueError(
+            f"`direction` must be given: state {names[i]!r} is not periodic, so the orbit "
+            "cannot be a rotation (give 1 or -1 for an oscillation)"
+        )
     terminal = {e.name for e in events if getattr(e, "terminal", False)}
 
     def fail(status: Status, msg: str, traj: Trajectory) -> PeriodicOrbit:
