@@ -9,23 +9,23 @@ estimated coefficients, ``H/lambda = 0.1087``, ``lambda/L = 1.5``):
 
 1. One course, ``chi_c = 10 deg``, to 1e-6 in Fn:
 
-   * **BVP**: :func:`ship_models.analysis.connection.critical_fn_bvp` with its
+   * **BVP**: :func:`ship_models.analysis.critical_bvp.critical_fn_bvp` with its
      defaults: one simulation of the upslope manifold at the vessel's default Fn
-     (0.3248, the paper's value) as the guess, then Newton on the collocation system
-     (Fn unknown). Its error is measured against a reference solve on a 2.5x finer,
-     longer mesh; it is about 1e-7.
-   * **bisection (lean)**: :func:`ship_models.analysis.connection.critical_fn_bisection`,
+     (``ship_models.paper.PAPER_FN``, the paper's value) as the guess, then Newton on
+     the collocation system (Fn unknown). Its error is measured against a reference
+     solve on a 2.5x finer, longer mesh; it is about 1e-7.
+   * **bisection (lean)**: :func:`ship_models.analysis.critical_bisection.upslope_bisection`,
      fate of the upslope manifold (periodic vs captured, decided by terminal events
      as soon as the branch passes the next crest or turns back) by CVODES (rtol
      1e-9), from the bracket (0.28, 0.33) to a width of 1e-6 (18 simulations);
    * **bisection (project tool)**: :func:`ship_models.analysis.critical.critical_fn`
-     (``broachkit critical --method bisection``), whose fate classifier also
-     identifies the periodic attractor by Poincare returns, from its default
-     bracket (0.25, 0.40) to 1e-6; timed once (it takes seconds per course).
+     with ``method="bisection"`` (``broachkit critical --method bisection``), whose
+     fate classifier also identifies the periodic attractor by Poincare returns, from
+     its default bracket (0.25, 0.40) to 1e-6; timed once (it takes seconds per course).
 
 2. The whole curve, ``chi_c = 0, 1, ..., 30 deg``:
 
-   * **continuation**: :func:`ship_models.analysis.connection.critical_curve` (one
+   * **continuation**: :func:`ship_models.analysis.critical_curve.critical_curve` (one
      BVP solve at 15 deg, pseudo-arclength in ``chi_c``, each course corrected
      exactly);
    * **31 bisections** (lean) as above; by default 4 of them (0, 10, 20, 30 deg) are
@@ -74,11 +74,9 @@ def _timed(fn: Callable[[], Any], repeat: int) -> tuple[Any, float, list[float]]
 def run(repeat: int = 3, full: bool = False) -> dict[str, Any]:
     """Run both comparisons; return the numbers (also printed by :func:`main`)."""
     from ship_models import purse_seiner
-    from ship_models.analysis.connection import (
-        critical_curve,
-        critical_fn_bisection,
-        critical_fn_bvp,
-    )
+    from ship_models.analysis.critical_bisection import upslope_bisection
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
+    from ship_models.analysis.critical_curve import critical_curve
 
     model = purse_seiner()
     chi10 = math.radians(10.0)
@@ -93,7 +91,7 @@ def run(repeat: int = 3, full: bool = False) -> dict[str, Any]:
     # ---- 1. one course
     bvp, t_bvp, ts_bvp = _timed(lambda: critical_fn_bvp(chi10, model=model), repeat)
     bis, t_bis, ts_bis = _timed(
-        lambda: critical_fn_bisection(chi10, model=model, bracket=BRACKET, tol=TOL), repeat
+        lambda: upslope_bisection(chi10, model=model, Fn_bracket=BRACKET, tol=TOL), repeat
     )
     ref = critical_fn_bvp(
         chi10, model=model, interval_length=0.3, start_distance=1e-4, end_distance=1e-3
@@ -107,7 +105,7 @@ def run(repeat: int = 3, full: bool = False) -> dict[str, Any]:
         "refined_Fn": ref.Fn,
         "bisection_Fn": bis.Fn,
         "bisection_bracket": list(bis.bracket),
-        "bisection_runs": bis.n_runs,
+        "bisection_runs": bis.n_evaluations,
         "bisection_s": t_bis,
         "bisection_runs_s": ts_bis,
         "bvp_minus_bisection": bvp.Fn - bis.Fn,
@@ -120,11 +118,11 @@ def run(repeat: int = 3, full: bool = False) -> dict[str, Any]:
         critical_fn = None
     if critical_fn is not None:
         t0 = time.perf_counter()
-        tool = critical_fn(model, chi10, tol=TOL)
+        tool = critical_fn(model, chi_c=chi10, method="bisection", tol=TOL)
         t_tool = time.perf_counter() - t0
         res["one_course"].update(
             {
-                "tool_Fn": tool.fn_critical,
+                "tool_Fn": tool.Fn,
                 "tool_bracket": list(tool.bracket),
                 "tool_runs": tool.n_evaluations,
                 "tool_s": t_tool,
@@ -139,7 +137,7 @@ def run(repeat: int = 3, full: bool = False) -> dict[str, Any]:
     b_times, b_vals = [], []
     for d in degs:
         t0 = time.perf_counter()
-        b = critical_fn_bisection(math.radians(d), model=model, bracket=BRACKET, tol=TOL)
+        b = upslope_bisection(math.radians(d), model=model, Fn_bracket=BRACKET, tol=TOL)
         b_times.append(time.perf_counter() - t0)
         b_vals.append(b.Fn)
     k = degs.astype(int)

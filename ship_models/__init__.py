@@ -24,6 +24,9 @@ load_model_file(path, kind="4dof") -> Umeda4DOF | SurgeModel
     The model of a user's vessel file.
 get_vessel_data(name) -> VesselModelData
     The resolved vessel behind a model name or file (no CasADi model built).
+PAPER_FN, PAPER_FN_BRACKET, PAPER_CHI_C
+    The published operating point of Umeda (1999) (:mod:`ship_models.paper`), the
+    default ``Fn`` and course everywhere in the ship layer.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from __future__ import annotations
 from typing import Any
 
 from .estimation import VesselModelData, resolve_vessel
+from .paper import PAPER_CHI_C, PAPER_FN, PAPER_FN_BRACKET
 from .registry import (
     PluginError,
     get_model,
@@ -56,6 +60,9 @@ def purse_seiner_surge() -> SurgeModel:
 
 
 __all__ = [
+    "PAPER_CHI_C",
+    "PAPER_FN",
+    "PAPER_FN_BRACKET",
     "Coefficient",
     "PluginError",
     "SurgeModel",

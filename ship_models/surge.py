@@ -35,6 +35,7 @@ from continuation.typing import FloatArray
 
 from .estimation import VesselModelData
 from .forces import ShipForces
+from .paper import PAPER_FN
 from .umeda_4dof import _as_vessel
 from .vessel import VesselData
 
@@ -81,7 +82,7 @@ class SurgeModel(System):
         self.forces: ShipForces = self.data.forces
         self.vessel = self.data.vessel
         defaults = {
-            "Fn": 0.3248,
+            "Fn": PAPER_FN,
             "H_over_lambda": self.vessel.get("waves.H_over_lambda"),
             "lambda_over_L": self.vessel.get("waves.lambda_over_L"),
         }
@@ -109,7 +110,7 @@ class SurgeModel(System):
         return self.state_index(name)
 
     def default_params(self) -> Params:
-        """Fn = 0.3248 and the vessel's wave (Umeda 1999)."""
+        """Fn = PAPER_FN (0.3248) and the vessel's wave (Umeda 1999)."""
         return self.params()
 
     def celerity(self, params: Params | FloatArray) -> float:

@@ -58,6 +58,7 @@ from continuation.typing import FloatArray
 
 from .estimation import VesselModelData, resolve_vessel
 from .forces import ShipForces
+from .paper import PAPER_CHI_C, PAPER_FN
 from .vessel import VesselData, load_vessel
 
 STATE_NAMES = ("xi_G", "u", "v", "chi", "r", "phi", "p_roll", "delta")
@@ -127,8 +128,8 @@ class Umeda4DOF(System):
         self.wave_lift = bool(wave_lift)
         v = self.vessel
         defaults = {
-            "Fn": 0.3248,
-            "chi_c": float(np.deg2rad(10.0)),
+            "Fn": PAPER_FN,
+            "chi_c": PAPER_CHI_C,
             "H_over_lambda": v.get("waves.H_over_lambda"),
             "lambda_over_L": v.get("waves.lambda_over_L"),
             "K_R": v.get("autopilot.K_R"),
@@ -190,7 +191,7 @@ class Umeda4DOF(System):
         return self.state_index(name)
 
     def default_params(self) -> Params:
-        """Fn = 0.3248, chi_c = 10 deg, the vessel's wave and autopilot (Umeda 1999)."""
+        """Fn = PAPER_FN (0.3248), chi_c = 10 deg, the vessel's wave and autopilot (Umeda 1999)."""
         return self.params()
 
     def celerity(self, params: Params | FloatArray) -> float:
@@ -290,7 +291,6 @@ class Umeda4DOF(System):
         if guess is not None or chi_c == 0.0:
             x0 = self.equilibrium_guess(pv, where) if guess is None else self.check_state(guess)
             return solve(x0)
-        from continuation.api import continue_equilibria  # (api imports the engine)
         from continuation.status import Status
 
         p0 = Params(PARAM_NAMES, pv).replace(chi_c=0.0)
@@ -302,18 +302,7 @@ class Umeda4DOF(System):
         )
         if not start.converged:
             return _failed(start, f"no {where} equilibrium at chi_c = 0: {start.message}", throw)
-        lo, hi = (0.0, chi_c) if chi_c > 0 else (chi_c, 0.0)
-        br = continue_equilibria(
-            self,
-            start.z,
-            p0,
-            "chi_c",
-            ds=math.copysign(0.01, chi_c),
-            ds_max=0.05,
-            p_min=lo,
-            p_max=hi,
-            direction="forward",
-        )
+        br = follow_in_chi_c(self, start.z, p0, chi_c, ds_max=0.05)
         if br.status is not Status.PARAM_BOUND or abs(float(br.p[-1]) - chi_c) > 1e-12:
             msg = (
                 f"the {where} equilibrium branch from chi_c = 0 does not reach chi_c = "
@@ -339,6 +328,60 @@ class Umeda4DOF(System):
                 rng.uniform(-0.4, 0.4),
             ]
         )
+
+
+def follow_in_chi_c(
+    model: Any,
+    x0: FloatArray,
+    params: Params,
+    chi_c_end: float,
+    *,
+    ds: float = 0.01,
+    ds_max: float = 0.05,
+    **options: Any,
+) -> Any:
+    """Follow an equilibrium from ``chi_c = 0`` to the course ``chi_c_end`` (rad).
+
+    The one path from the ``chi_c = 0`` surge roots to a course, shared by
+    :meth:`Umeda4DOF.find_equilibrium` and
+    :func:`ship_models.analysis.fixed_points.trace_in_chi_c`: pseudo-arclength
+    continuation in ``chi_c`` (:func:`continuation.api.continue_equilibria`,
+    ``direction="forward"``, bounded by 0 and ``chi_c_end``), steps ``ds`` (signed
+    towards ``chi_c_end``) up to ``ds_max``.
+
+    Parameters
+    ----------
+    model : Umeda4DOF
+    x0 : ndarray, shape (8,)
+        The equilibrium at ``chi_c = 0`` (``params["chi_c"]`` must be 0).
+    params : Params
+    chi_c_end : float
+        Nonzero end of the course range.
+    ds, ds_max : float
+        Initial (unsigned) and largest step.
+    **options
+        Further options of ``continue_equilibria`` (``max_steps``, ``progress``).
+
+    Returns
+    -------
+    Branch
+        Ends at ``chi_c_end`` (status ``PARAM_BOUND``) unless it folds back first.
+    """
+    from continuation.api import continue_equilibria  # (api imports the engine)
+
+    lo, hi = (0.0, chi_c_end) if chi_c_end > 0 else (chi_c_end, 0.0)
+    return continue_equilibria(
+        model,
+        x0,
+        params,
+        "chi_c",
+        ds=math.copysign(ds, chi_c_end),
+        ds_max=ds_max,
+        p_min=lo,
+        p_max=hi,
+        direction="forward",
+        **options,
+    )
 
 
 def _failed(res: NewtonResult, message: str, throw: bool) -> NewtonResult:

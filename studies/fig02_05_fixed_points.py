@@ -39,7 +39,9 @@ if __package__ in (None, ""):  # run as a script or loaded by path: make `_commo
 
 from _common import new_figure, save_figure, save_table
 
-FN = 0.3248
+from ship_models.paper import PAPER_FN
+
+FN = PAPER_FN
 CHI_C_DEG = 10.0
 CHI_C_MAX_DEG = 50.0
 COLORS = {"crest": "tab:red", "trough": "tab:blue"}

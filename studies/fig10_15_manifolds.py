@@ -37,8 +37,9 @@ if __package__ in (None, ""):  # run as a script or loaded by path: make `_commo
 
 from _common import new_figure, save_csv, save_figure
 
+from ship_models.paper import PAPER_FN
+
 CHI_C_DEG = 10.0
-PAPER_FN = 0.3248
 #: Width of the Fn search below the first-passage bracket for the final-fate switch.
 FINAL_SEARCH_WIDTH = 1e-3
 COLORS = {"downslope": "tab:red", "upslope": "tab:blue"}
@@ -179,7 +180,8 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     say(f"bisection of Fn on the upslope branch's first passage (chi_c = {CHI_C_DEG:g} deg)")
     crit = critical_fn(
         model,
-        base["chi_c"],
+        base,
+        method="bisection",
         tol=1e-5,
         progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),
     )
@@ -195,8 +197,9 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     say("bisection on the final fate below the first-passage bracket (secondary switches)")
     final = critical_fn(
         model,
-        base["chi_c"],
-        fn_bracket=(lo - FINAL_SEARCH_WIDTH, lo),
+        base,
+        method="bisection",
+        Fn_bracket=(lo - FINAL_SEARCH_WIDTH, lo),
         tol=1e-6,
         criterion="final",
         progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),

@@ -6,7 +6,7 @@ are suddenly changed and the transient is classified (capsize or periodic motion
 
 - Fig. 16: outcome over (initial position, Fn) for chi_c = 10 deg starting from the
   (Fn = 0.1, chi_c = 0) orbit, beside the heteroclinic-bifurcation Fn (collocation,
-  :func:`~ship_models.analysis.connection.critical_fn_bvp`);
+  :func:`~ship_models.analysis.critical_bvp.critical_fn_bvp`);
 - Figs. 17-20: the transient just above the boundary (xi_G vs u/c, u/c vs heading,
   heading vs roll, time histories of heading/roll/rudder over t c / L), with Fig. 21's
   comparison of its final stage with the unstable manifold of the crest saddle;
@@ -15,7 +15,7 @@ are suddenly changed and the transient is classified (capsize or periodic motion
   start at those controls);
 - Fig. 23 squares: the experiment's critical Fn against chi_c (0-30 deg) from the
   (0.1, 0) orbit at (xi_G/lambda)_0 = 0.5, by bisection, beside the heteroclinic line
-  (:func:`~ship_models.analysis.connection.critical_curve`).
+  (:func:`~ship_models.analysis.critical_curve.critical_curve`).
 
 Writes to ``--out`` (default ``out/fig16_22``): ``fig16_map.png``, ``fig17_20_transient.png``,
 ``fig21_final_stage.png``, ``fig22_map.png``, ``fig23_squares.png``; ``fig16_map.csv``,
@@ -45,11 +45,13 @@ if __package__ in (None, ""):  # run as a script or loaded by path: make `_commo
 
 from _common import new_figure, save_csv, save_figure, save_table
 
+from ship_models.paper import PAPER_FN_BRACKET
+
 CHI_TO_DEG = 10.0
 FROM_1 = (0.1, 0.0)  # (Fn, chi_c deg) of the first initial orbit (Figs. 16-21, 23)
 FROM_2 = (0.3, 45.0)  # of the second (Fig. 22)
 XI_FIG23 = 0.5
-PAPER_FN = (0.3247, 0.3248)
+PAPER_FN = PAPER_FN_BRACKET
 
 
 def _map_rows(mp: Any) -> list[list[Any]]:
@@ -61,7 +63,9 @@ def _map_rows(mp: Any) -> list[list[Any]]:
 
 
 def _draw_map(mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path: Path) -> None:
-    from ship_models.analysis.sudden_change import CAPSIZE, PERIODIC
+    from ship_models.analysis.outcomes import ShipOutcome
+
+    CAPSIZE, PERIODIC = ShipOutcome.CAPSIZE, ShipOutcome.PERIODIC
 
     fig = new_figure((5.8, 4.9))
     ax = fig.subplots()
@@ -99,7 +103,8 @@ def compute(
 ) -> dict[str, Any]:
     """Run the experiments; write figures and data; return the summary."""
     from ship_models import purse_seiner
-    from ship_models.analysis.connection import critical_curve, critical_fn_bvp
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
+    from ship_models.analysis.critical_curve import critical_curve
     from ship_models.analysis.manifold import unstable_manifold
     from ship_models.analysis.sudden_change import (
         follow_orbit,

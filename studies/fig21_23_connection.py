@@ -2,7 +2,7 @@
 
 The capsizing boundary is the heteroclinic bifurcation where the upslope branch of
 the crest saddle's unstable manifold lands on the neighbouring crest saddle (one
-wavelength back). Here it is solved directly (:mod:`ship_models.analysis.connection`):
+wavelength back). Here it is solved directly (:mod:`ship_models.analysis.critical_bvp`):
 
 - Fig. 21 idea: the connecting orbit at the critical Fn for ``chi_c = 10 deg`` beside
   the simulated upslope manifold just below (periodic motion) and just above
@@ -39,8 +39,10 @@ if __package__ in (None, ""):  # run as a script or loaded by path: make `_commo
 
 from _common import new_figure, save_csv, save_figure, save_table
 
+from ship_models.paper import PAPER_FN_BRACKET
+
 CHI_C_DEG = 10.0
-PAPER_FN = (0.3247, 0.3248)
+PAPER_FN = PAPER_FN_BRACKET
 CHECK_COURSES_DEG = (0.0, 20.0, 30.0)
 
 
@@ -77,13 +79,11 @@ def compute(
     """Solve the connection, the curve and the bisection checks; write figures and data."""
     from continuation.dynamics import simulate
     from ship_models import purse_seiner
-    from ship_models.analysis.connection import (
-        critical_curve,
-        critical_fn_bisection,
-        critical_fn_bvp,
-        upslope_branch,
-    )
+    from ship_models.analysis.critical_bisection import upslope_bisection
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
+    from ship_models.analysis.critical_curve import critical_curve
     from ship_models.analysis.events import capsize_event
+    from ship_models.analysis.upslope import upslope_branch
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
@@ -97,7 +97,7 @@ def compute(
     t_bvp = conn.elapsed
     chk = critical_fn_bvp(chi10, model=model, check=True).convergence
     say(f"  Fn = {conn.Fn:.8f} ({t_bvp:.2f} s); bisection by simulation to 1e-6")
-    bis = critical_fn_bisection(chi10, model=model, tol=1e-6)
+    bis = upslope_bisection(chi10, model=model, tol=1e-6)
     say(f"  bisection: Fn in [{bis.bracket[0]:.8f}, {bis.bracket[1]:.8f}] ({bis.elapsed:.2f} s)")
     summary["bvp"] = conn.to_json()
     if chk is not None:
@@ -106,7 +106,7 @@ def compute(
     summary["bisection"] = {
         "Fn": bis.Fn,
         "bracket": list(bis.bracket),
-        "n_runs": bis.n_runs,
+        "n_runs": bis.n_evaluations,
         "elapsed_s": bis.elapsed,
         "status": bis.status.name,
     }
@@ -182,7 +182,7 @@ def compute(
     checks = [[CHI_C_DEG, bis.Fn, bis.bracket[0], bis.bracket[1], conn.Fn, bis.status.name]]
     for deg in CHECK_COURSES_DEG if not quick else (30.0,):
         say(f"  bisection check at {deg:g} deg")
-        b = critical_fn_bisection(math.radians(deg), model=model, bracket=(0.295, 0.315), tol=1e-5)
+        b = upslope_bisection(math.radians(deg), model=model, Fn_bracket=(0.295, 0.315), tol=1e-5)
         k = int(np.argmin(np.abs(curve.chi_c_deg - deg)))
         checks.append([deg, b.Fn, b.bracket[0], b.bracket[1], float(curve.Fn[k]), b.status.name])
     save_table(

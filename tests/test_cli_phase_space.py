@@ -105,9 +105,11 @@ def test_critical_json_matches_library(capsys, model):
     lo, hi = res["bracket"]
     assert 0 < hi - lo <= 1e-3
     assert (res["fate_lo"], res["fate_hi"]) == ("periodic", "capsize")
-    ref = critical_fn(model, math.radians(10.0), fn_bracket=(0.30, 0.305), tol=1e-3)
+    ref = critical_fn(
+        model, chi_c=math.radians(10.0), method="bisection", Fn_bracket=(0.30, 0.305), tol=1e-3
+    )
     assert (lo, hi) == ref.bracket
-    assert res["fn_critical"] == ref.fn_critical
+    assert res["fn_critical"] == ref.Fn
     with pytest.raises(SystemExit):
         main(["critical", "--method", "shooting"])
     capsys.readouterr()

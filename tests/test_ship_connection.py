@@ -9,7 +9,7 @@ References
   ``chi_c = 10 deg`` is for measured coefficients; our vessel has estimated ones, so
   the references here are independent computations with the same model:
 * bisection on the fate of the upslope branch by simulation (written in this file
-  with :func:`continuation.dynamics.simulate.simulate`, and :func:`critical_fn_bisection`);
+  with :func:`continuation.dynamics.simulate.simulate`, and :func:`upslope_bisection`);
 * at ``chi_c = 0`` the lateral motions decouple (``v = r = phi = p = delta = 0`` is
   invariant), so the critical ``Fn`` must be that of the uncoupled surge model
   (a 2-D system), found here by shooting with SciPy's DOP853.
@@ -27,16 +27,12 @@ from continuation.bvp.solve import check_convergence
 from continuation.dynamics import SimEvent, simulate
 from continuation.status import Status
 from ship_models import purse_seiner, purse_seiner_surge
-from ship_models.analysis.connection import (
-    CAPTURED,
-    PERIODIC,
-    UPSLOPE_SHIFT,
-    critical_curve,
-    critical_fn_bisection,
-    critical_fn_bvp,
-    upslope_branch,
-)
+from ship_models.analysis.critical_bisection import upslope_bisection
+from ship_models.analysis.critical_bvp import critical_fn_bvp
+from ship_models.analysis.critical_curve import critical_curve
 from ship_models.analysis.events import capsize_event
+from ship_models.analysis.outcomes import ShipOutcome
+from ship_models.analysis.upslope import UPSLOPE_SHIFT, upslope_branch
 
 DEG = math.pi / 180
 
@@ -60,7 +56,7 @@ def curve(model, bvp10):
 def _upslope_passes(model, Fn: float, chi_c: float) -> bool:
     """True when the upslope branch passes the next crest (periodic motion).
 
-    Written independently of ship_models.analysis.connection: own saddle and
+    Written independently of ship_models.analysis (critical_bvp, upslope): own saddle and
     eigenvector, own events, CVODES through continuation.dynamics.simulate.
     """
     p = model.default_params().replace(Fn=Fn, chi_c=chi_c)
@@ -141,8 +137,8 @@ def test_bvp_agrees_with_bisection_at_10_deg(model, bvp10):
 
 
 def test_bvp_agrees_with_fine_bisection_at_10_deg(model, bvp10):
-    """To 1e-6 against critical_fn_bisection (bracket width 1e-6)."""
-    b = critical_fn_bisection(10 * DEG, model=model, bracket=(0.3010, 0.3022), tol=1e-6)
+    """To 1e-6 against upslope_bisection (bracket width 1e-6)."""
+    b = upslope_bisection(10 * DEG, model=model, Fn_bracket=(0.3010, 0.3022), tol=1e-6)
     assert b.success, b.message
     assert b.bracket[1] - b.bracket[0] <= 1e-6
     assert abs(bvp10.Fn - b.Fn) < 1e-6
@@ -152,7 +148,7 @@ def test_bvp_inside_the_project_bisection_bracket(model, bvp10):
     """Against the project's bisection tool (ship_models.analysis.critical, Poincare fates)."""
     from ship_models.analysis.critical import critical_fn
 
-    b = critical_fn(model, 10 * DEG, fn_bracket=(0.29, 0.31), tol=1e-4)
+    b = critical_fn(model, chi_c=10 * DEG, method="bisection", Fn_bracket=(0.29, 0.31), tol=1e-4)
     assert b.status is Status.SUCCESS, b.message
     lo, hi = b.bracket
     assert hi - lo <= 1e-4
@@ -204,7 +200,7 @@ def test_guess_as_orbit_or_connection(model, bvp10):
 
 def test_simplified_newton_equals_full_newton(model, bvp10, monkeypatch):
     """The simplified-Newton solve and continuation.bvp.solve_connection's Newton agree."""
-    import ship_models.analysis.connection as conn
+    import ship_models.analysis.critical_bvp as conn
 
     monkeypatch.setattr(conn, "_SIMPLIFIED_NEWTON", False)
     r = critical_fn_bvp(10 * DEG, model=model)
@@ -217,7 +213,7 @@ def test_unusable_guess_fn_falls_back_to_coarse_bisection(model, curve):
     """At chi_c = 0 and Fn = 0.45 the upslope branch never nears the shifted saddle."""
     r = critical_fn_bvp(0.0, model=model, Fn_guess=0.45)
     assert r.success
-    assert abs(r.guess_Fn - r.Fn) < 5e-3  # the guess came from the coarse bisection
+    assert abs(r.Fn_guess - r.Fn) < 5e-3  # the guess came from the coarse bisection
     assert abs(r.Fn - curve.Fn[0]) < 1e-6
 
 
@@ -249,7 +245,7 @@ def test_curve_at_zero_course_is_the_surge_threshold(curve):
 
 
 def test_curve_point_against_bisection(model, curve):
-    b = critical_fn_bisection(25 * DEG, model=model, bracket=(0.303, 0.312), tol=2e-6)
+    b = upslope_bisection(25 * DEG, model=model, Fn_bracket=(0.303, 0.312), tol=2e-6)
     assert b.success, b.message
     assert abs(curve.Fn[25] - b.Fn) < 2e-6
 
@@ -272,12 +268,12 @@ def test_curve_csv_and_json(curve, tmp_path):
 # ------------------------------------------------------------------ fates, input, interrupts
 def test_upslope_fates_on_both_sides(model):
     p = model.default_params().replace(chi_c=10 * DEG)
-    assert upslope_branch(model, p.replace(Fn=0.300)).fate == PERIODIC
-    assert upslope_branch(model, p.replace(Fn=0.303)).fate == CAPTURED
+    assert upslope_branch(model, p.replace(Fn=0.300)).fate == ShipOutcome.PERIODIC
+    assert upslope_branch(model, p.replace(Fn=0.303)).fate == ShipOutcome.CAPTURED
 
 
 def test_bisection_reports_a_bad_bracket(model):
-    b = critical_fn_bisection(10 * DEG, model=model, bracket=(0.303, 0.305), tol=1e-3)
+    b = upslope_bisection(10 * DEG, model=model, Fn_bracket=(0.303, 0.305), tol=1e-3)
     assert b.status is Status.NO_BRACKET
     assert "bracket" in b.message
 
@@ -290,8 +286,8 @@ def test_bisection_interrupt_keeps_bracket(model):
         if len(calls) == 3:
             raise KeyboardInterrupt
 
-    b = critical_fn_bisection(
-        10 * DEG, model=model, bracket=(0.300, 0.3032), tol=1e-6, progress=progress
+    b = upslope_bisection(
+        10 * DEG, model=model, Fn_bracket=(0.300, 0.3032), tol=1e-6, progress=progress
     )
     assert b.status is Status.INTERRUPTED
     assert 0.300 <= b.bracket[0] < b.bracket[1] <= 0.3032
@@ -335,9 +331,9 @@ def test_bad_input_curve_and_bisection(model):
     with pytest.raises(ValueError, match="chi_c_values"):
         critical_curve([0.0, 3.0], model=model)
     with pytest.raises(ValueError, match="bracket"):
-        critical_fn_bisection(0.1, model=model, bracket=(0.31, 0.30))
+        upslope_bisection(0.1, model=model, Fn_bracket=(0.31, 0.30))
     with pytest.raises(ValueError, match="tol"):
-        critical_fn_bisection(0.1, model=model, tol=0.0)
+        upslope_bisection(0.1, model=model, tol=0.0)
 
 
 # ------------------------------------------------------------------ command line

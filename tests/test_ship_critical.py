@@ -6,7 +6,7 @@ References used:
   with the default first-passage criterion the ends leave the neighbouring crest
   saddle on opposite sides of its stable manifold;
 - an independent method: the saddle-to-shifted-saddle connection solved as a
-  boundary-value problem by collocation (:func:`ship_models.analysis.connection.
+  boundary-value problem by collocation (:func:`ship_models.analysis.critical_bvp.
   critical_fn_bvp`, Beyn 1990), whose Fn must lie inside the bisection bracket, for
   the hull derivatives taken about G and moved from midship (``x_ref = 0``, Inoue,
   Hirano & Kijima 1981), where the final fate switches 1.6e-5 below the connection.
@@ -21,7 +21,8 @@ import pytest
 from continuation.errors import ContinuationError
 from continuation.status import Status
 from ship_models import purse_seiner
-from ship_models.analysis.critical import RETURNED, critical_fn, first_passage, outcome
+from ship_models.analysis.critical import critical_fn
+from ship_models.analysis.critical_bisection import RETURNED, first_passage, outcome
 from ship_models.analysis.manifold import SaddleVisit, ShipFate, unstable_manifold
 from ship_models.registry import get_vessel_data
 from ship_models.umeda_4dof import Umeda4DOF
@@ -36,7 +37,7 @@ def model():
 
 @pytest.fixture(scope="module")
 def result(model):
-    return critical_fn(model, CHI_C, fn_bracket=(0.300, 0.305), tol=1e-5)
+    return critical_fn(model, chi_c=CHI_C, method="bisection", Fn_bracket=(0.300, 0.305), tol=1e-5)
 
 
 def test_bracket_is_consistent(model, result):
@@ -44,7 +45,7 @@ def test_bracket_is_consistent(model, result):
     assert result.criterion == "first_passage"
     lo, hi = result.bracket
     assert 0 < hi - lo <= 1e-5
-    assert result.fn_critical == pytest.approx(0.5 * (lo + hi))
+    assert result.Fn == pytest.approx(0.5 * (lo + hi))
     assert (result.fate_lo, result.fate_hi) == ("periodic", "capsize")
     assert result.n_evaluations == len(result.evaluations)
     # independent re-simulation of both ends (fresh fixed points, default options): they
@@ -70,7 +71,10 @@ def test_bracket_is_consistent(model, result):
 
 def test_final_fate_criterion_bracket_is_consistent(model):
     """The final-fate variant: its ends, re-simulated, end periodic and capsized."""
-    res = critical_fn(model, CHI_C, fn_bracket=(0.300, 0.305), tol=1e-5, criterion="final")
+    res = critical_fn(
+        model, chi_c=CHI_C, method="bisection", Fn_bracket=(0.300, 0.305), tol=1e-5,
+        criterion="final",
+    )  # fmt: skip
     assert res.status is Status.SUCCESS, res.message
     assert res.criterion == "final"
     lo, hi = res.bracket
@@ -105,10 +109,10 @@ def test_first_passage_bracket_contains_the_collocation_connection(x_ref):
     collocation 0.3016117); the first passage does not.
     """
     m = _vessel(x_ref)
-    connection = pytest.importorskip("ship_models.analysis.connection")
+    connection = pytest.importorskip("ship_models.analysis.critical_bvp")
     bvp = connection.critical_fn_bvp(CHI_C, model=m)
     assert bvp.status is Status.SUCCESS, bvp.message
-    res = critical_fn(m, CHI_C, fn_bracket=(0.3010, 0.3022), tol=1e-6)
+    res = critical_fn(m, chi_c=CHI_C, method="bisection", Fn_bracket=(0.3010, 0.3022), tol=1e-6)
     assert res.status is Status.SUCCESS, res.message
     lo, hi = res.bracket
     w = hi - lo
@@ -149,26 +153,27 @@ def test_first_passage_rules():
 
 def test_agrees_with_the_collocation_connection(result):
     """The boundary-value solution of the heteroclinic connection lies in the bracket."""
-    connection = pytest.importorskip("ship_models.analysis.connection")
+    connection = pytest.importorskip("ship_models.analysis.critical_bvp")
     bvp = connection.critical_fn_bvp(CHI_C)
     lo, hi = result.bracket
     assert lo - 2e-6 <= bvp.Fn <= hi + 2e-6
 
 
 def test_no_bracket_and_bad_input(model):
-    res = critical_fn(model, CHI_C, fn_bracket=(0.33, 0.40), tol=1e-3)
+    bis = {"chi_c": CHI_C, "method": "bisection"}
+    res = critical_fn(model, **bis, Fn_bracket=(0.33, 0.40), tol=1e-3)
     assert res.status is Status.NO_BRACKET
     assert res.fate_lo == res.fate_hi == "capsize"
-    assert math.isnan(res.fn_critical)
+    assert math.isnan(res.Fn)
     with pytest.raises(ContinuationError):
-        critical_fn(model, CHI_C, fn_bracket=(0.33, 0.40), tol=1e-3, throw=True)
+        critical_fn(model, **bis, Fn_bracket=(0.33, 0.40), tol=1e-3, throw=True)
     with pytest.raises(ValueError, match="method"):
-        critical_fn(model, CHI_C, method="bvp")
-    with pytest.raises(ValueError, match="fn_bracket"):
-        critical_fn(model, CHI_C, fn_bracket=(0.4, 0.3))
+        critical_fn(model, chi_c=CHI_C, method="shooting")
+    with pytest.raises(ValueError, match="Fn_bracket"):
+        critical_fn(model, **bis, Fn_bracket=(0.4, 0.3))
     with pytest.raises(ValueError, match="tol"):
-        critical_fn(model, CHI_C, fn_bracket=(0.30, 0.31), tol=0.1)
+        critical_fn(model, **bis, Fn_bracket=(0.30, 0.31), tol=0.1)
     with pytest.raises(ValueError, match="branch"):
-        critical_fn(model, CHI_C, branch="sideways")
+        critical_fn(model, **bis, branch="sideways")
     with pytest.raises(ValueError, match="criterion"):
-        critical_fn(model, CHI_C, criterion="last")
+        critical_fn(model, **bis, criterion="last")

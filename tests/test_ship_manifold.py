@@ -8,7 +8,7 @@ References used:
   by an independent integrator (SciPy DOP853);
 - the paper's statements on the branches, asserted for our vessel at Fn = 0.3248
   (above our critical Fn) and 5e-5 below the critical Fn that the collocation solver
-  (:func:`ship_models.analysis.connection.critical_fn_bvp`) finds, an independent
+  (:func:`ship_models.analysis.critical_bvp.critical_fn_bvp`) finds, an independent
   method: the manifold fates must switch across that value.
 """
 
@@ -60,7 +60,7 @@ def above(model, params):
 @pytest.fixture(scope="module")
 def fn_critical(model, params):
     """Critical Fn at chi_c = 10 deg from the connecting orbit (collocation)."""
-    from ship_models.analysis.connection import critical_fn_bvp
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
 
     res = critical_fn_bvp(params["chi_c"], model=model, params=params)
     assert res.success, res.message

@@ -24,12 +24,10 @@ from scipy.integrate import solve_ivp
 from continuation.errors import ContinuationError
 from continuation.status import Status
 from ship_models import purse_seiner
-from ship_models.analysis.connection import critical_fn_bvp
+from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.analysis.eigen import paper_scales
+from ship_models.analysis.outcomes import ShipOutcome
 from ship_models.analysis.sudden_change import (
-    CAPSIZE,
-    PERIODIC,
-    SADDLE,
     default_guess,
     follow_orbit,
     periodic_orbit,
@@ -91,7 +89,7 @@ def _dop853_return(model, params, x, section, period_guess, rtol=1e-12):
 
 def test_periodic_orbit_closes_under_dop853(model, p_from, orbit):
     """One period re-integrated by DOP853 returns to the section state."""
-    assert orbit.drift == -1  # slower than the wave: overtaken once per period
+    assert orbit.shift == -1  # slower than the wave: overtaken once per period
     assert orbit.attracting
     assert orbit.closure < 1e-8
     scales, _ = paper_scales(model, p_from, default_guess(model, p_from))
@@ -121,8 +119,8 @@ def test_outcomes_below_and_above_the_heteroclinic_fn(model, orbit, fn_het):
     fns = (fn_het - 0.005, fn_het + 0.005)
     mp = sudden_change_map(model, None, CHI10, (0.0, 0.5), fns, orbit=orbit)
     assert mp.status is Status.SUCCESS
-    assert list(mp.outcomes[0]) == [PERIODIC, PERIODIC]
-    assert list(mp.outcomes[1]) == [CAPSIZE, CAPSIZE]
+    assert list(mp.outcomes[0]) == [ShipOutcome.PERIODIC, ShipOutcome.PERIODIC]
+    assert list(mp.outcomes[1]) == [ShipOutcome.CAPSIZE, ShipOutcome.CAPSIZE]
     np.testing.assert_array_equal(mp.boundary(), [fns[1], fns[1]])
     # one run in detail: capsize to port (Umeda 1999: "it then capsizes to port")
     r = sudden_change(model, None, orbit.params.replace(Fn=fns[1], chi_c=CHI10), 0.5, orbit=orbit)
@@ -146,7 +144,7 @@ def test_boundary_agrees_with_the_heteroclinic_fn(model, orbit, fn_het):
     assert b.success, b.message
     lo, hi = b.bracket
     assert hi - lo <= tol
-    assert b.outcomes == (PERIODIC, CAPSIZE)
+    assert b.outcomes == (ShipOutcome.PERIODIC, ShipOutcome.CAPSIZE)
     assert abs(b.Fn - fn_het) < tol + 1e-4
     assert lo < fn_het + tol
 
@@ -161,8 +159,8 @@ def test_surge_plane_at_chi_c_0_surf_rides_above_the_threshold(model, orbit):
     base = orbit.params.replace(chi_c=0.0)
     below = sudden_change(model, None, base.replace(Fn=fn0 - 0.003), 0.5, orbit=orbit)
     above = sudden_change(model, None, base.replace(Fn=fn0 + 0.003), 0.5, orbit=orbit)
-    assert below.outcome == PERIODIC
-    assert above.outcome == SADDLE and above.captured and not above.capsized
+    assert below.outcome == ShipOutcome.PERIODIC
+    assert above.outcome == ShipOutcome.SADDLE and above.captured and not above.capsized
     assert above.fate.equilibrium == "trough"
     for r in (below, above):  # no lateral motion: v, chi, r, phi, p_roll, delta stay 0
         assert np.max(np.abs(r.trajectory.x[:, 2:])) < 1e-9
@@ -173,7 +171,7 @@ def test_bracket_without_switch(model, orbit, fn_het):
     args = (model, None, CHI10, 0.5, (fn_het - 0.02, fn_het - 0.01))
     b = sudden_change_boundary(*args, orbit=orbit)
     assert b.status is Status.NO_BRACKET
-    assert b.outcomes == (PERIODIC, PERIODIC)
+    assert b.outcomes == (ShipOutcome.PERIODIC, ShipOutcome.PERIODIC)
     with pytest.raises(ContinuationError, match="bracket"):
         sudden_change_boundary(*args, orbit=orbit, throw=True)
 

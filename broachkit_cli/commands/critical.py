@@ -17,6 +17,8 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
+from ship_models.paper import PAPER_FN
+
 from .fixed_points import add_ship_arguments, ship_from_args
 
 NAME = "critical"
@@ -32,24 +34,24 @@ def _bisection(model: Any, params: Any, args: argparse.Namespace) -> dict[str, A
 
     res = critical_fn(
         model,
-        params["chi_c"],
-        params=params,
-        fn_bracket=(args.fn_min, args.fn_max),
+        params,
+        method="bisection",
+        Fn_bracket=(args.fn_min, args.fn_max),
         tol=args.tol,
         progress=progress,
         t_max=args.t_max,
         criterion=args.criterion,
     )
-    return res.to_json()
+    return {"fn_critical": res.Fn, **res.to_json()}
 
 
 def _bvp(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
-    from ship_models.analysis.connection import critical_fn_bvp
+    from ship_models.analysis.critical import critical_fn
 
-    res = critical_fn_bvp(
-        params["chi_c"],
-        model=model,
-        params=params,
+    res = critical_fn(
+        model,
+        params,
+        method="bvp",
         Fn_guess=args.fn_guess,
         guess_bracket=(args.fn_min, args.fn_max),
         check=True,
@@ -91,8 +93,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--fn-guess",
         type=float,
-        default=0.3248,
-        help="bvp: Fn of the unstable-manifold simulation that seeds the orbit (0.3248)",
+        default=PAPER_FN,
+        help=f"bvp: Fn of the unstable-manifold simulation that seeds the orbit ({PAPER_FN})",
     )
     parser.add_argument("--fn-min", type=float, default=0.25, help="lower end of the Fn search")
     parser.add_argument("--fn-max", type=float, default=0.40, help="upper end of the Fn search")

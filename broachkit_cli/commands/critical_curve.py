@@ -2,7 +2,7 @@
 
 The heteroclinic connection of the crest saddle to the neighbouring crest saddle is
 solved once as a boundary-value problem and continued in ``chi_c``
-(:func:`ship_models.analysis.connection.critical_curve`). Degrees on the command
+(:func:`ship_models.analysis.critical_curve.critical_curve`). Degrees on the command
 line, radians inside.
 
 Examples::
@@ -131,7 +131,7 @@ def plot_curve(curve: Any, path: Path, *, paper: bool = True) -> Path:
 
 def run(args: argparse.Namespace) -> int:
     """Compute the curve; print it (or JSON); write files under ``--out``. 0 on success."""
-    from ship_models.analysis.connection import critical_curve
+    from ship_models.analysis.critical_curve import critical_curve
 
     deg = parse_courses(str(args.chi_c))
     model, params = _ship(args)

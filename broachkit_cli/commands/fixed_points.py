@@ -17,6 +17,8 @@ import math
 import sys
 from typing import Any
 
+from ship_models.paper import PAPER_FN
+
 NAME = "fixed-points"
 HELP = "fixed points (surf-riding equilibria) of the ship at one Fn and autopilot course"
 
@@ -30,7 +32,7 @@ def add_ship_arguments(parser: argparse.ArgumentParser, *, fn: bool = True) -> N
     )
     if fn:
         parser.add_argument(
-            "--fn", type=float, default=0.3248, help="nominal Froude number (default 0.3248)"
+            "--fn", type=float, default=PAPER_FN, help=f"nominal Froude number (default {PAPER_FN})"
         )
     parser.add_argument(
         "--chi-c", type=float, default=10.0, help="autopilot course in degrees (default 10)"

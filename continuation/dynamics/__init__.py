@@ -23,10 +23,16 @@ from .global_graph import EdgeChange, GraphDiff, build_global_graph, compare_gra
 from .integrators import DEFAULT_ATOL, DEFAULT_RTOL, METHODS
 from .manifolds import ManifoldBranch, ManifoldResult, unstable_manifold
 from .saddles import oriented_unstable_direction, refine_equilibrium
+from .shooting import ReturnMap, ShootingOrbit, ShootingSettings, shoot_orbit
 from .simulate import Simulator, simulate
 from .trajectory import EventHits, Trajectory
 
 __all__ = [
+    # periodic orbits by return-map shooting
+    "shoot_orbit",
+    "ShootingOrbit",
+    "ShootingSettings",
+    "ReturnMap",
     # simulation
     "simulate",
     "Simulator",

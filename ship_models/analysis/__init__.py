@@ -9,13 +9,22 @@ model (:mod:`ship_models`); the figure scripts in ``studies/`` and the command l
 - :mod:`.eigen` -- eigenvalues, saddle index, unstable eigenvector in the paper's
   nondimensional units (Figs. 6-9)
 - :mod:`.events` -- the capsize event (roll beyond the vanishing angle of GZ)
-- :mod:`.manifold` -- unstable manifolds of a saddle and their fates (Figs. 10-15)
+- :mod:`.params` -- the one coercion of parameters and courses (``ship_params``)
+- :mod:`.outcomes` -- the one enumeration of outcomes (``ShipOutcome``)
+- :mod:`.manifold` -- unstable manifolds of a saddle and their fates (Figs. 10-15), on
+  the engine's :func:`continuation.dynamics.manifolds.unstable_manifold`
 - :mod:`.global_picture` -- fixed points, attractors and manifolds as a graph
-- :mod:`.critical` -- critical Fn of the heteroclinic bifurcation by bisection
-- :mod:`.connection` -- the same as a connecting orbit by collocation, and its
-  continuation in chi_c (the critical curve, Fig. 23)
+- :mod:`.crest_saddle` -- the crest saddle followed from chi_c = 0 (a ``FixedPoint``)
+- :mod:`.upslope` -- one run of the upslope branch, its fate, a connection guess
+- :mod:`.critical` -- ``critical_fn(model, params, method="bvp"|"bisection")``, one
+  result type ``CriticalFn`` (:mod:`.critical_result`)
+- :mod:`.critical_bvp` -- the critical Fn as a connecting orbit by collocation
+- :mod:`.critical_bisection` -- the critical Fn by bisection on simulated fates
+- :mod:`.critical_curve` -- its continuation in chi_c (the critical curve, Fig. 23)
 - :mod:`.sudden_change` -- the paper's "sudden change" experiments: start on the periodic
-  orbit of one control setting, switch the controls, classify the transient (Figs. 16-22)
+  orbit of one control setting (the engine's return-map solver,
+  :mod:`continuation.dynamics.shooting`), switch the controls, classify the transient
+  (Figs. 16-22)
 
 The simulation-based names are imported lazily (on first use).
 """
@@ -35,31 +44,37 @@ from .fixed_points import (
     trace_in_chi_c,
     trace_in_fn,
 )
+from .outcomes import ShipOutcome
+from .params import ship_params
 
 _LAZY = {
     "ShipFate": ".manifold",
     "ShipManifold": ".manifold",
     "classify_ship_fate": ".manifold",
     "unstable_manifold": ".manifold",
-    "CriticalResult": ".critical",
+    "BVPSettings": ".critical_bvp",
+    "CriticalFn": ".critical_result",
     "critical_fn": ".critical",
-    "first_passage": ".critical",
-    "CRITERIA": ".critical",
-    "RETURNED": ".critical",
+    "critical_fn_bvp": ".critical_bvp",
+    "first_passage_bisection": ".critical_bisection",
+    "upslope_bisection": ".critical_bisection",
+    "first_passage": ".critical_bisection",
+    "CRITERIA": ".critical_bisection",
+    "RETURNED": ".critical_bisection",
     "PictureDiff": ".global_picture",
     "compare_pictures": ".global_picture",
     "build_global_picture": ".global_picture",
-    "CriticalConnection": ".connection",
-    "CriticalCurve": ".connection",
-    "critical_curve": ".connection",
-    "critical_fn_bisection": ".connection",
-    "critical_fn_bvp": ".connection",
+    "CriticalCurve": ".critical_curve",
+    "critical_curve": ".critical_curve",
+    "crest_saddle": ".crest_saddle",
+    "UpslopeRun": ".upslope",
+    "upslope_branch": ".upslope",
     "periodic_orbit": ".sudden_change",
     "follow_orbit": ".sudden_change",
     "sudden_change": ".sudden_change",
     "sudden_change_boundary": ".sudden_change",
     "sudden_change_map": ".sudden_change",
-    "PeriodicOrbit": ".sudden_change",
+    "ShootingOrbit": ".sudden_change",
     "SuddenChange": ".sudden_change",
     "SuddenChangeBoundary": ".sudden_change",
     "SuddenChangeMap": ".sudden_change",
@@ -74,42 +89,48 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
-    "periodic_orbit",
-    "follow_orbit",
-    "sudden_change",
-    "sudden_change_boundary",
-    "sudden_change_map",
-    "PeriodicOrbit",
+    "BVPSettings",
+    "CRITERIA",
+    "CriticalCurve",
+    "CriticalFn",
+    "EigenStructure",
+    "FixedPoint",
+    "ShootingOrbit",
+    "PictureDiff",
+    "RETURNED",
+    "ShipFate",
+    "ShipManifold",
+    "ShipOutcome",
     "SuddenChange",
     "SuddenChangeBoundary",
     "SuddenChangeMap",
-    "CRITERIA",
-    "RETURNED",
-    "first_passage",
-    "CriticalConnection",
-    "CriticalCurve",
-    "critical_curve",
-    "critical_fn_bisection",
-    "critical_fn_bvp",
-    "CriticalResult",
-    "EigenStructure",
-    "FixedPoint",
-    "PictureDiff",
-    "ShipFate",
-    "ShipManifold",
+    "UpslopeRun",
+    "build_global_picture",
     "capsize_angle",
     "capsize_event",
     "classify_ship_fate",
     "compare_pictures",
+    "crest_saddle",
+    "critical_curve",
     "critical_fn",
+    "critical_fn_bvp",
     "eigen_structure",
     "find_fixed_point",
+    "first_passage",
+    "first_passage_bisection",
     "fixed_points",
-    "build_global_picture",
+    "follow_orbit",
     "paper_scales",
+    "periodic_orbit",
+    "ship_params",
+    "sudden_change",
+    "sudden_change_boundary",
+    "sudden_change_map",
     "surge_roots",
     "trace_in_chi_c",
     "trace_in_fn",
     "unstable_manifold",
+    "upslope_bisection",
+    "upslope_branch",
     "vanishing_angle",
 ]

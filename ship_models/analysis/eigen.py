@@ -118,6 +118,30 @@ class EigenStructure:
         """The ``saddle_index`` eigenvalues with positive real part, shape (k,)."""
         return self.values[: self.saddle_index]
 
+    @property
+    def weakest_stable(self) -> float:
+        """``min |Re lambda|`` over the stable eigenvalues (1/s): the slowest approach."""
+        stable = self.values.real[self.values.real < 0]
+        return float(np.min(-stable))
+
+    def approach_rate(self, offset: FloatArray, rel: float = 1e-3) -> float:
+        """Slowest stable decay rate present in ``offset`` (a state minus the point), 1/s.
+
+        The offset, shape (n,), is expanded in the eigenvectors, ``offset = V c``;
+        modes whose ``|c_k|`` is below ``rel`` times the largest stable one are ignored
+        (e.g. the lateral modes at ``chi_c = 0``, which the symmetric motion never
+        excites). Falls back to :attr:`weakest_stable`.
+        """
+        try:
+            c = np.abs(np.linalg.solve(self.vectors, np.asarray(offset, dtype=complex)))
+        except np.linalg.LinAlgError:
+            return self.weakest_stable
+        stable = self.values.real < 0
+        present = stable & (c > rel * np.max(c[stable], initial=0.0))
+        if not np.any(present):
+            return self.weakest_stable
+        return float(np.min(-self.values.real[present]))
+
     def unstable_vector(self, k: int = 0, *, nondim: bool = True) -> FloatArray:
         r"""Real unstable eigenvector ``k``, max-norm 1, with a fixed sign.
 

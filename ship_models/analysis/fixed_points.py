@@ -36,7 +36,9 @@ from continuation.status import Status
 from continuation.typing import FloatArray
 
 from ..surge import SurgeModel
+from ..umeda_4dof import follow_in_chi_c
 from .eigen import EigenStructure, eigen_structure
+from .params import ship_params
 
 log = logging.getLogger(__name__)
 
@@ -59,12 +61,6 @@ def position_label(xi: float) -> str:
     """``"crest"`` if ``xi_G/lambda`` (mod 1) is nearer the crest (0.5) than the trough (0)."""
     d = float(np.mod(xi, 1.0))
     return "crest" if abs(d - 0.5) < 0.25 else "trough"
-
-
-def _params(model: Any, params: Any) -> Params:
-    if params is None:
-        return model.default_params()
-    return Params(model.param_names, model.check_params(params, "params"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,6 +90,11 @@ class FixedPoint:
     def saddle_index(self) -> int:
         """Number of eigenvalues with positive real part."""
         return self.eigen.saddle_index
+
+    @property
+    def unstable_rate(self) -> float:
+        """The largest real part of the eigenvalues, ``lambda_u`` of a saddle (1/s)."""
+        return float(self.eigen.values[0].real)
 
     @property
     def stable(self) -> bool:
@@ -157,7 +158,7 @@ def surge_roots(model: Any, params: Params | None = None, *, n_grid: int = 400) 
     list of ndarray, shape (8,)
         Sorted by ``xi_G`` in [0, 1); empty when surf-riding is impossible at this ``Fn``.
     """
-    par = _params(model, params)
+    par = ship_params(model, params)
     if not (isinstance(n_grid, int) and n_grid >= 4):
         raise ValueError(f"`n_grid` must be an integer >= 4, got {n_grid!r}")
     sm = surge_model_of(model)
@@ -204,25 +205,14 @@ def trace_in_chi_c(
         folds are located (``branch.find("fold")``). A ``KeyboardInterrupt`` inside
         a branch ends it with ``Status.INTERRUPTED`` and later branches are skipped.
     """
-    par = _params(model, params).replace(chi_c=0.0)
+    par = ship_params(model, params).replace(chi_c=0.0)
     if not (math.isfinite(chi_c_max) and 0 < abs(chi_c_max) < math.pi / 2):
         raise ValueError(f"`chi_c_max` must be nonzero with |chi_c_max| < pi/2, got {chi_c_max}")
-    lo, hi = (0.0, chi_c_max) if chi_c_max > 0 else (chi_c_max, 0.0)
     out: dict[str, Branch] = {}
     for x0 in surge_roots(model, par):
         key = _unique_key(out, position_label(x0[0]))
-        br = continue_equilibria(
-            model,
-            x0,
-            par,
-            "chi_c",
-            ds=math.copysign(ds, chi_c_max),
-            ds_max=ds_max,
-            p_min=lo,
-            p_max=hi,
-            max_steps=max_steps,
-            direction="forward",
-            progress=progress,
+        br = follow_in_chi_c(
+            model, x0, par, chi_c_max, ds=ds, ds_max=ds_max, max_steps=max_steps, progress=progress
         )
         out[key] = br
         if br.status is Status.INTERRUPTED:
@@ -263,7 +253,7 @@ def trace_in_fn(
         the crest and trough points typically merge in a fold at the lowest ``Fn``
         that allows surf-riding).
     """
-    par = _params(model, params)
+    par = ship_params(model, params)
     if not (0 < fn_min < fn_max):
         raise ValueError(f"need 0 < fn_min < fn_max, got fn_min={fn_min}, fn_max={fn_max}")
     if not fn_min <= par["Fn"] <= fn_max:
@@ -351,7 +341,7 @@ def fixed_points(
         Sorted crest first, then by ``xi_G``; labels made unique. Empty when no surge
         root exists at this ``Fn`` (surf-riding impossible).
     """
-    par = _params(model, params)
+    par = ship_params(model, params)
     target = par["chi_c"]
     if not abs(target) < math.radians(85.0):
         raise ValueError(f"`params['chi_c']` must be within +-85 deg, got {target}")
@@ -400,7 +390,7 @@ def find_fixed_point(
         if fp.label == label:
             return fp
     raise ValueError(
-        f"no fixed point labelled {label!r} at {(_params(model, params)).as_dict()}; "
+        f"no fixed point labelled {label!r} at {(ship_params(model, params)).as_dict()}; "
         f"found {[fp.label for fp in pts]}"
     )
 

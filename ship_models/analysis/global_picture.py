@@ -33,7 +33,9 @@ import networkx as nx
 from continuation.params import Params
 
 from .fixed_points import FixedPoint, fixed_points
-from .manifold import EQUILIBRIUM, SADDLE, ShipManifold, unstable_manifold
+from .manifold import ShipManifold, unstable_manifold
+from .outcomes import ShipOutcome
+from .params import ship_params
 
 
 def _via(fate: Any) -> tuple[str, ...]:
@@ -70,11 +72,7 @@ def build_global_picture(
         Graph attributes: ``params`` (dict), ``manifolds`` (dict label ->
         :class:`~ship_models.analysis.manifold.ShipManifold`).
     """
-    par = (
-        model.default_params()
-        if params is None
-        else Params(model.param_names, model.check_params(params, "params"))
-    )
+    par = ship_params(model, params)
     pts = tuple(points) if points is not None else tuple(fixed_points(model, par))
     g = nx.MultiDiGraph(params=par.as_dict(), manifolds={})
     for fp in pts:
@@ -98,7 +96,11 @@ def build_global_picture(
         g.graph["manifolds"][fp.label] = man
         for name, br in man.branches.items():
             fate = br.fate
-            target = fate.equilibrium if fate.kind in (EQUILIBRIUM, SADDLE) else fate.kind
+            target = (
+                fate.equilibrium
+                if fate.kind in (ShipOutcome.EQUILIBRIUM, ShipOutcome.SADDLE)
+                else fate.kind
+            )
             if target not in g:
                 g.add_node(target, kind=fate.kind)
             g.add_edge(

@@ -57,6 +57,7 @@ the slope: the first-passage criterion of :mod:`ship_models.analysis.critical`).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections.abc import Callable, Sequence
@@ -74,6 +75,7 @@ from continuation.dynamics import (
     SimEvent,
     Trajectory,
 )
+from continuation.dynamics import unstable_manifold as engine_unstable_manifold
 from continuation.errors import ContinuationError
 from continuation.params import Params
 from continuation.status import Status
@@ -82,13 +84,11 @@ from continuation.typing import FloatArray
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
 from .fixed_points import FixedPoint, find_fixed_point, fixed_points
+from .outcomes import ShipOutcome
+from .params import ship_params
 
 log = logging.getLogger(__name__)
 
-CAPSIZE, PERIODIC, RECURRENT = "capsize", "periodic", "recurrent"
-EQUILIBRIUM, SADDLE, UNDECIDED = "equilibrium", "saddle", "undecided"
-#: Fate kinds, in the order of the module documentation.
-FATE_KINDS = (CAPSIZE, PERIODIC, RECURRENT, EQUILIBRIUM, SADDLE, UNDECIDED)
 #: Branch names: sign of the displacement along the unstable eigenvector.
 BRANCH_SIGNS = {"downslope": 1.0, "upslope": -1.0}
 
@@ -128,8 +128,8 @@ class ShipFate:
 
     Attributes
     ----------
-    kind : str
-        One of :data:`FATE_KINDS`.
+    kind : ShipOutcome
+        One of :data:`~ship_models.analysis.outcomes.FATE_KINDS`.
     t : float
         Time at which the fate was decided (s).
     visits : tuple of SaddleVisit
@@ -150,7 +150,7 @@ class ShipFate:
     message : str
     """
 
-    kind: str
+    kind: ShipOutcome
     t: float
     visits: tuple[SaddleVisit, ...] = ()
     period: float | None = None
@@ -164,7 +164,7 @@ class ShipFate:
     @property
     def label(self) -> str:
         """Short name: ``"capsize"``, ``"periodic"``, ``"equilibrium:<label>"``, ..."""
-        if self.kind in (EQUILIBRIUM, SADDLE):
+        if self.kind in (ShipOutcome.EQUILIBRIUM, ShipOutcome.SADDLE):
             return f"{self.kind}:{self.equilibrium}"
         return self.kind
 
@@ -213,14 +213,18 @@ def _ship_fate(
     shift = int(fate.shift[0]) if fate.shift else 0
     common = {"t": float(fate.t), "visits": visits, "message": fate.message}
     kind = fate.kind
-    if kind is FateKind.EVENT and fate.name == CAPSIZE:
-        return ShipFate(CAPSIZE, **common)
+    if kind is FateKind.EVENT and fate.name == ShipOutcome.CAPSIZE:
+        return ShipFate(ShipOutcome.CAPSIZE, **common)
     if kind is FateKind.PERIODIC:
         return ShipFate(
-            PERIODIC, period=fate.period, drift=shift, returns=fate.multiplicity, **common
+            ShipOutcome.PERIODIC,
+            period=fate.period,
+            drift=shift,
+            returns=fate.multiplicity,
+            **common,
         )
     if kind in (FateKind.EQUILIBRIUM, FateKind.SADDLE):
-        k = EQUILIBRIUM if kind is FateKind.EQUILIBRIUM else SADDLE
+        k = ShipOutcome.EQUILIBRIUM if kind is FateKind.EQUILIBRIUM else ShipOutcome.SADDLE
         name = fate.name
         if fate.index is None and fate.x_equilibrium is not None:
             # an equilibrium the classifier found by itself: match it to a known point
@@ -235,7 +239,7 @@ def _ship_fate(
     if kind is FateKind.UNDECIDED and fate.status is Status.SUCCESS and len(hits) >= n_recurrent:
         m = len(hits) - 1
         return ShipFate(
-            RECURRENT,
+            ShipOutcome.RECURRENT,
             period=float((hits.t[-1] - hits.t[0]) / m),
             drift=int(round((hits.x[-1, 0] - hits.x[0, 0]) / m)),
             t=float(fate.t),
@@ -248,43 +252,15 @@ def _ship_fate(
     status = fate.status
     if kind is FateKind.UNDECIDED and status is Status.SUCCESS:
         status = Status.MAX_STEPS
-    return ShipFate(UNDECIDED, status=status, **common)
+    return ShipFate(ShipOutcome.UNDECIDED, status=status, **common)
 
 
-def classify_ship_fate(
-    model: Any,
-    params: Params,
-    x0: FloatArray,
-    *,
-    points: Sequence[FixedPoint],
-    capsize_angle: float | None = None,
-    t_max: float = 600.0,
-    segment: float = 50.0,
-    dt: float = 0.05,
-    section: float | None = None,
-    return_tol: float = 1e-4,
-    max_lag: int = 4,
-    n_recurrent: int = 30,
-    visit_radius: float = 0.1,
-    progress: Callable[[float], None] | None = None,
-    rtol: float = 1e-9,
-    atol: float = 1e-11,
-) -> tuple[Trajectory, ShipFate]:
-    """Integrate from ``x0`` in segments until the fate is known (see module notes).
+@dataclass(frozen=True)
+class ShipFateSettings:
+    """Settings of the ship's fate classification (:func:`classify_ship_fate`).
 
-    The generic :class:`continuation.dynamics.fates.FateClassifier` does the work; this function
-    supplies the ship's capsize event, Poincare section, nondimensional distance and
-    fixed points, and adds the ``recurrent`` fate.
-
-    Parameters
+    Attributes
     ----------
-    model : Umeda4DOF
-    params : Params
-    x0 : ndarray, shape (8,)
-    points : sequence of FixedPoint
-        The fixed points at ``params`` (saddles for ``visits`` and the ``saddle``
-        fate, stable points for the ``equilibrium`` fate), e.g. from
-        :func:`~ship_models.analysis.fixed_points`.
     capsize_angle : float, optional
         Roll angle (rad) of the capsize event; default: vanishing stability of GZ.
     t_max : float
@@ -308,10 +284,75 @@ def classify_ship_fate(
         fate is ``recurrent``.
     visit_radius : float
         Distance to a saddle that counts as a visit.
-    progress : callable, optional
-        ``progress(t)`` after each segment.
     rtol, atol : float
         Integrator tolerances (CVODES BDF, :mod:`continuation.dynamics.simulate`).
+
+    Raises
+    ------
+    ValueError
+        On construction, naming a non-positive field.
+    """
+
+    capsize_angle: float | None = None
+    t_max: float = 600.0
+    segment: float = 50.0
+    dt: float = 0.05
+    section: float | None = None
+    return_tol: float = 1e-4
+    max_lag: int = 4
+    n_recurrent: int = 30
+    visit_radius: float = 0.1
+    rtol: float = 1e-9
+    atol: float = 1e-11
+
+    def __post_init__(self) -> None:
+        for name in (
+            "t_max", "segment", "dt", "return_tol", "max_lag", "n_recurrent", "visit_radius",
+            "rtol", "atol",
+        ):  # fmt: skip
+            val = getattr(self, name)
+            if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
+                raise ValueError(f"`{name}` must be a positive number, got {val!r}")
+
+    def replace(self, **changes: Any) -> ShipFateSettings:
+        """A copy with ``changes``; unknown names raise a ValueError naming them."""
+        bad = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
+        if bad:
+            raise ValueError(f"unknown fate setting(s) {bad}")
+        return dataclasses.replace(self, **changes) if changes else self
+
+
+def classify_ship_fate(
+    model: Any,
+    params: Params,
+    x0: FloatArray,
+    *,
+    points: Sequence[FixedPoint],
+    settings: ShipFateSettings | None = None,
+    progress: Callable[[float], None] | None = None,
+    **options: Any,
+) -> tuple[Trajectory, ShipFate]:
+    """Integrate from ``x0`` in segments until the fate is known (see module notes).
+
+    The generic :class:`continuation.dynamics.fates.FateClassifier` does the work; this function
+    supplies the ship's capsize event, Poincare section, nondimensional distance and
+    fixed points, and adds the ``recurrent`` fate.
+
+    Parameters
+    ----------
+    model : Umeda4DOF
+    params : Params
+    x0 : ndarray, shape (8,)
+    points : sequence of FixedPoint
+        The fixed points at ``params`` (saddles for ``visits`` and the ``saddle``
+        fate, stable points for the ``equilibrium`` fate), e.g. from
+        :func:`~ship_models.analysis.fixed_points`.
+    settings : ShipFateSettings, optional
+        Time limit, segments, tolerances (default ``ShipFateSettings()``).
+    progress : callable, optional
+        ``progress(t)`` after each segment.
+    **options
+        Fields of :class:`ShipFateSettings` replaced in ``settings`` (``t_max=...``).
 
     Returns
     -------
@@ -322,19 +363,12 @@ def classify_ship_fate(
     Raises
     ------
     ValueError
-        For non-positive ``t_max``, ``segment``, ``dt`` or tolerances.
+        For non-positive settings or unknown option names.
     """
-    for name, val in (
-        ("t_max", t_max),
-        ("segment", segment),
-        ("dt", dt),
-        ("return_tol", return_tol),
-        ("max_lag", max_lag),
-        ("n_recurrent", n_recurrent),
-        ("visit_radius", visit_radius),
-    ):
-        if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
-            raise ValueError(f"`{name}` must be a positive number, got {val!r}")
+    cfg = (settings or ShipFateSettings()).replace(**options)
+    capsize_angle, t_max, segment, dt = cfg.capsize_angle, cfg.t_max, cfg.segment, cfg.dt
+    section, return_tol, max_lag = cfg.section, cfg.return_tol, cfg.max_lag
+    n_recurrent, visit_radius, rtol, atol = cfg.n_recurrent, cfg.visit_radius, cfg.rtol, cfg.atol
     x0 = model.check_state(x0, "x0")
     pts = list(points)
     saddles = [fp for fp in pts if fp.saddle_index >= 1]
@@ -344,7 +378,7 @@ def classify_ship_fate(
     phi_cap = capsize_angle_of(model, capsize_angle)
     i_phi = model.state_index("phi")
     capsize = SimEvent(
-        CAPSIZE,
+        ShipOutcome.CAPSIZE,
         lambda t, x: np.abs(np.asarray(x)[..., i_phi]) - phi_cap,
         terminal=True,
         direction=1,
@@ -448,10 +482,31 @@ class ShipManifold:
         }
 
 
-def manifold_start(saddle: FixedPoint, eps: float, sign: float) -> FloatArray:
-    """``x_s + sign * eps * S y'_u``: the start of one unstable-manifold branch, shape (8,)."""
+def _engine_eps(saddle: FixedPoint, eps: float) -> float:
+    """``eps |y'_u|_2``: the engine's start distance for the ship's nondimensional ``eps``.
+
+    :func:`continuation.dynamics.manifolds.unstable_manifold` starts at ``x_s + sign eps_2 v``
+    with ``v`` the unstable eigenvector of unit ``||v / S||_2`` (``S = scales``), i.e.
+    ``v = S y'_u / |y'_u|_2`` with ``y'_u`` the nondimensional eigenvector of max-norm 1.
+    """
     y = saddle.eigen.unstable_vector(0, nondim=True)
-    return np.asarray(saddle.x + sign * eps * saddle.eigen.scales * y, dtype=float)
+    return float(eps) * float(np.linalg.norm(y))
+
+
+def manifold_start(saddle: FixedPoint, eps: float, sign: float) -> FloatArray:
+    """``x_s + sign * eps * S y'_u``: the start of one unstable-manifold branch, shape (8,).
+
+    Computed as the engine's :func:`continuation.dynamics.manifolds.unstable_manifold` does
+    (``x_s + sign eps_2 v``, ``v`` the real eigenvector of the largest eigenvalue of unit
+    scale-weighted 2-norm, ``xi_G`` component positive, ``eps_2`` from
+    :func:`_engine_eps`), so it is the start point of :func:`unstable_manifold` to the bit.
+    """
+    s = np.asarray(saddle.eigen.scales, dtype=float)
+    v = np.real(saddle.eigen.vectors[:, 0])
+    v = v / np.linalg.norm(v / s)
+    if v[list(saddle.eigen.state_names).index("xi_G")] < 0:
+        v = -v
+    return np.asarray(saddle.x + sign * _engine_eps(saddle, eps) * v, dtype=float)
 
 
 def unstable_manifold(
@@ -460,12 +515,11 @@ def unstable_manifold(
     saddle: FixedPoint | str = "crest",
     *,
     eps: float = 1e-6,
-    t_max: float = 600.0,
     branches: Sequence[str] = ("downslope", "upslope"),
     points: Sequence[FixedPoint] | None = None,
-    capsize_angle: float | None = None,
+    settings: ShipFateSettings | None = None,
     progress: Callable[[str, float], None] | None = None,
-    **classify: Any,
+    **options: Any,
 ) -> ShipManifold:
     """Both branches of the unstable manifold of a ship saddle, with their fates.
 
@@ -473,25 +527,23 @@ def unstable_manifold(
     ----------
     model : Umeda4DOF
     params : Params, optional
-        Default: the model's defaults (Fn = 0.3248, chi_c = 10 deg).
+        Default: the model's defaults (``ship_models.paper``: Fn = 0.3248, chi_c = 10 deg).
     saddle : FixedPoint or str
         The saddle, or its label among :func:`~ship_models.analysis.fixed_points`
         (default ``"crest"``: the point near the wave crest, as in the paper).
     eps : float
         Nondimensional initial displacement along the unstable eigenvector.
-    t_max : float
-        Time limit of each branch (s).
     branches : sequence of str
         Which of ``"downslope"``, ``"upslope"`` to compute.
     points : sequence of FixedPoint, optional
         Fixed points for the classification (default: all at ``params``).
-    capsize_angle : float, optional
-        Roll angle of capsize (rad); default the vanishing angle of GZ.
+    settings : ShipFateSettings, optional
+        The classification of each branch (time limit ``t_max``, ``capsize_angle``,
+        ``segment``, ``dt``, ``return_tol``, ``visit_radius``, ``section``, ...).
     progress : callable, optional
         ``progress(branch_name, t)`` after each integration segment.
-    **classify
-        Further options of :func:`classify_ship_fate` (``segment``, ``dt``,
-        ``return_tol``, ``eq_radius``, ``visit_radius``, ``section``).
+    **options
+        Fields of :class:`ShipFateSettings` replaced in ``settings``.
 
     Returns
     -------
@@ -503,11 +555,8 @@ def unstable_manifold(
         If the saddle does not have exactly one unstable eigenvalue, which must be
         real; for ``eps`` outside (0, 0.1); for an unknown branch name.
     """
-    par = (
-        model.default_params()
-        if params is None
-        else Params(model.param_names, model.check_params(params, "params"))
-    )
+    par = ship_params(model, params)
+    cfg = (settings or ShipFateSettings()).replace(**options)
     if not (isinstance(eps, (int, float)) and 0 < eps < 0.1):
         raise ValueError(f"`eps` must be in (0, 0.1), got {eps!r}")
     bad = [b for b in branches if b not in BRANCH_SIGNS]
@@ -527,22 +576,35 @@ def unstable_manifold(
     lam = sp.eigen.values[0]
     if lam.imag != 0.0:
         raise ValueError(f"`saddle` {sp.label!r}: unstable eigenvalue {lam} is not real")
+    eps_2 = _engine_eps(sp, eps)  # the engine's distance for x_s + sign eps S y'_u
     out: dict[str, ManifoldBranch] = {}
     for name in branches:
         sign = BRANCH_SIGNS[name]
-        x0 = manifold_start(sp, eps, sign)
         cb = None if progress is None else (lambda t, _n=name: progress(_n, t))
-        traj, fate = classify_ship_fate(
+        found: dict[str, Any] = {}
+
+        def classify_branch(x0: FloatArray, _cb: Any = cb, _found: dict = found) -> ShipFate:
+            _found["trajectory"], fate = classify_ship_fate(
+                model, par, x0, points=pts, settings=cfg, progress=_cb
+            )
+            return fate
+
+        man = engine_unstable_manifold(
             model,
-            par,
-            x0,
-            points=pts,
-            capsize_angle=capsize_angle,
-            t_max=t_max,
-            progress=cb,
-            **classify,
+            np.asarray(par.values, dtype=float),
+            sp.x,
+            eps=eps_2,
+            classify=classify_branch,
+            branches=(int(sign),),
+            orient="xi_G",
+            scale=sp.eigen.scales,
+            refine=False,
         )
-        out[name] = ManifoldBranch(name, sign, x0, traj, fate)
+        br = man.branch(int(sign)) if man.branches else None
+        if br is None:  # interrupted before the branch was classified
+            break
+        fate = br.fate
+        out[name] = ManifoldBranch(name, sign, br.x0, found["trajectory"], fate)
         log.debug("%s branch of %s: %s (%s)", name, sp.label, fate.label, fate.message)
         if fate.status is Status.INTERRUPTED:
             break
@@ -551,11 +613,6 @@ def unstable_manifold(
 
 __all__ = [
     "BRANCH_SIGNS",
-    "CAPSIZE",
-    "EQUILIBRIUM",
-    "FATE_KINDS",
-    "PERIODIC",
-    "UNDECIDED",
     "ManifoldBranch",
     "SaddleVisit",
     "ShipFate",

@@ -16,7 +16,7 @@ Steps, each a public function:
    :math:`x^* = P(x^*)` of the return map :math:`P` by Newton's method with a
    finite-difference Jacobian of :math:`P` (the 7 states other than ``xi_G``). Its
    eigenvalues are the nontrivial Floquet multipliers; all inside the unit circle
-   means the orbit attracts. :meth:`PeriodicOrbit.state_at` gives the state on the
+   means the orbit attracts. :meth:`ShootingOrbit.state_at` gives the state on the
    orbit at any :math:`(\xi_G/\lambda)_0` (its first crossing after the section).
 2. :func:`sudden_change` -- start at that state with the new controls ``params_to``
    and classify the transient (:func:`~ship_models.analysis.manifold.classify_ship_fate`):
@@ -36,6 +36,7 @@ Steps, each a public function:
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import time
@@ -45,7 +46,9 @@ from typing import Any
 
 import numpy as np
 
-from continuation.dynamics import PoincareSection, SimEvent, Trajectory, simulate
+from continuation.dynamics import Fate, FateKind, SimEvent, Trajectory, bisect_fate
+from continuation.dynamics.shooting import ShootingOrbit, ShootingSettings
+from continuation.dynamics.shooting import shoot_orbit as engine_periodic_orbit
 from continuation.errors import ContinuationError
 from continuation.params import Params
 from continuation.status import Status
@@ -55,26 +58,17 @@ from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
 from .fixed_points import fixed_points
 from .manifold import ShipFate, classify_ship_fate
+from .outcomes import CAPTURED_BY_WAVE, SUDDEN_CHANGE_OUTCOMES, ShipOutcome
+from .params import ship_params
 
 log = logging.getLogger(__name__)
 
-CAPSIZE, PERIODIC, SURF_RIDING = "capsize", "periodic", "surf-riding"
-SADDLE, UNDECIDED = "saddle", "undecided"
-#: Outcomes of a sudden-change run (Umeda 1999, Figs. 16, 22: cross = capsize, circle =
-#: periodic motion).
-OUTCOMES = (CAPSIZE, PERIODIC, SURF_RIDING, SADDLE, UNDECIDED)
-#: Outcomes counted as "captured by the wave" (the upper side of a boundary).
-CAPTURED = (CAPSIZE, SURF_RIDING, SADDLE)
-
 
 # ------------------------------------------------------------------------ helpers
-def _params(model: Any, params: Any, name: str) -> Params:
+def _given(model: Any, params: Any, name: str) -> Params:
     if params is None:
         raise ValueError(f"`{name}` must be given (Params, mapping or array)")
-    try:
-        return Params(model.param_names, model.check_params(params, name))
-    except ValueError as exc:
-        raise ValueError(f"`{name}`: {exc}") from None
+    return ship_params(model, params, name)
 
 
 def _positive(value: Any, name: str) -> float:
@@ -100,7 +94,7 @@ def _capsize_sim_event(model: Any, angle: float | None) -> SimEvent:
     phi_cap = capsize_angle_of(model, angle)
     i_phi = model.state_index("phi")
     return SimEvent(
-        CAPSIZE,
+        ShipOutcome.CAPSIZE,
         lambda t, x: np.abs(np.asarray(x)[..., i_phi]) - phi_cap,
         terminal=True,
         direction=1,
@@ -123,161 +117,6 @@ def default_guess(model: Any, params: Params, xi: float = 0.0) -> FloatArray:
 
 
 # ----------------------------------------------------------------- periodic orbit
-@dataclass(frozen=True, eq=False)
-class PeriodicOrbit:
-    r"""A periodic orbit of the ship, sectioned at :math:`\xi_G/\lambda = c \pmod 1`.
-
-    Attributes
-    ----------
-    model : Umeda4DOF
-    params : Params
-        The controls (and wave) it belongs to.
-    x_section : ndarray, shape (8,)
-        The state on the section (``xi_G = section``).
-    section : float
-    period : float
-        Return time to the section (s).
-    drift : int
-        Wavelengths travelled per period (``-1``: overtaken by one wave per period).
-    multipliers : ndarray, shape (7,), complex
-        Eigenvalues of the return map's Jacobian (nontrivial Floquet multipliers).
-    closure : float
-        Nondimensional max-norm of ``P(x) - x`` at the solution.
-    trajectory : Trajectory
-        One period from ``x_section``.
-    status : Status
-    message : str
-    n_transient : int
-        Returns simulated before the Newton refinement.
-    elapsed : float
-        Wall time (s).
-    """
-
-    model: Any
-    params: Params
-    x_section: FloatArray
-    section: float
-    period: float
-    drift: int
-    multipliers: np.ndarray
-    closure: float
-    trajectory: Trajectory
-    status: Status
-    message: str = ""
-    n_transient: int = 0
-    elapsed: float = 0.0
-
-    @property
-    def success(self) -> bool:
-        """Converged."""
-        return self.status is Status.SUCCESS
-
-    @property
-    def attracting(self) -> bool:
-        """All nontrivial Floquet multipliers inside the unit circle."""
-        return bool(np.all(np.abs(self.multipliers) < 1.0))
-
-    def state_at(self, xi_0: float) -> FloatArray:
-        r"""The state on the orbit where :math:`\xi_G/\lambda \equiv \xi_0 \pmod 1`.
-
-        The first such point after the section in the direction of the drift, located
-        by a Poincare section on the re-integrated orbit (so to the integrator's
-        accuracy, not an interpolation). ``xi_G`` of the result is ``xi_0`` itself.
-
-        Parameters
-        ----------
-        xi_0 : float
-            Initial longitudinal position :math:`(\xi_G/\lambda)_0`.
-
-        Returns
-        -------
-        ndarray, shape (8,)
-        """
-        xi_0 = _position(xi_0)
-        if not self.success:
-            raise ContinuationError(f"the periodic orbit did not converge: {self.message}")
-        i = self.model.state_index("xi_G")
-        x = self.x_section.copy()
-        if math.isclose(math.remainder(xi_0 - self.section, 1.0), 0.0, abs_tol=1e-13):
-            x[i] = xi_0
-            return x
-        direction = 1 if self.drift > 0 else -1
-        sec = PoincareSection("xi_G", xi_0, direction=direction, name="xi_0", terminal=True)
-        tr = simulate(
-            self.model,
-            x,
-            self.params,
-            (0.0, 1.5 * self.period),
-            events=[sec],
-            dt=min(0.05, self.period / 100),
-            rtol=1e-11,
-            atol=1e-13,
-        )
-        hits = tr.events["xi_0"]
-        if len(hits) == 0:  # pragma: no cover - a drifting orbit crosses every level
-            raise ContinuationError(f"the orbit does not pass xi_G/lambda = {xi_0} (mod 1)")
-        out = np.array(hits.x[0], dtype=float)
-        out[i] = xi_0
-        return out
-
-    def states(self, xi_0: Sequence[float]) -> FloatArray:
-        """:meth:`state_at` for several positions, shape ``(len(xi_0), 8)``."""
-        return np.array([self.state_at(v) for v in xi_0])
-
-    def to_json(self) -> dict[str, Any]:
-        """JSON-ready summary."""
-        return {
-            "params": {k: float(self.params[k]) for k in self.params.names},
-            "section": self.section,
-            "x_section": [float(v) for v in self.x_section],
-            "period_s": self.period,
-            "drift": self.drift,
-            "multipliers_abs": [float(v) for v in np.abs(self.multipliers)],
-            "closure": self.closure,
-            "attracting": self.attracting,
-            "status": self.status.name,
-            "message": self.message,
-            "n_transient": self.n_transient,
-            "elapsed_s": self.elapsed,
-        }
-
-
-class _ReturnMap:
-    """The first-return map to ``xi_G = c (mod 1)`` in the drift direction."""
-
-    def __init__(self, model: Any, params: Params, section: float, direction: int, tmax: float):
-        self.model, self.params, self.section = model, params, section
-        self.direction, self.tmax = direction, tmax
-        self.i = model.state_index("xi_G")
-        self.others = [k for k in range(len(model.state_names)) if k != self.i]
-
-    def full(self, y: FloatArray) -> FloatArray:
-        x = np.empty(len(self.others) + 1)
-        x[self.i] = self.section
-        x[self.others] = y
-        return x
-
-    def __call__(self, y: FloatArray) -> tuple[FloatArray, float, Trajectory]:
-        sec = PoincareSection(
-            "xi_G", self.section, direction=self.direction, name="ret", terminal=True
-        )
-        tr = simulate(
-            self.model,
-            self.full(y),
-            self.params,
-            (0.0, self.tmax),
-            events=[sec],
-            dt=0.05,
-            rtol=1e-11,
-            atol=1e-13,
-        )
-        if tr.status is Status.INTERRUPTED:
-            raise KeyboardInterrupt
-        if tr.terminal_event != "ret":
-            raise ContinuationError(f"no return to the section within {self.tmax:g} s")
-        return np.asarray(tr.x[-1, self.others], dtype=float), float(tr.t[-1]), tr
-
-
 def periodic_orbit(
     model: Any,
     params: Any,
@@ -290,14 +129,18 @@ def periodic_orbit(
     max_newton: int = 8,
     capsize_angle: float | None = None,
     throw: bool = False,
-) -> PeriodicOrbit:
+) -> ShootingOrbit:
     r"""The attracting periodic orbit of the ship at ``params``, by simulation + Newton.
 
+    The ship's use of the engine's return-map solver
+    (:func:`continuation.dynamics.shooting.shoot_orbit`): section
+    :math:`\xi_G/\lambda = c \pmod 1` (a rotation orbit: the ship is overtaken by whole
+    waves, ``shift = -1`` per period), the nondimensional max-norm of
+    :func:`~ship_models.analysis.eigen.paper_scales`, and the capsize event.
+
     1. Simulate from ``x_guess`` (default :func:`default_guess`) with the capsize event
-       and the section :math:`\xi_G/\lambda = c \pmod 1` until two consecutive returns
-       :math:`y_k, y_{k-1}` (the 7 states other than ``xi_G``, nondimensional
-       max-norm, :func:`~ship_models.analysis.eigen.paper_scales`) differ by less
-       than ``return_tol``.
+       and the section until two consecutive returns :math:`y_k, y_{k-1}` (the 7
+       states other than ``xi_G``) differ by less than ``return_tol``.
     2. Newton's method on :math:`G(y) = P(y) - y = 0` with the Jacobian
        :math:`DP - I` by forward differences (7 one-period runs), until the scaled
        step and residual are below ``tol``.
@@ -322,145 +165,60 @@ def periodic_orbit(
         Roll angle (rad) of capsize; default the vanishing angle of GZ. A capsize
         during the transient gives ``Status.EVENT``.
     throw : bool
-        Raise :class:`~continuation.errors.ConvergenceError` (a ContinuationError) on
-        failure instead of returning the status.
+        Raise :class:`~continuation.errors.ContinuationError` on failure instead of
+        returning the status.
 
     Returns
     -------
-    PeriodicOrbit
+    ShootingOrbit
+        The engine's type (``system`` is the model, ``shift`` the waves per period,
+        ``state_at(xi_0)`` the state at :math:`(\xi_G/\lambda)_0`).
 
     Raises
     ------
     ValueError
         For bad ``params``, ``x_guess``, tolerances or counts.
     """
-    t_start = time.perf_counter()
-    par = _params(model, params, "params")
+    par = ship_params(model, params)
     section = _position(section, "section")
-    return_tol = _positive(return_tol, "return_tol")
-    tol = _positive(tol, "tol")
-    for name, v in (("max_returns", max_returns), ("max_newton", max_newton)):
-        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-            raise ValueError(f"`{name}` must be a positive integer, got {v!r}")
+    settings = ShootingSettings(
+        return_tol=_positive(return_tol, "return_tol"),
+        tol=_positive(tol, "tol"),
+        max_returns=max_returns,
+        max_newton=max_newton,
+    )
     x0 = (
         default_guess(model, par, section)
         if x_guess is None
         else model.check_state(x_guess, "x_guess")
     )
     scales, _ = paper_scales(model, par, default_guess(model, par))
-    i_xi = model.state_index("xi_G")
-    others = [k for k in range(len(model.state_names)) if k != i_xi]
-    s7 = np.asarray(scales, dtype=float)[others]
-    cap = _capsize_sim_event(model, capsize_angle)
-
-    def fail(status: Status, msg: str, traj: Trajectory) -> PeriodicOrbit:
-        if throw and status is not Status.INTERRUPTED:
-            raise ContinuationError(f"periodic_orbit: {msg}")
-        return PeriodicOrbit(
-            model, par, np.array(traj.x[-1], dtype=float), section, math.nan, 0,
-            np.full(len(others), np.nan + 0j), math.nan, traj, status, msg, 0,
-            time.perf_counter() - t_start,
-        )  # fmt: skip
-
-    # ---- 1. transient: returns in both directions, in chunks
-    sec = PoincareSection("xi_G", section, name="sec")
-    x, t_now, hits_t, hits_x = x0, 0.0, [], []
-    y_prev: FloatArray | None = None
-    chunk = 200.0
-    converged = False
-    last: Trajectory | None = None
-    while len(hits_t) < max_returns:
-        tr = simulate(
-            model, x, par, (t_now, t_now + chunk), events=[cap, sec], dt=0.1, rtol=1e-9, atol=1e-11
-        )
-        last = tr
-        if tr.terminal_event == CAPSIZE:
-            return fail(Status.EVENT, f"capsized at t = {tr.t[-1]:.1f} s from the guess", tr)
-        if not tr.status.ok:
-            return fail(tr.status, tr.message, tr)
-        h = tr.events["sec"]
-        for tk, xk in zip(h.t, h.x, strict=True):
-            yk = np.asarray(xk[others])
-            hits_t.append(float(tk))
-            hits_x.append(np.asarray(xk, dtype=float))
-            if y_prev is not None and np.max(np.abs(yk - y_prev) / s7) < return_tol:
-                converged = True
-                break
-            y_prev = yk
-        if converged:
-            break
-        x, t_now = tr.x[-1], float(tr.t[-1])
-    assert last is not None
-    if not converged:
-        return fail(Status.MAX_ITER, f"returns did not settle in {len(hits_t)} returns", last)
-    n_transient = len(hits_t)
-    xa, xb = hits_x[-2], hits_x[-1]
-    drift = int(round(xb[i_xi] - xa[i_xi]))
-    if drift == 0:
-        return fail(
-            Status.UNDECIDED,
-            "the motion does not drift through the waves",
-            last,
-        )
-    period_est = hits_t[-1] - hits_t[-2]
-    pmap = _ReturnMap(model, par, section, 1 if drift > 0 else -1, 3.0 * period_est * abs(drift))
-
-    # ---- 2. Newton on P(y) - y
-    y = np.asarray(xb[others], dtype=float)
-    status, msg = Status.NEWTON_FAILED, f"Newton did not converge in {max_newton} iterations"
-    J = np.eye(len(others))
-    res = math.inf
-    try:
-        for it in range(max_newton):
-            py, _, _ = pmap(y)
-            g = py - y
-            res = float(np.max(np.abs(g) / s7))
-            J = np.empty((len(others), len(others)))
-            for k in range(len(others)):
-                h = 1e-6 * s7[k]
-                yk = y.copy()
-                yk[k] += h
-                J[:, k] = (pmap(yk)[0] - py) / h
-            step = np.linalg.solve(J - np.eye(len(others)), -g)
-            y = y + step
-            if np.max(np.abs(step) / s7) < tol and res < 1e3 * tol:
-                status, msg = Status.SUCCESS, f"converged in {it + 1} Newton iterations"
-                break
-            if res < tol:
-                status, msg = Status.SUCCESS, f"converged in {it + 1} Newton iterations"
-                break
-    except ContinuationError as exc:
-        status, msg = Status.NEWTON_FAILED, str(exc)
-    except np.linalg.LinAlgError:
-        status, msg = Status.SINGULAR, "singular return-map Jacobian (a multiplier equal to 1)"
-    except KeyboardInterrupt:
-        return fail(Status.INTERRUPTED, "interrupted during the Newton refinement", last)
-    try:
-        py, period, tr = pmap(y)
-    except ContinuationError as exc:
-        return fail(Status.NEWTON_FAILED, f"Newton diverged: {exc}", last)
-    except KeyboardInterrupt:
-        return fail(Status.INTERRUPTED, "interrupted during the Newton refinement", last)
-    closure = float(np.max(np.abs(py - y) / s7))
-    mult = np.linalg.eigvals(J)
-    orbit = PeriodicOrbit(
-        model, par, pmap.full(y), section, period, drift, mult, closure, tr, status, msg,
-        n_transient, time.perf_counter() - t_start,
-    )  # fmt: skip
-    if throw and status not in (Status.SUCCESS, Status.INTERRUPTED):
-        raise ContinuationError(f"periodic_orbit: {msg}")
-    log.debug("periodic orbit: %s, period %.6g s, closure %.2e", msg, period, closure)
+    orbit = engine_periodic_orbit(
+        model,
+        par,
+        x0,
+        state="xi_G",
+        section=section,
+        scale=scales,
+        events=[_capsize_sim_event(model, capsize_angle)],
+        settings=settings,
+    )
+    if orbit.status is Status.EVENT:
+        msg = f"capsized at t = {orbit.trajectory.t[-1]:.1f} s from the guess"
+        orbit = dataclasses.replace(orbit, message=msg)
+    if throw and orbit.status not in (Status.SUCCESS, Status.INTERRUPTED):
+        raise ContinuationError(f"periodic_orbit: {orbit.message}")
     return orbit
 
 
 def follow_orbit(
-    orbit: PeriodicOrbit,
+    orbit: ShootingOrbit,
     params: Any,
     *,
     steps: int = 3,
     progress: Callable[[str], None] | None = None,
     **options: Any,
-) -> PeriodicOrbit:
+) -> ShootingOrbit:
     """Follow a periodic orbit to new parameters in ``steps`` equal parameter steps.
 
     Each step starts :func:`periodic_orbit` from the previous orbit's section state
@@ -470,7 +228,7 @@ def follow_orbit(
 
     Parameters
     ----------
-    orbit : PeriodicOrbit
+    orbit : ShootingOrbit
         A converged orbit.
     params : Params, mapping or array
         Target parameters.
@@ -483,15 +241,15 @@ def follow_orbit(
 
     Returns
     -------
-    PeriodicOrbit
+    ShootingOrbit
         At ``params``; a failed status if some step failed (that step's orbit).
     """
-    if not isinstance(orbit, PeriodicOrbit) or not orbit.success:
-        raise ValueError("`orbit` must be a converged PeriodicOrbit")
+    if not isinstance(orbit, ShootingOrbit) or not orbit.success:
+        raise ValueError("`orbit` must be a converged ShootingOrbit")
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         raise ValueError(f"`steps` must be a positive integer, got {steps!r}")
-    model = orbit.model
-    target = _params(model, params, "params")
+    model = orbit.system
+    target = ship_params(model, params)
     a = np.asarray(orbit.params.values, dtype=float)
     b = np.asarray(target.values, dtype=float)
     options.setdefault("section", orbit.section)
@@ -513,10 +271,10 @@ class SuddenChange:
 
     Attributes
     ----------
-    outcome : str
-        One of :data:`OUTCOMES`: ``capsize``, ``periodic`` (periodic attractor or
-        bounded recurrent surging), ``surf-riding`` (stable equilibrium),
-        ``undecided``.
+    outcome : ShipOutcome
+        One of :data:`~ship_models.analysis.outcomes.SUDDEN_CHANGE_OUTCOMES`:
+        ``capsize``, ``periodic`` (periodic attractor or bounded recurrent surging),
+        ``surf-riding`` (stable equilibrium), ``saddle``, ``undecided``.
     xi_0 : float
         Initial longitudinal position :math:`(\xi_G/\lambda)_0`.
     params_to : Params
@@ -530,7 +288,7 @@ class SuddenChange:
     trajectory : Trajectory
     """
 
-    outcome: str
+    outcome: ShipOutcome
     xi_0: float
     params_to: Params
     x0: FloatArray
@@ -541,12 +299,12 @@ class SuddenChange:
     @property
     def capsized(self) -> bool:
         """The ship capsized."""
-        return self.outcome == CAPSIZE
+        return self.outcome == ShipOutcome.CAPSIZE
 
     @property
     def captured(self) -> bool:
-        """Capsize, surf-riding or convergence onto a saddle (:data:`CAPTURED`)."""
-        return self.outcome in CAPTURED
+        """Capsize, surf-riding or convergence onto a saddle (``CAPTURED_BY_WAVE``)."""
+        return self.outcome in CAPTURED_BY_WAVE
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready summary (no trajectory)."""
@@ -560,26 +318,26 @@ class SuddenChange:
         }
 
 
-def _outcome(fate: ShipFate) -> str:
-    if fate.kind == "capsize":
-        return CAPSIZE
-    if fate.kind in ("periodic", "recurrent"):
-        return PERIODIC
-    if fate.kind == "equilibrium":
-        return SURF_RIDING
-    if fate.kind == "saddle":
-        return SADDLE
-    return UNDECIDED
+def _outcome(fate: ShipFate) -> ShipOutcome:
+    if fate.kind == ShipOutcome.CAPSIZE:
+        return ShipOutcome.CAPSIZE
+    if fate.kind in (ShipOutcome.PERIODIC, ShipOutcome.RECURRENT):
+        return ShipOutcome.PERIODIC
+    if fate.kind == ShipOutcome.EQUILIBRIUM:
+        return ShipOutcome.SURF_RIDING
+    if fate.kind == ShipOutcome.SADDLE:
+        return ShipOutcome.SADDLE
+    return ShipOutcome.UNDECIDED
 
 
-def _orbit_for(model: Any, params_from: Any, orbit: PeriodicOrbit | None) -> PeriodicOrbit:
+def _orbit_for(model: Any, params_from: Any, orbit: ShootingOrbit | None) -> ShootingOrbit:
     if orbit is not None:
-        if not isinstance(orbit, PeriodicOrbit):
-            raise ValueError(f"`orbit` must be a PeriodicOrbit, got {type(orbit).__name__}")
+        if not isinstance(orbit, ShootingOrbit):
+            raise ValueError(f"`orbit` must be a ShootingOrbit, got {type(orbit).__name__}")
         if not orbit.success:
             raise ValueError(f"`orbit` did not converge: {orbit.message}")
         return orbit
-    pf = _params(model, params_from, "params_from")
+    pf = _given(model, params_from, "params_from")
     return periodic_orbit(model, pf, throw=True)
 
 
@@ -589,7 +347,7 @@ def sudden_change(
     params_to: Any,
     xi_0: float,
     *,
-    orbit: PeriodicOrbit | None = None,
+    orbit: ShootingOrbit | None = None,
     t_max: float = 600.0,
     capsize_angle: float | None = None,
     progress: Callable[[float], None] | None = None,
@@ -606,7 +364,7 @@ def sudden_change(
         The new controls, e.g. Fn = 0.31, chi_c = 10 deg.
     xi_0 : float
         Initial longitudinal position :math:`(\xi_G/\lambda)_0` on the old orbit.
-    orbit : PeriodicOrbit, optional
+    orbit : ShootingOrbit, optional
         The old orbit, if already computed (:func:`periodic_orbit`).
     t_max : float
         Time limit (s); ``undecided`` after it.
@@ -629,7 +387,7 @@ def sudden_change(
     ValueError
         For bad parameters, ``xi_0``, ``t_max`` or ``orbit``.
     """
-    pt = _params(model, params_to, "params_to")
+    pt = _given(model, params_to, "params_to")
     xi_0 = _position(xi_0)
     t_max = _positive(t_max, "t_max")
     orb = _orbit_for(model, params_from, orbit)
@@ -721,7 +479,7 @@ def sudden_change_boundary(
     fn_bracket: tuple[float, float],
     tol: float = 1e-4,
     *,
-    orbit: PeriodicOrbit | None = None,
+    orbit: ShootingOrbit | None = None,
     t_max: float = 600.0,
     throw: bool = False,
     progress: Callable[[str], None] | None = None,
@@ -730,7 +488,7 @@ def sudden_change_boundary(
     r"""Critical Fn of the sudden change to course ``chi_c_to`` by bisection on the outcome.
 
     The outcome at the lower end of ``fn_bracket`` must be ``periodic`` and at the
-    upper end captured (:data:`CAPTURED`: ``capsize`` for ``chi_c > 0``,
+    upper end captured (``CAPTURED_BY_WAVE``: ``capsize`` for ``chi_c > 0``,
     ``surf-riding``/``saddle`` in the surge plane at ``chi_c = 0``); otherwise the
     result carries ``Status.NO_BRACKET`` (``ContinuationError`` with ``throw=True``).
     Each step halves the bracket, keeping ends with different outcomes, until it is
@@ -753,7 +511,7 @@ def sudden_change_boundary(
         ``(lower, upper)`` nominal Froude numbers.
     tol : float
         Final bracket width in Fn.
-    orbit : PeriodicOrbit, optional
+    orbit : ShootingOrbit, optional
         The old periodic orbit (computed from ``params_from`` if not given).
     t_max : float
         Time limit of each run (s).
@@ -787,7 +545,9 @@ def sudden_change_boundary(
     base = orb.params.replace(chi_c=chi)
     n_runs = 0
 
-    def run(fn: float) -> str:
+    ends: list[ShipOutcome] = []
+
+    def run(fn: float) -> Any:
         nonlocal n_runs
         pt = base.replace(Fn=fn)
         options.setdefault("points", None)
@@ -796,7 +556,7 @@ def sudden_change_boundary(
         )
         r = sudden_change(model, None, pt, xi_0, orbit=orb, t_max=t_max, **opts)
         n_runs += 1
-        if r.outcome == UNDECIDED and r.fate.status is not Status.INTERRUPTED:
+        if r.outcome == ShipOutcome.UNDECIDED and r.fate.status is not Status.INTERRUPTED:
             # close to the boundary the transient lingers near the crest saddle and the
             # attractor below it has several returns: one more try with twice the time
             r = sudden_change(model, None, pt, xi_0, orbit=orb, t_max=2 * t_max, **opts)
@@ -805,38 +565,53 @@ def sudden_change_boundary(
             raise KeyboardInterrupt
         if progress is not None:
             progress(f"Fn = {fn:.7f}: {r.outcome}")
+        if len(ends) < 2:
+            ends.append(r.outcome)
+            if len(ends) == 2 and (
+                ends[0] != ShipOutcome.PERIODIC or ends[1] not in CAPTURED_BY_WAVE
+            ):
+                raise _WrongEnds
+        if r.outcome == ShipOutcome.UNDECIDED:
+            return Fate(FateKind.UNDECIDED, "undecided", t=r.t)
         return r.outcome
 
-    def done(status: Status, msg: str, out: tuple[str, str]) -> SuddenChangeBoundary:
+    def done(status: Status, msg: str, bracket: tuple[float, float], out: Any) -> Any:
         if throw and status not in (Status.SUCCESS, Status.INTERRUPTED):
             raise ContinuationError(f"sudden_change_boundary: {msg}")
         return SuddenChangeBoundary(
-            0.5 * (lo + hi), (lo, hi), out, chi, xi_0, n_runs, status, msg,
+            0.5 * (bracket[0] + bracket[1]), bracket, out, chi, xi_0, n_runs, status, msg,
             time.perf_counter() - t_start,
         )  # fmt: skip
 
-    o_lo = o_hi = UNDECIDED
     try:
-        o_lo, o_hi = run(lo), run(hi)
-        if o_lo != PERIODIC or o_hi not in CAPTURED:
-            return done(
-                Status.NO_BRACKET,
-                f"bracket ends must be 'periodic' below and captured ({', '.join(CAPTURED)}) "
-                f"above; got {o_lo!r} at Fn = {lo:g} and {o_hi!r} at Fn = {hi:g}",
-                (o_lo, o_hi),
-            )
-        while hi - lo > tol:
-            mid = 0.5 * (lo + hi)
-            o = run(mid)
-            if o == UNDECIDED:
-                return done(Status.UNDECIDED, f"undecided outcome at Fn = {mid:.8f}", (o_lo, o_hi))
-            if o in CAPTURED:
-                hi, o_hi = mid, o
-            else:
-                lo, o_lo = mid, o
-    except KeyboardInterrupt:
-        return done(Status.INTERRUPTED, "interrupted", (o_lo, o_hi))
-    return done(Status.SUCCESS, f"bracket width {hi - lo:.2e} after {n_runs} runs", (o_lo, o_hi))
+        res = bisect_fate(run, lo, hi, tol=tol, max_evaluations=10**6)
+    except _WrongEnds:
+        captured = ", ".join(o for o in SUDDEN_CHANGE_OUTCOMES if o in CAPTURED_BY_WAVE)
+        return done(
+            Status.NO_BRACKET,
+            f"bracket ends must be 'periodic' below and captured ({captured}) above; got "
+            f"{str(ends[0])!r} at Fn = {lo:g} and {str(ends[1])!r} at Fn = {hi:g}",
+            (lo, hi),
+            (ends[0], ends[1]),
+        )
+    bracket = (float(res.bracket[0]), float(res.bracket[1]))
+    out = tuple(
+        ShipOutcome.UNDECIDED if f is None or isinstance(f, Fate) else f
+        for f in (res.fate_lo, res.fate_hi)
+    )
+    if res.status is Status.UNDECIDED:
+        mid = res.history[-1][0]
+        return done(Status.UNDECIDED, f"undecided outcome at Fn = {mid:.8f}", bracket, out)
+    if res.status is Status.INTERRUPTED:
+        return done(Status.INTERRUPTED, "interrupted", bracket, out)
+    if res.status is not Status.SUCCESS:
+        return done(res.status, res.message, bracket, out)
+    width = bracket[1] - bracket[0]
+    return done(Status.SUCCESS, f"bracket width {width:.2e} after {n_runs} runs", bracket, out)
+
+
+class _WrongEnds(Exception):
+    """The ends of the bracket are not periodic (lower) and captured (upper)."""
 
 
 # ----------------------------------------------------------------- map
@@ -870,7 +645,7 @@ class SuddenChangeMap:
         """Per initial position: lowest capsizing Fn of the grid (nan if none), shape (n_xi,)."""
         out = np.full(self.xi_0.size, np.nan)
         for j in range(self.xi_0.size):
-            k = np.nonzero(self.outcomes[:, j] == CAPSIZE)[0]
+            k = np.nonzero(self.outcomes[:, j] == ShipOutcome.CAPSIZE)[0]
             if k.size:
                 out[j] = self.Fn[k[0]]
         return out
@@ -883,7 +658,7 @@ def sudden_change_map(
     xi_0: Sequence[float],
     fn_values: Sequence[float],
     *,
-    orbit: PeriodicOrbit | None = None,
+    orbit: ShootingOrbit | None = None,
     t_max: float = 600.0,
     progress: Callable[[str], None] | None = None,
     **options: Any,
@@ -943,14 +718,7 @@ def sudden_change_map(
 
 
 __all__ = [
-    "CAPSIZE",
-    "CAPTURED",
-    "OUTCOMES",
-    "PERIODIC",
-    "SADDLE",
-    "SURF_RIDING",
-    "UNDECIDED",
-    "PeriodicOrbit",
+    "ShootingOrbit",
     "SuddenChange",
     "SuddenChangeBoundary",
     "SuddenChangeMap",

@@ -1,0 +1,88 @@
+"""Coercion of the ship's parameters and courses: the one place that checks them.
+
+Every public function of :mod:`ship_models.analysis` takes ``params`` as a
+:class:`~continuation.params.Params`, a mapping by name or an array in the model's
+order; :func:`ship_params` turns any of them into a checked ``Params`` (and applies
+changes such as ``chi_c=...``), and :func:`course` checks one autopilot course.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from continuation.params import Params
+
+
+def ship_params(model: Any, params: Any = None, name: str = "params", **changes: float) -> Params:
+    """``params`` as checked :class:`Params` of ``model``, with ``changes`` applied.
+
+    Parameters
+    ----------
+    model : System
+        The ship model (its ``param_names``, ``check_params``, ``default_params``).
+    params : Params, mapping or array_like, shape (m,), optional
+        Default ``model.default_params()``.
+    name : str
+        Argument name used in error messages.
+    **changes : float
+        Values replaced after the check (e.g. ``chi_c=0.1, Fn=0.3``); must be finite.
+
+    Returns
+    -------
+    Params
+
+    Raises
+    ------
+    ValueError
+        One line naming ``name`` (wrong names, shape, non-finite values) or the change.
+    """
+    if params is None:
+        p = model.default_params()
+    else:
+        try:
+            p = Params(tuple(model.param_names), model.check_params(params, name))
+        except (TypeError, ValueError) as exc:
+            msg = str(exc)
+            raise ValueError(msg if f"`{name}`" in msg else f"`{name}`: {msg}") from None
+    for k, v in changes.items():
+        if not (isinstance(v, (int, float)) and math.isfinite(v)):
+            raise ValueError(f"`{k}` must be a finite number, got {v!r}")
+    return p.replace(**changes) if changes else p
+
+
+def course(value: Any, name: str = "chi_c") -> float:
+    """An autopilot course in (-pi/2, pi/2) rad as a float.
+
+    Raises
+    ------
+    ValueError
+        If ``value`` is not a finite number in that range (message names ``name``).
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"`{name}` must be a number (rad), got {value!r}") from None
+    if not (math.isfinite(v) and abs(v) < math.pi / 2):
+        raise ValueError(f"`{name}` must be a finite course in (-pi/2, pi/2) rad, got {value!r}")
+    return v
+
+
+def ship_model(model: Any) -> Any:
+    """``model`` checked to be an Umeda4DOF-like System, or a new purse seiner if None.
+
+    No model is cached: a caller that solves many courses passes its model.
+    """
+    if model is None:
+        from ship_models import purse_seiner
+
+        return purse_seiner()
+    if not (hasattr(model, "state_names") and hasattr(model, "find_equilibrium")):
+        raise ValueError(
+            "`model` must be an Umeda4DOF-like System (with `find_equilibrium`), "
+            f"got {type(model).__name__}"
+        )
+    return model
+
+
+__all__ = ["course", "ship_model", "ship_params"]
