@@ -640,7 +640,7 @@ class PeriodLimit:
         else:
             raise ConvergenceError("the saddle of the period limit did not converge")
         mesh = mesh if mesh is not None else CollocationMesh(80, 4, self.T_last)
-        return HeteroclinicProblem(orb.system, orb.params, unknown_params=(self.free,),
+        return HeteroclinicProblem(orb.system, orb.params, free=(self.free,),
                                    saddle_from=x, shift=orb.shift, mesh=mesh)  # fmt: skip
 
 
