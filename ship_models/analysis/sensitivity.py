@@ -198,9 +198,7 @@ def _model_options(model: Any) -> dict[str, Any]:
     }
 
 
-def _overridden(
-    raw: VesselData, resolved: VesselData, changes: Mapping[str, float]
-) -> VesselData:
+def _overridden(raw: VesselData, resolved: VesselData, changes: Mapping[str, float]) -> VesselData:
     """``raw`` with the coefficients ``changes`` (values in each entry's own unit)."""
     out: dict[str, Coefficient] = {}
     for key, val in changes.items():
