@@ -56,8 +56,12 @@ STATUSES = ("given", "measured", "estimated", "assumed", "calibrated")
 #: Kinds of uncertainty in the ``[uncertainties]`` section.
 UNCERTAINTY_TYPES = ("relative", "absolute")
 
-#: Wave surge-force models selectable by ``[vessel] wave_surge_model``.
-WAVE_SURGE_MODELS = ("froude_krylov", "froude_krylov_diffraction")
+#: Wave surge-force models selectable by ``[vessel] wave_surge_model``. Only the
+#: Froude-Krylov integral of the paper is implemented; a published diffraction
+#: correction for small fishing vessels could not be read here (see the issue 14
+#: report), so no second model is offered rather than an unsourced one. A measured
+#: ratio to Froude-Krylov can be given as ``hydrodynamics.wave_surge_scale``.
+WAVE_SURGE_MODELS = ("froude_krylov",)
 
 #: Breaking limit of the wave steepness (Michell 1893: H/lambda = 0.142 ~ 1/7).
 BREAKING_STEEPNESS = 1.0 / 7.0
