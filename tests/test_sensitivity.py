@@ -123,3 +123,17 @@ def test_linear_band_against_sampled_connections(sens, vessel):
     dlin = band.sample_linear - sens.Fn
     remainder = band.samples - band.sample_linear
     assert np.max(np.abs(remainder)) <= 0.05 * np.max(np.abs(dlin))
+
+
+def test_wave_steepness_elasticity_is_the_sum_of_the_wave_force_factors(vessel, sens):
+    """Every wave force is linear in H (celerity depends on lambda only), so the exact
+    CasADi elasticity in H/lambda equals the sum of the rebuilt-model elasticities of
+    the four wave-force amplitudes (X_w via wave_surge_scale, Y_w, N_w, K_w)."""
+    keys = ("waves.H_over_lambda", "factor.Y_w", "factor.N_w", "factor.K_w")
+    s2 = critical_fn_sensitivity(CHI, vessel=vessel, keys=keys, connection=sens.connection,
+                                 model=sens.connection.orbit.problem.system)  # fmt: skip
+    assert s2.entry("waves.H_over_lambda").method == "exact"
+    total = sens.entry("hydrodynamics.wave_surge_scale").elasticity + sum(
+        s2.entry(k).elasticity for k in keys[1:]
+    )
+    assert s2.entry("waves.H_over_lambda").elasticity == pytest.approx(total, rel=1e-5)
