@@ -45,7 +45,10 @@ quantity):
 
 and the wave surge-force amplitude is the file's own ``hydrodynamics.wave_surge_scale``
 (status ``assumed``, 1 by default). ``R_surf`` and ``R_nominal`` add up to a uniform
-scaling of ``R``.
+scaling of ``R``. A factor scales its quantity along the whole orbit (the surge speed
+varies along it); the ``quantity`` reported with it is its value at the wave
+celerity ``u = c`` (for the default ship ``T(c; n)`` is negative: the propeller, set
+for ``u_0 < c``, brakes at the celerity) or, for ``R_nominal``, at ``u_0``.
 
 Public names
 ------------
