@@ -227,4 +227,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
         o.write(f"{'chi_c (deg)':>11} {'Fn predicted':>13} {'Fn calibrated':>14}\n")
         for c, a, b in zip(curves.chi_c, curves.predicted.Fn, curves.calibrated.Fn, strict=True):
             o.write(f"{math.degrees(c):>11.3g} {a:>13.6f} {b:>14.6f}\n")
+        o.write(
+            f"curve status: predicted {curves.predicted.status.name}, calibrated "
+            f"{curves.calibrated.status.name}\n"
+        )
     return 0 if cal.success else 1

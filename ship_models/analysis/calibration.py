@@ -366,6 +366,10 @@ class CalibratedCurves:
             "Fn_calibrated": [
                 None if not np.isfinite(f) else float(f) for f in self.calibrated.Fn
             ],  # fmt: skip
+            "converged_predicted": [bool(c) for c in self.predicted.converged],
+            "converged_calibrated": [bool(c) for c in self.calibrated.converged],
+            "status_predicted": self.predicted.status.name,
+            "status_calibrated": self.calibrated.status.name,
             "calibration": self.calibration.to_json(),
         }
 
@@ -377,7 +381,13 @@ def calibrated_curves(
     vessel: VesselData | str | Path = "purse_seiner",
     **curve_options: Any,
 ) -> CalibratedCurves:
-    """The critical curve of the calibrated vessel beside the predicted one."""
+    """The critical curve of the calibrated vessel beside the predicted one.
+
+    Both by :func:`~ship_models.analysis.connection.critical_curve` (its statuses and
+    per-course convergence are kept). For the default ship calibrated on
+    ``wave_surge_scale`` the calibrated curve rises steeply beyond about 25 deg and
+    fresh one-course solves fail there, so points past 25 deg need checking.
+    """
     raw = vessel if isinstance(vessel, VesselData) else load_vessel(vessel)
     opts = _model_options(cal.connection.orbit.problem.system)
     chis = np.asarray(chi_c_values, dtype=float)
