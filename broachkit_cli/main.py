@@ -21,6 +21,8 @@ COMMAND_MODULES: tuple[str, ...] = (
     "broachkit_cli.commands.manifold",
     "broachkit_cli.commands.critical",
     "broachkit_cli.commands.critical_curve",
+    "broachkit_cli.commands.sensitivity",
+    "broachkit_cli.commands.calibrate",
     "broachkit_cli.commands.demo",
 )
 

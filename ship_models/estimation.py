@@ -426,6 +426,17 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
         h_R = float(np.sqrt(v.get("rudder.aspect_ratio") * A_R))
     z_R = (d_a - 0.5 * h_R) + zeta_G  # rudder centre: lower edge at the keel line aft
     eta = min(1.0, D_p / h_R)
+    if v.has("hydrodynamics.wave_surge_scale"):
+        surge_scale = v.get("hydrodynamics.wave_surge_scale")
+    else:
+        surge_scale = 1.0
+        est["hydrodynamics.wave_surge_scale"] = _est(
+            1.0,
+            "-",
+            "no correction of the wave surge force of the selected wave_surge_model "
+            "(Froude-Krylov, as in Umeda 1999)",
+            "assumed",
+        )
     strips = WaveStrips.from_hull(
         hull,
         x_G=x_G,
@@ -435,6 +446,7 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
         rho=rho,
         g=g,
         n_depth=int(v.get("hull.n_depth")),
+        surge_scale=surge_scale,
     )
     q_speed = 0.5 * rho * L * d_m
     forces = ShipForces(

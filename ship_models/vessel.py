@@ -6,9 +6,26 @@ number is a table::
     GM = { value = 1.0, unit = "m", source = "Umeda (1999) Table 1", status = "given" }
 
 ``status`` is one of ``given`` (from the reference paper's table), ``measured``
-(from a cited test report), ``estimated`` (a named method computed it) or
-``assumed`` (a stated engineering assumption). Free-text metadata (strings) are
-allowed only in the ``[vessel]`` section.
+(from a cited test report), ``estimated`` (a named method computed it),
+``assumed`` (a stated engineering assumption) or ``calibrated`` (solved so that the
+model reproduces a stated target, e.g. a published critical Froude number; the
+source names the target and where it came from). Free-text metadata (strings) are
+allowed only in the ``[vessel]`` section; there ``wave_surge_model`` selects the
+wave surge-force model (one of :data:`WAVE_SURGE_MODELS`, default
+``"froude_krylov"``).
+
+Uncertainties (optional) live in an ``[uncertainties]`` section keyed by the dotted
+name of any schema coefficient, given in the file or filled by the estimation
+pipeline::
+
+    [uncertainties]
+    "hydrodynamics.m_x" = { value = 0.3, type = "relative", source = "..." }
+    "rudder.x_H_over_L" = { value = 0.05, type = "absolute", unit = "-", source = "..." }
+
+``value`` is a *standard* uncertainty (one standard deviation, as in the ISO Guide
+to the Expression of Uncertainty in Measurement), relative to the coefficient's
+value or absolute in ``unit``; ``source`` states where it comes from (a method's
+published accuracy, or an assumption stated as one). See :class:`Uncertainty`.
 
 :func:`load_vessel` parses and validates a file and returns an immutable
 :class:`VesselData`. Validation refuses, with a :class:`VesselFileError` naming the
@@ -26,6 +43,7 @@ which records them with status ``estimated`` and the method in ``source``.
 
 from __future__ import annotations
 
+import json
 import math
 import tomllib
 from collections.abc import Iterator, Mapping
@@ -33,7 +51,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-STATUSES = ("given", "measured", "estimated", "assumed")
+STATUSES = ("given", "measured", "estimated", "assumed", "calibrated")
+
+#: Kinds of uncertainty in the ``[uncertainties]`` section.
+UNCERTAINTY_TYPES = ("relative", "absolute")
+
+#: Wave surge-force models selectable by ``[vessel] wave_surge_model``. Only the
+#: Froude-Krylov integral of the paper is implemented; a published diffraction
+#: correction for small fishing vessels could not be read here (see the issue 14
+#: report), so no second model is offered rather than an unsourced one. A measured
+#: ratio to Froude-Krylov can be given as ``hydrodynamics.wave_surge_scale``.
+WAVE_SURGE_MODELS = ("froude_krylov",)
 
 #: Breaking limit of the wave steepness (Michell 1893: H/lambda = 0.142 ~ 1/7).
 BREAKING_STEEPNESS = 1.0 / 7.0
@@ -252,6 +280,15 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "K_phi_prime": _opt("none", "K_phi / (rho/2 L d^2 U^2)"),
         "K_p0": _opt("none", "-K_p(0) / (I_xx + J_xx) (1/s, >= 0)", 0.0),
         "K_p_lift_prime": _opt("none", "roll lift damping / (rho/2 L d^3 U)", 0.0),
+        "wave_surge_scale": Field(
+            "none",
+            False,
+            0.0,
+            10.0,
+            True,
+            doc="factor on the wave surge force X_w of the selected wave_surge_model "
+            "(absent: 1, the model's own amplitude)",
+        ),
     },
 }
 
@@ -285,6 +322,77 @@ class Coefficient:
             "source": self.source,
             "status": self.status,
         }
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """Standard uncertainty (one standard deviation) of one coefficient.
+
+    Attributes
+    ----------
+    value : float
+        ``>= 0``; a fraction of the coefficient's value (``type="relative"``) or an
+        amount in ``unit`` (``type="absolute"``).
+    type : str
+        ``"relative"`` or ``"absolute"``.
+    source : str
+        Where it comes from: a method's published accuracy, or an assumption stated
+        as one.
+    unit : str
+        Unit of an absolute uncertainty (``"-"`` for relative ones).
+    """
+
+    value: float
+    type: str
+    source: str
+    unit: str = "-"
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain dictionary (for JSON and TOML)."""
+        d: dict[str, Any] = {"value": self.value, "type": self.type, "source": self.source}
+        if self.type == "absolute":
+            d["unit"] = self.unit
+        return d
+
+    def sigma(self, key: str, coefficient: Coefficient) -> float:
+        """Standard uncertainty of the coefficient at dotted ``key``, in its own unit."""
+        if self.type == "relative":
+            return abs(self.value * coefficient.value)
+        return self.value * _si_factor(key, self.unit) / _si_factor(key, coefficient.unit)
+
+
+def _check_uncertainty(key: str, raw: Any) -> Uncertainty:
+    where = f"uncertainties.{key}"
+    sec, _, name = key.partition(".")
+    if sec not in SCHEMA or name not in SCHEMA[sec]:
+        raise VesselFileError(f"`{where}`: no coefficient {key!r} in the schema")
+    if not isinstance(raw, Mapping):
+        raise VesselFileError(f"`{where}` must be a table {{ value, type, source[, unit] }}")
+    missing = [k for k in ("value", "type", "source") if k not in raw]
+    if missing:
+        raise VesselFileError(f"`{where}` is missing {', '.join(missing)}")
+    extra = sorted(set(raw) - {"value", "type", "source", "unit"})
+    if extra:
+        raise VesselFileError(f"`{where}` has unknown key(s) {extra}")
+    value = raw["value"]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise VesselFileError(f"`{where}.value` must be a number, got {value!r}")
+    if not (math.isfinite(value) and value >= 0):
+        raise VesselFileError(f"`{where}.value` must be finite and >= 0, got {value!r}")
+    kind = raw["type"]
+    if kind not in UNCERTAINTY_TYPES:
+        raise VesselFileError(f"`{where}.type` must be one of {UNCERTAINTY_TYPES}, got {kind!r}")
+    src = raw["source"]
+    if not isinstance(src, str) or not src.strip():
+        raise VesselFileError(f"`{where}.source` must be a non-empty string")
+    unit = raw.get("unit", "-")
+    if kind == "absolute":
+        if "unit" not in raw:
+            raise VesselFileError(f"`{where}` is absolute and needs a `unit`")
+        _si_factor(key, unit)  # refuses a unit of the wrong dimension
+    elif unit != "-":
+        raise VesselFileError(f"`{where}` is relative; its unit must be '-', got {unit!r}")
+    return Uncertainty(float(value), kind, src, unit)
 
 
 def _si_factor(key: str, unit: str) -> float:
@@ -439,18 +547,46 @@ class VesselData(Mapping[str, Coefficient]):
         All numbers, by dotted key.
     path : str
         File it was read from ("" when built in code).
+    uncertainties : mapping of str to Uncertainty
+        Standard uncertainties by dotted key (section ``[uncertainties]``); a key may
+        name a coefficient that only the estimation pipeline fills.
     """
 
     name: str
     meta: Mapping[str, str]
     coefficients: Mapping[str, Coefficient] = field(repr=False)
     path: str = ""
+    uncertainties: Mapping[str, Uncertainty] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         coeffs = dict(self.coefficients)
         validate(coeffs)
+        meta = dict(self.meta)
+        model = meta.get("wave_surge_model", WAVE_SURGE_MODELS[0])
+        if model not in WAVE_SURGE_MODELS:
+            raise VesselFileError(
+                f"`vessel.wave_surge_model` must be one of {WAVE_SURGE_MODELS}, got {model!r}"
+            )
+        unc = dict(self.uncertainties)
+        for k, u in unc.items():
+            if not isinstance(u, Uncertainty):
+                unc[k] = _check_uncertainty(k, u)
+            else:
+                _check_uncertainty(k, u.as_dict() | {"unit": u.unit})
         object.__setattr__(self, "coefficients", coeffs)
-        object.__setattr__(self, "meta", dict(self.meta))
+        object.__setattr__(self, "meta", meta)
+        object.__setattr__(self, "uncertainties", unc)
+
+    @property
+    def wave_surge_model(self) -> str:
+        """The selected wave surge-force model (``[vessel] wave_surge_model``)."""
+        return str(self.meta.get("wave_surge_model", WAVE_SURGE_MODELS[0]))
+
+    def sigma(self, key: str) -> float | None:
+        """Standard uncertainty of ``key`` in the coefficient's unit (None if none given)."""
+        k = self._resolve_key(key)
+        u = self.uncertainties.get(k)
+        return None if u is None else u.sigma(k, self.coefficients[k])
 
     # Mapping protocol
     def __getitem__(self, key: str) -> Coefficient:
@@ -505,6 +641,8 @@ class VesselData(Mapping[str, Coefficient]):
         for k, c in self.coefficients.items():
             sec, name = k.split(".", 1)
             out.setdefault(sec, {})[name] = c.as_dict()
+        if self.uncertainties:
+            out["uncertainties"] = {k: u.as_dict() for k, u in self.uncertainties.items()}
         return out
 
     def with_overrides(self, overrides: Mapping[str, float | Coefficient]) -> VesselData:
@@ -533,14 +671,14 @@ class VesselData(Mapping[str, Coefficient]):
                 default_unit = next(iter(_UNITS[SCHEMA[sec][name].dim]))
                 unit = coeffs[key].unit if key in coeffs else default_unit
                 coeffs[key] = Coefficient(float(val), unit, "user override", "measured")
-        return VesselData(self.name, self.meta, coeffs, self.path)
+        return VesselData(self.name, self.meta, coeffs, self.path, self.uncertainties)
 
     def with_estimates(self, estimates: Mapping[str, Coefficient]) -> VesselData:
         """A copy with estimated coefficients added (existing keys are kept)."""
         coeffs = dict(self.coefficients)
         for key, c in estimates.items():
             coeffs.setdefault(key, c)
-        return VesselData(self.name, self.meta, coeffs, self.path)
+        return VesselData(self.name, self.meta, coeffs, self.path, self.uncertainties)
 
     def summary(self) -> list[tuple[str, float, str, str, str]]:
         """Rows ``(key, value, unit, status, source)`` sorted by key."""
@@ -567,11 +705,17 @@ def parse_vessel(doc: Mapping[str, Any], path: str = "") -> VesselData:
         meta[k] = v
     name = meta.pop("name", "") or (Path(path).stem if path else "vessel")
     coeffs: dict[str, Coefficient] = {}
+    unc_raw = doc.get("uncertainties", {})
+    if not isinstance(unc_raw, Mapping):
+        raise VesselFileError("`uncertainties` must be a table keyed by dotted coefficient names")
+    uncertainties = {str(k): _check_uncertainty(str(k), u) for k, u in unc_raw.items()}
     for sec, body in doc.items():
-        if sec == "vessel":
+        if sec in ("vessel", "uncertainties"):
             continue
         if sec not in SCHEMA:
-            raise VesselFileError(f"`{sec}`: unknown section; sections are {['vessel', *SCHEMA]}")
+            raise VesselFileError(
+                f"`{sec}`: unknown section; sections are {['vessel', *SCHEMA, 'uncertainties']}"
+            )
         if not isinstance(body, Mapping):
             raise VesselFileError(f"`{sec}` must be a table")
         for key, raw in body.items():
@@ -581,7 +725,58 @@ def parse_vessel(doc: Mapping[str, Any], path: str = "") -> VesselData:
                     f"`{dotted}`: unknown key {key!r} in [{sec}]; allowed are {list(SCHEMA[sec])}"
                 )
             coeffs[dotted] = _check_table(dotted, raw)
-    return VesselData(name, meta, coeffs, path)
+    return VesselData(name, meta, coeffs, path, uncertainties)
+
+
+def _toml_str(s: str) -> str:
+    return json.dumps(s, ensure_ascii=True)  # a JSON string is a valid TOML basic string
+
+
+def _toml_num(x: float) -> str:
+    return repr(float(x))  # shortest repr: reads back to the same float
+
+
+def vessel_to_toml(vessel: VesselData, header: str = "") -> str:
+    """The vessel as the text of a vessel file (:func:`load_vessel` reads it back).
+
+    Parameters
+    ----------
+    vessel : VesselData
+    header : str
+        Comment lines put at the top (each prefixed with ``# ``).
+    """
+    lines = [f"# {h}" if h else "#" for h in header.splitlines()] if header else []
+    lines += ["", "[vessel]", f"name = {_toml_str(vessel.name)}"]
+    lines += [f"{k} = {_toml_str(v)}" for k, v in vessel.meta.items()]
+    by_sec: dict[str, list[tuple[str, Coefficient]]] = {}
+    for k, c in vessel.coefficients.items():
+        sec, name = k.split(".", 1)
+        by_sec.setdefault(sec, []).append((name, c))
+    for sec in SCHEMA:
+        if sec not in by_sec:
+            continue
+        lines += ["", f"[{sec}]"]
+        for name, c in by_sec[sec]:
+            lines.append(
+                f"{name} = {{ value = {_toml_num(c.value)}, unit = {_toml_str(c.unit)}, "
+                f"source = {_toml_str(c.source)}, status = {_toml_str(c.status)} }}"
+            )
+    if vessel.uncertainties:
+        lines += ["", "[uncertainties]"]
+        for k, u in vessel.uncertainties.items():
+            unit = f", unit = {_toml_str(u.unit)}" if u.type == "absolute" else ""
+            lines.append(
+                f"{_toml_str(k)} = {{ value = {_toml_num(u.value)}, type = {_toml_str(u.type)}"
+                f"{unit}, source = {_toml_str(u.source)} }}"
+            )
+    return "\n".join(lines) + "\n"
+
+
+def dump_vessel(vessel: VesselData, path: str | Path, header: str = "") -> Path:
+    """Write :func:`vessel_to_toml` to ``path``; return the path."""
+    p = Path(path)
+    p.write_text(vessel_to_toml(vessel, header))
+    return p
 
 
 def available_vessels() -> list[str]:
@@ -627,6 +822,11 @@ def load_vessel(path_or_name: str | Path) -> VesselData:
 __all__ = [
     "BREAKING_STEEPNESS",
     "Coefficient",
+    "UNCERTAINTY_TYPES",
+    "Uncertainty",
+    "WAVE_SURGE_MODELS",
+    "dump_vessel",
+    "vessel_to_toml",
     "Field",
     "SCHEMA",
     "STATUSES",

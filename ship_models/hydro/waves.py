@@ -148,6 +148,9 @@ class WaveStrips:
         Water density and gravity.
     L : float
         Length between perpendiculars (m).
+    surge_scale : float
+        Factor on the surge force ``X_w`` (``hydrodynamics.wave_surge_scale`` of the
+        vessel file; 1 = the Froude-Krylov integral as in the paper).
     """
 
     x: FloatArray
@@ -166,6 +169,7 @@ class WaveStrips:
     rho: float
     g: float
     L: float
+    surge_scale: float = 1.0
 
     @classmethod
     def from_hull(
@@ -179,6 +183,7 @@ class WaveStrips:
         rho: float,
         g: float,
         n_depth: int = 12,
+        surge_scale: float = 1.0,
     ) -> WaveStrips:
         """Build from a :class:`HullForm` (``x_G`` from midship, forward +)."""
         zeta, wz, b = hull.depth_quadrature(n_depth)
@@ -204,6 +209,7 @@ class WaveStrips:
             rho=float(rho),
             g=float(g),
             L=float(hull.L),
+            surge_scale=float(surge_scale),
         )
 
     # ------------------------------------------------------------------ forces
@@ -261,7 +267,7 @@ class WaveStrips:
         C, Cz, Sy = self.section_integrals(k, s, ops)
         rga = self.rho * self.g * a
         I_sC = _dot(self.w, sk * C, ops)
-        X = -rga * k * c * I_sC
+        X = -self.surge_scale * rga * k * c * I_sC
         Y = rga * k * s * I_sC
         N = rga * k * (s * _dot(self.w * self.x, sk * C, ops) - c * _dot(self.w, ck * Sy, ops))
         bwl = _const(self.b_wl, ops)
