@@ -7,7 +7,7 @@ import math
 import pytest
 
 from ship_models.analysis.calibration import calibrate
-from ship_models.analysis.connection import critical_fn_bvp
+from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.estimation import build_vessel_model
 from ship_models.umeda_4dof import Umeda4DOF
 from ship_models.vessel import load_vessel

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from ship_models.analysis.connection import critical_fn_bvp
+from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.analysis.sensitivity import (
     FACTORS,
     critical_fn_sensitivity,

@@ -2,7 +2,7 @@ r"""Explicit calibration: one coefficient solved so that the critical Fn hits a 
 
 With a measured (or published) critical Froude number :math:`Fn^\dagger` at one
 course, :func:`calibrate` solves the connection of
-:mod:`ship_models.analysis.connection` with ``Fn`` *fixed* at the target and one
+:mod:`ship_models.analysis.critical_bvp` with ``Fn`` *fixed* at the target and one
 named coefficient :math:`\theta` of the vessel *unknown*: the same collocation
 residual :math:`G(z; \theta) = 0`, where the unknown slot of ``Fn`` in ``z`` now
 holds :math:`\theta`. Newton's method on that bordered system uses the exact
@@ -14,7 +14,7 @@ difference of the residual with the model rebuilt at :math:`\theta + h`, as in
 
 The discretisation (mesh, truncation time, phase reference) is that of the starting
 connection; the calibrated vessel is then checked by a fresh
-:func:`~ship_models.analysis.connection.critical_fn_bvp` solve and, if that misses the
+:func:`~ship_models.analysis.critical_bvp.critical_fn_bvp` solve and, if that misses the
 target by more than ``target_tol``, the bordered solve is repeated on the fresh
 connection's discretisation.
 
@@ -22,8 +22,8 @@ A calibrated value is never a prediction: the written vessel file records the
 coefficient with status ``calibrated`` and a source naming the target, its course
 and where the target came from, and keeps the value it replaced in that source.
 
-Functions of :mod:`ship_models.analysis.connection` used: ``critical_fn_bvp`` and
-``critical_curve`` (and the ``CriticalConnection`` / ``CriticalCurve`` results).
+Functions of :mod:`ship_models.analysis.critical_bvp` used: ``critical_fn_bvp`` and
+``critical_curve`` (and the ``CriticalFn`` / ``CriticalCurve`` results).
 """
 
 from __future__ import annotations
@@ -41,12 +41,14 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from continuation._types import FloatArray
+from continuation.typing import FloatArray
 
 from ..estimation import build_vessel_model
 from ..umeda_4dof import Umeda4DOF
 from ..vessel import Coefficient, VesselData, dump_vessel, load_vessel
-from .connection import CriticalConnection, CriticalCurve, critical_curve, critical_fn_bvp
+from .critical_bvp import critical_fn_bvp
+from .critical_curve import CriticalCurve, critical_curve
+from .critical_result import CriticalFn
 from .sensitivity import FACTORS, SYSTEM_PARAMS, _fn_index, _model_options, model_at
 
 log = logging.getLogger(__name__)
@@ -86,7 +88,7 @@ class Calibration:
         Bordered solves (1 unless the fresh check missed ``target_tol``).
     vessel : VesselData
         The calibrated vessel (file values plus the calibrated entry).
-    connection : CriticalConnection
+    connection : CriticalFn
         The fresh connection of the calibrated vessel.
     success : bool
         ``|Fn_check - target_Fn| <= target_tol``.
@@ -106,7 +108,7 @@ class Calibration:
     iterations: int
     rounds: int
     vessel: VesselData = field(repr=False)
-    connection: CriticalConnection = field(repr=False)
+    connection: CriticalFn = field(repr=False)
     success: bool = False
     message: str = ""
     elapsed: float = 0.0
@@ -153,7 +155,7 @@ def _check_key(key: str, resolved: VesselData) -> None:
 
 
 def _bordered_solve(
-    conn: CriticalConnection,
+    conn: CriticalFn,
     raw: VesselData,
     resolved: VesselData,
     key: str,
@@ -221,7 +223,7 @@ def calibrate(
     *,
     vessel: VesselData | str | Path = "purse_seiner",
     target_source: str = PAPER_TARGET_SOURCE,
-    connection: CriticalConnection | None = None,
+    connection: CriticalFn | None = None,
     tol: float = 1e-10,
     target_tol: float = 1e-7,
     max_iter: int = 15,
@@ -244,7 +246,7 @@ def calibrate(
         The vessel as in its file.
     target_source : str
         Provenance of the target (written into the calibrated entry's source).
-    connection : CriticalConnection, optional
+    connection : CriticalFn, optional
         A converged connection of ``vessel`` at ``chi_c`` to start from.
     tol : float
         Max-norm of the bordered residual.
@@ -383,7 +385,7 @@ def calibrated_curves(
 ) -> CalibratedCurves:
     """The critical curve of the calibrated vessel beside the predicted one.
 
-    Both by :func:`~ship_models.analysis.connection.critical_curve` (its statuses and
+    Both by :func:`~ship_models.analysis.critical_curve.critical_curve` (its statuses and
     per-course convergence are kept). For the default ship calibrated on
     ``wave_surge_scale`` the calibrated curve rises steeply beyond about 25 deg and
     fresh one-course solves fail there, so points past 25 deg need checking.

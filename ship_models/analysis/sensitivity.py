@@ -1,7 +1,7 @@
 r"""Sensitivity of the critical Froude number to every coefficient of the vessel.
 
 The critical ``Fn*`` of one course is an unknown of the collocation system of the
-saddle-to-shifted-saddle connection (:func:`ship_models.analysis.connection.critical_fn_bvp`):
+saddle-to-shifted-saddle connection (:func:`ship_models.analysis.critical_bvp.critical_fn_bvp`):
 :math:`G(z; \theta) = 0` with ``z`` the discretised orbit, the saddle, the Riccati
 unknowns and ``Fn``, and :math:`\theta` any coefficient the model is built from. By
 the implicit-function theorem, with :math:`G_z` the (square, non-singular at a
@@ -60,8 +60,8 @@ named) coefficients; :class:`Sensitivity`, :class:`SensitivityEntry`.
 with an optional sampled confirmation; :class:`UncertaintyBand`.
 :func:`tornado_figure` — the sorted elasticities as a PNG.
 
-Functions of :mod:`ship_models.analysis.connection` used: ``critical_fn_bvp``
-(the connection) and the ``CriticalConnection`` result type.
+Functions of :mod:`ship_models.analysis.critical_bvp` used: ``critical_fn_bvp``
+(the connection) and the ``CriticalFn`` result type.
 """
 
 from __future__ import annotations
@@ -79,10 +79,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from continuation._types import FloatArray
 from continuation.newton import newton
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.settings import NewtonSettings
+from continuation.typing import FloatArray
 
 from ..estimation import VesselModelData, build_vessel_model
 from ..forces import ShipForces
@@ -90,7 +90,8 @@ from ..hydro.propeller import revolutions
 from ..hydro.waves import WaveStrips
 from ..umeda_4dof import Umeda4DOF
 from ..vessel import SCHEMA, Coefficient, VesselData, VesselFileError, load_vessel
-from .connection import CriticalConnection, critical_fn_bvp
+from .critical_bvp import critical_fn_bvp
+from .critical_result import CriticalFn
 
 log = logging.getLogger(__name__)
 
@@ -320,7 +321,7 @@ class Sensitivity:
     entries : tuple of SensitivityEntry
         Sorted by decreasing ``|elasticity|`` (zero-valued coefficients last, by
         ``|dFn/dtheta|``).
-    connection : CriticalConnection
+    connection : CriticalFn
         The converged connection that was differentiated.
     elapsed : float
         Wall time (s).
@@ -329,7 +330,7 @@ class Sensitivity:
     chi_c: float
     Fn: float
     entries: tuple[SensitivityEntry, ...]
-    connection: CriticalConnection = field(repr=False)
+    connection: CriticalFn = field(repr=False)
     elapsed: float = 0.0
 
     def entry(self, key: str) -> SensitivityEntry:
@@ -384,14 +385,14 @@ def default_keys(resolved: VesselData) -> list[str]:
 
 def _fn_index(prob: Any) -> int:
     sl = prob.layout.slices()["params"]
-    names = list(prob.unknown_params)
+    names = list(prob.free)
     return int(sl.start + names.index("Fn"))
 
 
 class _Residuals:
     """Residual of the converged connection's discretisation for rebuilt models."""
 
-    def __init__(self, conn: CriticalConnection, vessel: VesselData, resolved: VesselData,
+    def __init__(self, conn: CriticalFn, vessel: VesselData, resolved: VesselData,
                  options: Mapping[str, Any]) -> None:  # fmt: skip
         self.prob = conn.orbit.problem
         self.z = np.asarray(conn.orbit.z, dtype=float)
@@ -408,7 +409,7 @@ class _Residuals:
 
     def exact_param(self, name: str) -> FloatArray:
         pv = self.prob.params
-        return np.asarray(self.prob.with_free(name).dp(self.z, float(pv[name])), dtype=float)
+        return np.asarray(self.prob.with_vary(name).dp(self.z, float(pv[name])), dtype=float)
 
 
 def _lower_bound_hit(key: str, value: float, h: float, unit: str) -> bool:
@@ -448,7 +449,7 @@ def _g_theta(
     return (-3 * g0 + 4 * g1 - g2) / (2 * h), h, "forward"
 
 
-def _factor_quantity(key: str, model: Any, conn: CriticalConnection) -> float:
+def _factor_quantity(key: str, model: Any, conn: CriticalFn) -> float:
     """The quantity a factor scales, at the base point (N or N m)."""
     F = model.forces
     pv = conn.orbit.params
@@ -485,7 +486,7 @@ def critical_fn_sensitivity(
     *,
     vessel: VesselData | str | Path = "purse_seiner",
     keys: Iterable[str] | None = None,
-    connection: CriticalConnection | None = None,
+    connection: CriticalFn | None = None,
     model: Umeda4DOF | None = None,
     rel_step: float = 1e-4,
     abs_step: float = 1e-5,
@@ -508,9 +509,9 @@ def critical_fn_sensitivity(
         The vessel (file values; estimates are recomputed).
     keys : iterable of str, optional
         Dotted keys and factor names; default :func:`default_keys`.
-    connection : CriticalConnection, optional
+    connection : CriticalFn, optional
         A converged connection of this vessel at ``chi_c`` (else solved with
-        :func:`~ship_models.analysis.connection.critical_fn_bvp`).
+        :func:`~ship_models.analysis.critical_bvp.critical_fn_bvp`).
     model : Umeda4DOF, optional
         The model of ``vessel`` (built if omitted); its options (saturation, lift)
         are kept for the rebuilt models.
@@ -576,7 +577,7 @@ def critical_fn_sensitivity(
 
 # ----------------------------------------------------------------------------- re-solves
 def resolve_at(
-    conn: CriticalConnection,
+    conn: CriticalFn,
     model: Umeda4DOF,
     *,
     same_discretisation: bool = True,
@@ -588,7 +589,7 @@ def resolve_at(
     ``same_discretisation=True``: Newton on the same collocation system (mesh, phase
     reference, projection bases) with the new model — the discrete ``Fn*`` that the
     implicit derivative differentiates. ``False``: a full
-    :func:`~ship_models.analysis.connection.critical_fn_bvp` solve from ``conn``.
+    :func:`~ship_models.analysis.critical_bvp.critical_fn_bvp` solve from ``conn``.
     ``params`` changes system parameters (``K_R`` ...).
 
     Raises
