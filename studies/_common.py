@@ -1,8 +1,10 @@
 """Shared output helpers for the study scripts: output folder, figure style, PNG and CSV.
 
-Study scripts import this module as ``from _common import ...`` (they run as
-``python studies/<script>.py``, which puts this folder on ``sys.path``). Everything
-here is generic: nothing knows about ships.
+Study modules import this one as ``from studies._common import ...`` (``studies`` is
+a package installed with broachkit; ``python studies/<script>.py`` puts the folder
+above it on ``sys.path``). Everything here is generic: nothing knows about ships.
+Every file is written atomically (a temporary file renamed onto the final name,
+:mod:`broachkit_cli.files`), so an interrupted study never leaves a truncated file.
 
 - :func:`output_dir` -- ``<root>/<name>``, created; root from ``--out``, else the
   environment variable ``BROACHKIT_OUT``, else ``./out``.
@@ -24,6 +26,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from broachkit_cli.files import atomic_path, write_atomic, write_atomic_group, write_json
 
 #: Environment variable naming the default output root.
 OUT_ENV = "BROACHKIT_OUT"
@@ -96,8 +100,8 @@ def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int | None = Non
     p = Path(path)
     if p.suffix.lower() != ".png":
         p = p.with_name(p.name + ".png")
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=dpi or STYLE["savefig.dpi"])
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=dpi or STYLE["savefig.dpi"])
     if getattr(fig.canvas, "manager", None) is not None:  # a pyplot figure
         import matplotlib.pyplot as plt
 
@@ -143,8 +147,7 @@ def save_csv(
         if a.size != n:
             raise ValueError(f"`columns[{k!r}]` has {a.size} values, expected {n}")
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    with p.open("w", newline="") as fh:
+    with atomic_path(p) as tmp, tmp.open("w", newline="") as fh:
         for line in _meta_lines(meta):
             fh.write(line + "\n")
         w = csv.writer(fh)
@@ -181,8 +184,7 @@ def save_table(
         If a row's length differs from ``header`` (names the row index).
     """
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    with p.open("w", newline="") as fh:
+    with atomic_path(p) as tmp, tmp.open("w", newline="") as fh:
         for line in _meta_lines(meta):
             fh.write(line + "\n")
         w = csv.writer(fh)
@@ -205,4 +207,7 @@ __all__ = [
     "save_figure",
     "save_table",
     "use_agg",
+    "write_atomic",
+    "write_atomic_group",
+    "write_json",
 ]

@@ -34,10 +34,10 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from _common import new_figure, save_figure, save_table
+from studies._common import new_figure, save_figure, save_table, write_atomic_group, write_json
 
 FN = 0.3248
 CHI_C_DEG = 10.0
@@ -161,7 +161,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     branches = trace_in_chi_c(model, params, chi_c_max=math.radians(CHI_C_MAX_DEG))
     rows: list[dict[str, Any]] = []
     for label, br in branches.items():
-        br.save(out / f"branch_chi_c_{label}.npz")
+        write_atomic_group(out, lambda d, b=br, n=label: b.save(d / f"branch_chi_c_{n}.npz"))
         rows += _rows(br, label, c, "chi_c_deg")
     meta = {
         "study": "Umeda (1999) Figs. 2-5, default vessel",
@@ -218,7 +218,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         for label, br in fn_branches.items()
     }
     summary["seconds"] = round(time.perf_counter() - t0, 2)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    write_json(out / "summary.json", summary)
     return summary
 
 

@@ -32,10 +32,10 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from _common import new_figure, save_csv, save_figure
+from studies._common import new_figure, save_csv, save_figure, write_json
 
 CHI_C_DEG = 10.0
 PAPER_FN = 0.3248
@@ -183,7 +183,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         tol=1e-5,
         progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),
     )
-    (out / "critical.json").write_text(json.dumps(crit.to_json(), indent=2))
+    write_json(out / "critical.json", crit.to_json())
     if not crit.status.ok and crit.status.name != "SUCCESS":
         say(f"bisection did not succeed: {crit.message}")
     lo, hi = crit.bracket
@@ -201,7 +201,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         criterion="final",
         progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),
     )
-    (out / "critical_final_fate.json").write_text(json.dumps(final.to_json(), indent=2))
+    write_json(out / "critical_final_fate.json", final.to_json())
     below = final.bracket[0] if final.status.name == "SUCCESS" else lo
     cases = {"above": hi, "below": below, "paper": PAPER_FN}
     figures: list[str] = []
@@ -246,7 +246,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     summary["figures"] = figures
     summary["data"] = data
     summary["seconds"] = round(time.perf_counter() - t0, 2)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    write_json(out / "summary.json", summary, default=str)
     return summary
 
 

@@ -40,10 +40,10 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from _common import new_figure, save_csv, save_figure, save_table
+from studies._common import new_figure, save_csv, save_figure, save_table, write_json
 
 CHI_TO_DEG = 10.0
 FROM_1 = (0.1, 0.0)  # (Fn, chi_c deg) of the first initial orbit (Figs. 16-21, 23)
@@ -353,7 +353,7 @@ def compute(
         "fig23_squares.png",
     ]  # fmt: skip
     summary["seconds"] = round(time.perf_counter() - t_all, 2)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+    write_json(out / "summary.json", summary, default=float)
     return summary
 
 

@@ -34,10 +34,10 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from _common import new_figure, save_csv, save_figure, save_table
+from studies._common import new_figure, save_csv, save_figure, save_table, write_atomic, write_json
 
 CHI_C_DEG = 10.0
 PAPER_FN = (0.3247, 0.3248)
@@ -172,7 +172,7 @@ def compute(
     courses = np.radians(np.arange(0.0, 31.0, 5.0 if quick else 1.0))
     curve = critical_curve(courses, model=model, start=conn)
     say(f"  {curve.message} ({curve.elapsed:.2f} s)")
-    curve.to_csv(out / "critical_curve.csv")
+    write_atomic(out / "critical_curve.csv", curve.to_csv)
     summary["curve"] = {
         "chi_c_deg": [round(float(v), 9) for v in curve.chi_c_deg],
         "Fn": [float(v) for v in curve.Fn],
@@ -210,7 +210,7 @@ def compute(
     save_figure(fig, out / "fig23_critical_curve.png")
     summary["figures"] = ["fig21_connection.png", "fig23_critical_curve.png"]
     summary["seconds"] = round(time.perf_counter() - t_all, 2)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    write_json(out / "summary.json", summary)
     return summary
 
 

@@ -107,7 +107,7 @@ def test_critical_json_matches_library(capsys, model):
     assert (res["fate_lo"], res["fate_hi"]) == ("periodic", "capsize")
     ref = critical_fn(model, math.radians(10.0), fn_bracket=(0.30, 0.305), tol=1e-3)
     assert (lo, hi) == ref.bracket
-    assert res["fn_critical"] == ref.fn_critical
+    assert res["Fn"] == ref.fn_critical
     with pytest.raises(SystemExit):
         main(["critical", "--method", "shooting"])
     capsys.readouterr()
@@ -116,7 +116,7 @@ def test_critical_json_matches_library(capsys, model):
 
 
 def test_reproduce_runs_and_skips_finished_steps(capsys, tmp_path):
-    code = main(["reproduce", "--out", str(tmp_path), "--only", "fig06_09"])
+    code = main(["reproduce", "--out", str(tmp_path), "--only", "fig06_09", "--json"])
     assert code == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["steps"] == ["fig06_09"] and "fig06_09" in summary["seconds"]
@@ -126,7 +126,7 @@ def test_reproduce_runs_and_skips_finished_steps(capsys, tmp_path):
     data = json.loads((step / "summary.json").read_text())
     assert data["points"]["crest"]["saddle_index"] == 1
     mtime = (step / "summary.json").stat().st_mtime_ns
-    assert main(["reproduce", "--out", str(tmp_path), "--only", "fig06_09"]) == 0
+    assert main(["reproduce", "--out", str(tmp_path), "--only", "fig06_09", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["seconds"] == {}  # skipped
     assert (step / "summary.json").stat().st_mtime_ns == mtime
     assert main(["reproduce", "--out", str(tmp_path), "--only", "nonsense"]) == 2
