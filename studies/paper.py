@@ -325,7 +325,7 @@ CLAIMS: tuple[Claim, ...] = (
           "The trajectory toward the downslope ... the ship then capsizes to port. The "
           "trajectory toward the upslope approaches a saddle next to the original saddle and "
           "then realizes capsizing due to broaching.",
-          ("fig10_15/fig10_position_above.png", "fig10_15/fig12_roll_heading_above.png"),
+          ("fig10_15/fig10_position_above.png", "fig10_15/fig12_position_heading_above.png"),
           _fates("above", {"downslope": "capsize", "upslope": "capsize"}),
           (("Fn", f"{PAPER_FN}"),)),
     Claim("below", "Figs. 14-15",
@@ -355,11 +355,11 @@ CLAIMS: tuple[Claim, ...] = (
     Claim("fig23_curve", "Fig. 23",
           "Critical condition for capsizing due to broaching (filled circles: heteroclinic "
           "bifurcation) against the autopilot course 0-30 degrees.",
-          ("fig21_23/fig23_critical_curve.png",), _curve),
+          ("fig16_22/fig23_critical_condition.png", "fig21_23/critical_curve_methods.png"), _curve),
     Claim("fig23_squares", "Fig. 23",
           "The heteroclinic bifurcation is slightly larger than the boundary obtained by "
           "numerical experiments (squares, (xi_G/lambda)_0 = 0.5).",
-          ("fig16_22/fig23_squares.png",), _squares),
+          ("fig16_22/fig23_critical_condition.png",), _squares),
 )  # fmt: skip
 
 __all__ = ["AGREES", "CLAIMS", "DIFFERS", "NOT_RUN", "PAPER_FN", "PAPER_FN_10DEG", "Claim",
