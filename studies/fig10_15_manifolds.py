@@ -146,9 +146,11 @@ def _plot_case(
                 ax.plot(px, q[qy][0], marker, mfc="none", color="k", ms=7)
                 lab = fp.label if shift == 0 else f"{fp.label}@{int(shift):+d}"
                 ax.annotate(
-                    lab, (px, q[qy][0]), textcoords="offset points", fontsize=7,
+                    lab,
+                    (px, q[qy][0]),
+                    textcoords="offset points",
+                    fontsize=7,
                     xytext=(5, 5) if fp.label == sp.label else (5, -12),
-                ), fontsize=7
                 )
         ax.set_xlabel(LABELS[qx])
         ax.set_ylabel(LABELS[qy])
