@@ -152,8 +152,12 @@ def plot_by_stability(ax: Any, x: np.ndarray, y: np.ndarray, n_unstable: np.ndar
 
 
 def _mark_fold(ax: Any, x: float, y: float) -> None:
+    """Mark a fold; its label goes towards the inside of the axes (no overlap with the frame)."""
     ax.plot(x, y, "kx", ms=8)
-    ax.annotate(f"fold {x:.1f} deg", (x, y), textcoords="offset points", xytext=(-8, 8),
+    lo, hi = ax.get_ylim()
+    below = y > 0.5 * (lo + hi)
+    ax.annotate(f"fold {x:.1f} deg", (x, y), textcoords="offset points",
+                xytext=(-8, -10 if below else 8), va="top" if below else "bottom",
                 ha="right", fontsize=8)  # fmt: skip
 
 

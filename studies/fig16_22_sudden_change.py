@@ -98,8 +98,7 @@ def _draw_map(mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path
     ax.set_title(title, fontsize=8.5)
     ax.set_xlim(-0.05, 1.0)
     ax.ticklabel_format(axis="y", useOffset=False)
-    ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
-    fig.tight_layout()
+    fig.legend(loc="outside lower center", ncol=2, fontsize=6.5, frameon=False)
     save_figure(fig, path)
 
 

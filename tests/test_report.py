@@ -25,7 +25,7 @@ from broachkit_cli.report import AT_LIMIT_MARGIN, is_code_sentence
 @pytest.fixture(scope="module")
 def run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("job")
-    assert main(["--out", str(out), "--only", "demo", "fig06_09", "--json"]) == 0
+    assert main(["--out", str(out), "--only", "demo", "fig02_05", "fig06_09", "--json"]) == 0
     return out
 
 
@@ -118,9 +118,17 @@ def test_report_opens_in_a_headless_browser_with_every_image_loaded(run: Path) -
     browser, driver_path = found
     opts = webdriver.ChromeOptions()
     opts.binary_location = browser
-    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-quic",
-                 "--no-first-run", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage"):
+    for flag in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--disable-dev-shm-usage",
+    ):
         opts.add_argument(flag)  # fmt: skip
     drv = webdriver.Chrome(service=Service(driver_path), options=opts)
     try:
@@ -137,3 +145,26 @@ def test_report_opens_in_a_headless_browser_with_every_image_loaded(run: Path) -
     assert images, "the page shows no image"
     broken = [src for src, done, w, h in images if not (done and w > 0 and h > 0)]
     assert not broken, f"images not loaded: {broken}"
+
+
+def test_every_csv_has_angles_in_degrees(run: Path) -> None:
+    import csv
+
+    import numpy as np
+
+    from continuation.branch import Branch
+
+    bare = {"chi", "phi", "delta", "r", "p_roll"}
+    csvs = list(run.glob("fig*/*.csv"))
+    assert csvs
+    for path in csvs:
+        with path.open() as fh:
+            header = next(csv.reader(ln for ln in fh if not ln.startswith("#")))
+        assert not bare & set(header), (path.name, header)
+    # and the degrees are the branch's radians converted
+    br = Branch.load(run / "fig02_05" / "branch_chi_c_crest.npz")
+    with (run / "fig02_05" / "fixed_points_chi_c.csv").open() as fh:
+        rows = list(csv.DictReader(ln for ln in fh if not ln.startswith("#")))
+    crest = [r for r in rows if r["branch"] == "crest"]
+    phi = np.array([float(r["phi_deg"]) for r in crest])
+    np.testing.assert_allclose(phi, np.degrees(br.x[:, 5]), rtol=1e-12)

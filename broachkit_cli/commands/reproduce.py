@@ -226,6 +226,8 @@ def _versions() -> dict[str, str]:
 
 
 def _summary_text(doc: dict[str, Any]) -> str:
+    from studies.paper import PAPER_FN_10DEG
+
     k = doc["key_numbers"]
     lines = [f"broachkit reproduce: {len(doc['steps'])} step(s) in {doc['total_seconds']:.1f} s"]
 
@@ -237,7 +239,7 @@ def _summary_text(doc: dict[str, Any]) -> str:
         lines.append(
             f"  critical Fn at chi_c = {f(k['chi_c_deg'], 'g')} deg: {f(k['Fn_bvp'], '.8f')} "
             f"(connecting orbit), {f(k['Fn_bisection'])} in [{f(lo_hi[0])}, {f(lo_hi[1])}] "
-            "(bisection); Umeda (1999): 0.3247-0.3248"
+            f"(bisection); Umeda (1999): {PAPER_FN_10DEG[0]}-{PAPER_FN_10DEG[1]}"
         )
     if k["critical_curve_ends"]:
         a, b = k["critical_curve_ends"]
