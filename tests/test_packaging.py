@@ -27,7 +27,7 @@ def test_studies_and_template_are_packaged() -> None:
     assert "templates/*.j2" in data
     assert list((ROOT / "broachkit_cli" / "templates").glob("*.j2"))
     deps = " ".join(cfg["project"]["dependencies"])
-    assert "jinja2" in deps and "tqdm" in deps
+    assert "jinja2" in deps
 
 
 def test_every_step_of_the_main_job_is_a_module_of_the_package() -> None:

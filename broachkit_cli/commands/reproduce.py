@@ -31,6 +31,7 @@ import importlib.util
 import json
 import logging
 import platform
+import shutil
 import sys
 import time
 from collections.abc import Callable
@@ -135,42 +136,51 @@ def _steps(args: argparse.Namespace) -> list[Step]:
 
 
 class Progress:
-    """One progress display for the whole job: a bar on a terminal, else one line a step."""
+    """One progress display for the whole job.
+
+    On a terminal: one status line, rewritten in place (``[k/n] step: message``, the
+    elapsed time of the job); elsewhere (a log, a pipe): one line per step. Sub-step
+    messages also go to the log (shown with ``--verbose``).
+    """
 
     def __init__(self, n: int, *, enabled: bool) -> None:
         self.n = n
         self.enabled = enabled
-        self.bar: Any = None
-        if enabled and sys.stderr.isatty():
-            from tqdm import tqdm
+        self.live = enabled and sys.stderr.isatty()
+        self.width = max(40, min(shutil.get_terminal_size((100, 24)).columns, 160) - 1)
+        self.t0 = time.perf_counter()
+        self.head = ""
 
-            self.bar = tqdm(total=n, unit="step", file=sys.stderr, dynamic_ncols=True)
+    def _show(self, text: str) -> None:
+        line = f"{self.head}{text}"[: self.width]
+        sys.stderr.write("\r" + line.ljust(self.width))
+        sys.stderr.flush()
 
     def start(self, i: int, key: str, title: str, skipped: bool = False) -> None:
         """Step ``i`` (1-based) begins (or is skipped because it is done)."""
-        if self.bar is not None:
-            self.bar.set_description_str(f"{key}")
-            self.bar.set_postfix_str("done earlier" if skipped else title, refresh=True)
+        tail = " (done earlier)" if skipped else ""
+        if self.live:
+            self.head = f"[{i}/{self.n}] {title}{tail}"
+            self._show(f" ({time.perf_counter() - self.t0:.0f} s)")
         elif self.enabled:
-            tail = " (done earlier)" if skipped else ""
             sys.stderr.write(f"[{i}/{self.n}] {title}{tail}\n")
             sys.stderr.flush()
 
     def message(self, msg: str) -> None:
-        """A sub-step message: on the bar, or in the log (``--verbose``)."""
-        if self.bar is not None:
-            self.bar.set_postfix_str(" ".join(msg.split())[:60], refresh=True)
+        """A sub-step message: on the status line, and in the log (``--verbose``)."""
+        if self.live:
+            self._show(f": {' '.join(msg.split())} ({time.perf_counter() - self.t0:.0f} s)")
         log.info("  %s", msg)
 
     def finish(self) -> None:
         """One step finished."""
-        if self.bar is not None:
-            self.bar.update(1)
 
     def close(self) -> None:
-        """Remove the bar."""
-        if self.bar is not None:
-            self.bar.close()
+        """End the status line."""
+        if self.live and self.head:
+            sys.stderr.write("\r" + " " * self.width + "\r")
+            sys.stderr.flush()
+            self.head = ""
 
 
 def _get(d: Any, *keys: Any) -> Any:
