@@ -305,3 +305,18 @@ def test_impossible_vessels_name_the_field(section, key, value, field, capsys):
     doc[section][key]["value"] = value
     with pytest.raises(VesselFileError, match=re.escape(f"`{field}`")):
         parse_vessel(doc)
+
+
+def test_fn_range_without_an_answer_says_so(capsys):
+    """Both ends capsize: one line naming the range, exit 1, and no NaN printed as an answer."""
+    import json
+
+    argv = ["critical", "--chi-c", "10", "--fn-min", "0.31", "--fn-max", "0.4", "--tol", "0.01"]
+    assert main(argv) == 1
+    out, err = capsys.readouterr()
+    assert out == "" and "nan" not in err.lower()
+    assert len(err.strip().splitlines()) == 1 and "--fn-min/--fn-max" in err
+    assert "NO_BRACKET" in err
+    assert main([*argv, "--json"]) == 1
+    doc = json.loads(capsys.readouterr().out)  # strict JSON: no NaN
+    assert doc["Fn"] is None and doc["status"] == "NO_BRACKET"
