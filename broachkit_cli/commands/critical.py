@@ -25,6 +25,7 @@ from ..options import (
     json_safe,
     ship_from_args,
 )
+from ..progress import StatusLine
 
 NAME = "critical"
 HELP = "critical Fn of capsizing due to broaching (heteroclinic bifurcation) at one course"
@@ -33,20 +34,19 @@ HELP = "critical Fn of capsizing due to broaching (heteroclinic bifurcation) at 
 def _bisection(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
     from ship_models.analysis.critical import critical_fn
 
-    def progress(ev: Any) -> None:
-        if not args.json:
-            sys.stderr.write(f"  Fn = {ev.Fn:.8f}: {ev.outcome or 'undecided'}\n")
-
-    res = critical_fn(
-        model,
-        params["chi_c"],
-        params=params,
-        fn_bracket=(args.Fn_min, args.Fn_max),
-        tol=args.tol,
-        progress=progress,
-        t_max=args.t_max,
-        criterion=args.criterion,
-    )
+    with StatusLine(enabled=not args.json) as status:
+        res = critical_fn(
+            model,
+            params["chi_c"],
+            params=params,
+            fn_bracket=(args.Fn_min, args.Fn_max),
+            tol=args.tol,
+            progress=lambda ev: status.show(
+                f"bisection: Fn = {ev.Fn:.8f}: {ev.outcome or 'undecided'}"
+            ),
+            t_max=args.t_max,
+            criterion=args.criterion,
+        )
     return _with_fn(res.to_json(), res.fn_critical)
 
 

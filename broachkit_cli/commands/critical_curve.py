@@ -36,6 +36,7 @@ from ..options import (
     prepare_out,
     ship_from_args,
 )
+from ..progress import StatusLine
 
 NAME = "critical-curve"
 HELP = "critical Fn against the autopilot course by continuing the heteroclinic connection"
@@ -132,15 +133,15 @@ def run(args: argparse.Namespace) -> int:
     out = prepare_out(args.out)
     model, params = _ship(args)
     t0 = time.perf_counter()
-    last = [t0]
-
-    def progress(pt: Any) -> None:
-        now = time.perf_counter()
-        if now - last[0] > 2.0 and not args.json:
-            sys.stderr.write(f"  chi_c = {math.degrees(float(pt.p)):.2f} deg\n")
-            last[0] = now
-
-    curve = critical_curve(np.radians(deg), model=model, params=params, progress=progress)
+    with StatusLine(enabled=not args.json) as status:
+        curve = critical_curve(
+            np.radians(deg),
+            model=model,
+            params=params,
+            progress=lambda pt: status.show(
+                f"continuing the connection: chi_c = {math.degrees(float(pt.p)):.2f} deg"
+            ),
+        )
     elapsed = time.perf_counter() - t0
     result = {
         "vessel": model.vessel.name,

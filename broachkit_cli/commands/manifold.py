@@ -17,6 +17,7 @@ import sys
 
 from ..files import write_atomic
 from ..options import add_out, add_ship, finite, json_safe, prepare_out, ship_from_args
+from ..progress import StatusLine
 
 NAME = "manifold"
 HELP = "unstable manifold of the crest saddle (both branches) and where each goes"
@@ -53,21 +54,16 @@ def run(args: argparse.Namespace) -> int:
     out = prepare_out(args.out)
     model, params = ship_from_args(args)
 
-    def progress(branch: str, t: float) -> None:
-        sys.stderr.write(f"\r{branch}: t = {t:8.1f} s ")
-        sys.stderr.flush()
-
-    man = unstable_manifold(
-        model,
-        params,
-        args.saddle,
-        eps=args.eps,
-        t_max=args.t_max,
-        capsize_angle=angle,
-        progress=None if args.json else progress,
-    )
-    if not args.json:
-        sys.stderr.write("\n")
+    with StatusLine(enabled=not args.json) as status:
+        man = unstable_manifold(
+            model,
+            params,
+            args.saddle,
+            eps=args.eps,
+            t_max=args.t_max,
+            capsize_angle=angle,
+            progress=lambda branch, t: status.show(f"{branch}: t = {t:8.1f} s"),
+        )
     result = {
         "vessel": model.vessel.name,
         "params": params.as_dict(),
