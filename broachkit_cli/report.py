@@ -119,6 +119,14 @@ def vessel_context(name: str = "purse_seiner") -> dict[str, Any]:
     }
 
 
+def _vessel_figure(out: Path, name: str = "purse_seiner") -> str | None:
+    """The one-page vessel figure (``studies.vessel_report``) in ``out/vessel``; its href."""
+    from studies.vessel_report import build_report
+
+    files = build_report(name, out / "vessel")
+    return str(Path(files.png).relative_to(out))
+
+
 def key_number_rows(numbers: Mapping[str, Any]) -> list[tuple[str, str]]:
     """The headline numbers as (label, formatted value) rows."""
     rows = []
@@ -163,10 +171,11 @@ def write_report(out: Path, results: Mapping[str, Any], doc: Mapping[str, Any]) 
     counts = Counter(c["verdict"] for c in claims)
     try:
         vessel = vessel_context()
+        vessel["figure"] = _vessel_figure(out)
     except ValueError as exc:  # the vessel file became invalid since the run: say so
         log.warning("vessel table left out of the report: %s", exc)
         vessel = {"name": "purse_seiner", "description": str(exc), "is_code": "",
-                  "table1": [], "coefficients": [], "derived": []}  # fmt: skip
+                  "table1": [], "coefficients": [], "derived": [], "figure": None}  # fmt: skip
     html = env.get_template("report.html.j2").render(
         title="broachkit: Umeda (1999) reproduced with the default vessel",
         subtitle=(
