@@ -1,8 +1,15 @@
 """Entry point of the ``broachkit`` command.
 
 Each sub-command lives in its own module under :mod:`broachkit_cli.commands` and
-provides ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``.
-``broachkit`` with no sub-command runs :data:`DEFAULT_COMMAND`.
+provides ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``; the
+options they share are in :mod:`broachkit_cli.options`. ``broachkit`` with no
+sub-command runs :data:`DEFAULT_COMMAND` (so ``broachkit --out X`` is
+``broachkit reproduce --out X``).
+
+Errors never end in a traceback unless ``--verbose``: bad input (a
+:class:`ValueError`, which names the option or the vessel-file field) prints one line
+and exits with 2; any other failure prints one line and exits with 1; Ctrl-C exits
+with 130 and keeps what finished.
 """
 
 from __future__ import annotations
@@ -11,7 +18,11 @@ import argparse
 import importlib
 import logging
 import sys
+import traceback
+import warnings
 from types import ModuleType
+
+from .options import OneLineParser, add_verbose
 
 #: Sub-command modules, in the order shown by ``broachkit --help``.
 COMMAND_MODULES: tuple[str, ...] = (
@@ -29,6 +40,10 @@ COMMAND_MODULES: tuple[str, ...] = (
 #: What ``broachkit`` runs without a sub-command.
 DEFAULT_COMMAND = "reproduce"
 
+#: Top-level flags that may precede the command name.
+_TOP_FLAGS = ("-v", "--verbose")
+_HELP_FLAGS = ("-h", "--help")
+
 
 def _load_commands() -> dict[str, ModuleType]:
     cmds: dict[str, ModuleType] = {}
@@ -45,42 +60,91 @@ def _load_commands() -> dict[str, ModuleType]:
 
 def build_parser(cmds: dict[str, ModuleType]) -> argparse.ArgumentParser:
     """The top-level parser with one sub-parser per command."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="broachkit",
         description=(
             "Continuation and bifurcation analysis of ship capsizing due to broaching "
             "(Umeda 1999). Without a sub-command: `broachkit " + DEFAULT_COMMAND + "`."
         ),
     )
-    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    parser.add_argument(
+        "-v", "--verbose", action="store_true", help="show library messages and tracebacks"
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, mod in cmds.items():
         p = sub.add_parser(name, help=mod.HELP, description=mod.HELP)
         mod.add_arguments(p)
+        add_verbose(p)
     return parser
+
+
+def with_default_command(argv: list[str], commands: dict[str, ModuleType]) -> list[str]:
+    """``argv`` with :data:`DEFAULT_COMMAND` inserted when it names no command.
+
+    ``[]`` -> ``["reproduce"]``; ``["--out", "X"]`` -> ``["reproduce", "--out", "X"]``;
+    ``["-v", "--out", "X"]`` -> ``["-v", "reproduce", "--out", "X"]``; a help request
+    alone (``-h``) is left as it is.
+    """
+    i = 0
+    while i < len(argv) and argv[i] in _TOP_FLAGS:
+        i += 1
+    rest = argv[i:]
+    if rest and (rest[0] in commands or rest[0] in _HELP_FLAGS):
+        return list(argv)
+    return [*argv[:i], DEFAULT_COMMAND, *rest]
+
+
+def configure_logging(verbose: bool) -> None:
+    """Library messages: warnings only by default, everything with ``--verbose``."""
+    root = logging.getLogger()
+    for h in list(root.handlers):
+        if getattr(h, "_broachkit", False):
+            root.removeHandler(h)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+    handler._broachkit = True  # type: ignore[attr-defined]
+    root.addHandler(handler)
+    root.setLevel(logging.DEBUG if verbose else logging.WARNING)
+    for noisy in ("matplotlib", "PIL", "numba", "distributed", "asyncio"):
+        logging.getLogger(noisy).setLevel(logging.WARNING)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the ``broachkit`` command line; returns the exit code."""
     cmds = _load_commands()
     parser = build_parser(cmds)
+    argv = with_default_command(list(sys.argv[1:] if argv is None else argv), cmds)
     args = parser.parse_args(argv)
-    logging.basicConfig(
-        level=logging.DEBUG if args.verbose else logging.INFO,
-        format="%(message)s",
-        stream=sys.stderr,
-    )
-    name = args.command or DEFAULT_COMMAND
-    if args.command is None:
-        args = parser.parse_args([*(argv or sys.argv[1:]), name])
+    verbose = bool(getattr(args, "verbose", False))
+    configure_logging(verbose)
+    name = args.command
     try:
-        return int(cmds[name].run(args))
+        with warnings.catch_warnings():
+            if not verbose:
+                warnings.filterwarnings("ignore", module="matplotlib")
+                warnings.filterwarnings("ignore", category=UserWarning, message=".*[Ll]ayout.*")
+            return int(cmds[name].run(args))
     except KeyboardInterrupt:
         sys.stderr.write("interrupted; finished results are kept on disk\n")
         return 130
     except ValueError as exc:
-        sys.stderr.write(f"broachkit {name}: error: {exc}\n")
+        if verbose:
+            traceback.print_exc()
+        sys.stderr.write(f"broachkit {name}: error: {_one_line(exc)}\n")
         return 2
+    except Exception as exc:  # noqa: BLE001 - the front door never shows a traceback
+        if verbose:
+            traceback.print_exc()
+        sys.stderr.write(
+            f"broachkit {name}: failed: {type(exc).__name__}: {_one_line(exc)} "
+            "(--verbose shows the traceback)\n"
+        )
+        return 1
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text if len(text) <= 400 else text[:397] + "..."
 
 
 if __name__ == "__main__":

@@ -55,7 +55,7 @@ from .hydro.propeller import fit_kt_quadratic, holtrop_thrust_deduction, taylor_
 from .hydro.resistance import HoltropHull, ResistanceFit, fit_resistance
 from .hydro.roll import ikeda_lift_damping_per_speed, roll_inertia
 from .hydro.waves import WaveStrips
-from .vessel import Coefficient, VesselData
+from .vessel import Coefficient, VesselData, VesselFileError
 
 log = logging.getLogger(__name__)
 
@@ -238,7 +238,8 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
             "m",
             "smallest watertight extension of the sides above D (stand-in for enclosed "
             "superstructures) for which the GZ curve meets the IMO 2008 IS Code general "
-            "criteria (Part A 2.2): the paper's loading condition 'marginally complies'",
+            "criteria (Part A 2.2) to within the 1 mm tolerance of the fit (the computed "
+            "margin may miss zero by ~1e-4): the paper's condition 'marginally complies'",
         )
     gz = gz_curve(
         hull,
@@ -248,6 +249,11 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
         topside_height=topside,
     )
     zeta_G = gz.zeta_G
+    if zeta_G + d_m <= 0.0:  # KG = KM - GM: G at or below the keel
+        raise VesselFileError(
+            f"`loading.GM` = {GM} m exceeds this hull's KM = {zeta_G + d_m + GM:.4g} m "
+            f"(KG = {zeta_G + d_m:.4g} m: G below the keel)"
+        )
 
     # ---- resistance -----------------------------------------------------------
     hh = _holtrop(v, hull, C_wp, S_f)

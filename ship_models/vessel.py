@@ -32,7 +32,9 @@ published accuracy, or an assumption stated as one). See :class:`Uncertainty`.
 field by its dotted path (e.g. ``loading.GM``): a missing required field; a table
 without ``value``/``unit``/``source``/``status`` or with extra keys; an unknown
 status, unit, section or key (no silent typos); a non-finite value; non-positive
-lengths, breadth, drafts, mass or periods; ``GM <= 0``; a wave steeper than the
+lengths, breadth, drafts, mass or periods, or beyond any ship's (``L_pp`` > 500 m,
+``L_pp/B`` outside [1.5, 20], ``B/d_m`` outside [0.5, 15]); ``GM <= 0`` or so large
+that G lies below the keel (``KG = KM - GM < 0``); a wave steeper than the
 breaking limit ``H/lambda = 1/7`` (Michell, J.H. 1893, "The highest waves in water",
 Phil. Mag. 36:430-437).
 
@@ -143,13 +145,13 @@ def _opt(dim: str, doc: str, low: float = -math.inf, high: float = math.inf) -> 
 #: The schema: section -> key -> Field. Keys not listed here are refused.
 SCHEMA: dict[str, dict[str, Field]] = {
     "particulars": {
-        "L_pp": _pos("length", "length between perpendiculars"),
-        "L_OA": _pos("length", "length overall", required=False),
-        "B": _pos("length", "moulded breadth"),
-        "D": _pos("length", "moulded depth (keel to deck at side)"),
-        "d_f": _pos("length", "draft at the fore perpendicular"),
-        "d_m": _pos("length", "mean draft", required=False),
-        "d_a": _pos("length", "draft at the aft perpendicular"),
+        "L_pp": Field("length", True, 1.0, 500.0, doc="length between perpendiculars"),
+        "L_OA": _pos("length", "length overall", required=False, high=550.0),
+        "B": _pos("length", "moulded breadth", high=100.0),
+        "D": _pos("length", "moulded depth (keel to deck at side)", high=60.0),
+        "d_f": _pos("length", "draft at the fore perpendicular", high=40.0),
+        "d_m": _pos("length", "mean draft", required=False, high=40.0),
+        "d_a": _pos("length", "draft at the aft perpendicular", high=40.0),
         "C_b": _frac("block coefficient"),
         "lcb_aft": Field("length", True, doc="longitudinal centre of buoyancy aft of midship"),
         "S_f": _pos("area", "wetted surface area", required=False),
@@ -158,7 +160,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
     },
     "loading": {
         "GM": _pos("length", "metacentric height"),
-        "T_phi": _pos("time", "natural roll period"),
+        "T_phi": _pos("time", "natural roll period", high=120.0),
         "mass": _pos("mass", "displacement mass (within 2 % of rho C_b L B d_m)", False),
     },
     "environment": {
@@ -465,6 +467,25 @@ def _check_consistency(coeffs: Mapping[str, Coefficient]) -> None:
                 f"{0.5 * (d_f + d_a):.4f} m by more than 1 %"
             )
     L = si("particulars.L_pp")
+    B = si("particulars.B")
+    if not 1.5 <= L / B <= 20.0:
+        raise VesselFileError(
+            f"`particulars.B` = {B} m gives L_pp/B = {L / B:.3g}; a ship has 1.5 <= L_pp/B <= 20"
+        )
+    d_mean = 0.5 * (d_f + d_a)
+    if not 0.5 <= B / d_mean <= 15.0:
+        raise VesselFileError(
+            f"`particulars.d_f`/`particulars.d_a` give B/d_m = {B / d_mean:.3g}; a ship has "
+            "0.5 <= B/d_m <= 15"
+        )
+    # KG = KM - GM must be positive: KM = KB + BM <= d_m + B^2 / (12 C_b d_m) (KB <= d_m;
+    # the waterplane's transverse inertia <= L B^3 / 12, the volume = C_b L B d_m).
+    km_max = d_mean + B**2 / (12.0 * si("particulars.C_b") * d_mean)
+    if si("loading.GM") >= km_max:
+        raise VesselFileError(
+            f"`loading.GM` = {si('loading.GM')} m would put G below the keel (KG = KM - GM < 0; "
+            f"KM <= {km_max:.3g} m for these particulars)"
+        )
     if abs(si("particulars.lcb_aft")) >= 0.5 * L:
         raise VesselFileError("`particulars.lcb_aft` must lie within the ship (|lcb| < L_pp/2)")
     if "loading.mass" in coeffs:

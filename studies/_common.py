@@ -1,8 +1,10 @@
 """Shared output helpers for the study scripts: output folder, figure style, PNG and CSV.
 
-Study scripts import this module as ``from _common import ...`` (they run as
-``python studies/<script>.py``, which puts this folder on ``sys.path``). Everything
-here is generic: nothing knows about ships.
+Study modules import this one as ``from studies._common import ...`` (``studies`` is
+a package installed with broachkit; ``python studies/<script>.py`` puts the folder
+above it on ``sys.path``). Everything here is generic: nothing knows about ships.
+Every file is written atomically (a temporary file renamed onto the final name,
+:mod:`broachkit_cli.files`), so an interrupted study never leaves a truncated file.
 
 - :func:`output_dir` -- ``<root>/<name>``, created; root from ``--out``, else the
   environment variable ``BROACHKIT_OUT``, else ``./out``.
@@ -24,6 +26,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from broachkit_cli.files import atomic_path, write_atomic, write_atomic_group, write_json
 
 #: Environment variable naming the default output root.
 OUT_ENV = "BROACHKIT_OUT"
@@ -96,13 +100,93 @@ def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int | None = Non
     p = Path(path)
     if p.suffix.lower() != ".png":
         p = p.with_name(p.name + ".png")
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=dpi or STYLE["savefig.dpi"])
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=dpi or STYLE["savefig.dpi"])
     if getattr(fig.canvas, "manager", None) is not None:  # a pyplot figure
         import matplotlib.pyplot as plt
 
         plt.close(fig)
     return p
+
+
+# ------------------------------------------------------------ the paper's planes
+#: States that are angles (written in degrees, ``<name>_deg``, in every CSV) and
+#: angular rates (``<name>_deg_s``).
+ANGLE_STATES = ("chi", "phi", "delta")
+RATE_STATES = ("r", "p_roll")
+
+#: Axis labels of the paper's quantities (symbol list of Umeda 1999).
+PLANE_LABELS: dict[str, str] = {
+    "xi": r"nondimensional longitudinal position $\xi_G/\lambda$",
+    "xi_unwrapped": r"$\xi_G/\lambda$ (unwrapped)",
+    "u_c": "nondimensional surge velocity $u/c$",
+    "chi": r"heading angle $\chi$ (deg)",
+    "r_nd": r"nondimensional yaw rate $r' = rL/\sqrt{u^2+v^2}$",
+    "phi": r"roll angle $\phi$ (deg)",
+    "p_nd": r"nondimensional roll rate $p' = pL/\sqrt{u^2+v^2}$",
+    "delta": r"rudder angle $\delta$ (deg)",
+}
+
+
+def paper_quantities(
+    x: np.ndarray, names: Sequence[str], c: float, L: float
+) -> dict[str, np.ndarray]:
+    """The paper's plotted quantities of states ``x`` (shape (N, 8)).
+
+    ``u_c = u/c``; ``r_nd = r L / sqrt(u^2 + v^2)`` and ``p_nd = p L / sqrt(u^2 + v^2)``
+    (the symbol list's r' and p'); angles in degrees; ``xi_unwrapped`` is xi_G/lambda.
+    """
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    i = {n: k for k, n in enumerate(names)}
+    speed = np.hypot(x[:, i["u"]], x[:, i["v"]])
+    return {
+        "xi_unwrapped": x[:, i["xi_G"]],
+        "u_c": x[:, i["u"]] / c,
+        "chi": np.degrees(x[:, i["chi"]]),
+        "r_nd": x[:, i["r"]] * L / speed,
+        "phi": np.degrees(x[:, i["phi"]]),
+        "p_nd": x[:, i["p_roll"]] * L / speed,
+        "delta": np.degrees(x[:, i["delta"]]),
+    }
+
+
+def wrap_position(xi: np.ndarray, low: float) -> np.ndarray:
+    """``xi`` wrapped into ``[low, low + 1)``, with NaN where it jumps (breaks the line).
+
+    The paper draws positions in one window of one wavelength plus (Figs. 10, 12, 14:
+    -0.6 .. 1), so a periodic motion that drifts back one wave per period shows as a
+    closed loop.
+    """
+    w = low + np.mod(np.asarray(xi, dtype=float) - low, 1.0)
+    if w.size < 2:
+        return w
+    jumps = np.nonzero(np.abs(np.diff(w)) > 0.5)[0]
+    return np.insert(w, jumps + 1, np.nan)
+
+
+def insert_breaks(y: np.ndarray, xi: np.ndarray, low: float) -> np.ndarray:
+    """``y`` with NaN inserted where :func:`wrap_position` breaks ``xi``."""
+    w = low + np.mod(np.asarray(xi, dtype=float) - low, 1.0)
+    jumps = np.nonzero(np.abs(np.diff(w)) > 0.5)[0] if w.size > 1 else np.array([], int)
+    return np.insert(np.asarray(y, dtype=float), jumps + 1, np.nan)
+
+
+def state_columns(names: Sequence[str], x: np.ndarray) -> dict[str, np.ndarray]:
+    """CSV columns of states ``x`` (N, n): angles in degrees, angular rates in deg/s.
+
+    One angle unit in every CSV of the studies: ``chi_deg``, ``phi_deg``, ``delta_deg``,
+    ``r_deg_s``, ``p_roll_deg_s``; the other states as they are (SI, xi_G in wavelengths).
+    """
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    cols: dict[str, np.ndarray] = {}
+    for k, n in enumerate(names):
+        if n in ANGLE_STATES:
+            cols[f"{n}_deg"] = np.degrees(x[:, k])
+        elif n in RATE_STATES:
+            cols[f"{n}_deg_s"] = np.degrees(x[:, k])
+        else:
+            cols[n] = x[:, k]
+    return cols
 
 
 def _meta_lines(meta: Mapping[str, Any] | None) -> list[str]:
@@ -143,8 +227,7 @@ def save_csv(
         if a.size != n:
             raise ValueError(f"`columns[{k!r}]` has {a.size} values, expected {n}")
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    with p.open("w", newline="") as fh:
+    with atomic_path(p) as tmp, tmp.open("w", newline="") as fh:
         for line in _meta_lines(meta):
             fh.write(line + "\n")
         w = csv.writer(fh)
@@ -181,8 +264,7 @@ def save_table(
         If a row's length differs from ``header`` (names the row index).
     """
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    with p.open("w", newline="") as fh:
+    with atomic_path(p) as tmp, tmp.open("w", newline="") as fh:
         for line in _meta_lines(meta):
             fh.write(line + "\n")
         w = csv.writer(fh)
@@ -195,9 +277,16 @@ def save_table(
 
 
 __all__ = [
+    "ANGLE_STATES",
     "OUT_ENV",
+    "PLANE_LABELS",
+    "RATE_STATES",
     "STYLE",
     "figure_style",
+    "insert_breaks",
+    "paper_quantities",
+    "state_columns",
+    "wrap_position",
     "new_figure",
     "output_dir",
     "read_csv",
@@ -205,4 +294,7 @@ __all__ = [
     "save_figure",
     "save_table",
     "use_agg",
+    "write_atomic",
+    "write_atomic_group",
+    "write_json",
 ]

@@ -34,12 +34,11 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from _common import new_figure, save_figure, save_table
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ship_models.paper import PAPER_FN
+from studies._common import new_figure, save_figure, save_table, write_atomic_group, write_json
 
 FN = PAPER_FN
 CHI_C_DEG = 10.0
@@ -69,9 +68,9 @@ def _rows(br: Any, label: str, c: float, free: str) -> list[dict[str, Any]]:
                 "v": float(x[2]),
                 "v_over_c": float(x[2] / c),
                 "chi_deg": float(np.degrees(x[3])),
-                "r": float(x[4]),
+                "r_deg_s": float(np.degrees(x[4])),
                 "phi_deg": float(np.degrees(x[5])),
-                "p_roll": float(x[6]),
+                "p_roll_deg_s": float(np.degrees(x[6])),
                 "delta_deg": float(np.degrees(x[7])),
                 "saddle_index": int(br.n_unstable[k]),
             }
@@ -113,39 +112,66 @@ def _plot_vs_course(branches: dict[str, Any], c: float, out: Path) -> list[str]:
     ]
     written = []
     for fname, tag, quantities in specs:
-        fig = new_figure((6, 2.6 * len(quantities) + 0.6))
+        fig = new_figure((6, 2.6 * len(quantities) + 1.0))
         axes = fig.subplots(len(quantities), 1, sharex=True, squeeze=False)
         for ax, (_, ylabel, fn) in zip(axes[:, 0], quantities, strict=True):
             for label, br in branches.items():
                 k = _primary_end(br) + 1
                 chi = np.degrees(br.p[:k])
-                ax.plot(
-                    chi,
-                    fn(br.x[:k]),
-                    "-",
-                    color=COLORS.get(label, "k"),
-                    label=f"near the {label} (saddle index {int(br.n_unstable[min(1, k - 1)])})",
-                )
+                plot_by_stability(ax, chi, fn(br.x[:k]), br.n_unstable[:k], COLORS.get(label, "k"))
                 for sp in br.find("fold")[:1]:
                     xs = np.asarray(sp.x)[None, :]
-                    ax.plot(np.degrees(sp.p), fn(xs)[0], "kx", ms=8)
-                    ax.annotate(
-                        f"fold {np.degrees(sp.p):.1f} deg",
-                        (np.degrees(sp.p), fn(xs)[0]),
-                        textcoords="offset points",
-                        xytext=(-80, -14),
-                        fontsize=8,
-                    )
+                    _mark_fold(ax, float(np.degrees(sp.p)), float(fn(xs)[0]))
             ax.set_ylabel(ylabel)
             ax.grid(alpha=0.3)
-            ax.axhline(0.0, color="0.6", lw=0.6)
-        axes[0, 0].legend(fontsize=8)
+            lo, hi = ax.get_ylim()
+            if lo < 0.0 < hi:
+                ax.axhline(0.0, color="0.6", lw=0.6)
         axes[-1, 0].set_xlabel("autopilot course $\\chi_c$ (deg)")
         axes[0, 0].set_title(f"{tag}: fixed points for Fn = {FN} (our vessel)")
         axes[-1, 0].set_xlim(0, CHI_C_MAX_DEG)
+        _legend(fig, branches)
         save_figure(fig, out / fname)
         written.append(fname)
     return written
+
+
+def plot_by_stability(ax: Any, x: np.ndarray, y: np.ndarray, n_unstable: np.ndarray,
+                      color: str) -> None:  # fmt: skip
+    """Draw a branch solid where it is stable (saddle index 0), dashed where unstable."""
+    unstable = np.asarray(n_unstable) > 0
+    for flag, style in ((False, "-"), (True, "--")):
+        yy = np.where(unstable == flag, y, np.nan)
+        # join each run to its neighbour so the line has no gap at a change of stability
+        edge = np.nonzero(np.diff(unstable.astype(int)) != 0)[0]
+        for e in edge:
+            if unstable[e] == flag:
+                yy[e + 1] = y[e + 1]
+            else:
+                yy[e] = y[e]
+        ax.plot(x, yy, style, color=color)
+
+
+def _mark_fold(ax: Any, x: float, y: float) -> None:
+    """Mark a fold; its label goes towards the inside of the axes (no overlap with the frame)."""
+    ax.plot(x, y, "kx", ms=8)
+    lo, hi = ax.get_ylim()
+    below = y > 0.5 * (lo + hi)
+    ax.annotate(f"fold {x:.1f} deg", (x, y), textcoords="offset points",
+                xytext=(-8, -10 if below else 8), va="top" if below else "bottom",
+                ha="right", fontsize=8)  # fmt: skip
+
+
+def _legend(fig: Any, branches: dict[str, Any]) -> None:
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color=COLORS.get(label, "k"), label=f"near the {label}")
+               for label in branches]  # fmt: skip
+    handles += [
+        Line2D([], [], color="0.3", ls="-", label="stable"),
+        Line2D([], [], color="0.3", ls="--", label="unstable (saddle index >= 1)"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=7, frameon=False)
 
 
 def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
@@ -163,11 +189,11 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     branches = trace_in_chi_c(model, params, chi_c_max=math.radians(CHI_C_MAX_DEG))
     rows: list[dict[str, Any]] = []
     for label, br in branches.items():
-        br.save(out / f"branch_chi_c_{label}.npz")
+        write_atomic_group(out, lambda d, b=br, n=label: b.save(d / f"branch_chi_c_{n}.npz"))
         rows += _rows(br, label, c, "chi_c_deg")
     meta = {
         "study": "Umeda (1999) Figs. 2-5, default vessel",
-        "units": "u, v m/s; r, p_roll rad/s; angles deg; xi_G = xi_G/lambda in [0, 1)",
+        "units": "u, v m/s; angles deg, rates deg/s; xi_G = xi_G/lambda in [0, 1)",
         "params": json.dumps(params.as_dict()),
         "celerity_m_s": c,
     }
@@ -176,7 +202,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
 
     say("tracing both fixed points in Fn at chi_c = 10 deg")
     fn_rows: list[dict[str, Any]] = []
-    fig = new_figure((6, 5.6))
+    fig = new_figure((6, 6.0))
     axes = fig.subplots(2, 1, sharex=True)
     fn_branches = {}
     for label in ("crest", "trough"):
@@ -185,13 +211,13 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         fn_branches[label] = br
         fn_rows += _rows(br, label, c, "Fn")
         for ax, y in zip(axes, (np.mod(br.state("xi_G"), 1), br.state("u") / c), strict=True):
-            ax.plot(br.p, y, "-", color=COLORS[label], label=f"near the {label}")
+            plot_by_stability(ax, br.p, y, br.n_unstable, COLORS[label])
     _write_csv(out / "fixed_points_fn.csv", fn_rows, meta)
     axes[0].set_ylabel(r"$\xi_G/\lambda$")
     axes[1].set_ylabel("$u/c$")
     axes[1].set_xlabel("nominal Froude number Fn")
     axes[0].set_title(f"fixed points for $\\chi_c$ = {CHI_C_DEG:g} deg against Fn (our vessel)")
-    axes[0].legend(fontsize=8)
+    _legend(fig, fn_branches)
     for ax in axes:
         ax.grid(alpha=0.3)
     save_figure(fig, out / "fixed_points_vs_fn.png")
@@ -220,7 +246,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         for label, br in fn_branches.items()
     }
     summary["seconds"] = round(time.perf_counter() - t0, 2)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    write_json(out / "summary.json", summary)
     return summary
 
 

@@ -31,12 +31,11 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from _common import new_figure, save_figure, save_table
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ship_models.paper import PAPER_FN
+from studies._common import new_figure, save_figure, save_table, write_json
 
 FN = PAPER_FN
 CHI_C_DEG = 10.0
@@ -133,7 +132,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         save_table(out / fname, header, [[r[h] for h in header] for r in rows], meta=meta)
     summary["figures"] = figures
     summary["seconds"] = round(time.perf_counter() - t0, 2)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    write_json(out / "summary.json", summary)
     return summary
 
 

@@ -10,9 +10,13 @@
 3. The global picture (fixed points, attractors, manifold branches) on both sides of
    the switch is compared (:mod:`ship_models.analysis.global_picture`).
 
-Planes as in the paper: xi_G/lambda vs u/c (Figs. 10, 14), heading vs u/c (Figs. 11,
-15), roll vs heading (Fig. 12), roll vs rudder (Fig. 13); both sides of the switch get
-all four planes.
+Planes as in the paper (its axis labels and symbol list): xi_G/lambda vs u/c (Figs. 10,
+14), heading vs the nondimensional yaw rate r' = r L/sqrt(u^2+v^2) (Figs. 11, 15),
+xi_G/lambda vs heading (Fig. 12), roll vs the nondimensional roll rate p' (Fig. 13);
+positions in the paper's window -0.6 .. 1, the end of a branch that drifts back redrawn
+shifted by whole waves so that the periodic attractor shows as a closed curve; the
+whole simulated branch is drawn (:func:`position_pieces`). Both sides of the switch get
+all four planes (``extra_<plane>_<case>.png`` where the paper has no figure).
 
 Writes to ``--out`` (default ``out/fig10_15``): ``fig10_..fig15_*.png``,
 ``manifold_<case>_<branch>.csv`` (time series), ``critical.json``, ``summary.json``.
@@ -32,117 +36,144 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from _common import new_figure, save_csv, save_figure
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ship_models.paper import PAPER_FN
+from studies._common import (
+    PLANE_LABELS,
+    new_figure,
+    paper_quantities,
+    save_csv,
+    save_figure,
+    state_columns,
+    write_json,
+)
 
 CHI_C_DEG = 10.0
 #: Width of the Fn search below the first-passage bracket for the final-fate switch.
 FINAL_SEARCH_WIDTH = 1e-3
 COLORS = {"downslope": "tab:red", "upslope": "tab:blue"}
 STYLES = {"downslope": "-", "upslope": "--"}
-#: The paper's planes: (file tag, x quantity, y quantity).
+#: The paper's planes (from its axis labels and symbol list): (file tag, x, y).
+#: Figs. 10/14: position vs u/c; Figs. 11/15: heading vs r' (as Fig. 18, whose
+#: ordinate -0.1..0.6 against heading 0..70 deg fits r'); Fig. 12: position on the
+#: abscissa, heading on the ordinate (the text: the heading grows while the ship
+#: stays on the downslope); Fig. 13: roll angle vs p' (as Fig. 19).
 PLANES = (
     ("position", "xi", "u_c"),
-    ("heading", "chi", "u_c"),
-    ("roll_heading", "phi", "chi"),
-    ("roll_rudder", "phi", "delta"),
+    ("heading", "chi", "r_nd"),
+    ("position_heading", "xi", "chi"),
+    ("roll", "phi", "p_nd"),
 )
-LABELS = {
-    "xi": r"$\xi_G/\lambda$ (unwrapped)",
-    "u_c": "$u/c$",
-    "chi": r"heading $\chi$ (deg)",
-    "phi": r"roll $\phi$ (deg)",
-    "delta": r"rudder $\delta$ (deg)",
-}
+#: The position window of the paper's Figs. 10, 12, 14: -0.6 .. 1.
+XI_WINDOW_LOW, XI_WINDOW_HIGH = -0.6, 1.0
+#: Wavelengths of the end of a branch redrawn, shifted by whole waves, inside the
+#: window: a motion that keeps drifting back (the periodic attractor) shows there.
+ATTRACTOR_WAVES = 3.0
 
 
-def _quantities(x: np.ndarray, c: float) -> dict[str, np.ndarray]:
-    return {
-        "xi": x[:, 0],
-        "u_c": x[:, 1] / c,
-        "chi": np.degrees(x[:, 3]),
-        "phi": np.degrees(x[:, 5]),
-        "delta": np.degrees(x[:, 7]),
-    }
+def position_pieces(xi: np.ndarray, y: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, bool]]:
+    """A branch in the position window: (x, y, is_shifted_copy) pieces to draw.
+
+    The branch is drawn as it runs until it first leaves the window to the left
+    (``xi < XI_WINDOW_LOW``); what follows, if anything, is a motion drifting back by
+    whole waves. Its last :data:`ATTRACTOR_WAVES` wavelengths are drawn again shifted
+    by every whole number of waves that brings them into the window, so that a
+    periodic attractor appears as the closed curve it is on the wave-periodic phase
+    space (the paper's Figs. 14-15).
+    """
+    out_left = np.nonzero(xi < XI_WINDOW_LOW)[0]
+    if out_left.size == 0:
+        return [(xi, y, False)]
+    k = int(out_left[0]) + 1
+    pieces = [(xi[:k], y[:k], False)]
+    rest_xi, rest_y = xi[k:], y[k:]
+    if rest_xi.size < 2:
+        return pieces
+    far = np.nonzero(np.abs(rest_xi - rest_xi[-1]) > ATTRACTOR_WAVES)[0]
+    first = int(far[-1]) + 1 if far.size else 0
+    txi, ty = rest_xi[first:], rest_y[first:]
+    lo = int(np.ceil(XI_WINDOW_LOW - txi.max()))
+    hi = int(np.floor(XI_WINDOW_HIGH - txi.min()))
+    pieces += [(txi + shift, ty, True) for shift in range(lo, hi + 1)]
+    return pieces
 
 
-def _visible(traj: Any, xi_s: float) -> np.ndarray:
-    """Samples to draw: stop two and a half waves behind the saddle (surging goes on)."""
-    xi = traj.x[:, 0]
-    beyond = np.nonzero(xi < xi_s - 2.5)[0]
-    k = int(beyond[0]) if beyond.size else xi.size
-    return np.arange(k)
+LABELS = PLANE_LABELS
 
 
-def _plot_case(man: Any, c: float, out: Path, numbers: dict[str, str], title: str) -> list[str]:
+def _plot_case(
+    man: Any, c: float, L: float, out: Path, numbers: dict[str, str], title: str, case: str
+) -> list[str]:
     """One PNG per plane for one Fn; ``numbers`` maps plane tag -> paper figure number."""
     written = []
     sp = man.saddle
+    names = man.branches[next(iter(man.branches))].trajectory.state_names
     for tag, qx, qy in PLANES:
-        fig = new_figure((6.0, 4.4))
+        fig = new_figure((6.0, 4.6))
         ax = fig.subplots()
         for name, br in man.branches.items():
-            sel = _visible(br.trajectory, sp.x[0])
-            q = _quantities(br.trajectory.x[sel], c)
-            ax.plot(
-                q[qx],
-                q[qy],
-                STYLES[name],
-                color=COLORS[name],
-                lw=1.6 if name == "downslope" else 1.1,
-                label=f"{name}: {br.fate.label}",
-            )
+            x = np.asarray(br.trajectory.x)
+            q = paper_quantities(x, names, c, L)
+            style = {"color": COLORS[name], "lw": 1.5 if name == "downslope" else 1.0}
+            if qx == "xi":
+                pieces = position_pieces(q["xi_unwrapped"], q[qy])
+            else:
+                pieces = [(q[qx], q[qy], False)]
+            for k, (xs, ys, copy) in enumerate(pieces):
+                ax.plot(
+                    xs,
+                    ys,
+                    STYLES[name],
+                    alpha=0.55 if copy else 1.0,
+                    label=f"{name}: {br.fate.label}" if k == 0 else None,
+                    **style,
+                )
             if br.fate.kind == "capsize":
-                ax.plot(q[qx][-1], q[qy][-1], "x", color=COLORS[name], ms=9)
+                xs, ys, _ = pieces[0]
+                ax.plot(xs[-1], ys[-1], "x", color=COLORS[name], ms=9)
         for fp in man.points:
             if fp.saddle_index > 1:
                 continue
-            for shift in (0, -1, -2) if qx == "xi" else (0,):
-                x = np.array(fp.x)
-                x[0] += shift
-                q = _quantities(x[None, :], c)
+            q = paper_quantities(np.asarray(fp.x)[None, :], names, c, L)
+            shifts = (0.0, -1.0) if qx == "xi" else (0.0,)
+            for shift in shifts:
+                px = q["xi_unwrapped"][0] + shift if qx == "xi" else q[qx][0]
+                if qx == "xi" and not XI_WINDOW_LOW <= px <= XI_WINDOW_HIGH:
+                    continue
                 marker = "o" if fp.label == sp.label else "s"
-                ax.plot(q[qx], q[qy], marker, mfc="none", color="k", ms=7)
-                if shift == 0 or fp.label == sp.label:
-                    lab = fp.label if shift == 0 else f"{fp.label}@{shift:+d}"
-                    ax.annotate(
-                        lab,
-                        (q[qx][0], q[qy][0]),
-                        textcoords="offset points",
-                        xytext=(5, 5),
-                        fontsize=7,
-                    )
+                ax.plot(px, q[qy][0], marker, mfc="none", color="k", ms=7)
+                lab = fp.label if shift == 0 else f"{fp.label}@{int(shift):+d}"
+                ax.annotate(
+                    lab,
+                    (px, q[qy][0]),
+                    textcoords="offset points",
+                    fontsize=7,
+                    xytext=(5, 5) if fp.label == sp.label else (5, -12),
+                )
         ax.set_xlabel(LABELS[qx])
         ax.set_ylabel(LABELS[qy])
-        ax.set_title(f"Fig. {numbers[tag]}: {title}" if tag in numbers else title)
-        ax.legend(loc="best")
-        name = (f"fig{int(numbers[tag]):02d}_" if tag in numbers else "extra_") + (
-            f"{tag}_Fn{man.params['Fn']:.6f}.png"
-        )
+        if qx == "xi":
+            ax.set_xlim(XI_WINDOW_LOW, XI_WINDOW_HIGH)
+        ax.set_title(f"Fig. {numbers[tag]}: {title}" if tag in numbers else title, fontsize=9)
+        fig.legend(loc="outside lower center", ncol=2, fontsize=7, frameon=False)
+        name = (
+            f"fig{int(numbers[tag]):02d}_" if tag in numbers else "extra_"
+        ) + f"{tag}_{case}.png"
         save_figure(fig, out / name)
         written.append(name)
     return written
 
 
-def _save_series(man: Any, c: float, out: Path, case: str) -> list[str]:
+def _save_series(man: Any, c: float, L: float, out: Path, case: str) -> list[str]:
     files = []
     for name, br in man.branches.items():
         tr = br.trajectory
-        q = _quantities(np.asarray(tr.x), c)
-        cols = {"t": tr.t}
-        cols.update({n: tr.x[:, i] for i, n in enumerate(tr.state_names)})
-        cols.update(
-            {
-                "u_over_c": q["u_c"],
-                "chi_deg": q["chi"],
-                "phi_deg": q["phi"],
-                "delta_deg": q["delta"],
-            }
-        )
+        x = np.asarray(tr.x)
+        q = paper_quantities(x, tr.state_names, c, L)
+        cols = {"t": tr.t, **state_columns(tr.state_names, x)}
+        cols.update({"u_over_c": q["u_c"], "r_nondim": q["r_nd"], "p_nondim": q["p_nd"]})
         fname = f"manifold_{case}_{name}.csv"
         save_csv(
             out / fname,
@@ -153,7 +184,8 @@ def _save_series(man: Any, c: float, out: Path, case: str) -> list[str]:
                 "branch": name,
                 "fate": br.fate.label,
                 "eps": man.eps,
-                "units": "t s; xi_G = xi_G/lambda unwrapped; u, v m/s; angles rad (and deg cols)",
+                "units": "t s; xi_G = xi_G/lambda unwrapped; u, v m/s; angles deg, rates deg/s; "
+                "r_nondim = r L/sqrt(u^2+v^2), p_nondim likewise",
             },
         )
         files.append(fname)
@@ -177,6 +209,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     model = purse_seiner()
     base = model.default_params().replace(chi_c=math.radians(CHI_C_DEG))
     c = model.celerity(base)
+    L = float(model.forces.L)
     say(f"bisection of Fn on the upslope branch's first passage (chi_c = {CHI_C_DEG:g} deg)")
     crit = critical_fn(
         model,
@@ -185,7 +218,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         tol=1e-5,
         progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),
     )
-    (out / "critical.json").write_text(json.dumps(crit.to_json(), indent=2))
+    write_json(out / "critical.json", crit.to_json())
     if not crit.status.ok and crit.status.name != "SUCCESS":
         say(f"bisection did not succeed: {crit.message}")
     lo, hi = crit.bracket
@@ -204,7 +237,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         criterion="final",
         progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),
     )
-    (out / "critical_final_fate.json").write_text(json.dumps(final.to_json(), indent=2))
+    write_json(out / "critical_final_fate.json", final.to_json())
     below = final.bracket[0] if final.status.name == "SUCCESS" else lo
     cases = {"above": hi, "below": below, "paper": PAPER_FN}
     figures: list[str] = []
@@ -224,7 +257,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         man = unstable_manifold(model, p, "crest", points=pts, t_max=1500.0)
         mans[case] = man
         if case == "above":
-            nums = {"position": "10", "heading": "11", "roll_heading": "12", "roll_rudder": "13"}
+            nums = {"position": "10", "heading": "11", "position_heading": "12", "roll": "13"}
             title = f"Fn = {fn:.6f} (just above critical), $\\chi_c$ = {CHI_C_DEG:g} deg"
         elif case == "below":
             nums = {"position": "14", "heading": "15"}
@@ -232,8 +265,8 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         else:
             nums = {}
             title = f"Fn = {fn} (the paper's value), $\\chi_c$ = {CHI_C_DEG:g} deg"
-        figures += _plot_case(man, c, out, nums, title)
-        data += _save_series(man, c, out, case)
+        figures += _plot_case(man, c, L, out, nums, title, case)
+        data += _save_series(man, c, L, out, case)
         summary["cases"][case] = {"Fn": fn, **man.to_json()}
     say("global picture at the 'below' and 'above' cases")
     g_lo = build_global_picture(model, base.replace(Fn=cases["below"]), t_max=1500.0)
@@ -249,7 +282,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     summary["figures"] = figures
     summary["data"] = data
     summary["seconds"] = round(time.perf_counter() - t0, 2)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=str))
+    write_json(out / "summary.json", summary, default=str)
     return summary
 
 

@@ -18,7 +18,7 @@ are suddenly changed and the transient is classified (capsize or periodic motion
   (:func:`~ship_models.analysis.critical_curve.critical_curve`).
 
 Writes to ``--out`` (default ``out/fig16_22``): ``fig16_map.png``, ``fig17_20_transient.png``,
-``fig21_final_stage.png``, ``fig22_map.png``, ``fig23_squares.png``; ``fig16_map.csv``,
+``fig21_final_stage.png``, ``fig22_map.png``, ``fig23_critical_condition.png``; ``fig16_map.csv``,
 ``fig22_map.csv``, ``fig23_boundaries.csv``, ``transient.csv``, ``orbits.csv``,
 ``summary.json``.
 
@@ -40,12 +40,20 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from _common import new_figure, save_csv, save_figure, save_table
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ship_models.paper import PAPER_FN_BRACKET
+from studies._common import (
+    PLANE_LABELS,
+    new_figure,
+    paper_quantities,
+    save_csv,
+    save_figure,
+    save_table,
+    state_columns,
+    write_json,
+)
 
 CHI_TO_DEG = 10.0
 FROM_1 = (0.1, 0.0)  # (Fn, chi_c deg) of the first initial orbit (Figs. 16-21, 23)
@@ -86,15 +94,14 @@ def _draw_map(mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path
         ax.errorbar(
             xs, [bounds[x].Fn for x in xs],
             yerr=[0.5 * (bounds[x].bracket[1] - bounds[x].bracket[0]) for x in xs],
-            fmt="D-", color="tab:green", ms=4, lw=0.8, label="boundary by bisection",
+            fmt="D", color="tab:green", ms=5, capsize=3, label="boundary by bisection (bracket)",
         )  # fmt: skip
     ax.set_xlabel("initial longitudinal position (xi_G / lambda)_0")
     ax.set_ylabel("nominal Froude number")
     ax.set_title(title, fontsize=8.5)
     ax.set_xlim(-0.05, 1.0)
     ax.ticklabel_format(axis="y", useOffset=False)
-    ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
-    fig.tight_layout()
+    fig.legend(loc="outside lower center", ncol=2, fontsize=6.5, frameon=False)
     save_figure(fig, path)
 
 
@@ -142,24 +149,30 @@ def compute(
     summary["orbit_0.3_45deg_from_calm_water"] = direct2.message
     save_table(
         out / "orbits.csv",
-        ["orbit", "period_s", "max_abs_multiplier", "closure", *model.state_names],
+        [
+            "orbit",
+            "period_s",
+            "max_abs_multiplier",
+            "closure",
+            *state_columns(model.state_names, orb1.x_section[None, :]),
+        ],
         [
             [
                 f"Fn={FROM_1[0]} chi_c={FROM_1[1]}deg",
                 orb1.period,
                 float(np.max(np.abs(orb1.multipliers))),
                 orb1.closure,
-                *orb1.x_section,
+                *(float(v[0]) for v in state_columns(model.state_names, orb1.x_section).values()),
             ],
             [
                 f"Fn={FROM_2[0]} chi_c={FROM_2[1]}deg",
                 orb2.period,
                 float(np.max(np.abs(orb2.multipliers))),
                 orb2.closure,
-                *orb2.x_section,
+                *(float(v[0]) for v in state_columns(model.state_names, orb2.x_section).values()),
             ],
         ],  # fmt: skip
-        meta={"section": "xi_G/lambda = 0", "units": "SI, angles rad"},
+        meta={"section": "xi_G/lambda = 0", "units": "SI, angles deg, rates deg/s"},
     )
 
     def opt(n_def: int, n_full: int) -> int:
@@ -189,7 +202,7 @@ def compute(
             _map_rows(mp),
             meta={"chi_c_to_deg": CHI_TO_DEG, "heteroclinic_Fn": fn_het},
         )
-        bxi = xi_grid if full else np.array([0.0, 0.5])
+        bxi = xi_grid  # the boundary by bisection at every plotted position
         bounds = {}
         lo_d, hi_d = min(deltas), max(deltas)
         for xi in bxi:
@@ -250,22 +263,29 @@ def compute(
         {"chi_c_deg": float(d), **b.to_json(), "heteroclinic_Fn": float(r[6])}
         for (d, b), r in zip(squares.items(), rows, strict=True)
     ]
-    fig = new_figure((5.6, 3.9))
+    fig = new_figure((5.8, 4.6))
     ax = fig.subplots()
     ok = curve.converged
-    ax.plot(curve.chi_c_deg[ok], curve.Fn[ok], "o-", ms=4, label="heteroclinic bifurcation")
+    ax.plot(curve.chi_c_deg[ok], curve.Fn[ok], "-", color="k", lw=1.0)
+    ax.plot(curve.chi_c_deg[ok], curve.Fn[ok], "o", color="k", ms=5,
+            label="heteroclinic bifurcation (connecting orbit, filled circles)")  # fmt: skip
     ax.errorbar(
         list(squares), [b.Fn for b in squares.values()],
         yerr=[0.5 * (b.bracket[1] - b.bracket[0]) for b in squares.values()],
-        fmt="s", mfc="none", ms=8, color="tab:orange",
-        label=f"numerical experiment (sudden change, (xi_G/lambda)_0 = {XI_FIG23:g})",
+        fmt="s", mfc="none", ms=9, mew=1.4, color="tab:orange", capsize=3,
+        label=f"numerical experiment, sudden change, (xi_G/lambda)_0 = {XI_FIG23:g} (squares)",
+    )  # fmt: skip
+    ax.errorbar(
+        [CHI_TO_DEG], [0.5 * (PAPER_FN[0] + PAPER_FN[1])], yerr=[0.5 * (PAPER_FN[1] - PAPER_FN[0])],
+        fmt="D", color="tab:red", ms=6, capsize=3,
+        label=f"Umeda (1999) at {CHI_TO_DEG:g} deg: {PAPER_FN[0]}-{PAPER_FN[1]} (measured coeff.)",
     )  # fmt: skip
     ax.set_xlabel("autopilot course chi_c (deg)")
-    ax.set_ylabel("critical nominal Froude number")
+    ax.set_ylabel("nominal Froude number Fn")
     ax.ticklabel_format(axis="y", useOffset=False)
-    ax.set_title("Critical condition for capsizing due to broaching (cf. Fig. 23)", fontsize=9)
-    ax.legend(fontsize=7)
-    save_figure(fig, out / "fig23_squares.png")
+    ax.set_title("Fig. 23: critical condition for capsizing due to broaching", fontsize=9)
+    fig.legend(loc="outside lower center", ncol=1, fontsize=7, frameon=False)
+    save_figure(fig, out / "fig23_critical_condition.png")
 
     # ---- Figs. 17-20: the transient just above the boundary, and Fig. 21
     b10 = squares.get(CHI_TO_DEG)
@@ -281,9 +301,9 @@ def compute(
     deg = np.degrees
     save_csv(
         out / "transient.csv",
-        {"t": tr.t, "t_nondim": tr.t * c / L, **{n: x[:, i[n]] for n in model.state_names}},
+        {"t": tr.t, "t_nondim": tr.t * c / L, **state_columns(model.state_names, x)},
         meta={"Fn": fn_above, "chi_c_deg": CHI_TO_DEG, "xi_0": XI_FIG23, "outcome": run.outcome,
-              "units": "SI, angles rad, xi_G unwrapped"},
+              "units": "SI, angles deg, rates deg/s, xi_G unwrapped"},
     )  # fmt: skip
     summary["transient"] = {
         "Fn": fn_above,
@@ -295,20 +315,17 @@ def compute(
         "roll_end_deg": float(deg(x[-1, i["phi"]])),
         "rudder_end_deg": float(deg(x[-1, i["delta"]])),
     }
-    fig = new_figure((9.0, 7.0))
+    q = paper_quantities(x, model.state_names, c, L)
+    fig = new_figure((9.0, 7.6))
     ax = fig.subplots(2, 2).ravel()
-    ax[0].plot(x[:, i["xi_G"]], x[:, i["u"]] / c, lw=0.8)
-    ax[0].set_xlabel("xi_G / lambda (unwrapped)")
-    ax[0].set_ylabel("u / c")
-    ax[0].set_title("Fig. 17", fontsize=8)
-    ax[1].plot(deg(x[:, i["chi"]]), x[:, i["u"]] / c, lw=0.8)
-    ax[1].set_xlabel("heading angle chi (deg)")
-    ax[1].set_ylabel("u / c")
-    ax[1].set_title("Fig. 18", fontsize=8)
-    ax[2].plot(deg(x[:, i["phi"]]), deg(x[:, i["chi"]]), lw=0.8)
-    ax[2].set_xlabel("roll angle phi (deg)")
-    ax[2].set_ylabel("heading angle chi (deg)")
-    ax[2].set_title("Fig. 19", fontsize=8)
+    for k, (qx, qy, n) in enumerate(
+        (("xi_unwrapped", "u_c", 17), ("chi", "r_nd", 18), ("phi", "p_nd", 19))
+    ):
+        ax[k].plot(q[qx], q[qy], lw=0.8)
+        ax[k].plot(q[qx][-1], q[qy][-1], "x", color="tab:red", ms=8)
+        ax[k].set_xlabel(PLANE_LABELS[qx])
+        ax[k].set_ylabel(PLANE_LABELS[qy])
+        ax[k].set_title(f"Fig. {n}", fontsize=8)
     tn = tr.t * c / L
     for n, lab in (("chi", "heading"), ("phi", "roll"), ("delta", "rudder")):
         ax[3].plot(tn, deg(x[:, i[n]]), lw=0.9, label=f"{lab} angle")
@@ -316,7 +333,7 @@ def compute(
     ax[3].set_xlabel("nondimensional time t c / L")
     ax[3].set_ylabel("angle (deg)")
     ax[3].set_title("Fig. 20 (final stage)", fontsize=8)
-    ax[3].legend(fontsize=7)
+    ax[3].legend(fontsize=7, loc="upper left")
     fig.suptitle(
         f"Transient just above the boundary: Fn = {fn_above:.6f}, chi_c = {CHI_TO_DEG:g} deg, "
         f"from the (0.1, 0 deg) orbit at (xi_G/lambda)_0 = {XI_FIG23:g}: {run.outcome}",
@@ -326,28 +343,29 @@ def compute(
 
     say("Fig. 21: final stage beside the unstable manifold of the crest saddle")
     man = unstable_manifold(model, pt, "crest", t_max=300.0)
-    fig = new_figure((9.0, 3.8))
+    fig = new_figure((9.0, 4.4))
     ax = fig.subplots(1, 2)
     xi_end = x[-1, i["xi_G"]]
     last = tr.t >= tr.t[-1] - 60.0
     lab = "numerical experiment (last 60 s)"
     sq = {"ms": 2.5, "mfc": "none", "color": "tab:orange", "label": lab}
-    ax[0].plot(x[last, i["xi_G"]] - math.floor(xi_end), x[last, i["u"]] / c, "s", **sq)
-    ax[1].plot(deg(x[last, i["chi"]]), deg(x[last, i["phi"]]), "s", **sq)
+    ax[0].plot(q["xi_unwrapped"][last] - math.floor(xi_end), q["u_c"][last], "s", **sq)
+    ax[1].plot(q["chi"][last], q["r_nd"][last], "s", **sq)
     man_json = {}
     for name, br in man.branches.items():
-        y = br.trajectory.x
+        y = np.asarray(br.trajectory.x)
+        qm = paper_quantities(y, model.state_names, c, L)
         col = "k" if name == "downslope" else "tab:gray"
-        ax[0].plot(y[:, i["xi_G"]] - math.floor(y[0, i["xi_G"]]), y[:, i["u"]] / c, "-", color=col,
-                   lw=1.0, label=f"unstable manifold, {name} ({br.fate.label})")  # fmt: skip
-        ax[1].plot(deg(y[:, i["chi"]]), deg(y[:, i["phi"]]), "-", color=col, lw=1.0,
-                   label=f"unstable manifold, {name}")  # fmt: skip
+        style = {"color": col, "lw": 1.0, "label": f"unstable manifold, {name} ({br.fate.label})"}
+        ax[0].plot(qm["xi_unwrapped"] - math.floor(y[0, i["xi_G"]]), qm["u_c"], "-", **style)
+        style["label"] = None
+        ax[1].plot(qm["chi"], qm["r_nd"], "-", **style)
         man_json[name] = br.fate.label
-    ax[0].set_xlabel("xi_G / lambda (shifted to one wave)")
-    ax[0].set_ylabel("u / c")
-    ax[1].set_xlabel("heading angle chi (deg)")
-    ax[1].set_ylabel("roll angle phi (deg)")
-    ax[0].legend(fontsize=6.5)
+    ax[0].set_xlabel(PLANE_LABELS["xi"] + " (one wave)")
+    ax[0].set_ylabel(PLANE_LABELS["u_c"])
+    ax[1].set_xlabel(PLANE_LABELS["chi"])
+    ax[1].set_ylabel(PLANE_LABELS["r_nd"])
+    fig.legend(loc="outside lower center", ncol=3, fontsize=7, frameon=False)
     fig.suptitle(f"Final stage vs unstable manifold of the crest saddle, Fn = {fn_above:.6f} "
                  "(cf. Fig. 21)", fontsize=9)  # fmt: skip
     save_figure(fig, out / "fig21_final_stage.png")
@@ -355,10 +373,10 @@ def compute(
 
     summary["figures"] = [
         "fig16_map.png", "fig17_20_transient.png", "fig21_final_stage.png", "fig22_map.png",
-        "fig23_squares.png",
+        "fig23_critical_condition.png",
     ]  # fmt: skip
     summary["seconds"] = round(time.perf_counter() - t_all, 2)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+    write_json(out / "summary.json", summary, default=float)
     return summary
 
 

@@ -15,7 +15,7 @@ wavelength back). Here it is solved directly (:mod:`ship_models.analysis.critica
   ``studies/README.md``).
 
 Writes to ``--out`` (default ``out/fig21_23``): ``fig21_connection.png``,
-``fig23_critical_curve.png``, ``critical_curve.csv``, ``connection_orbit_10deg.csv``,
+``critical_curve_methods.png``, ``critical_curve.csv``, ``connection_orbit_10deg.csv``,
 ``methods_10deg.csv``, ``bisection_checks.csv``, ``summary.json``.
 
 Run: ``python studies/fig21_23_connection.py [--out DIR] [--quick]``.
@@ -34,12 +34,21 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script or loaded by path: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from _common import new_figure, save_csv, save_figure, save_table
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ship_models.paper import PAPER_FN_BRACKET
+from studies._common import (
+    PLANE_LABELS,
+    new_figure,
+    paper_quantities,
+    save_csv,
+    save_figure,
+    save_table,
+    state_columns,
+    write_atomic,
+    write_json,
+)
 
 CHI_C_DEG = 10.0
 PAPER_FN = PAPER_FN_BRACKET
@@ -47,29 +56,22 @@ CHECK_COURSES_DEG = (0.0, 20.0, 30.0)
 
 
 def _planes(model: Any, c: float) -> list[tuple[str, str, Callable[[np.ndarray], tuple]]]:
-    """The paper's projection planes (Figs. 10-15): (x label, y label, mapping)."""
-    i = {n: model.state_index(n) for n in model.state_names}
+    """The paper's planes (Figs. 10-13): (x label, y label, mapping of states (N, 8))."""
+    L = float(model.forces.L)
+    names = model.state_names
 
-    def d(a: np.ndarray) -> np.ndarray:
-        return np.degrees(a)
+    def plane(qx: str, qy: str) -> Callable[[np.ndarray], tuple]:
+        def f(x: np.ndarray) -> tuple:
+            q = paper_quantities(x, names, c, L)
+            return q[qx], q[qy]
 
-    def xi_u(x: np.ndarray) -> tuple:
-        return x[:, i["xi_G"]], x[:, i["u"]] / c
-
-    def u_chi(x: np.ndarray) -> tuple:
-        return x[:, i["u"]] / c, d(x[:, i["chi"]])
-
-    def chi_phi(x: np.ndarray) -> tuple:
-        return d(x[:, i["chi"]]), d(x[:, i["phi"]])
-
-    def delta_phi(x: np.ndarray) -> tuple:
-        return d(x[:, i["delta"]]), d(x[:, i["phi"]])
+        return f
 
     return [
-        ("xi_G / lambda", "u / c", xi_u),
-        ("u / c", "heading chi (deg)", u_chi),
-        ("heading chi (deg)", "roll phi (deg)", chi_phi),
-        ("rudder delta (deg)", "roll phi (deg)", delta_phi),
+        (PLANE_LABELS["xi_unwrapped"], PLANE_LABELS["u_c"], plane("xi_unwrapped", "u_c")),
+        (PLANE_LABELS["chi"], PLANE_LABELS["r_nd"], plane("chi", "r_nd")),
+        (PLANE_LABELS["xi_unwrapped"], PLANE_LABELS["chi"], plane("xi_unwrapped", "chi")),
+        (PLANE_LABELS["phi"], PLANE_LABELS["p_nd"], plane("phi", "p_nd")),
     ]
 
 
@@ -124,8 +126,15 @@ def compute(
     o = conn.orbit
     save_csv(
         out / "connection_orbit_10deg.csv",
-        {"t": o.t, **{n: o.state(n) for n in o.state_names}},
-        meta={"Fn_critical": conn.Fn, "chi_c_deg": CHI_C_DEG, "units": "SI, angles rad"},
+        {
+            "t": o.t,
+            **state_columns(o.state_names, np.column_stack([o.state(n) for n in o.state_names])),
+        },
+        meta={
+            "Fn_critical": conn.Fn,
+            "chi_c_deg": CHI_C_DEG,
+            "units": "SI, angles deg, rates deg/s",
+        },
     )
 
     # ---- Fig. 21 idea: the connection beside the manifold on both sides
@@ -149,7 +158,7 @@ def compute(
         ),
     }
     c = model.celerity(p10)
-    fig = new_figure((9.0, 6.6))
+    fig = new_figure((9.0, 7.4))
     axes = fig.subplots(2, 2).ravel()
     for ax, (xl, yl, f) in zip(axes, _planes(model, c), strict=True):
         for (label, x), col in zip(runs.items(), ("tab:green", "tab:red"), strict=True):
@@ -160,7 +169,8 @@ def compute(
         ax.plot(*f(ends), "ko", ms=5, mfc="w", label="crest saddle and its shift")
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
-    axes[0].legend(fontsize=6.5, loc="lower left")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=2,
+               fontsize=7, frameon=False)  # fmt: skip
     fig.suptitle(
         f"Connecting orbit at the critical Fn, chi_c = {CHI_C_DEG:g} deg "
         "(cf. Umeda 1999, Figs. 10-15, 21)"
@@ -172,7 +182,7 @@ def compute(
     courses = np.radians(np.arange(0.0, 31.0, 5.0 if quick else 1.0))
     curve = critical_curve(courses, model=model, start=conn)
     say(f"  {curve.message} ({curve.elapsed:.2f} s)")
-    curve.to_csv(out / "critical_curve.csv")
+    write_atomic(out / "critical_curve.csv", curve.to_csv)
     summary["curve"] = {
         "chi_c_deg": [round(float(v), 9) for v in curve.chi_c_deg],
         "Fn": [float(v) for v in curve.Fn],
@@ -191,26 +201,24 @@ def compute(
         checks,
     )
     summary["bisection_checks"] = checks
-    fig = new_figure((5.6, 3.9))
+    fig = new_figure((5.6, 4.4))
     ax = fig.subplots()
     ok = curve.converged
-    ax.plot(curve.chi_c_deg[ok], curve.Fn[ok], "o-", ms=3.5, label="heteroclinic connection (BVP)")
+    ax.plot(curve.chi_c_deg[ok], curve.Fn[ok], "-", color="k", lw=1.0,
+            label="continued heteroclinic connection (BVP)")  # fmt: skip
     ax.plot(
-        [r[0] for r in checks], [r[1] for r in checks], "s", mfc="none", ms=8, color="tab:orange",
-        label="bisection on the manifold's fate (simulation)",
-    )  # fmt: skip
-    ax.errorbar(
-        [CHI_C_DEG], [np.mean(PAPER_FN)], yerr=[0.5 * (PAPER_FN[1] - PAPER_FN[0])], fmt="D",
-        color="tab:red", ms=5, label="Umeda (1999), measured coefficients",
+        [r[0] for r in checks], [r[1] for r in checks], "^", mfc="none", ms=8, color="tab:purple",
+        label="bisection on the unstable manifold's fate (simulation)",
     )  # fmt: skip
     ax.set_xlabel("autopilot course chi_c (deg)")
     ax.set_ylabel("critical nominal Froude number")
-    ax.set_title("Critical Fn for capsizing due to broaching (cf. Fig. 23)", fontsize=9)
-    ax.legend(fontsize=7, loc="center left")
-    save_figure(fig, out / "fig23_critical_curve.png")
-    summary["figures"] = ["fig21_connection.png", "fig23_critical_curve.png"]
+    ax.ticklabel_format(axis="y", useOffset=False)
+    ax.set_title("Critical Fn by two methods (the combined Fig. 23 is in fig16_22)", fontsize=9)
+    fig.legend(loc="outside lower center", ncol=1, fontsize=7, frameon=False)
+    save_figure(fig, out / "critical_curve_methods.png")
+    summary["figures"] = ["fig21_connection.png", "critical_curve_methods.png"]
     summary["seconds"] = round(time.perf_counter() - t_all, 2)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    write_json(out / "summary.json", summary)
     return summary
 
 

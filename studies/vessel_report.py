@@ -37,14 +37,13 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from _common import figure_style, new_figure, output_dir, save_csv, save_figure, save_table
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ship_models import get_vessel_data
 from ship_models.estimation import VesselModelData
 from ship_models.hydro.hydrostatics import is_code_criteria
+from studies._common import figure_style, new_figure, output_dir, save_csv, save_figure, save_table
 
 STATUSES = ("given", "measured", "estimated", "assumed")
 STATUS_COLORS = {

@@ -22,7 +22,7 @@ def test_critical_both_methods_agree(capsys: pytest.CaptureFixture[str]) -> None
     assert hi - lo <= 1e-5
     assert out["bisection"]["fate_lo"] != out["bisection"]["fate_hi"]
     # the connecting orbit lies in the bisection bracket (to the bracket's own width)
-    assert lo - 1e-5 <= out["fn_critical"] <= hi + 1e-5
+    assert lo - 1e-5 <= out["Fn"] <= hi + 1e-5
     assert abs(out["difference"]) < 1e-4
     assert out["bvp"]["residual_norm"] < 1e-8
     # mesh and truncation-time refinement move the answer by less than 1e-6

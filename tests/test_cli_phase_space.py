@@ -109,7 +109,7 @@ def test_critical_json_matches_library(capsys, model):
         model, chi_c=math.radians(10.0), method="bisection", Fn_bracket=(0.30, 0.305), tol=1e-3
     )
     assert (lo, hi) == ref.bracket
-    assert res["fn_critical"] == ref.Fn
+    assert res["Fn"] == ref.Fn
     with pytest.raises(SystemExit):
         main(["critical", "--method", "shooting"])
     capsys.readouterr()
@@ -118,7 +118,7 @@ def test_critical_json_matches_library(capsys, model):
 
 
 def test_reproduce_runs_and_skips_finished_steps(capsys, tmp_path):
-    code = main(["reproduce", "--out", str(tmp_path), "--only", "fig06_09"])
+    code = main(["reproduce", "--out", str(tmp_path), "--only", "fig06_09", "--json"])
     assert code == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["steps"] == ["fig06_09"] and "fig06_09" in summary["seconds"]
@@ -128,7 +128,7 @@ def test_reproduce_runs_and_skips_finished_steps(capsys, tmp_path):
     data = json.loads((step / "summary.json").read_text())
     assert data["points"]["crest"]["saddle_index"] == 1
     mtime = (step / "summary.json").stat().st_mtime_ns
-    assert main(["reproduce", "--out", str(tmp_path), "--only", "fig06_09"]) == 0
+    assert main(["reproduce", "--out", str(tmp_path), "--only", "fig06_09", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["seconds"] == {}  # skipped
     assert (step / "summary.json").stat().st_mtime_ns == mtime
     assert main(["reproduce", "--out", str(tmp_path), "--only", "nonsense"]) == 2

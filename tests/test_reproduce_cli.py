@@ -20,7 +20,7 @@ def test_reproduce_runs_writes_and_resumes(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "out"
-    assert main(["reproduce", "--out", str(out), "--only", "demo", "fig06_09"]) == 0
+    assert main(["reproduce", "--out", str(out), "--only", "demo", "fig06_09", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["steps"] == ["demo", "fig06_09"]
     demo = json.loads((out / "demo" / "summary.json").read_text())
@@ -36,7 +36,7 @@ def test_reproduce_runs_writes_and_resumes(
     assert list((out / "fig06_09").glob("*.png"))
     assert list((out / "fig06_09").glob("*.csv"))
     # a second run skips the finished steps and reports the same results
-    assert main(["reproduce", "--out", str(out), "--only", "demo", "fig06_09"]) == 0
+    assert main(["reproduce", "--out", str(out), "--only", "demo", "fig06_09", "--json"]) == 0
     again = json.loads(capsys.readouterr().out)
     assert again["steps"] == ["demo", "fig06_09"]
     assert again["seconds"] == {}

@@ -17,9 +17,15 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from ship_models.paper import PAPER_FN
-
-from .fixed_points import add_ship_arguments, ship_from_args
+from ..options import (
+    add_fn_guess,
+    add_ship,
+    check_fn,
+    finite,
+    json_safe,
+    ship_from_args,
+)
+from ..progress import StatusLine
 
 NAME = "critical"
 HELP = "critical Fn of capsizing due to broaching (heteroclinic bifurcation) at one course"
@@ -28,21 +34,27 @@ HELP = "critical Fn of capsizing due to broaching (heteroclinic bifurcation) at 
 def _bisection(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
     from ship_models.analysis.critical import critical_fn
 
-    def progress(ev: Any) -> None:
-        if not args.json:
-            sys.stderr.write(f"  Fn = {ev.Fn:.8f}: {ev.outcome or 'undecided'}\n")
+    with StatusLine(enabled=not args.json) as status:
+        res = critical_fn(
+            model,
+            params,
+            method="bisection",
+            Fn_bracket=(args.Fn_min, args.Fn_max),
+            tol=args.tol,
+            progress=lambda ev: status.show(
+                f"bisection: Fn = {ev.Fn:.8f}: {ev.outcome or 'undecided'}"
+            ),
+            t_max=args.t_max,
+            criterion=args.criterion,
+        )
+    return _with_fn(res.to_json(), res.Fn)
 
-    res = critical_fn(
-        model,
-        params,
-        method="bisection",
-        Fn_bracket=(args.fn_min, args.fn_max),
-        tol=args.tol,
-        progress=progress,
-        t_max=args.t_max,
-        criterion=args.criterion,
-    )
-    return {"fn_critical": res.Fn, **res.to_json()}
+
+def _with_fn(doc: dict[str, Any], Fn: float) -> dict[str, Any]:
+    """The result's JSON with the critical value under its one name, ``"Fn"``."""
+    doc = {k: v for k, v in doc.items() if k != "fn_critical"}
+    doc["Fn"] = Fn
+    return doc
 
 
 def _bvp(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
@@ -52,11 +64,11 @@ def _bvp(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
         model,
         params,
         method="bvp",
-        Fn_guess=args.fn_guess,
-        guess_bracket=(args.fn_min, args.fn_max),
+        Fn_guess=args.Fn_guess,
+        guess_bracket=(args.Fn_min, args.Fn_max),
         check=True,
     )
-    return {"method": "bvp", "fn_critical": res.Fn, **res.to_json()}
+    return _with_fn({"method": "bvp", **res.to_json()}, res.Fn)
 
 
 def _both(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
@@ -65,9 +77,9 @@ def _both(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
     ok = bvp["status"] == "SUCCESS" and bis["status"] == "SUCCESS"
     return {
         "method": "both",
-        "fn_critical": bvp["fn_critical"],
+        "Fn": bvp["Fn"],
         "bracket": bis["bracket"],
-        "difference": bvp["fn_critical"] - bis["fn_critical"],
+        "difference": bvp["Fn"] - bis["Fn"],
         "status": "SUCCESS"
         if ok
         else (bvp["status"] if bis["status"] == "SUCCESS" else bis["status"]),
@@ -86,18 +98,17 @@ METHODS: dict[str, Callable[[Any, Any, argparse.Namespace], dict[str, Any]]] = {
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``broachkit critical``."""
-    add_ship_arguments(parser, fn=False)
+    add_ship(parser, fn=False)
     parser.add_argument(
         "--method", choices=sorted(METHODS), default="bisection", help="how to locate it"
     )
+    add_fn_guess(parser)
     parser.add_argument(
-        "--fn-guess",
-        type=float,
-        default=PAPER_FN,
-        help=f"bvp: Fn of the unstable-manifold simulation that seeds the orbit ({PAPER_FN})",
+        "--fn-min", dest="Fn_min", type=float, default=0.25, help="lower end of the Fn search"
     )
-    parser.add_argument("--fn-min", type=float, default=0.25, help="lower end of the Fn search")
-    parser.add_argument("--fn-max", type=float, default=0.40, help="upper end of the Fn search")
+    parser.add_argument(
+        "--fn-max", dest="Fn_max", type=float, default=0.40, help="upper end of the Fn search"
+    )
     parser.add_argument("--tol", type=float, default=1e-5, help="bracket width in Fn (1e-5)")
     parser.add_argument(
         "--criterion",
@@ -116,35 +127,54 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Locate the critical Fn; returns 0 on success, 1 otherwise."""
-    for opt in ("fn_min", "fn_max", "tol", "t_max", "fn_guess"):
-        val = getattr(args, opt)
-        if not (math.isfinite(val) and val > 0):
-            raise ValueError(f"--{opt.replace('_', '-')} must be positive, got {val}")
-    if not args.fn_min < args.fn_max:
-        raise ValueError(f"--fn-min must be below --fn-max, got {args.fn_min}, {args.fn_max}")
+    finite("--fn-min", args.Fn_min, low=0.0)
+    finite("--fn-max", args.Fn_max, low=0.0)
+    if not args.Fn_min < args.Fn_max:
+        raise ValueError(f"--fn-min must be below --fn-max, got {args.Fn_min}, {args.Fn_max}")
+    finite("--tol", args.tol, low=0.0, high=args.Fn_max - args.Fn_min)
+    finite("--t-max", args.t_max, low=0.0, high=1e5, unit="s")
     model, params = ship_from_args(args)
+    check_fn(model, "--fn-min", args.Fn_min)
+    check_fn(model, "--fn-max", args.Fn_max)
+    if args.Fn_guess is not None:
+        check_fn(model, "--fn-guess", args.Fn_guess)
     result = {"vessel": model.vessel.name, **METHODS[args.method](model, params, args)}
     if args.json:
-        sys.stdout.write(json.dumps(result, indent=2) + "\n")
+        sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
+    elif result["status"] != "SUCCESS" and not math.isfinite(result.get("Fn") or math.nan):
+        sys.stderr.write(
+            f"broachkit critical: no critical Fn in --fn-min/--fn-max = [{args.Fn_min:g}, "
+            f"{args.Fn_max:g}] at chi_c = {args.chi_c:g} deg ({args.method}, "
+            f"{result['status']}): {_reason(result)}\n"
+        )
     else:
         head = f"{model.vessel.name}, chi_c = {args.chi_c:g} deg ({args.method}): "
         if args.method == "bisection":
             lo, hi = result["bracket"]
             text = (
-                f"critical Fn = {result['fn_critical']:.7f} in [{lo:.7f}, {hi:.7f}] "
+                f"critical Fn = {result['Fn']:.7f} in [{lo:.7f}, {hi:.7f}] "
                 f"({result['fate_lo']} below, {result['fate_hi']} above)"
             )
         elif args.method == "bvp":
             text = (
-                f"critical Fn = {result['fn_critical']:.8f} (connecting orbit, "
+                f"critical Fn = {result['Fn']:.8f} (connecting orbit, "
                 f"|G| = {result['residual_norm']:.1e}, mesh change {result.get('delta_Fn_mesh')}, "
                 f"T change {result.get('delta_Fn_T')})"
             )
         else:
             lo, hi = result["bracket"]
             text = (
-                f"bvp Fn = {result['fn_critical']:.8f}; bisection bracket "
+                f"bvp Fn = {result['Fn']:.8f}; bisection bracket "
                 f"[{lo:.7f}, {hi:.7f}]; difference {result['difference']:.1e}"
             )
         sys.stdout.write(head + text + f"; {result['status']}\n")
     return 0 if result["status"] == "SUCCESS" else 1
+
+
+def _reason(result: dict[str, Any]) -> str:
+    """The one-line reason of a failed search (the library's message)."""
+    for part in (result, result.get("bisection") or {}, result.get("bvp") or {}):
+        msg = part.get("message")
+        if msg:
+            return " ".join(str(msg).split())
+    return "the method gave no answer"

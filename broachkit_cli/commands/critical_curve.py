@@ -24,6 +24,20 @@ from typing import Any
 
 import numpy as np
 
+from ..files import write_atomic, write_json
+from ..options import (
+    CHI_C_MAX_DEG,
+    add_fn_guess,
+    add_json,
+    add_out,
+    add_vessel,
+    add_wave,
+    json_safe,
+    prepare_out,
+    ship_from_args,
+)
+from ..progress import StatusLine
+
 NAME = "critical-curve"
 HELP = "critical Fn against the autopilot course by continuing the heteroclinic connection"
 
@@ -53,8 +67,10 @@ def parse_courses(text: str) -> np.ndarray:
         raise ValueError(
             f"--chi-c must be 'start:stop[:step]' or a comma list of degrees, got {text!r}"
         ) from None
-    if deg.size == 0 or not np.all(np.isfinite(deg)) or np.any(np.abs(deg) >= 85.0):
-        raise ValueError(f"--chi-c courses must be finite and within +-85 deg, got {text!r}")
+    if deg.size == 0 or not np.all(np.isfinite(deg)) or np.any(np.abs(deg) >= CHI_C_MAX_DEG):
+        raise ValueError(
+            f"--chi-c courses must be finite and within +-{CHI_C_MAX_DEG:g} deg, got {text!r}"
+        )
     if deg.size > 1000:
         raise ValueError(f"--chi-c gives {deg.size} courses; at most 1000")
     return deg
@@ -64,41 +80,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``broachkit critical-curve``."""
     parser.add_argument(
         "--chi-c",
+        dest="chi_c",
         default="0:30",
         help="courses in degrees: 'start:stop[:step]' (step 1) or 'a,b,c' (default 0:30)",
     )
-    parser.add_argument(
-        "--vessel",
-        default="purse_seiner",
-        help="vessel name or path of a vessel TOML file (default: purse_seiner)",
-    )
-    parser.add_argument(
-        "--h-over-lambda", type=float, default=None, help="wave steepness (default: vessel)"
-    )
-    parser.add_argument(
-        "--lambda-over-l",
-        type=float,
-        default=None,
-        help="wavelength / ship length (default: vessel)",
-    )
-    parser.add_argument(
-        "--fn-guess",
-        type=float,
-        default=None,
-        help="Fn of the simulated manifold used as the first guess (default: vessel's Fn)",
-    )
-    parser.add_argument(
-        "--out", type=Path, default=None, help="folder for the CSV, JSON and PNG (optional)"
-    )
-    parser.add_argument("--json", action="store_true", help="print the result as JSON")
+    add_vessel(parser)
+    add_wave(parser)
+    add_fn_guess(parser)
+    add_out(parser, None, "the CSV, JSON and PNG (optional)")
+    add_json(parser)
 
 
 def _ship(args: argparse.Namespace) -> tuple[Any, Any]:
-    from broachkit_cli.commands.fixed_points import ship_from_args
-
     ns = argparse.Namespace(**vars(args))
     ns.chi_c = 0.0
-    ns.fn = args.fn_guess
+    ns.Fn = args.Fn_guess
     return ship_from_args(ns)
 
 
@@ -134,17 +130,18 @@ def run(args: argparse.Namespace) -> int:
     from ship_models.analysis.critical_curve import critical_curve
 
     deg = parse_courses(str(args.chi_c))
+    out = prepare_out(args.out)
     model, params = _ship(args)
     t0 = time.perf_counter()
-    last = [t0]
-
-    def progress(pt: Any) -> None:
-        now = time.perf_counter()
-        if now - last[0] > 2.0 and not args.json:
-            sys.stderr.write(f"  chi_c = {math.degrees(float(pt.p)):.2f} deg\n")
-            last[0] = now
-
-    curve = critical_curve(np.radians(deg), model=model, params=params, progress=progress)
+    with StatusLine(enabled=not args.json) as status:
+        curve = critical_curve(
+            np.radians(deg),
+            model=model,
+            params=params,
+            progress=lambda pt: status.show(
+                f"continuing the connection: chi_c = {math.degrees(float(pt.p)):.2f} deg"
+            ),
+        )
     elapsed = time.perf_counter() - t0
     result = {
         "vessel": model.vessel.name,
@@ -154,16 +151,14 @@ def run(args: argparse.Namespace) -> int:
         "elapsed_s": elapsed,
         **curve.to_json(),
     }
-    if args.out is not None:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        curve.to_csv(out / "critical_curve.csv")
-        (out / "critical_curve.json").write_text(json.dumps(result, indent=2))
-        plot_curve(curve, out / "critical_curve.png")
+    if out is not None:
+        write_atomic(out / "critical_curve.csv", curve.to_csv)
+        write_json(out / "critical_curve.json", result)
+        write_atomic(out / "critical_curve.png", lambda p: plot_curve(curve, p))
         result["files"] = [str(out / n) for n in ("critical_curve.csv", "critical_curve.json",
                                                   "critical_curve.png")]  # fmt: skip
     if args.json:
-        sys.stdout.write(json.dumps(result, indent=2) + "\n")
+        sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
     else:
         sys.stdout.write(
             f"{model.vessel.name}: critical Fn by continuing the heteroclinic connection "

@@ -10,14 +10,17 @@ from typing import Any
 
 import numpy as np
 
+from ..files import write_atomic, write_atomic_group, write_json
+from ..options import add_json, add_out, json_safe, prepare_out
+
 NAME = "demo"
 HELP = "continue the Bratu problem (fold) and the Brusselator (Hopf); write figures and data"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``broachkit demo``."""
-    parser.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
-    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_out(parser, "out/demo", "the branches and the figure")
+    add_json(parser)
 
 
 def _bratu_system(n: int) -> Any:
@@ -73,8 +76,8 @@ def compute(out: Path) -> dict[str, Any]:
         max_steps=300,
         events=(Event("max_u_10", lambda x, p: float(np.max(x)) - 10.0, terminal=True),),
     )
-    br.save(out / "bratu50_branch.npz")
-    br.to_csv(out / "bratu50_branch.csv")
+    write_atomic_group(out, lambda d: br.save(d / "bratu50_branch.npz"))
+    write_atomic(out / "bratu50_branch.csv", br.to_csv)
     summary["bratu50"] = {
         "status": br.status.name,
         "folds": [sp.p for sp in br.find("fold")],
@@ -92,8 +95,8 @@ def compute(out: Path) -> dict[str, Any]:
         p_max=3.0,
         direction="forward",
     )
-    bb.save(out / "brusselator_branch.npz")
-    bb.to_csv(out / "brusselator_branch.csv")
+    write_atomic_group(out, lambda d: bb.save(d / "brusselator_branch.npz"))
+    write_atomic(out / "brusselator_branch.csv", bb.to_csv)
     summary["brusselator"] = {
         "status": bb.status.name,
         "hopf": [{"B": sp.p, "omega": sp.data.get("omega")} for sp in bb.find("hopf")],
@@ -110,17 +113,19 @@ def compute(out: Path) -> dict[str, Any]:
     axes[1].set_ylabel("y")
     axes[1].set_title("Brusselator, A = 1 (Hopf at B = 2)")
     fig.tight_layout()
-    fig.savefig(out / "demo.png", dpi=120)
+    write_atomic(out / "demo.png", lambda p: fig.savefig(p, dpi=120))
     plt.close(fig)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    summary["figures"] = ["demo.png"]
+    write_json(out / "summary.json", summary)
     return summary
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``broachkit demo``."""
-    summary = compute(args.out)
+    out = prepare_out(args.out)
+    summary = compute(out)
     if args.json:
-        sys.stdout.write(json.dumps(summary, indent=2) + "\n")
+        sys.stdout.write(json.dumps(json_safe(summary), indent=2) + "\n")
     else:
         for name, s in summary.items():
             sys.stdout.write(f"{name}: {s}\n")

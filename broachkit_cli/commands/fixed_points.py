@@ -5,8 +5,7 @@ list ``fixed_points``: for each point its state (angles also in degrees), all
 eigenvalues (dimensional 1/s and in the paper's time ``t' = t c / L``), saddle index
 and unstable eigenvector (nondimensional, max-norm 1, sign: ``xi_G`` component > 0).
 
-Also holds the ship options shared by ``manifold`` and ``critical``
-(:func:`add_ship_arguments`, :func:`ship_from_args`).
+The ship options are the shared ones of :mod:`broachkit_cli.options`.
 """
 
 from __future__ import annotations
@@ -15,74 +14,16 @@ import argparse
 import json
 import math
 import sys
-from typing import Any
 
-from ship_models.paper import PAPER_FN
+from ..options import add_ship, json_safe, ship_from_args
 
 NAME = "fixed-points"
 HELP = "fixed points (surf-riding equilibria) of the ship at one Fn and autopilot course"
 
 
-def add_ship_arguments(parser: argparse.ArgumentParser, *, fn: bool = True) -> None:
-    """Vessel, control and wave options shared by the phase-space commands."""
-    parser.add_argument(
-        "--vessel",
-        default="purse_seiner",
-        help="vessel name or path of a vessel TOML file (default: purse_seiner)",
-    )
-    if fn:
-        parser.add_argument(
-            "--fn", type=float, default=PAPER_FN, help=f"nominal Froude number (default {PAPER_FN})"
-        )
-    parser.add_argument(
-        "--chi-c", type=float, default=10.0, help="autopilot course in degrees (default 10)"
-    )
-    parser.add_argument(
-        "--h-over-lambda",
-        type=float,
-        default=None,
-        help="wave steepness H/lambda (default: vessel)",
-    )
-    parser.add_argument(
-        "--lambda-over-l",
-        type=float,
-        default=None,
-        help="wavelength over ship length (default: vessel)",
-    )
-    parser.add_argument("--json", action="store_true", help="print the result as JSON")
-
-
-def ship_from_args(args: argparse.Namespace) -> tuple[Any, Any]:
-    """Build the ship model and its parameters from the shared options.
-
-    Raises
-    ------
-    ValueError
-        For a non-finite or out-of-range option (naming it).
-    """
-    from ship_models import Umeda4DOF
-
-    chi = float(args.chi_c)
-    if not (math.isfinite(chi) and abs(chi) < 85.0):
-        raise ValueError(f"--chi-c must be a course in degrees within +-85, got {args.chi_c}")
-    model = Umeda4DOF(args.vessel)
-    changes: dict[str, float] = {"chi_c": math.radians(chi)}
-    if getattr(args, "fn", None) is not None:
-        if not (math.isfinite(args.fn) and args.fn > 0):
-            raise ValueError(f"--fn must be a positive Froude number, got {args.fn}")
-        changes["Fn"] = float(args.fn)
-    for opt, name in (("h_over_lambda", "H_over_lambda"), ("lambda_over_l", "lambda_over_L")):
-        val = getattr(args, opt, None)
-        if val is not None:
-            if not (math.isfinite(val) and val > 0):
-                raise ValueError(f"--{opt.replace('_', '-')} must be positive, got {val}")
-            changes[name] = float(val)
-    return model, model.default_params().replace(**changes)
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``broachkit fixed-points``."""
-    add_ship_arguments(parser)
+    add_ship(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -100,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
         "fixed_points": [fp.to_json() for fp in pts],
     }
     if args.json:
-        sys.stdout.write(json.dumps(result, indent=2) + "\n")
+        sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
     else:
         sys.stdout.write(
             f"{model.vessel.name}: Fn = {params['Fn']:.6g}, chi_c = {args.chi_c:g} deg: "

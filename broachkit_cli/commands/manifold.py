@@ -14,9 +14,10 @@ import argparse
 import json
 import math
 import sys
-from pathlib import Path
 
-from .fixed_points import add_ship_arguments, ship_from_args
+from ..files import write_atomic
+from ..options import add_out, add_ship, finite, json_safe, prepare_out, ship_from_args
+from ..progress import StatusLine
 
 NAME = "manifold"
 HELP = "unstable manifold of the crest saddle (both branches) and where each goes"
@@ -24,7 +25,7 @@ HELP = "unstable manifold of the crest saddle (both branches) and where each goe
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``broachkit manifold``."""
-    add_ship_arguments(parser)
+    add_ship(parser)
     parser.add_argument("--saddle", default="crest", help="label of the saddle (default crest)")
     parser.add_argument(
         "--eps", type=float, default=1e-6, help="nondimensional start distance (default 1e-6)"
@@ -38,53 +39,44 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="capsize roll angle in degrees (default: vanishing angle of GZ)",
     )
-    parser.add_argument("--out", type=Path, default=None, help="write the branches as CSV here")
+    add_out(parser, None, "the branches' time series as CSV")
 
 
 def run(args: argparse.Namespace) -> int:
     """Compute the manifold and print the fates; returns 0 (1 if a fate is undecided)."""
     from ship_models.analysis.manifold import unstable_manifold
 
-    model, params = ship_from_args(args)
-    if not (math.isfinite(args.t_max) and args.t_max > 0):
-        raise ValueError(f"--t-max must be a positive time in s, got {args.t_max}")
-    if not (math.isfinite(args.eps) and 0 < args.eps < 0.1):
-        raise ValueError(f"--eps must be in (0, 0.1), got {args.eps}")
+    finite("--t-max", args.t_max, low=0.0, high=1e5, unit="s")
+    finite("--eps", args.eps, low=0.0, high=0.1)
     angle = None
     if args.capsize_angle is not None:
-        if not (math.isfinite(args.capsize_angle) and 0 < args.capsize_angle <= 180):
-            raise ValueError(f"--capsize-angle must be in (0, 180] deg, got {args.capsize_angle}")
-        angle = math.radians(args.capsize_angle)
+        angle = math.radians(finite("--capsize-angle", args.capsize_angle, low=0.0, high=180.0))
+    out = prepare_out(args.out)
+    model, params = ship_from_args(args)
 
-    def progress(branch: str, t: float) -> None:
-        sys.stderr.write(f"\r{branch}: t = {t:8.1f} s ")
-        sys.stderr.flush()
-
-    man = unstable_manifold(
-        model,
-        params,
-        args.saddle,
-        eps=args.eps,
-        t_max=args.t_max,
-        capsize_angle=angle,
-        progress=None if args.json else progress,
-    )
-    if not args.json:
-        sys.stderr.write("\n")
+    with StatusLine(enabled=not args.json) as status:
+        man = unstable_manifold(
+            model,
+            params,
+            args.saddle,
+            eps=args.eps,
+            t_max=args.t_max,
+            capsize_angle=angle,
+            progress=lambda branch, t: status.show(f"{branch}: t = {t:8.1f} s"),
+        )
     result = {
         "vessel": model.vessel.name,
         "params": params.as_dict(),
         "chi_c_deg": math.degrees(params["chi_c"]),
         **man.to_json(),
     }
-    if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
+    if out is not None:
         files = {}
         for name, br in man.branches.items():
-            files[name] = str(br.trajectory.to_csv(args.out / f"manifold_{name}.csv"))
+            files[name] = str(write_atomic(out / f"manifold_{name}.csv", br.trajectory.to_csv))
         result["files"] = files
     if args.json:
-        sys.stdout.write(json.dumps(result, indent=2) + "\n")
+        sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
     else:
         sp = man.saddle
         sys.stdout.write(

@@ -23,6 +23,8 @@ import sys
 from collections import Counter
 from typing import Any
 
+from ..options import add_verbose
+
 NAME = "vessels"
 HELP = "list vessel models, show a vessel's coefficients with their sources, validate a file"
 
@@ -49,6 +51,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="check the file format and values only (do not run the estimation pipeline)",
     )
+    for action in sub.choices.values():
+        add_verbose(action)
 
 
 def _finite_or_none(x: Any) -> Any:

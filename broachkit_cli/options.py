@@ -1,0 +1,339 @@
+"""Options shared by the ``broachkit`` commands, and their checks.
+
+One place defines the common options (vessel, wave, autopilot course, Froude number,
+output folder, ``--json``, ``--verbose``) so that every command spells and checks
+them alike. Names follow the paper's symbols: the flag is the kebab-case of the
+library name and argparse's ``dest`` is the library name itself (``--fn`` ->
+``Fn``, ``--fn-guess`` -> ``Fn_guess``, ``--chi-c`` -> ``chi_c``, ``--h-over-lambda``
+-> ``H_over_lambda``). Degrees on the command line, radians in the library.
+
+Every check raises a one-line :class:`ValueError` naming the option; the entry
+point (:func:`broachkit_cli.main.main`) prints it and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+#: Largest autopilot course accepted (deg); beyond it the ship is no longer in
+#: following/quartering seas and the wave model's encounter assumptions fail.
+CHI_C_MAX_DEG = 85.0
+#: Plausible range of the wavelength-to-length ratio lambda/L (the strip wave
+#: forces and the paper's regime: 0.5 .. 3 in Umeda 1999).
+LAMBDA_OVER_L_RANGE = (0.2, 5.0)
+#: Largest vessel file read (bytes): a vessel file is a few kB.
+MAX_VESSEL_FILE_BYTES = 1_000_000
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An :class:`argparse.ArgumentParser` whose usage errors are one line (exit 2)."""
+
+    def error(self, message: str) -> Any:  # noqa: D102 - argparse's contract
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+# ---------------------------------------------------------------- adding options
+
+
+def add_verbose(parser: argparse.ArgumentParser) -> None:
+    """``-v/--verbose``: debug messages and tracebacks (accepted before or after COMMAND)."""
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="show library messages and the traceback of an error",
+    )
+
+
+def add_json(parser: argparse.ArgumentParser) -> None:
+    """``--json``: print the result as one JSON document on stdout."""
+    parser.add_argument("--json", action="store_true", help="print the result as JSON")
+
+
+def add_out(parser: argparse.ArgumentParser, default: str | None, what: str) -> None:
+    """``--out DIR`` (checked by :func:`prepare_out` before any computing)."""
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=None if default is None else Path(default),
+        help=f"folder for {what}" + ("" if default is None else f" (default {default})"),
+    )
+
+
+def add_vessel(parser: argparse.ArgumentParser) -> None:
+    """``--vessel NAME|FILE``."""
+    parser.add_argument(
+        "--vessel",
+        default="purse_seiner",
+        help="registered model name or path of a vessel TOML file (default: purse_seiner)",
+    )
+
+
+def add_wave(parser: argparse.ArgumentParser) -> None:
+    """``--h-over-lambda`` and ``--lambda-over-l`` (default: the vessel file's wave)."""
+    parser.add_argument(
+        "--h-over-lambda",
+        dest="H_over_lambda",
+        type=float,
+        default=None,
+        help="wave steepness H/lambda (default: the vessel's; at most 1/7, breaking)",
+    )
+    parser.add_argument(
+        "--lambda-over-l",
+        dest="lambda_over_L",
+        type=float,
+        default=None,
+        help="wavelength over ship length lambda/L (default: the vessel's)",
+    )
+
+
+def add_chi_c(parser: argparse.ArgumentParser, default: float = 10.0) -> None:
+    """``--chi-c DEG``: one autopilot course in degrees."""
+    parser.add_argument(
+        "--chi-c",
+        dest="chi_c",
+        type=float,
+        default=default,
+        help=f"autopilot course chi_c in degrees (default {default:g})",
+    )
+
+
+def add_fn(parser: argparse.ArgumentParser) -> None:
+    """``--fn``: the nominal Froude number (default: the model's, ``ship_models.paper.PAPER_FN``)."""
+    parser.add_argument(
+        "--fn",
+        dest="Fn",
+        type=float,
+        default=None,
+        help="nominal Froude number Fn (default: the model's)",
+    )
+
+
+def add_fn_guess(parser: argparse.ArgumentParser) -> None:
+    """``--fn-guess``: the Fn of the simulation that seeds a connecting orbit."""
+    parser.add_argument(
+        "--fn-guess",
+        dest="Fn_guess",
+        type=float,
+        default=None,
+        help="Fn of the unstable-manifold simulation that seeds the orbit (default: model's)",
+    )
+
+
+def add_ship(parser: argparse.ArgumentParser, *, fn: bool = True, chi_c: bool = True) -> None:
+    """Vessel, wave, course and (optionally) Fn options, plus ``--json``."""
+    add_vessel(parser)
+    if fn:
+        add_fn(parser)
+    if chi_c:
+        add_chi_c(parser)
+    add_wave(parser)
+    add_json(parser)
+
+
+# ---------------------------------------------------------------- checking
+
+
+def finite(name: str, value: float, *, low: float = -math.inf, high: float = math.inf,
+           low_open: bool = True, unit: str = "") -> float:  # fmt: skip
+    """``value`` as a float if finite and in ``(low, high]`` (``[low, high]``), else ValueError.
+
+    ``name`` is the option as the user typed it (``"--fn-max"``).
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    below = v <= low if low_open else v < low
+    if not math.isfinite(v) or below or v > high:
+        lo = "(" if low_open else "["
+        rng = f"{lo}{low:g}, {high:g}]"
+        raise ValueError(
+            f"{name} must be finite and in {rng}{' ' + unit if unit else ''}, got {value}"
+        )
+    return v
+
+
+def prepare_out(out: Path | str | None, name: str = "--out") -> Path | None:
+    """Create the output folder and prove it writable, before anything is computed.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` when the path is a file, cannot be created, or is not writable.
+    """
+    if out is None:
+        return None
+    p = Path(out)
+    if "\x00" in str(p):
+        raise ValueError(f"{name}: the path contains a NUL character")
+    if p.exists() and not p.is_dir():
+        raise ValueError(f"{name}: {p} exists and is not a folder")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".write-test-", dir=p)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ValueError(f"{name}: cannot write to {p} ({reason})") from None
+    return p
+
+
+def _check_vessel_name(name: str) -> None:
+    text = str(name)
+    if not text.strip():
+        raise ValueError("--vessel must name a vessel (see `broachkit vessels list`)")
+    if "\x00" in text:
+        raise ValueError("--vessel contains a NUL character")
+    if text.endswith(".toml") or "/" in text or os.sep in text:
+        p = Path(text)
+        if not p.is_file():
+            raise ValueError(f"--vessel: no vessel file {text!r}")
+        if p.stat().st_size > MAX_VESSEL_FILE_BYTES:
+            raise ValueError(f"--vessel: {text!r} is too large for a vessel file")
+
+
+def load_model(vessel: str) -> Any:
+    """The model of ``--vessel`` through :func:`ship_models.registry.get_model`.
+
+    Raises
+    ------
+    ValueError
+        Unknown name, unreadable or invalid vessel file (the message names the field).
+    """
+    from ship_models.registry import PluginError, get_model
+
+    _check_vessel_name(vessel)
+    try:
+        return get_model(vessel)
+    except PluginError as exc:
+        raise ValueError(f"--vessel {vessel!r}: {exc}") from exc
+    except ValueError as exc:
+        raise ValueError(f"--vessel {vessel!r}: {exc}") from exc
+    except OSError as exc:
+        raise ValueError(f"--vessel {vessel!r}: cannot read ({exc.strerror})") from exc
+
+
+def fn_limit(model: Any) -> float:
+    """Largest Fn the model is valid for: the vessel's R(u) fit range (or 1)."""
+    vessel = getattr(model, "vessel", None)
+    if vessel is not None and hasattr(vessel, "has") and vessel.has("resistance.Fn_max_fit"):
+        return float(vessel.get("resistance.Fn_max_fit"))
+    return 1.0
+
+
+def check_fn(model: Any, name: str, value: float) -> float:
+    """A Froude number within ``(0, fn_limit(model)]``, else ValueError naming ``name``."""
+    hi = fn_limit(model)
+    v = finite(name, value)
+    if not 0.0 < v <= hi:
+        raise ValueError(
+            f"{name} = {value} is outside (0, {hi:g}], the Froude-number range of the "
+            "vessel's resistance fit (resistance.Fn_max_fit)"
+        )
+    return v
+
+
+def check_chi_c_deg(name: str, value: float) -> float:
+    """An autopilot course in degrees within +-:data:`CHI_C_MAX_DEG`."""
+    v = finite(name, value)
+    if not abs(v) < CHI_C_MAX_DEG:
+        raise ValueError(
+            f"{name} must be a course in degrees within +-{CHI_C_MAX_DEG:g}, got {value}"
+        )
+    return v
+
+
+def wave_changes(args: argparse.Namespace) -> dict[str, float]:
+    """Checked ``H_over_lambda`` / ``lambda_over_L`` from the options that were given."""
+    from ship_models.vessel import BREAKING_STEEPNESS
+
+    changes: dict[str, float] = {}
+    h = getattr(args, "H_over_lambda", None)
+    if h is not None:
+        v = finite("--h-over-lambda", h)
+        if not 0.0 < v <= BREAKING_STEEPNESS:
+            raise ValueError(
+                f"--h-over-lambda = {h} is impossible: a wave is in (0, 1/7 = "
+                f"{BREAKING_STEEPNESS:.4f}] (steeper waves break; Michell 1893)"
+            )
+        changes["H_over_lambda"] = v
+    lam = getattr(args, "lambda_over_L", None)
+    if lam is not None:
+        lo, hi = LAMBDA_OVER_L_RANGE
+        v = finite("--lambda-over-l", lam)
+        if not lo <= v <= hi:
+            raise ValueError(f"--lambda-over-l must be in [{lo:g}, {hi:g}], got {lam}")
+        changes["lambda_over_L"] = v
+    return changes
+
+
+def ship_from_args(args: argparse.Namespace) -> tuple[Any, Any]:
+    """The model (through ``get_model``) and its parameters from the shared options.
+
+    Reads ``vessel``, and if present ``Fn``, ``chi_c`` (degrees), ``H_over_lambda``,
+    ``lambda_over_L``; the parameters are the model's defaults with those replaced
+    (``chi_c`` in radians).
+
+    Raises
+    ------
+    ValueError
+        For an unknown vessel, a bad vessel file, or an option out of range (naming it).
+    """
+    changes = wave_changes(args)
+    chi = getattr(args, "chi_c", None)
+    if chi is not None:
+        changes["chi_c"] = math.radians(check_chi_c_deg("--chi-c", chi))
+    model = load_model(args.vessel)
+    names = tuple(getattr(model, "param_names", ()))
+    if "chi_c" not in names or not hasattr(model, "vessel"):
+        raise ValueError(
+            f"--vessel {args.vessel!r} is not a 4-DOF ship model (parameters {names}); "
+            "use a vessel name or file (see `broachkit vessels list`)"
+        )
+    if getattr(args, "Fn", None) is not None:
+        changes["Fn"] = check_fn(model, "--fn", args.Fn)
+    return model, model.default_params().replace(**changes)
+
+
+def json_safe(obj: Any) -> Any:
+    """``obj`` with every non-finite float replaced by ``None`` (strict JSON has no NaN)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_safe(v) for v in obj]
+    return obj
+
+
+__all__ = [
+    "CHI_C_MAX_DEG",
+    "LAMBDA_OVER_L_RANGE",
+    "OneLineParser",
+    "add_chi_c",
+    "add_fn",
+    "add_fn_guess",
+    "add_json",
+    "add_out",
+    "add_ship",
+    "add_vessel",
+    "add_verbose",
+    "add_wave",
+    "check_chi_c_deg",
+    "check_fn",
+    "finite",
+    "fn_limit",
+    "json_safe",
+    "load_model",
+    "prepare_out",
+    "ship_from_args",
+    "wave_changes",
+]

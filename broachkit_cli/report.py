@@ -1,0 +1,203 @@
+"""``report.html``: the paper's statements beside this run's figures, numbers and verdicts.
+
+Written by ``broachkit reproduce`` at the top of its output folder from the run's own
+step summaries, with the Jinja2 template ``templates/report.html.j2`` (which holds no
+numbers: every number comes from the run or from :mod:`studies.paper`). Figures are
+linked relatively (``fig10_15/fig10_position_above.png``), so the folder can be moved
+or opened offline.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import logging
+import math
+from collections import Counter
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from .files import write_text
+
+log = logging.getLogger(__name__)
+
+#: File name of the report inside the output folder.
+REPORT_NAME = "report.html"
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, float):
+        return "n/a" if not math.isfinite(v) else f"{v:.8g}"
+    if v is None:
+        return "n/a"
+    return str(v)
+
+
+def claims_context(out: Path, results: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """Each claim of :data:`studies.paper.CLAIMS` with this run's finding and figures."""
+    from studies.paper import CLAIMS
+
+    rows = []
+    for c in CLAIMS:
+        try:
+            f = c.check(results)
+            numbers, verdict, reason = f.numbers, f.verdict, f.reason
+        except (KeyError, TypeError, ValueError, IndexError, ZeroDivisionError) as exc:
+            # a summary of an unexpected shape: say so instead of guessing
+            numbers, verdict, reason = (), "not run", f"cannot read this run's summary ({exc!r})"
+        rows.append(
+            {
+                "key": c.key,
+                "figure": c.figure,
+                "statement": c.statement,
+                "paper_numbers": c.paper_numbers,
+                "numbers": numbers,
+                "verdict": verdict,
+                "reason": reason,
+                "figures": [{"href": p, "exists": (out / p).is_file()} for p in c.figures],
+            }
+        )
+    return rows
+
+
+#: Relative IS-Code margin below which a condition is "at the limit" rather than failing:
+#: the topside height is fitted to the limit with a 1 mm tolerance
+#: (:func:`ship_models.hydro.hydrostatics.marginal_topside_height`), which moves the
+#: tightest criterion by about this much.
+AT_LIMIT_MARGIN = 1e-3
+
+
+def is_code_sentence(margin: float) -> str:
+    """What the computed IMO IS-Code margin says, in words that agree with its sign.
+
+    ``margin`` is the smallest ``value/required - 1`` over the general criteria
+    (:func:`ship_models.hydro.hydrostatics.is_code_margin`).
+    """
+    if margin >= 0.0:
+        return (
+            f"IMO IS Code general criteria: met (smallest relative margin {margin:+.1e}); "
+            "the paper's loading condition 'marginally complies'."
+        )
+    if margin > -AT_LIMIT_MARGIN:
+        return (
+            f"IMO IS Code general criteria: at the limit; the tightest criterion is missed "
+            f"by a relative {margin:+.1e}, within the tolerance of the topside-height fit "
+            "that puts the condition on the limit (the paper: 'marginally complies')."
+        )
+    return (
+        f"IMO IS Code general criteria: NOT met (smallest relative margin {margin:+.1e}); "
+        "the paper's condition 'marginally complies'."
+    )
+
+
+def vessel_context(name: str = "purse_seiner") -> dict[str, Any]:
+    """The vessel's Table 1, every coefficient (value, unit, status, source), derived numbers."""
+    from ship_models.registry import get_vessel_data
+
+    data = get_vessel_data(name)
+    v = data.vessel
+    coeffs = sorted(v.coefficients.items())
+    rows = [
+        {"key": k, "value": _fmt(c.value), "unit": c.unit, "status": c.status, "source": c.source}
+        for k, c in coeffs
+    ]
+    table1 = [r for r in rows if r["status"] == "given" and "Table 1" in r["source"]]
+    info = dict(data.info)
+    margin = info.get("is_code_margin")
+    meta = dict(v.meta)
+    if margin is None:
+        is_code = ""
+    else:
+        is_code = is_code_sentence(float(margin))
+    return {
+        "name": v.name,
+        "description": meta.get("description", ""),
+        "is_code": is_code,
+        "table1": table1,
+        "coefficients": rows,
+        "derived": [(k, _fmt(float(val))) for k, val in sorted(info.items())],
+    }
+
+
+def _vessel_figure(out: Path, name: str = "purse_seiner") -> str | None:
+    """The one-page vessel figure (``studies.vessel_report``) in ``out/vessel``; its href."""
+    from studies.vessel_report import build_report
+
+    files = build_report(name, out / "vessel")
+    return str(Path(files.png).relative_to(out))
+
+
+def key_number_rows(numbers: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """The headline numbers as (label, formatted value) rows."""
+    rows = []
+    chi = numbers.get("chi_c_deg")
+    where = f" at chi_c = {chi:g} deg" if isinstance(chi, int | float) else ""
+    rows.append((f"critical Fn{where}, connecting orbit", _fmt(numbers.get("Fn_bvp"))))
+    rows.append((f"critical Fn{where}, bisection", _fmt(numbers.get("Fn_bisection"))))
+    br = numbers.get("Fn_bisection_bracket")
+    if br:
+        rows.append(("bisection bracket", f"[{_fmt(br[0])}, {_fmt(br[1])}]"))
+    for end in numbers.get("critical_curve_ends") or []:
+        rows.append((f"critical curve at chi_c = {end['chi_c_deg']:g} deg", _fmt(end["Fn"])))
+    return rows
+
+
+def write_report(out: Path, results: Mapping[str, Any], doc: Mapping[str, Any]) -> Path:
+    """Render ``out/report.html`` from the step summaries and the job's document.
+
+    Parameters
+    ----------
+    out : Path
+        The output folder of the job (figures below it, linked relatively).
+    results : mapping
+        ``{step: summary}`` of the steps of this run (done now or earlier).
+    doc : mapping
+        The job's ``reproduce.json`` document (``key_numbers``, ``figures``,
+        ``seconds``, ``total_seconds``, ``versions``, ``settings``).
+
+    Returns
+    -------
+    Path
+        The report's path.
+    """
+    import jinja2
+
+    env = jinja2.Environment(
+        loader=jinja2.PackageLoader("broachkit_cli", "templates"),
+        autoescape=jinja2.select_autoescape(["html", "j2"]),
+        undefined=jinja2.StrictUndefined,
+    )
+    claims = claims_context(out, results)
+    counts = Counter(c["verdict"] for c in claims)
+    try:
+        vessel = vessel_context()
+        vessel["figure"] = _vessel_figure(out)
+    except ValueError as exc:  # the vessel file became invalid since the run: say so
+        log.warning("vessel table left out of the report: %s", exc)
+        vessel = {"name": "purse_seiner", "description": str(exc), "is_code": "",
+                  "table1": [], "coefficients": [], "derived": [], "figure": None}  # fmt: skip
+    html = env.get_template("report.html.j2").render(
+        title="broachkit: Umeda (1999) reproduced with the default vessel",
+        subtitle=(
+            "Each statement of the paper beside this run's figure, numbers and verdict. "
+            "The paper's hydrodynamic coefficients were measured; ours are estimated from "
+            "its Table 1, so thresholds move while the structure is the paper's."
+        ),
+        verdict_counts={v: counts.get(v, 0) for v in ("agrees", "differs", "not run")},
+        key_numbers=key_number_rows(doc.get("key_numbers", {})),
+        claims=claims,
+        all_figures=list(doc.get("figures", [])),
+        vessel=vessel,
+        run={
+            "started": doc.get("started", _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")),
+            "total_seconds": doc.get("total_seconds"),
+            "out": str(out),
+            "seconds": sorted((doc.get("seconds") or {}).items()),
+            "versions": sorted((doc.get("versions") or {}).items()),
+            "settings": sorted((doc.get("settings") or {}).items()),
+        },
+    )
+    return write_text(out / REPORT_NAME, html)
+
+
+__all__ = ["REPORT_NAME", "claims_context", "key_number_rows", "vessel_context", "write_report"]
