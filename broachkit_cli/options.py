@@ -105,7 +105,7 @@ def add_chi_c(parser: argparse.ArgumentParser, default: float = 10.0) -> None:
 
 
 def add_fn(parser: argparse.ArgumentParser) -> None:
-    """``--fn``: the nominal Froude number (default: the model's, ``ship_models.paper.PAPER_FN``)."""
+    """``--fn``: the nominal Froude number (default: the model's, ``paper.PAPER_FN``)."""
     parser.add_argument(
         "--fn",
         dest="Fn",
