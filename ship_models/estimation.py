@@ -26,6 +26,7 @@ I_xx + J_xx                 from T_phi and GM
 K_p(u)                      zeta_0 (assumed) + Ikeda et al. (1978) lift damping
 GZ(phi)                     hull hydrostatics, free sinkage and trim
 X_w, Y_w, N_w, K_w          Froude-Krylov strips + slender-body lift
+X_w diffraction (optional)  G.I. Taylor (1928) long-wave m_x/(rho V) ratio
 ==========================  ==================================================
 
 Published coefficients can be given instead of estimated (every such key is
@@ -48,6 +49,7 @@ import numpy as np
 
 from .forces import ShipForces
 from .hydro.added_mass import lewis_sway_added_mass, soding_surge_added_mass
+from .hydro.diffraction import taylor_diffraction_ratio
 from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
@@ -443,6 +445,19 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
             "(Froude-Krylov, as in Umeda 1999)",
             "assumed",
         )
+    diffraction_factor = 1.0
+    if v.wave_surge_model == "froude_krylov_taylor":
+        if v.has("hydrodynamics.wave_surge_diffraction"):
+            r_D = v.get("hydrodynamics.wave_surge_diffraction")
+        else:
+            r_D = taylor_diffraction_ratio(m_x, rho, volume)
+            est["hydrodynamics.wave_surge_diffraction"] = _est(
+                r_D,
+                "-",
+                "m_x/(rho V): long-wave diffraction part of the surge force, G.I. Taylor "
+                "(1928) Proc. R. Soc. Lond. A 120:260-283 (ship_models.hydro.diffraction)",
+            )
+        diffraction_factor = 1.0 + r_D
     strips = WaveStrips.from_hull(
         hull,
         x_G=x_G,
@@ -452,7 +467,7 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
         rho=rho,
         g=g,
         n_depth=int(v.get("hull.n_depth")),
-        surge_scale=surge_scale,
+        surge_scale=surge_scale * diffraction_factor,
     )
     q_speed = 0.5 * rho * L * d_m
     forces = ShipForces(

@@ -58,12 +58,14 @@ STATUSES = ("given", "measured", "estimated", "assumed", "calibrated")
 #: Kinds of uncertainty in the ``[uncertainties]`` section.
 UNCERTAINTY_TYPES = ("relative", "absolute")
 
-#: Wave surge-force models selectable by ``[vessel] wave_surge_model``. Only the
-#: Froude-Krylov integral of the paper is implemented; a published diffraction
-#: correction for small fishing vessels could not be read here (see the issue 14
-#: report), so no second model is offered rather than an unsourced one. A measured
-#: ratio to Froude-Krylov can be given as ``hydrodynamics.wave_surge_scale``.
-WAVE_SURGE_MODELS = ("froude_krylov",)
+#: Wave surge-force models selectable by ``[vessel] wave_surge_model``:
+#: ``"froude_krylov"`` (default) -- the Froude-Krylov integral over the hull, as in
+#: Umeda (1999); ``"froude_krylov_taylor"`` -- plus G.I. Taylor's (1928) long-wave
+#: diffraction part ``X_D = (m_x / rho V) X_FK`` (:mod:`ship_models.hydro.diffraction`;
+#: valid for wavelengths long against the hull, so not the default at lambda/L ~ 1).
+#: A measured ratio to the selected model can be given as
+#: ``hydrodynamics.wave_surge_scale``.
+WAVE_SURGE_MODELS = ("froude_krylov", "froude_krylov_taylor")
 
 #: Breaking limit of the wave steepness (Michell 1893: H/lambda = 0.142 ~ 1/7).
 BREAKING_STEEPNESS = 1.0 / 7.0
@@ -290,6 +292,13 @@ SCHEMA: dict[str, dict[str, Field]] = {
             True,
             doc="factor on the wave surge force X_w of the selected wave_surge_model "
             "(absent: 1, the model's own amplitude)",
+        ),
+        "wave_surge_diffraction": _opt(
+            "none",
+            "diffraction-to-Froude-Krylov ratio X_D/X_FK of wave_surge_model "
+            "'froude_krylov_taylor' (absent: m_x/(rho V), Taylor 1928)",
+            0.0,
+            10.0,
         ),
     },
 }
