@@ -343,12 +343,13 @@ DEMOS = {d.key: d for d in (KPR, CIR, SAN)}
 
 def manifold_guess(
     demo: Demo, params: dict[str, float] | None = None, eps: float = 1e-6,
-    t_max: float = 400.0,
+    t_max: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The saddle's 1-D unstable manifold, simulated and cut at its closest return.
 
     Starts at ``x_- + eps v_u`` (``v_u`` the unstable eigenvector, on the side
-    ``demo.branch``), integrates (``rtol = 1e-10``) and cuts at the closest return: the smallest distance to the saddle
+    ``demo.branch``), integrates (DOP853, ``rtol = 1e-10``, up to ``t_max``, default ``2 T``, or
+    until the orbit is 10 away) and cuts at the closest return: the smallest distance to the saddle
     while the orbit, after its excursion, stays within 0.2 times the excursion's first
     maximum distance (beyond, it leaves again when the parameter is not exact). Returns ``(t, x)`` with ``t`` from 0, shapes (K,) and (K, 3).
     """
@@ -362,8 +363,19 @@ def manifold_guess(
     if v[0] != 0:
         v = v * np.sign(v[0])
     x0 = xs + demo.branch * eps * v
-    sol = solve_ivp(lambda t, x: s.f(x, p), (0.0, t_max), x0, rtol=1e-10, atol=1e-13,
-                    dense_output=True, max_step=0.5)
+
+    def escape(t: float, x: np.ndarray) -> float:
+        return float(np.linalg.norm(x - xs)) - 10.0
+
+    escape.terminal = True  # type: ignore[attr-defined]
+    t_end = 2.0 * demo.T if t_max is None else t_max
+    from continuation.ops import NUMPY_OPS
+
+    def f(t: float, x: np.ndarray) -> np.ndarray:
+        return np.asarray(demo.rhs(x, p, NUMPY_OPS), dtype=float)
+
+    sol = solve_ivp(f, (0.0, t_end), x0, method="DOP853", rtol=1e-10, atol=1e-13,
+                    dense_output=True, events=escape)
     t = np.linspace(0.0, sol.t[-1], 20001)
     X = sol.sol(t).T
     d = np.linalg.norm(X - xs, axis=1)

@@ -134,13 +134,15 @@ def run_chain(
     directory: str | os.PathLike[str],
     chain: Sequence[Mapping[str, Any]],
     files: Mapping[str, str] | None = None,
+    fort3: str | os.PathLike[str] | None = None,
 ) -> ChainResult:
     """Run AUTO runs ``chain`` (constants dicts) in ``directory`` one after the other.
 
     A constants dict may hold ``IRS`` (restart label in the previous run's ``fort.8``,
     copied to ``fort.3``); ``files`` are written into the directory first (data files
     named by ``dat``). A run that exits non-zero or writes no solution raises
-    RuntimeError with AUTO's output.
+    RuntimeError with AUTO's output. ``fort3``: a ``fort.8`` of an earlier chain that
+    the first run restarts from.
     """
     d = pathlib.Path(directory)
     d.mkdir(parents=True, exist_ok=True)
@@ -148,6 +150,8 @@ def run_chain(
         (d / name).write_text(text)
     for name in ("fort.3", "fort.7", "fort.8", "fort.9"):
         (d / name).unlink(missing_ok=True)
+    if fort3 is not None:
+        shutil.copyfile(fort3, d / "fort.3")
     wall = auto_total = 0.0
     runs: list[list[Point]] = []
     for k, constants in enumerate(chain):
