@@ -80,9 +80,25 @@ _STPNT_HEAD = """subroutine stpnt(ndim, u, par, t)
 
 # Settings every demo run shares (HomCont's IPS = 9; the demos' own values).
 AUTO_BASE: dict[str, Any] = {
-    "NDIM": 3, "IPS": 9, "ILP": 0, "NCOL": 4, "ISP": 0, "ISW": 1, "IPLT": 0,
-    "NBC": 0, "NINT": 0, "MXBF": 0, "IID": 0, "ITMX": 10, "ITNW": 7, "NWTN": 3,
-    "EPSL": 1e-7, "EPSU": 1e-7, "EPSS": 1e-5, "IADS": 1, "NPR": 1000,
+    "NDIM": 3,
+    "IPS": 9,
+    "ILP": 0,
+    "NCOL": 4,
+    "ISP": 0,
+    "ISW": 1,
+    "IPLT": 0,
+    "NBC": 0,
+    "NINT": 0,
+    "MXBF": 0,
+    "IID": 0,
+    "ITMX": 10,
+    "ITNW": 7,
+    "NWTN": 3,
+    "EPSL": 1e-7,
+    "EPSU": 1e-7,
+    "EPSS": 1e-5,
+    "IADS": 1,
+    "NPR": 1000,
 }
 
 
@@ -142,8 +158,11 @@ class Demo:
 def _kpr_rhs(x: Any, p: Any, ops: Any) -> Any:
     lam, kappa, inv_eps = p[0], p[1], p[2]
     return ops.stack(
-        [inv_eps * (kappa * x[1] - x[0] ** 3 + 3.0 * x[0] - lam), x[0] - 2.0 * x[1] + x[2],
-         x[1] - x[2]]
+        [
+            inv_eps * (kappa * x[1] - x[0] ** 3 + 3.0 * x[0] - lam),
+            x[0] - 2.0 * x[1] + x[2],
+            x[1] - x[2],
+        ]
     )
 
 
@@ -154,7 +173,9 @@ def _kpr_saddle(p: np.ndarray) -> np.ndarray:
     return np.full(3, r[1])  # the middle root (AUTO's -0.9591): the saddle
 
 
-_KPR_F90 = _HEAD + """  f(1) = par(3) * (par(2) * u(2) - u(1)**3 + 3d0 * u(1) - par(1))
+_KPR_F90 = (
+    _HEAD
+    + """  f(1) = par(3) * (par(2) * u(2) - u(1)**3 + 3d0 * u(1) - par(1))
   f(2) = u(1) - 2d0 * u(2) + u(3)
   f(3) = u(2) - u(3)
   if (ijac == 0) return
@@ -166,17 +187,30 @@ _KPR_F90 = _HEAD + """  f(1) = par(3) * (par(2) * u(2) - u(1)**3 + 3d0 * u(1) - 
   dfdp(:, 2) = (/ par(3) * u(2), 0d0, 0d0 /)
   dfdp(:, 3) = (/ par(2) * u(2) - u(1)**3 + 3d0 * u(1) - par(1), 0d0, 0d0 /)
 end subroutine func
-""" + _STPNT_HEAD + """  par(1) = -1.851185124d0
+"""
+    + _STPNT_HEAD
+    + """  par(1) = -1.851185124d0
   par(2) = -0.15d0
   par(3) = 10d0
   par(11) = 0.1d0
   par(12:14) = -0.9591016d0
   par(15) = -1d-5
 end subroutine stpnt
-""" + _STUBS
+"""
+    + _STUBS
+)
 
-_KPR_BASE = {**AUTO_BASE, "NTST": 15, "IAD": 1, "JAC": 1, "DS": 0.1, "DSMIN": 0.001,
-             "DSMAX": 2.0, "NPAR": 15, "IEQUIB": 1}
+_KPR_BASE = {
+    **AUTO_BASE,
+    "NTST": 15,
+    "IAD": 1,
+    "JAC": 1,
+    "DS": 0.1,
+    "DSMIN": 0.001,
+    "DSMAX": 2.0,
+    "NPAR": 15,
+    "IEQUIB": 1,
+}
 
 KPR = Demo(
     key="kpr",
@@ -191,11 +225,26 @@ KPR = Demo(
     fortran=_KPR_F90,
     auto_solve=[
         {**_KPR_BASE, "IRS": 0, "ICP": [11, 17], "NMX": 35, "UZR": {17: 0.0}, "ISTART": 3},
-        {**_KPR_BASE, "IRS": ("UZ", 1), "ICP": [11, 1], "NMX": 50, "UZSTOP": {11: 60.0},
-         "ISTART": 3},
+        {
+            **_KPR_BASE,
+            "IRS": ("UZ", 1),
+            "ICP": [11, 1],
+            "NMX": 50,
+            "UZSTOP": {11: 60.0},
+            "ISTART": 3,
+        },
     ],
-    auto_continue={**_KPR_BASE, "ICP": [1, 2], "NTST": 25, "NMX": 50, "DS": 0.1,
-                   "DSMIN": 0.01, "DSMAX": 0.2, "ISTART": 1, "ITWIST": 0},
+    auto_continue={
+        **_KPR_BASE,
+        "ICP": [1, 2],
+        "NTST": 25,
+        "NMX": 50,
+        "DS": 0.1,
+        "DSMIN": 0.01,
+        "DSMAX": 0.2,
+        "ISTART": 1,
+        "ITWIST": 0,
+    },
     T=60.0,
     branch=-1,
 )
@@ -206,12 +255,17 @@ def _cir_rhs(x: Any, p: Any, ops: Any) -> Any:
     nu, be, ga, r, a3, b3 = (p[i] for i in range(6))
     d3 = (x[1] - x[0]) ** 3
     return ops.stack(
-        [(-(be + nu) * x[0] + be * x[1] - a3 * x[0] ** 3 + b3 * d3) / r,
-         be * x[0] - (be + ga) * x[1] - x[2] - b3 * d3, x[1]]
+        [
+            (-(be + nu) * x[0] + be * x[1] - a3 * x[0] ** 3 + b3 * d3) / r,
+            be * x[0] - (be + ga) * x[1] - x[2] - b3 * d3,
+            x[1],
+        ]
     )
 
 
-_CIR_F90 = _HEAD + """  double precision :: nu, be, ga, r, a3, b3, d2, d3
+_CIR_F90 = (
+    _HEAD
+    + """  double precision :: nu, be, ga, r, a3, b3, d2, d3
   nu = par(1); be = par(2); ga = par(3); r = par(4); a3 = par(5); b3 = par(6)
   d2 = (u(2) - u(1))**2
   d3 = (u(2) - u(1))**3
@@ -231,7 +285,9 @@ _CIR_F90 = _HEAD + """  double precision :: nu, be, ga, r, a3, b3, d2, d3
   dfdp(:, 5) = (/ -u(1)**3 / r, 0d0, 0d0 /)
   dfdp(:, 6) = (/ d3 / r, -d3, 0d0 /)
 end subroutine func
-""" + _STPNT_HEAD + """  par(1) = NU0
+"""
+    + _STPNT_HEAD
+    + """  par(1) = NU0
   par(2) = 0.6d0
   par(3) = 0d0
   par(4) = 0.6d0
@@ -240,7 +296,9 @@ end subroutine func
   par(11) = T0
   par(12:14) = 0d0
 end subroutine stpnt
-""" + _STUBS
+"""
+    + _STUBS
+)
 
 _CIR_BASE = {**AUTO_BASE, "NTST": 35, "IAD": 1, "JAC": 1, "NPAR": 14, "IEQUIB": 0}
 
@@ -256,8 +314,7 @@ CIR = Demo(
     key="cir",
     title="Freire et al. circuit: nu of the saddle-focus homoclinic orbit",
     state_names=("x", "y", "z"),
-    params={"nu": -0.721309, "beta": 0.6, "gamma": 0.0, "r": 0.6, "a3": 0.328578,
-            "b3": 0.933578},
+    params={"nu": -0.721309, "beta": 0.6, "gamma": 0.0, "r": 0.6, "a3": 0.328578, "b3": 0.933578},
     auto_index={"nu": 1, "beta": 2, "gamma": 3, "r": 4, "a3": 5, "b3": 6},
     solved="nu",
     second="beta",
@@ -265,11 +322,26 @@ CIR = Demo(
     saddle=lambda p: np.zeros(3),
     fortran=_CIR_F90,  # NU0, T0 filled in from the guess by the benchmark
     auto_solve=[
-        {**_CIR_BASE, "dat": "guess.dat", "IRS": 0, "ICP": [11, 1], "NMX": 50, "DS": 1.0,
-         "DSMIN": 1e-4, "DSMAX": 5.0, "UZSTOP": {11: 100.0}},
+        {
+            **_CIR_BASE,
+            "dat": "guess.dat",
+            "IRS": 0,
+            "ICP": [11, 1],
+            "NMX": 50,
+            "DS": 1.0,
+            "DSMIN": 1e-4,
+            "DSMAX": 5.0,
+            "UZSTOP": {11: 100.0},
+        },
     ],
-    auto_continue={**_CIR_BASE, "ICP": [1, 2], "NMX": 100, "DS": 0.01, "DSMIN": 1e-4,
-                   "DSMAX": 0.01},
+    auto_continue={
+        **_CIR_BASE,
+        "ICP": [1, 2],
+        "NMX": 100,
+        "DS": 0.01,
+        "DSMIN": 1e-4,
+        "DSMAX": 0.01,
+    },
     T=100.0,
     auto_files=_cir_files,
 )
@@ -280,14 +352,20 @@ def _san_rhs(x: Any, p: Any, ops: Any) -> Any:
     a, b, c, al, be, ga, mu, mt = (p[i] for i in range(8))
     w = mt - al * x[2]
     return ops.stack(
-        [a * x[0] + b * x[1] - a * x[0] ** 2 + w * x[0] * (2.0 - 3.0 * x[0]),
-         b * x[0] + a * x[1] - 1.5 * b * x[0] ** 2 - 1.5 * a * x[0] * x[1] - 2.0 * w * x[1],
-         c * x[2] + mu * x[0] + ga * x[0] * x[2]
-         + al * be * (x[0] ** 2 * (1.0 - x[0]) - x[1] ** 2)]
+        [
+            a * x[0] + b * x[1] - a * x[0] ** 2 + w * x[0] * (2.0 - 3.0 * x[0]),
+            b * x[0] + a * x[1] - 1.5 * b * x[0] ** 2 - 1.5 * a * x[0] * x[1] - 2.0 * w * x[1],
+            c * x[2]
+            + mu * x[0]
+            + ga * x[0] * x[2]
+            + al * be * (x[0] ** 2 * (1.0 - x[0]) - x[1] ** 2),
+        ]
     )
 
 
-_SAN_F90 = _HEAD + """  double precision :: w
+_SAN_F90 = (
+    _HEAD
+    + """  double precision :: w
   w = par(8) - par(4) * u(3)
   f(1) = par(1) * u(1) + par(2) * u(2) - par(1) * u(1)**2 + w * u(1) * (2d0 - 3d0 * u(1))
   f(2) = par(2) * u(1) + par(1) * u(2) - 1.5d0 * par(2) * u(1)**2 &
@@ -302,7 +380,9 @@ _SAN_F90 = _HEAD + """  double precision :: w
   dfdu(3, :) = (/ par(7) + par(6) * u(3) + par(4) * par(5) * u(1) * (2d0 - 3d0 * u(1)), &
                   -2d0 * par(4) * par(5) * u(2), par(3) + par(6) * u(1) /)
 end subroutine func
-""" + _STPNT_HEAD + """  double precision :: s, e
+"""
+    + _STPNT_HEAD
+    + """  double precision :: s, e
   par(1:8) = (/ 0d0, 1d0, -2d0, 0d0, 1d0, 0d0, 0d0, 0d0 /)
   par(11) = 20d0
   par(12:14) = 0d0
@@ -313,19 +393,38 @@ end subroutine func
   u(2) = 4d0 * e * (1d0 - e) / (1d0 + e)**3
   u(3) = 0d0
 end subroutine stpnt
-""" + _STUBS
+"""
+    + _STUBS
+)
 
-_SAN_BASE = {**AUTO_BASE, "NTST": 35, "IAD": 3, "JAC": -1, "ITMX": 9, "NPAR": 14,
-             "IEQUIB": 0, "DS": 0.05, "DSMIN": 0.005, "DSMAX": 0.1}
+_SAN_BASE = {
+    **AUTO_BASE,
+    "NTST": 35,
+    "IAD": 3,
+    "JAC": -1,
+    "ITMX": 9,
+    "NPAR": 14,
+    "IEQUIB": 0,
+    "DS": 0.05,
+    "DSMIN": 0.005,
+    "DSMAX": 0.1,
+}
 
 SAN = Demo(
     key="san",
     title="Sandstede's model: mu~ at a = 0.25",
     state_names=("x", "y", "z"),
-    params={"a": 0.25, "b": 1.0, "c": -2.0, "alpha": 0.0, "beta": 1.0, "gamma": 0.0,
-            "mu": 0.0, "mu_t": 0.0},
-    auto_index={"a": 1, "b": 2, "c": 3, "alpha": 4, "beta": 5, "gamma": 6, "mu": 7,
-                "mu_t": 8},
+    params={
+        "a": 0.25,
+        "b": 1.0,
+        "c": -2.0,
+        "alpha": 0.0,
+        "beta": 1.0,
+        "gamma": 0.0,
+        "mu": 0.0,
+        "mu_t": 0.0,
+    },
+    auto_index={"a": 1, "b": 2, "c": 3, "alpha": 4, "beta": 5, "gamma": 6, "mu": 7, "mu_t": 8},
     solved="mu_t",
     second="alpha",
     rhs=_san_rhs,
@@ -342,16 +441,19 @@ DEMOS = {d.key: d for d in (KPR, CIR, SAN)}
 
 
 def manifold_guess(
-    demo: Demo, params: dict[str, float] | None = None, eps: float = 1e-6,
+    demo: Demo,
+    params: dict[str, float] | None = None,
+    eps: float = 1e-6,
     t_max: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The saddle's 1-D unstable manifold, simulated and cut at its closest return.
 
     Starts at ``x_- + eps v_u`` (``v_u`` the unstable eigenvector, on the side
     ``demo.branch``), integrates (DOP853, ``rtol = 1e-10``, up to ``t_max``, default ``2 T``, or
-    until the orbit is 10 away) and cuts at the closest return: the smallest distance to the saddle
-    while the orbit, after its excursion, stays within 0.2 times the excursion's first
-    maximum distance (beyond, it leaves again when the parameter is not exact). Returns ``(t, x)`` with ``t`` from 0, shapes (K,) and (K, 3).
+    until the orbit is 10 away) and cuts at the closest return: the smallest distance to
+    the saddle while the orbit, after its excursion, stays within 0.2 times the
+    excursion's first maximum distance (beyond, it leaves again when the parameter is
+    not exact). Returns ``(t, x)`` with ``t`` from 0, shapes (K,) and (K, 3).
     """
     vals = {**demo.params, **(params or {})}
     p = np.array([vals[k] for k in demo.params], dtype=float)
@@ -374,8 +476,16 @@ def manifold_guess(
     def f(t: float, x: np.ndarray) -> np.ndarray:
         return np.asarray(demo.rhs(x, p, NUMPY_OPS), dtype=float)
 
-    sol = solve_ivp(f, (0.0, t_end), x0, method="DOP853", rtol=1e-10, atol=1e-13,
-                    dense_output=True, events=escape)
+    sol = solve_ivp(
+        f,
+        (0.0, t_end),
+        x0,
+        method="DOP853",
+        rtol=1e-10,
+        atol=1e-13,
+        dense_output=True,
+        events=escape,
+    )
     t = np.linspace(0.0, sol.t[-1], 20001)
     X = sol.sol(t).T
     d = np.linalg.norm(X - xs, axis=1)
@@ -393,7 +503,9 @@ def manifold_guess(
     return t[: k + 1], X[: k + 1]
 
 
-def guess_on(t: np.ndarray, X: np.ndarray, T: float, K: int = 2001) -> tuple[np.ndarray, np.ndarray]:
+def guess_on(
+    t: np.ndarray, X: np.ndarray, T: float, K: int = 2001
+) -> tuple[np.ndarray, np.ndarray]:
     """Place the orbit ``(t, X)`` on ``[0, T]``: its last ``T`` time units if longer,
     else padded at both ends with its end values (the saddle is approached there)."""
     d = float(t[-1] - t[0])

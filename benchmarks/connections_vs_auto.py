@@ -68,8 +68,13 @@ ADAPT = 2  # rounds of mesh equidistribution in broachkit's solve (issue 11's ad
 # Everything broachkit-specific is in these two functions (conn is changing the API:
 # re-point here). Today they call continuation.bvp.HeteroclinicProblem /
 # CollocationMesh / solve_connection(adapt=2) / continue_connection.
-def bk_solve(demo: Demo, N: int, T: float, guess: tuple[np.ndarray, np.ndarray],
-             params: dict[str, float] | None = None) -> Any:
+def bk_solve(
+    demo: Demo,
+    N: int,
+    T: float,
+    guess: tuple[np.ndarray, np.ndarray],
+    params: dict[str, float] | None = None,
+) -> Any:
     """One broachkit connection solve: homoclinic (``shift = 0``) to ``demo.saddle``,
     ``N`` intervals of degree 4 on ``[0, T]``, unknown ``demo.solved``; returns the
     ConnectionResult (``.success``, ``.value(name)``)."""
@@ -79,7 +84,11 @@ def bk_solve(demo: Demo, N: int, T: float, guess: tuple[np.ndarray, np.ndarray],
     vals = {**demo.params, **(params or {})}
     xs = demo.saddle(np.array([vals[k] for k in demo.params]))
     prob = HeteroclinicProblem(
-        s, s.params(**vals), demo.solved, saddle_from=xs, shift=np.zeros(len(xs)),
+        s,
+        s.params(**vals),
+        demo.solved,
+        saddle_from=xs,
+        shift=np.zeros(len(xs)),
         mesh=CollocationMesh(N, 4, T),
     )
     return solve_connection(prob, guess_on(*guess, T), adapt=ADAPT)
@@ -93,14 +102,16 @@ def bk_continue(result: Any, demo: Demo, end: float, ds: float, ds_max: float) -
 
     p0 = result.params[demo.second]
     lo, hi = (end, math.inf) if end < p0 else (-math.inf, end)
-    settings = ContinuationSettings(ds=ds, ds_max=ds_max, ds_min=1e-6, p_min=lo, p_max=hi,
-                                    max_steps=400)
-    return continue_connection(result, demo.second, settings,
-                               direction="backward" if end < p0 else "forward")
+    settings = ContinuationSettings(
+        ds=ds, ds_max=ds_max, ds_min=1e-6, p_min=lo, p_max=hi, max_steps=400
+    )
+    return continue_connection(
+        result, demo.second, settings, direction="backward" if end < p0 else "forward"
+    )
 
 
 # Where the continuation (b) ends, in the second parameter (inside the demo's branch).
-CONTINUE_TO = {"kpr": -2.0, "cir": 0.0, "san": 1.0}
+CONTINUE_TO = {"kpr": -2.0, "cir": 0.3, "san": 1.0}  # cir: hyperbolic for beta > 0 only
 
 
 def _median_time(fn: Callable[[], Any], repeats: int) -> tuple[float, Any]:
@@ -125,13 +136,15 @@ class AutoDemo:
         if demo.key == "cir":  # starting data: our simulated manifold, T of the data
             t, _ = manifold_guess(demo)
             src = src.replace("NU0", f"{demo.params['nu']!r}d0").replace(
-                "T0", f"{float(t[-1] - t[0])!r}d0")
+                "T0", f"{float(t[-1] - t[0])!r}d0"
+            )
         if demo.auto_files is not None:
             self.files = demo.auto_files(demo)
         self.exe = an.build(src, self.work / "build")
 
-    def _resolve(self, chain: list[dict[str, Any]], scale: int = 1,
-                 prev: list[an.Point] | None = None) -> list[dict[str, Any]]:
+    def _resolve(
+        self, chain: list[dict[str, Any]], scale: int = 1, prev: list[an.Point] | None = None
+    ) -> list[dict[str, Any]]:
         out = []
         d = self.work / "resolve"
         for c in chain:
@@ -152,8 +165,9 @@ class AutoDemo:
     def solve(self, chain: list[dict[str, Any]], tag: str = "solve") -> an.ChainResult:
         return an.run_chain(self.exe, self.work / tag, chain, self.files)
 
-    def continue_constants(self, solved: an.ChainResult, end: float,
-                           scale: int = 1) -> dict[str, Any]:
+    def continue_constants(
+        self, solved: an.ChainResult, end: float, scale: int = 1
+    ) -> dict[str, Any]:
         c = dict(self.demo.auto_continue)
         c["IRS"] = an.last(solved.runs[-1]).lab
         c["UZSTOP"] = {self.demo.auto_index[self.demo.second]: end}
@@ -163,18 +177,26 @@ class AutoDemo:
         return c
 
     def cont(self, solved: an.ChainResult, c: dict[str, Any], tag: str = "cont") -> an.ChainResult:
-        return an.run_chain(self.exe, self.work / tag, [c], self.files,
-                            fort3=solved.directory / "fort.8")
+        return an.run_chain(
+            self.exe, self.work / tag, [c], self.files, fort3=solved.directory / "fort.8"
+        )
 
     def extend_T(self, solved: an.ChainResult, T: float, ntst: int) -> float:
         """The solved parameter after continuing in (T, solved) to ``T`` on NTST=ntst."""
         c = dict(self.demo.auto_solve[-1])
-        c.update(IRS=an.last(solved.runs[-1]).lab, ICP=[11, self.demo.auto_index[self.demo.solved]],
-                 NTST=ntst, NMX=400, UZSTOP={11: T}, ISTART=1)
+        c.update(
+            IRS=an.last(solved.runs[-1]).lab,
+            ICP=[11, self.demo.auto_index[self.demo.solved]],
+            NTST=ntst,
+            NMX=400,
+            UZSTOP={11: T},
+            ISTART=1,
+        )
         c.pop("dat", None)
         c.pop("UZR", None)
-        r = an.run_chain(self.exe, self.work / "extend", [c], self.files,
-                         fort3=solved.directory / "fort.8")
+        r = an.run_chain(
+            self.exe, self.work / "extend", [c], self.files, fort3=solved.directory / "fort.8"
+        )
         return self.value(r)
 
     def value(self, r: an.ChainResult, name: str | None = None) -> float:
@@ -183,25 +205,38 @@ class AutoDemo:
 
 
 # ============================================================================== driver
-def reference(demo: Demo, params: dict[str, float], guess_value: float) -> dict[str, Any]:
-    """The solved parameter at ``params``: closed form (san) or broachkit on 400 adapted
-    intervals with T doubled, and the change from T to 2T... (see module docstring)."""
+def reference(
+    demo: Demo, params: dict[str, float], guess: tuple[np.ndarray, np.ndarray]
+) -> dict[str, Any]:
+    """The solved parameter at ``params`` (the solved one: a guess): closed form (san),
+    else broachkit on 400 adapted intervals with ``T = 3 T_demo`` (its change from
+    ``2 T_demo`` is reported as a truncation check). ``guess``: an orbit ``(t, x)``."""
     if demo.key == "san":
         return {"value": 0.0, "how": "closed form (mu~ = 0)"}
-    p = {**params, demo.solved: guess_value}
-    g = manifold_guess(demo, p)
-    r2 = bk_solve(demo, 400, 2 * demo.T, g, p)
-    r3 = bk_solve(demo, 400, 3 * demo.T, g, p)
+    r2 = bk_solve(demo, 400, 2 * demo.T, guess, params)
+    r3 = bk_solve(demo, 400, 3 * demo.T, guess, params)
     if not (r2.success and r3.success):
         raise RuntimeError(f"{demo.key}: reference solve failed: {r2.message} / {r3.message}")
     v2, v3 = r2.value(demo.solved), r3.value(demo.solved)
-    return {"value": v3, "how": "broachkit N=400 adapted, T = 3 T_demo",
-            "change_2T_to_3T": abs(v3 - v2)}
+    return {
+        "value": v3,
+        "how": "broachkit N=400 adapted, T = 3 T_demo",
+        "change_2T_to_3T": abs(v3 - v2),
+    }
+
+
+def _orbit(result: Any) -> tuple[np.ndarray, np.ndarray]:
+    return np.asarray(result.t, dtype=float), np.asarray(result.x, dtype=float)
 
 
 def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
-    out: dict[str, Any] = {"key": demo.key, "title": demo.title, "solved": demo.solved,
-                           "second": demo.second, "T_demo": demo.T}
+    out: dict[str, Any] = {
+        "key": demo.key,
+        "title": demo.title,
+        "solved": demo.solved,
+        "second": demo.second,
+        "T_demo": demo.T,
+    }
     ad = AutoDemo(demo, work)
     # ---- (a) AUTO solve
     chain = ad.solve_chain()
@@ -209,11 +244,16 @@ def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
     a_val = ad.value(solved)
     a_times = [ad.solve(chain).seconds for _ in range(repeats)]
     a_tot = [ad.solve(chain).auto_seconds for _ in range(1)]
-    ref = reference(demo, demo.params, a_val)
+    t0 = time.perf_counter()
+    g = manifold_guess(demo)
+    guess_s = time.perf_counter() - t0
+    ref = reference(demo, demo.params, g)
     # AUTO fine (cross-check): NTST x 6 for the last run, T doubled
     try:
-        fine = ad.solve(ad.solve_chain(scale=1)[:-1] + [
-            {**chain[-1], "NTST": chain[-1]["NTST"] * 6}], tag="fine")
+        fine = ad.solve(
+            ad.solve_chain(scale=1)[:-1] + [{**chain[-1], "NTST": chain[-1]["NTST"] * 6}],
+            tag="fine",
+        )
         a_fine = ad.extend_T(fine, 2 * demo.T, chain[-1]["NTST"] * 6)
         ref["auto_fine_2T"] = a_fine
         ref["auto_fine_minus_ref"] = a_fine - ref["value"]
@@ -221,14 +261,17 @@ def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
         ref["auto_fine_2T"] = f"failed: {str(exc)[:200]}"
     a_err = abs(a_val - ref["value"])
     out["reference"] = ref
-    out["auto_solve"] = {"value": a_val, "error": a_err, "seconds": statistics.median(a_times),
-                         "auto_total_time": a_tot[0], "runs": len(chain),
-                         "steps": [len(r) for r in solved.runs],
-                         "NTST": chain[-1]["NTST"], "NCOL": chain[-1]["NCOL"]}
+    out["auto_solve"] = {
+        "value": a_val,
+        "error": a_err,
+        "seconds": statistics.median(a_times),
+        "auto_total_time": a_tot[0],
+        "runs": len(chain),
+        "steps": [len(r) for r in solved.runs],
+        "NTST": chain[-1]["NTST"],
+        "NCOL": chain[-1]["NCOL"],
+    }
     # ---- (a) broachkit at equal accuracy
-    t0 = time.perf_counter()
-    g = manifold_guess(demo)
-    guess_s = time.perf_counter() - t0
     chosen = None
     scan = []
     for N in N_CANDIDATES:
@@ -248,10 +291,16 @@ def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
         return out
     N, T = chosen
     sec, res = _median_time(lambda: bk_solve(demo, N, T, g), repeats)
-    bk.update(N=N, T=T, degree=4, value=res.value(demo.solved),
-              error=abs(res.value(demo.solved) - ref["value"]), seconds=sec,
-              ratio=sec / out["auto_solve"]["seconds"],
-              ratio_with_guess=(sec + guess_s) / out["auto_solve"]["seconds"])
+    bk.update(
+        N=N,
+        T=T,
+        degree=4,
+        value=res.value(demo.solved),
+        error=abs(res.value(demo.solved) - ref["value"]),
+        seconds=sec,
+        ratio=sec / out["auto_solve"]["seconds"],
+        ratio_with_guess=(sec + guess_s) / out["auto_solve"]["seconds"],
+    )
     out["broachkit_solve"] = bk
     # ---- (b) AUTO continuation to the end value
     end = CONTINUE_TO[demo.key]
@@ -261,31 +310,76 @@ def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
     a_end_second = last.values[f"PAR({demo.auto_index[demo.second]})"]
     a_end_val = last.values[f"PAR({demo.auto_index[demo.solved]})"]
     c_times = [ad.cont(solved, cc).seconds for _ in range(repeats)]
-    ref_end = reference(demo, {**demo.params, demo.second: a_end_second}, a_end_val)
-    out["auto_continue"] = {"end": a_end_second, "reached": abs(a_end_second - end) < 1e-6,
-                            "value_at_end": a_end_val, "error_at_end": abs(a_end_val - ref_end["value"]),
-                            "steps": len(ar.runs[-1]), "seconds": statistics.median(c_times),
-                            "NTST": cc["NTST"], "DS": cc["DS"], "DSMAX": cc["DSMAX"],
-                            "reference_at_end": ref_end}
-    # ---- (b) broachkit continuation (same N, T as the solve; larger N if less accurate)
-    bc: dict[str, Any] = {}
-    for NN in (N, 2 * N, 4 * N):
+    from continuation.bvp import connection_at
+
+    br0 = bk_continue(res, demo, end, cc["DS"], cc["DSMAX"])
+    end_orbit = _orbit(connection_at(br0, -1))
+    ref_end = reference(
+        demo, {**demo.params, demo.second: a_end_second, demo.solved: a_end_val}, end_orbit
+    )
+    out["auto_continue"] = {
+        "end": a_end_second,
+        "reached": abs(a_end_second - end) < 1e-6,
+        "value_at_end": a_end_val,
+        "error_at_end": abs(a_end_val - ref_end["value"]),
+        "steps": len(ar.runs[-1]),
+        "seconds": statistics.median(c_times),
+        "NTST": cc["NTST"],
+        "DS": cc["DS"],
+        "DSMAX": cc["DSMAX"],
+        "reference_at_end": ref_end,
+    }
+    try:  # cross-check of the end reference: AUTO's continuation on NTST x 6
+        fine_c = ad.cont(solved, ad.continue_constants(solved, end, scale=6), tag="cont_fine")
+        ref_end["auto_fine"] = an.last(fine_c.runs[-1]).values[
+            f"PAR({demo.auto_index[demo.solved]})"
+        ]
+        ref_end["auto_fine_minus_ref"] = ref_end["auto_fine"] - ref_end["value"]
+    except RuntimeError as exc:
+        ref_end["auto_fine"] = f"failed: {str(exc)[:200]}"
+    # ---- (b) broachkit continuation: the smallest N (same T as the solve) whose error
+    # at the end is at most AUTO's; each candidate run once, the chosen one timed
+    a_err_end = out["auto_continue"]["error_at_end"]
+    bc: dict[str, Any] = {"scan": []}
+    pick = None
+    for NN in N_CANDIDATES:
         start = bk_solve(demo, NN, T, g)
-        sec, br = _median_time(lambda start=start: bk_continue(start, demo, end, cc["DS"], cc["DSMAX"]),
-                               repeats)
+        if not start.success:
+            continue
+        br = bk_continue(start, demo, end, cc["DS"], cc["DSMAX"])
         p_end = float(br.p[-1])
         v_end = float(br.records[demo.solved][-1])
         if abs(p_end - a_end_second) > 1e-9:
-            r_end = reference(demo, {**demo.params, demo.second: p_end}, v_end)["value"]
+            r_end = reference(
+                demo,
+                {**demo.params, demo.second: p_end, demo.solved: v_end},
+                _orbit(connection_at(br, -1)),
+            )["value"]
         else:
             r_end = ref_end["value"]
         err = abs(v_end - r_end)
-        bc = {"N": NN, "T": T, "steps": len(br.p) - 1, "status": br.status.name,
-              "end": p_end, "value_at_end": v_end, "error_at_end": err, "seconds": sec,
-              "ratio": sec / out["auto_continue"]["seconds"]}
-        if err <= out["auto_continue"]["error_at_end"]:
+        bc["scan"].append({"N": NN, "status": br.status.name, "end": p_end, "error": err})
+        if err <= a_err_end:
+            pick = (NN, start, br, p_end, v_end, err)
             break
-        bc["note"] = "less accurate than AUTO at the end; retried with 2N"
+    if pick is None:
+        bc["status"] = "did not reach AUTO's error at the end on any candidate mesh"
+    else:
+        NN, start, br, p_end, v_end, err = pick
+        sec, br = _median_time(
+            lambda: bk_continue(start, demo, end, cc["DS"], cc["DSMAX"]), repeats
+        )
+        bc.update(
+            N=NN,
+            T=T,
+            steps=len(br.p) - 1,
+            status=br.status.name,
+            end=p_end,
+            value_at_end=v_end,
+            error_at_end=err,
+            seconds=sec,
+            ratio=sec / out["auto_continue"]["seconds"],
+        )
     out["broachkit_continue"] = bc
     return out
 
@@ -314,10 +408,14 @@ def render(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
             continue
         lines.append(
             f"| {r['key']} | {r['solved']} | {ref.get('value', float('nan')):.12g} | "
-            f"{a['value']:.12g} | {_fmt(a['error'])} | {a['seconds']:.4f} ({a['NTST']}x{a['NCOL']}) | "
-            + (f"{b['N']}, {b['T']:g} | {_fmt(b['error'])} | {b['seconds']:.4f} | "
-               f"{b['ratio']:.2f} | {b['guess_seconds']:.3f} | {b['ratio_with_guess']:.2f} |"
-               if "seconds" in b else f"{b.get('status', '-')} ||||||")
+            f"{a['value']:.12g} | {_fmt(a['error'])} | "
+            f"{a['seconds']:.4f} ({a['NTST']}x{a['NCOL']}) | "
+            + (
+                f"{b['N']}, {b['T']:g} | {_fmt(b['error'])} | {b['seconds']:.4f} | "
+                f"{b['ratio']:.2f} | {b['guess_seconds']:.3f} | {b['ratio_with_guess']:.2f} |"
+                if "seconds" in b
+                else f"{b.get('status', '-')} ||||||"
+            )
         )
     lines += [
         "",
@@ -331,18 +429,34 @@ def render(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
         a, b = r.get("auto_continue"), r.get("broachkit_continue")
         if not a or not b:
             continue
+        if "seconds" not in b:
+            lines.append(
+                f"| {r['key']} | {r['second']} | {a['steps']} | "
+                f"{_fmt(a['error_at_end'])} | {a['seconds']:.4f} | {b['status']} |||||"
+            )
+            continue
         lines.append(
-            f"| {r['key']} | {r['second']}: {r['start_second']:g} -> {a['end']:.6g} | {a['steps']} | "
+            f"| {r['key']} | {r['second']}: {r['start_second']:g} -> {a['end']:.6g} | "
+            f"{a['steps']} | "
             f"{_fmt(a['error_at_end'])} | {a['seconds']:.4f} | {b['N']} | {b['steps']} | "
             f"{b['status']} | {_fmt(b['error_at_end'])} | {b['seconds']:.4f} | {b['ratio']:.2f} |"
         )
     lines += ["", "References and cross-checks:", ""]
     for r in results:
         ref = r.get("reference", {})
-        lines.append(f"* {r['key']}: {ref.get('how')}; AUTO NTST x 6 with T doubled: "
-                     f"{_fmt(ref.get('auto_fine_2T'), '.12g')} "
-                     f"(minus reference {_fmt(ref.get('auto_fine_minus_ref'))}); "
-                     f"change of the reference from 2T to 3T: {_fmt(ref.get('change_2T_to_3T'))}")
+        lines.append(
+            f"* {r['key']}: {ref.get('how')}; AUTO NTST x 6 with T doubled: "
+            f"{_fmt(ref.get('auto_fine_2T'), '.12g')} "
+            f"(minus reference {_fmt(ref.get('auto_fine_minus_ref'))}); "
+            f"change of the reference from 2T to 3T: {_fmt(ref.get('change_2T_to_3T'))}"
+        )
+        re_ = r.get("auto_continue", {}).get("reference_at_end", {})
+        if re_:
+            lines.append(
+                f"  * at the end of (b): reference {_fmt(re_.get('value'), '.12g')}; "
+                f"AUTO NTST x 6: {_fmt(re_.get('auto_fine'), '.12g')} (minus reference "
+                f"{_fmt(re_.get('auto_fine_minus_ref'))})"
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -370,15 +484,22 @@ def main(argv: list[str] | None = None) -> int:
             r["start_second"] = demo.params[demo.second]
             results.append(r)
             log.info("%s", json.dumps(r, default=str)[:400])
-    meta = {"command": "benchmarks/_work/venv/bin/python benchmarks/connections_vs_auto.py "
-                       + " ".join(argv if argv is not None else sys.argv[1:]),
-            "machine": f"{platform.machine()}, {platform.python_version()}",
-            "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "repeats": args.repeats}
+    meta = {
+        "command": "benchmarks/_work/venv/bin/python benchmarks/connections_vs_auto.py "
+        + " ".join(argv if argv is not None else sys.argv[1:]),
+        "machine": f"{platform.machine()}, {platform.python_version()}",
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        "repeats": args.repeats,
+    }
     out = pathlib.Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".json").write_text(json.dumps({"meta": meta, "results": results}, indent=1,
-                                                   default=lambda o: dataclasses.asdict(o)
-                                                   if dataclasses.is_dataclass(o) else str(o)))
+    out.with_suffix(".json").write_text(
+        json.dumps(
+            {"meta": meta, "results": results},
+            indent=1,
+            default=lambda o: dataclasses.asdict(o) if dataclasses.is_dataclass(o) else str(o),
+        )
+    )
     out.with_suffix(".md").write_text(render(results, meta))
     print(out.with_suffix(".md").read_text())
     return 0

@@ -92,8 +92,19 @@ class Point:
     values: dict[str, float]
 
 
-_TY = {1: "BP", 2: "LP", 3: "HB", 4: "UZ", -4: "UZ", 5: "LP", 6: "BP", 7: "PD", 8: "TR", 9: "EP",
-       -9: "MX"}
+_TY = {
+    1: "BP",
+    2: "LP",
+    3: "HB",
+    4: "UZ",
+    -4: "UZ",
+    5: "LP",
+    6: "BP",
+    7: "PD",
+    8: "TR",
+    9: "EP",
+    -9: "MX",
+}
 
 
 def parse_fort7(path: str | os.PathLike[str]) -> list[Point]:
