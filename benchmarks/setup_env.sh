@@ -19,7 +19,10 @@ VENV="$WORK/venv"
 PY="${PYTHON:-python3}"
 mkdir -p "$WORK"
 
-# bifpy compiles AUTO-07p's Fortran sources at install time: it needs gfortran.
+# bifpy compiles AUTO-07p's Fortran sources at install time: it needs gfortran. It also
+# ships AUTO's library (bifpy/auto/_lib/libbifpy.a) and AUTO's command-line main program
+# (main.o): benchmarks/peers/auto_native.py links the benchmarks' own equation files
+# against them into native AUTO-07p executables (connections_vs_auto.py, periodic_vs_auto.py).
 if ! command -v gfortran >/dev/null 2>&1; then
     if command -v apt-get >/dev/null 2>&1; then
         SUDO=""
@@ -68,5 +71,11 @@ for mod in ("continuation", "bifpy", "bice", "pycont"):  # pycont-lite imports a
         print(f"  import {mod}: ok ({getattr(m, '__version__', '?')})")
     except Exception as exc:  # report, do not fail: the benchmark says what is missing
         print(f"  import {mod}: {type(exc).__name__}: {exc}")
+import importlib.util, pathlib
+spec = importlib.util.find_spec("bifpy")
+if spec is not None and spec.origin:
+    lib = pathlib.Path(spec.origin).parent / "auto" / "_lib"
+    ok = all((lib / f).exists() for f in ("main.o", "libbifpy.a"))
+    print(f"  AUTO-07p native build (main.o + libbifpy.a): {'ok' if ok else 'MISSING in ' + str(lib)}")
 PYEOF
 exit $status

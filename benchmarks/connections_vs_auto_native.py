@@ -1,0 +1,513 @@
+r"""Connecting orbits: broachkit against AUTO-07p/HomCont (native), at equal accuracy.
+
+For each demo of :mod:`benchmarks.connection_demos` (``kpr``, ``cir``, ``san``):
+
+(a) **one connection solve** at the demo's parameters. AUTO: the demo's own route to it
+    (its runs from its start: the ``ISTART=3`` homotopy for kpr, our starting data for
+    cir, the closed-form orbit for san), as a native executable; broachkit: the
+    unstable manifold simulated and cut (:func:`connection_demos.manifold_guess`, timed
+    separately) and one solve from it (:func:`bk_solve`).
+(b) **one continuation** of that connection in a second parameter, from the solution
+    of (a) to a fixed end value of the second parameter (AUTO: ``UZSTOP``; broachkit:
+    the bound ``p_min``/``p_max``).
+
+Accuracy is the error of the solved parameter against a reference computed here: the
+closed form where there is one (san: ``mu~ = 0`` exactly, the orbit lies on
+``y^2 = x^2 (1 - x), z = 0`` for every ``a, alpha``), else a fine-mesh, long-interval
+solve by broachkit (400 intervals, adapted, ``T`` doubled), cross-checked by AUTO on
+``NTST = 200`` with ``T`` doubled (their difference is reported). broachkit's mesh is
+the smallest (``N`` intervals, then ``T``) whose error is at most AUTO's; a broachkit
+setting that cannot reach AUTO's error is reported as such, never rounded into a win.
+
+Timing: medians of ``--repeats`` runs. AUTO's wall time is that of the executables
+(process start to exit, reading ``fort.2``/``fort.3``, writing ``fort.7/8/9``); its own
+``Total Time`` is listed too. broachkit's is the call in this process after one
+untimed warm-up (CasADi's functions are built at the first call and cached).
+
+Run (after ``bash benchmarks/setup_env.sh``)::
+
+    benchmarks/_work/venv/bin/python benchmarks/connections_vs_auto_native.py
+
+writes ``benchmarks/results/connections_vs_auto_native.{json,md}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import logging
+import math
+import pathlib
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+from benchmarks.connection_demos import DEMOS, Demo, guess_on, manifold_guess  # noqa: E402
+from benchmarks.peers import auto_native as an  # noqa: E402
+from benchmarks.peers.common import PeerUnavailable  # noqa: E402
+
+log = logging.getLogger("connections_vs_auto")
+
+# broachkit's candidate meshes for "equal accuracy", cheapest first
+N_CANDIDATES = (8, 10, 12, 15, 20, 25, 30, 40, 50, 60, 80, 100, 140, 200)
+T_FACTORS = (1.0, 1.5, 2.0)
+ADAPT = 2  # rounds of mesh equidistribution in broachkit's solve (issue 11's adapt=2)
+
+
+# ======================================================================= broachkit side
+# Everything broachkit-specific is in these two functions (conn is changing the API:
+# re-point here). Today they call continuation.bvp.HeteroclinicProblem /
+# CollocationMesh / solve_connection(adapt=2) / continue_connection.
+def bk_solve(
+    demo: Demo,
+    N: int,
+    T: float,
+    guess: tuple[np.ndarray, np.ndarray],
+    params: dict[str, float] | None = None,
+) -> Any:
+    """One broachkit connection solve: homoclinic (``shift = 0``) to ``demo.saddle``,
+    ``N`` intervals of degree 4 on ``[0, T]``, unknown ``demo.solved``; returns the
+    ConnectionResult (``.success``, ``.value(name)``)."""
+    from continuation.bvp import CollocationMesh, HeteroclinicProblem, solve_connection
+
+    s = demo.system()
+    vals = {**demo.params, **(params or {})}
+    xs = demo.saddle(np.array([vals[k] for k in demo.params]))
+    prob = HeteroclinicProblem(
+        s,
+        s.params(**vals),
+        demo.solved,
+        saddle_from=xs,
+        shift=np.zeros(len(xs)),
+        mesh=CollocationMesh(N, 4, T),
+    )
+    return solve_connection(prob, guess_on(*guess, T), adapt=ADAPT)
+
+
+def bk_continue(result: Any, demo: Demo, end: float, ds: float, ds_max: float) -> Any:
+    """Continue the connection ``result`` in ``demo.second`` from its value to ``end``
+    (``continue_connection``; pseudo-arclength); returns the Branch."""
+    from continuation.bvp import continue_connection
+    from continuation.settings import ContinuationSettings
+
+    p0 = result.params[demo.second]
+    lo, hi = (end, math.inf) if end < p0 else (-math.inf, end)
+    settings = ContinuationSettings(
+        ds=ds, ds_max=ds_max, ds_min=1e-6, p_min=lo, p_max=hi, max_steps=400
+    )
+    return continue_connection(
+        result, demo.second, settings, direction="backward" if end < p0 else "forward"
+    )
+
+
+# Where the continuation (b) ends, in the second parameter (inside the demo's branch).
+CONTINUE_TO = {"kpr": -2.0, "cir": 0.3, "san": 1.0}  # cir: hyperbolic for beta > 0 only
+
+
+def _median_time(fn: Callable[[], Any], repeats: int) -> tuple[float, Any]:
+    out = fn()  # warm-up (and the result)
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+# ============================================================================ AUTO side
+class AutoDemo:
+    """The AUTO-07p executable of a demo and its runs (see connection_demos)."""
+
+    def __init__(self, demo: Demo, work: pathlib.Path) -> None:
+        self.demo = demo
+        self.work = work / demo.key
+        src = demo.fortran
+        self.files: dict[str, str] = {}
+        if demo.key == "cir":  # starting data: our simulated manifold, T of the data
+            t, _ = manifold_guess(demo)
+            src = src.replace("NU0", f"{demo.params['nu']!r}d0").replace(
+                "T0", f"{float(t[-1] - t[0])!r}d0"
+            )
+        if demo.auto_files is not None:
+            self.files = demo.auto_files(demo)
+        self.exe = an.build(src, self.work / "build")
+
+    def _resolve(
+        self, chain: list[dict[str, Any]], scale: int = 1, prev: list[an.Point] | None = None
+    ) -> list[dict[str, Any]]:
+        out = []
+        d = self.work / "resolve"
+        for c in chain:
+            c = dict(c)
+            if scale != 1:
+                c["NTST"] = c["NTST"] * scale
+                c["DSMAX"] = c["DSMAX"]
+            if isinstance(c.get("IRS"), tuple):
+                c["IRS"] = an.label_of(prev, *c["IRS"])
+            out.append(c)
+            if len(out) < len(chain):
+                prev = an.run_chain(self.exe, d, out, self.files).runs[-1]
+        return out
+
+    def solve_chain(self, scale: int = 1) -> list[dict[str, Any]]:
+        return self._resolve(self.demo.auto_solve, scale)
+
+    def solve(self, chain: list[dict[str, Any]], tag: str = "solve") -> an.ChainResult:
+        return an.run_chain(self.exe, self.work / tag, chain, self.files)
+
+    def continue_constants(
+        self, solved: an.ChainResult, end: float, scale: int = 1
+    ) -> dict[str, Any]:
+        c = dict(self.demo.auto_continue)
+        c["IRS"] = an.last(solved.runs[-1]).lab
+        c["UZSTOP"] = {self.demo.auto_index[self.demo.second]: end}
+        c["NMX"] = 400
+        if scale != 1:
+            c["NTST"] = c["NTST"] * scale
+        return c
+
+    def cont(self, solved: an.ChainResult, c: dict[str, Any], tag: str = "cont") -> an.ChainResult:
+        return an.run_chain(
+            self.exe, self.work / tag, [c], self.files, fort3=solved.directory / "fort.8"
+        )
+
+    def extend_T(self, solved: an.ChainResult, T: float, ntst: int) -> float:
+        """The solved parameter after continuing in (T, solved) to ``T`` on NTST=ntst."""
+        c = dict(self.demo.auto_solve[-1])
+        c.update(
+            IRS=an.last(solved.runs[-1]).lab,
+            ICP=[11, self.demo.auto_index[self.demo.solved]],
+            NTST=ntst,
+            NMX=400,
+            UZSTOP={11: T},
+            ISTART=1,
+        )
+        c.pop("dat", None)
+        c.pop("UZR", None)
+        r = an.run_chain(
+            self.exe, self.work / "extend", [c], self.files, fort3=solved.directory / "fort.8"
+        )
+        return self.value(r)
+
+    def value(self, r: an.ChainResult, name: str | None = None) -> float:
+        name = name or self.demo.solved
+        return an.last(r.runs[-1]).values[f"PAR({self.demo.auto_index[name]})"]
+
+
+# ============================================================================== driver
+def reference(
+    demo: Demo, params: dict[str, float], guess: tuple[np.ndarray, np.ndarray]
+) -> dict[str, Any]:
+    """The solved parameter at ``params`` (the solved one: a guess): closed form (san),
+    else broachkit on 400 adapted intervals with ``T = 3 T_demo`` (its change from
+    ``2 T_demo`` is reported as a truncation check). ``guess``: an orbit ``(t, x)``."""
+    if demo.key == "san":
+        return {"value": 0.0, "how": "closed form (mu~ = 0)"}
+    r2 = bk_solve(demo, 400, 2 * demo.T, guess, params)
+    r3 = bk_solve(demo, 400, 3 * demo.T, guess, params)
+    if not (r2.success and r3.success):
+        raise RuntimeError(f"{demo.key}: reference solve failed: {r2.message} / {r3.message}")
+    v2, v3 = r2.value(demo.solved), r3.value(demo.solved)
+    return {
+        "value": v3,
+        "how": "broachkit N=400 adapted, T = 3 T_demo",
+        "change_2T_to_3T": abs(v3 - v2),
+    }
+
+
+def _orbit(result: Any) -> tuple[np.ndarray, np.ndarray]:
+    return np.asarray(result.t, dtype=float), np.asarray(result.x, dtype=float)
+
+
+def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "key": demo.key,
+        "title": demo.title,
+        "solved": demo.solved,
+        "second": demo.second,
+        "T_demo": demo.T,
+    }
+    ad = AutoDemo(demo, work)
+    # ---- (a) AUTO solve
+    chain = ad.solve_chain()
+    solved = ad.solve(chain)
+    a_val = ad.value(solved)
+    a_times = [ad.solve(chain).seconds for _ in range(repeats)]
+    a_tot = [ad.solve(chain).auto_seconds for _ in range(1)]
+    t0 = time.perf_counter()
+    g = manifold_guess(demo)
+    guess_s = time.perf_counter() - t0
+    ref = reference(demo, demo.params, g)
+    # AUTO fine (cross-check): NTST x 6 for the last run, T doubled
+    try:
+        fine = ad.solve(
+            ad.solve_chain(scale=1)[:-1] + [{**chain[-1], "NTST": chain[-1]["NTST"] * 6}],
+            tag="fine",
+        )
+        a_fine = ad.extend_T(fine, 2 * demo.T, chain[-1]["NTST"] * 6)
+        ref["auto_fine_2T"] = a_fine
+        ref["auto_fine_minus_ref"] = a_fine - ref["value"]
+    except RuntimeError as exc:
+        ref["auto_fine_2T"] = f"failed: {str(exc)[:200]}"
+    a_err = abs(a_val - ref["value"])
+    out["reference"] = ref
+    out["auto_solve"] = {
+        "value": a_val,
+        "error": a_err,
+        "seconds": statistics.median(a_times),
+        "auto_total_time": a_tot[0],
+        "runs": len(chain),
+        "steps": [len(r) for r in solved.runs],
+        "NTST": chain[-1]["NTST"],
+        "NCOL": chain[-1]["NCOL"],
+    }
+    # ---- (a) broachkit at equal accuracy
+    chosen = None
+    scan = []
+    for N in N_CANDIDATES:
+        for f in T_FACTORS:
+            r = bk_solve(demo, N, f * demo.T, g)
+            err = abs(r.value(demo.solved) - ref["value"]) if r.success else math.inf
+            scan.append({"N": N, "T": f * demo.T, "status": r.status.name, "error": err})
+            if err <= a_err:
+                chosen = (N, f * demo.T)
+                break
+        if chosen:
+            break
+    bk: dict[str, Any] = {"guess_seconds": guess_s, "scan": scan, "adapt": ADAPT}
+    if chosen is None:
+        bk["status"] = "did not reach AUTO's error on any candidate mesh"
+        out["broachkit_solve"] = bk
+        return out
+    N, T = chosen
+    sec, res = _median_time(lambda: bk_solve(demo, N, T, g), repeats)
+    bk.update(
+        N=N,
+        T=T,
+        degree=4,
+        value=res.value(demo.solved),
+        error=abs(res.value(demo.solved) - ref["value"]),
+        seconds=sec,
+        ratio=sec / out["auto_solve"]["seconds"],
+        ratio_with_guess=(sec + guess_s) / out["auto_solve"]["seconds"],
+    )
+    out["broachkit_solve"] = bk
+    # ---- (b) AUTO continuation to the end value
+    end = CONTINUE_TO[demo.key]
+    cc = ad.continue_constants(solved, end)
+    ar = ad.cont(solved, cc)
+    last = an.last(ar.runs[-1])
+    a_end_second = last.values[f"PAR({demo.auto_index[demo.second]})"]
+    a_end_val = last.values[f"PAR({demo.auto_index[demo.solved]})"]
+    c_times = [ad.cont(solved, cc).seconds for _ in range(repeats)]
+    from continuation.bvp import connection_at
+
+    br0 = bk_continue(res, demo, end, cc["DS"], cc["DSMAX"])
+    end_orbit = _orbit(connection_at(br0, -1))
+    ref_end = reference(
+        demo, {**demo.params, demo.second: a_end_second, demo.solved: a_end_val}, end_orbit
+    )
+    out["auto_continue"] = {
+        "end": a_end_second,
+        "reached": abs(a_end_second - end) < 1e-6,
+        "value_at_end": a_end_val,
+        "error_at_end": abs(a_end_val - ref_end["value"]),
+        "steps": len(ar.runs[-1]),
+        "seconds": statistics.median(c_times),
+        "NTST": cc["NTST"],
+        "DS": cc["DS"],
+        "DSMAX": cc["DSMAX"],
+        "reference_at_end": ref_end,
+    }
+    try:  # cross-check of the end reference: AUTO's continuation on NTST x 6
+        fine_c = ad.cont(solved, ad.continue_constants(solved, end, scale=6), tag="cont_fine")
+        ref_end["auto_fine"] = an.last(fine_c.runs[-1]).values[
+            f"PAR({demo.auto_index[demo.solved]})"
+        ]
+        ref_end["auto_fine_minus_ref"] = ref_end["auto_fine"] - ref_end["value"]
+    except RuntimeError as exc:
+        ref_end["auto_fine"] = f"failed: {str(exc)[:200]}"
+    # ---- (b) broachkit continuation: the smallest N (same T as the solve) whose error
+    # at the end is at most AUTO's; each candidate run once, the chosen one timed
+    a_err_end = out["auto_continue"]["error_at_end"]
+    bc: dict[str, Any] = {"scan": []}
+    # reference at broachkit's end (the bound itself), from the orbit at br0's end
+    end_bk = float(br0.p[-1])
+    if abs(end_bk - a_end_second) > 1e-12:
+        ref_bk = reference(
+            demo,
+            {**demo.params, demo.second: end_bk, demo.solved: float(br0.records[demo.solved][-1])},
+            end_orbit,
+        )["value"]
+    else:
+        ref_bk = ref_end["value"]
+    bc["reference_at_end"] = ref_bk
+    pick = None
+    for NN in N_CANDIDATES:
+        start = bk_solve(demo, NN, T, g)
+        if not start.success:
+            bc["scan"].append({"N": NN, "status": start.status.name})
+            continue
+        br = bk_continue(start, demo, end, cc["DS"], cc["DSMAX"])
+        p_end = float(br.p[-1])
+        v_end = float(br.records[demo.solved][-1])
+        err = abs(v_end - ref_bk) if abs(p_end - end_bk) < 1e-12 else math.inf
+        bc["scan"].append({"N": NN, "status": br.status.name, "end": p_end, "error": err})
+        if err <= a_err_end:
+            pick = (NN, start, br, p_end, v_end, err)
+            break
+    if pick is None:
+        bc["status"] = "did not reach AUTO's error at the end on any candidate mesh"
+    else:
+        NN, start, br, p_end, v_end, err = pick
+        sec, br = _median_time(
+            lambda: bk_continue(start, demo, end, cc["DS"], cc["DSMAX"]), repeats
+        )
+        bc.update(
+            N=NN,
+            T=T,
+            steps=len(br.p) - 1,
+            status=br.status.name,
+            end=p_end,
+            value_at_end=v_end,
+            error_at_end=err,
+            seconds=sec,
+            ratio=sec / out["auto_continue"]["seconds"],
+        )
+    out["broachkit_continue"] = bc
+    return out
+
+
+def _fmt(x: Any, spec: str = ".2e") -> str:
+    return format(x, spec) if isinstance(x, (int, float)) and math.isfinite(x) else str(x)
+
+
+def render(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
+    lines = [
+        "# Connecting orbits: broachkit vs AUTO-07p/HomCont (native)",
+        "",
+        f"Command: `{meta['command']}`  ",
+        f"Machine: {meta['machine']}; {meta['date']}; repeats {meta['repeats']} (medians).",
+        "",
+        "## (a) one connection solve at the demo's parameters",
+        "",
+        "| demo | solved | reference | AUTO value | AUTO error | AUTO s (NTST x NCOL) "
+        "| broachkit N x 4, T | bk error | bk s | bk/AUTO | + guess s | (bk+guess)/AUTO |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        a, b, ref = r.get("auto_solve", {}), r.get("broachkit_solve", {}), r.get("reference", {})
+        if "error" in r:
+            lines.append(f"| {r['key']} | failed: {r['error']} |||||||||||")
+            continue
+        lines.append(
+            f"| {r['key']} | {r['solved']} | {ref.get('value', float('nan')):.12g} | "
+            f"{a['value']:.12g} | {_fmt(a['error'])} | "
+            f"{a['seconds']:.4f} ({a['NTST']}x{a['NCOL']}) | "
+            + (
+                f"{b['N']}, {b['T']:g} | {_fmt(b['error'])} | {b['seconds']:.4f} | "
+                f"{b['ratio']:.2f} | {b['guess_seconds']:.3f} | {b['ratio_with_guess']:.2f} |"
+                if "seconds" in b
+                else f"{b.get('status', '-')} ||||||"
+            )
+        )
+    lines += [
+        "",
+        "## (b) one continuation of it in a second parameter",
+        "",
+        "| demo | second: from -> to | AUTO steps | AUTO error at end | AUTO s "
+        "| bk N | bk steps | bk status | bk error at end | bk s | bk/AUTO |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        a, b = r.get("auto_continue"), r.get("broachkit_continue")
+        if not a or not b:
+            continue
+        if "seconds" not in b:
+            lines.append(
+                f"| {r['key']} | {r['second']} | {a['steps']} | "
+                f"{_fmt(a['error_at_end'])} | {a['seconds']:.4f} | {b['status']} |||||"
+            )
+            continue
+        lines.append(
+            f"| {r['key']} | {r['second']}: {r['start_second']:g} -> {a['end']:.6g} | "
+            f"{a['steps']} | "
+            f"{_fmt(a['error_at_end'])} | {a['seconds']:.4f} | {b['N']} | {b['steps']} | "
+            f"{b['status']} | {_fmt(b['error_at_end'])} | {b['seconds']:.4f} | {b['ratio']:.2f} |"
+        )
+    lines += ["", "References and cross-checks:", ""]
+    for r in results:
+        ref = r.get("reference", {})
+        lines.append(
+            f"* {r['key']}: {ref.get('how')}; AUTO NTST x 6 with T doubled: "
+            f"{_fmt(ref.get('auto_fine_2T'), '.12g')} "
+            f"(minus reference {_fmt(ref.get('auto_fine_minus_ref'))}); "
+            f"change of the reference from 2T to 3T: {_fmt(ref.get('change_2T_to_3T'))}"
+        )
+        re_ = r.get("auto_continue", {}).get("reference_at_end", {})
+        if re_:
+            lines.append(
+                f"  * at the end of (b): reference {_fmt(re_.get('value'), '.12g')}; "
+                f"AUTO NTST x 6: {_fmt(re_.get('auto_fine'), '.12g')} (minus reference "
+                f"{_fmt(re_.get('auto_fine_minus_ref'))})"
+            )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--demos", default=",".join(DEMOS))
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--out", default=str(HERE / "results" / "connections_vs_auto_native"))
+    args = ap.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    try:
+        an.library_paths()
+    except PeerUnavailable as exc:
+        print(f"AUTO-07p not available: {exc}", file=sys.stderr)
+        return 2
+    results = []
+    with tempfile.TemporaryDirectory(prefix="conn_vs_auto_") as tmp:
+        for key in args.demos.split(","):
+            demo = DEMOS[key]
+            log.info("%s ...", key)
+            try:
+                r = bench_demo(demo, pathlib.Path(tmp), args.repeats)
+            except Exception as exc:  # a failed demo is reported, not hidden
+                r = {"key": key, "error": f"{type(exc).__name__}: {str(exc)[:300]}"}
+            r["start_second"] = demo.params[demo.second]
+            results.append(r)
+            log.info("%s", json.dumps(r, default=str)[:400])
+    meta = {
+        "command": "benchmarks/_work/venv/bin/python benchmarks/connections_vs_auto_native.py "
+        + " ".join(argv if argv is not None else sys.argv[1:]),
+        "machine": f"{platform.machine()}, {platform.python_version()}",
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        "repeats": args.repeats,
+    }
+    out = pathlib.Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".json").write_text(
+        json.dumps(
+            {"meta": meta, "results": results},
+            indent=1,
+            default=lambda o: dataclasses.asdict(o) if dataclasses.is_dataclass(o) else str(o),
+        )
+    )
+    out.with_suffix(".md").write_text(render(results, meta))
+    print(out.with_suffix(".md").read_text())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
