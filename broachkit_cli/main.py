@@ -22,6 +22,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "broachkit_cli.commands.critical",
     "broachkit_cli.commands.critical_curve",
     "broachkit_cli.commands.demo",
+    "broachkit_cli.commands.sweep",
 )
 
 #: What ``broachkit`` runs without a sub-command.

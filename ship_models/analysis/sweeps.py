@@ -576,21 +576,30 @@ def critical_line(
             continue
         Fn[k] = float(prob.unpack(r.z)["params"]["Fn"])
         ok[k] = True
-    h_end = float(P.min())
+    # rows of the branch that are valid connections: crest saddle of index 1
+    rows = [saddle_rate(Z[i], float(P[i])) for i in range(P.size)]
+    valid = np.array([n == 1 for n, _ in rows])
+    h_end = float(P[valid].min()) if valid.any() else math.nan
     reasons = list(failed)
-    if hs[0] < h_end - 1e-12:
-        j = int(np.argmin(P))
-        _, rate = saddle_rate(Z[j], h_end)
+    if valid.any() and hs[0] < h_end - 1e-12:
+        j = int(np.argmin(np.where(valid, P, np.inf)))
         j0 = int(np.argmin(np.abs(P - h0)))
-        _, rate0 = saddle_rate(Z[j0], float(P[j0]))
+        rate, rate0 = rows[j][1], rows[j0][1]
         fn_end = float(prob.unpack(Z[j])["params"]["Fn"])
         why = (
             f"the connection ends near H/lambda = {h_end:.5g} (Fn = {fn_end:.5f}; branch "
-            f"{branch.status.name}): the crest saddle's unstable eigenvalue there is "
-            f"{rate:.3g} 1/s ({rate0:.3g} at H/lambda = {h0:g})"
+            f"{branch.status.name}, lowest H/lambda on it {float(P.min()):.5g}): the crest "
+            f"saddle's unstable eigenvalue falls to {rate:.3g} 1/s there "
+            f"({rate0:.3g} at H/lambda = {h0:g})"
         )
-        if math.isfinite(rate0) and rate < 0.2 * rate0:
-            why += "; it merges with the surf-riding point: no surf-riding in gentler waves"
+        if not valid.all():
+            why += (
+                "; beyond, the branch's end equilibrium has no unstable direction: the crest "
+                "saddle merges with the surf-riding point (saddle-node), no surf-riding in "
+                "gentler waves at this speed"
+            )
+        elif rate < 0.2 * rate0:
+            why += "; it is merging with the surf-riding point: no surf-riding in gentler waves"
         reasons.append(why)
     return result("; ".join(reasons), h_end, branch.status.name)
 
