@@ -24,11 +24,24 @@ Tasks (``key["task"]``):
 Sweeps (the calling side): :func:`boundary_sweep`, :func:`courses_sweep`,
 :func:`surface_sweep`.
 
+Notes
+-----
+The connection is the capture threshold only where the fate of the upslope branch
+switches at it. For the purse seiner at ``chi_c = 10 deg``, ``lambda/L = 1.5`` this was
+checked by bisection by simulation at ``H/lambda = 0.08, 0.1`` (agreement to 1e-7),
+but at ``H/lambda = 0.06`` the connection (Fn = 0.358836, converged under mesh halving
+and longer T; the simulated branch passes within 1e-3 of the shifted saddle there)
+does not change the fate -- periodic on both sides -- and the fate switches at
+Fn = 0.36030 instead, with the branch nowhere near the shifted saddle: another global
+bifurcation takes over in gentler waves. :func:`surface_sweep` therefore re-checks a
+sample of points by bisection (``check``) and reports ``agrees`` for each.
+
 Ship functions called (for re-pointing after the reorganisation of
 ``ship_models.analysis``): ``sudden_change.periodic_orbit``,
 ``sudden_change.follow_orbit``, ``sudden_change.sudden_change``,
 ``sudden_change.sudden_change_boundary``, ``fixed_points.fixed_points``,
 ``connection.critical_fn_bvp``, ``connection.critical_curve``,
+``connection.critical_fn_bisection``,
 ``SurgeModel.fixed_points`` / ``surge_force``, ``registry.get_model`` /
 ``get_vessel_data``; engine: ``continuation.bvp.continue_connection``,
 ``continuation.newton.newton``, ``continuation.simulate.simulate``.
@@ -207,11 +220,38 @@ def _surge_line(key: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-_TASKS = {"boundary": _boundary, "outcome": _outcome, "line": _line, "surge-line": _surge_line}
+def _bisect(key: dict[str, Any]) -> dict[str, Any]:
+    from .connection import critical_fn_bisection
+
+    m = _model(key["vessel"])
+    b = critical_fn_bisection(
+        math.radians(float(key["chi_c_deg"])), model=m, params=_params(m, key),
+        bracket=(float(key["Fn_bracket"][0]), float(key["Fn_bracket"][1])),
+        tol=float(key["tol"]),
+    )  # fmt: skip
+    if b.status is Status.INTERRUPTED:
+        raise KeyboardInterrupt
+    return {
+        "Fn": b.Fn if b.success else None,
+        "Fn_lower": b.bracket[0],
+        "Fn_upper": b.bracket[1],
+        "n_runs": b.n_runs,
+        "status": b.status.name,
+        "message": b.message,
+    }
+
+
+_TASKS = {
+    "boundary": _boundary,
+    "outcome": _outcome,
+    "line": _line,
+    "surge-line": _surge_line,
+    "bisect": _bisect,
+}
 
 
 def run_task(key: dict[str, Any]) -> dict[str, Any]:
-    """Run one ship task (``key["task"]`` in ``boundary, outcome, line, surge-line``).
+    """Run one ship task (``key["task"]``: boundary, outcome, line, surge-line, bisect).
 
     The function handed to :func:`continuation.sweep.run_sweep`: module level, JSON in,
     JSON out (``None`` for values that do not exist), no timings (so the table does
@@ -484,6 +524,9 @@ def critical_line(
     3. Correct every requested steepness by Newton at fixed ``H_over_lambda`` from the
        branch rows around it; a point counts only if the crest saddle there has one
        unstable eigenvalue.
+
+    The line is the connection; whether it is also where the fate switches must be
+    checked by simulation (see the module notes: not so at gentle waves).
 
     Where the branch stops before the gentlest wave, the rest of the line is nan and
     ``reason`` says where and why: the branch status, and the crest saddle's unstable
@@ -842,6 +885,14 @@ class SurfaceSweep:
     reasons : tuple of str, shape (n_L,)
         Why each line of ``Fn`` ends (empty when complete).
     sweep : SweepResult
+    checks : tuple of dict
+        Sample points re-computed by bisection of the upslope branch's fate by
+        simulation (:func:`~ship_models.analysis.connection.critical_fn_bisection`):
+        ``H_over_lambda, lambda_over_L, Fn`` (connection), ``Fn_lower, Fn_upper``
+        (bisection), ``agrees`` (the connection's Fn inside the bisection bracket).
+        Where it does not agree the connection exists but is not where the fate of the
+        branch switches (found at gentle waves: see the module notes).
+    check_sweep : SweepResult or None
     """
 
     chi_c_deg: float
@@ -851,6 +902,8 @@ class SurfaceSweep:
     Fn_surge: FloatArray
     reasons: tuple[str, ...]
     sweep: SweepResult
+    checks: tuple[dict[str, Any], ...] = ()
+    check_sweep: SweepResult | None = None
 
 
 def surface_sweep(
@@ -861,12 +914,16 @@ def surface_sweep(
     lambda_over_L: Sequence[float] = tuple(np.linspace(0.75, 2.5, 8)),
     tol: float = 1e-9,
     surge_tol: float = 1e-8,
+    check: int = 0,
+    check_tol: float = 1e-6,
     **run: Any,
 ) -> SurfaceSweep:
     r"""The critical surface: one continuation task in :math:`H/\lambda` per wavelength.
 
     Per wavelength two tasks: :func:`critical_line` at ``chi_c_deg`` and the surge-only
-    thresholds (:func:`surge_threshold`) at the same steepnesses.
+    thresholds (:func:`surge_threshold`) at the same steepnesses. Then ``check`` sample
+    points of the surface (spread over the converged ones) are re-computed by bisection
+    by simulation, one task each, in a bracket of +-2e-3 around the connection's Fn.
 
     Returns
     -------
@@ -901,7 +958,36 @@ def surface_sweep(
             reasons[i] = r.value["reason"]
         else:
             Fs[i] = vals
-    return SurfaceSweep(float(chi_c_deg), hs, ls, Fn, Fs, tuple(reasons), res)
+    checks: list[dict[str, Any]] = []
+    check_res = None
+    if isinstance(check, bool) or not isinstance(check, int) or check < 0:
+        raise ValueError(f"`check` must be a non-negative integer, got {check!r}")
+    pts = [(i, j) for i in range(ls.size) for j in range(hs.size) if np.isfinite(Fn[i, j])]
+    if check and pts:
+        pick = [pts[int(k)] for k in np.unique(np.linspace(0, len(pts) - 1, check).round())]
+        ck = [
+            {"task": "bisect", "lambda_over_L": float(ls[i]), "H_over_lambda": float(hs[j]),
+             "chi_c_deg": float(chi_c_deg), "Fn_bracket": [Fn[i, j] - 2e-3, Fn[i, j] + 2e-3],
+             "tol": float(check_tol), "vessel": vessel}
+            for i, j in pick
+        ]  # fmt: skip
+        check_res = _run(ck, vessel, "surface checks", run)
+        for r in check_res.records:
+            i, j = (
+                index[r.key["lambda_over_L"]],
+                int(np.argmin(np.abs(hs - r.key["H_over_lambda"]))),
+            )
+            v = r.value if r.done else {}
+            ok = r.done and v.get("status") == "SUCCESS"
+            checks.append({
+                "lambda_over_L": float(ls[i]), "H_over_lambda": float(hs[j]),
+                "Fn": float(Fn[i, j]), "Fn_lower": v.get("Fn_lower"), "Fn_upper": v.get("Fn_upper"),
+                "status": v.get("status", "FAILED"), "message": v.get("message", ""),
+                "agrees": bool(ok and v["Fn_lower"] - 1e-6 <= Fn[i, j] <= v["Fn_upper"] + 1e-6),
+            })  # fmt: skip
+    return SurfaceSweep(
+        float(chi_c_deg), hs, ls, Fn, Fs, tuple(reasons), res, tuple(checks), check_res
+    )
 
 
 __all__ = [
