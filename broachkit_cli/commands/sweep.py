@@ -130,6 +130,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     s.add_argument("--chi-c", type=float, default=10.0, help="course, degrees (default 10)")
     s.add_argument("--h-over-lambda", default="0.02:0.11:10", help="'a:b:count' or 'a,b,c'")
     s.add_argument("--lambda-over-l", default="0.75:2.5:8", help="'a:b:count' or 'a,b,c'")
+    s.add_argument(
+        "--check", type=int, default=3, help="sample points re-checked by bisection (default 3)"
+    )
     _common(s)
 
 
@@ -273,9 +276,12 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
 
     hs = parse_count(args.h_over_lambda, "--h-over-lambda")
     ls = parse_count(args.lambda_over_l, "--lambda-over-l")
+    if args.check < 0:
+        raise ValueError(f"--check must be a non-negative integer, got {args.check}")
     r = surface_sweep(
-        args.vessel, args.chi_c, H_over_lambda=hs, lambda_over_L=ls, **_run_options(args)
-    )
+        args.vessel, args.chi_c, H_over_lambda=hs, lambda_over_L=ls, check=args.check,
+        **_run_options(args),
+    )  # fmt: skip
     out = args.out
     lines = ["lambda_over_L,H_over_lambda,Fn,Fn_surge"]
     for i, lL in enumerate(r.lambda_over_L):
@@ -292,7 +298,9 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
         "Fn": _clean(r.Fn),
         "Fn_surge_chi_c_0": _clean(r.Fn_surge),
         "reasons": list(r.reasons),
+        "checks_by_bisection": list(r.checks),
         "sweep": r.sweep.to_json(),
+        "check_sweep": None if r.check_sweep is None else r.check_sweep.to_json(),
     }
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
@@ -314,7 +322,14 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     fig.tight_layout()
     fig.savefig(out / "surface.png", dpi=120)
     plt.close(fig)
-    return data, r.sweep.success
+    for c in r.checks:
+        log.info(
+            "check lambda/L = %g, H/lambda = %g: connection Fn %.6f, bisection [%s, %s] %s",
+            c["lambda_over_L"], c["H_over_lambda"], c["Fn"], c["Fn_lower"], c["Fn_upper"],
+            "agrees" if c["agrees"] else "DISAGREES",
+        )  # fmt: skip
+    ok = r.sweep.success and (r.check_sweep is None or r.check_sweep.success)
+    return data, ok
 
 
 def run(args: argparse.Namespace) -> int:
