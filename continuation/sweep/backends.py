@@ -8,7 +8,11 @@
 - a ``distributed.Client`` or any ``concurrent.futures.Executor`` passed in (left open).
 - ``"serial"``: in the calling process, one task after another (debugging).
 
-Nothing here schedules: Dask's scheduler or the process pool does.
+Nothing here schedules: Dask's scheduler or the process pool does. A worker that dies
+is charged to every task running on it. The ``LocalCluster`` started here has Dask's
+own resubmission switched off (``allowed-failures = 0``), so the sweep's single retry
+is the only one; a running cluster keeps its own setting (Dask's default: 3 silent
+resubmissions before ``KilledWorker``), then the sweep retries once more.
 """
 
 from __future__ import annotations

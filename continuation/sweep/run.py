@@ -260,7 +260,9 @@ def run_sweep(
     ----------
     fn : callable
         A module-level function ``fn(key: dict) -> JSON value`` (picklable by
-        reference: it runs in other processes or on other machines).
+        reference: it runs in other processes or on other machines). Return ``None``
+        rather than NaN for a missing number: NaN is kept, but ``nan != nan`` makes
+        equal tables compare unequal.
     keys : iterable of dict
         The tasks' inputs: non-empty dicts of finite JSON values, all different.
     store : path, optional
@@ -321,19 +323,19 @@ def run_sweep(
     status = Status.SUCCESS
     bar = _progress_bar(progress, len(ids), n_reused, desc)
     be: Backend | None = None
-    interrupted = False
+    clean = False
     try:
         if todo:
             be = open_backend(backend, workers=workers, scheduler=scheduler)
             n_executed = _drive(be, fn, todo, retries, name, code, context, st, finished, bar)
+        clean = True
     except KeyboardInterrupt:
-        interrupted = True
         status = Status.INTERRUPTED
         log.warning("%s interrupted: %d of %d tasks finished", desc, len(finished), len(ids))
     finally:
         bar.close()
-        if be is not None:
-            be.close(cancel=interrupted)
+        if be is not None:  # on an interruption or error: cancel, stop the workers
+            be.close(cancel=not clean)
     records = tuple(sorted(finished.values(), key=lambda r: order(r.key)))
     pending = tuple(sorted((k for t, k in todo if t not in finished), key=order))
     n_failed = sum(not r.done for r in records)
