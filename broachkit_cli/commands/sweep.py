@@ -286,10 +286,8 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     lines = ["lambda_over_L,H_over_lambda,Fn,Fn_surge"]
     for i, lL in enumerate(r.lambda_over_L):
         for j, h in enumerate(r.H_over_lambda):
-            f, g = r.Fn[i, j], r.Fn_surge[i, j]
-            lines.append(
-                f"{lL!r},{h!r},{'' if np.isnan(f) else repr(f)},{'' if np.isnan(g) else repr(g)}"
-            )
+            cells = [float(lL), float(h), float(r.Fn[i, j]), float(r.Fn_surge[i, j])]
+            lines.append(",".join("" if math.isnan(v) else repr(v) for v in cells))
     (out / "surface.csv").write_text("\n".join(lines) + "\n")
     data = {
         "chi_c_deg": r.chi_c_deg,
@@ -324,9 +322,10 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     plt.close(fig)
     for c in r.checks:
         log.info(
-            "check lambda/L = %g, H/lambda = %g: connection Fn %.6f, bisection [%s, %s] %s",
+            "check lambda/L = %g, H/lambda = %g: connection Fn %.7f, bisection [%s, %s]: %s "
+            "(outside by %s)",
             c["lambda_over_L"], c["H_over_lambda"], c["Fn"], c["Fn_lower"], c["Fn_upper"],
-            "agrees" if c["agrees"] else "DISAGREES",
+            "agrees" if c["agrees"] else "DISAGREES", c["difference"],
         )  # fmt: skip
     ok = r.sweep.success and (r.check_sweep is None or r.check_sweep.success)
     return data, ok

@@ -889,7 +889,8 @@ class SurfaceSweep:
         Sample points re-computed by bisection of the upslope branch's fate by
         simulation (:func:`~ship_models.analysis.connection.critical_fn_bisection`):
         ``H_over_lambda, lambda_over_L, Fn`` (connection), ``Fn_lower, Fn_upper``
-        (bisection), ``agrees`` (the connection's Fn inside the bisection bracket).
+        (bisection), ``difference`` (how far the connection's Fn lies outside the
+        bracket, 0 inside), ``agrees`` (``difference <= agree_tol``).
         Where it does not agree the connection exists but is not where the fate of the
         branch switches (found at gentle waves: see the module notes).
     check_sweep : SweepResult or None
@@ -916,6 +917,7 @@ def surface_sweep(
     surge_tol: float = 1e-8,
     check: int = 0,
     check_tol: float = 1e-6,
+    agree_tol: float = 1e-5,
     **run: Any,
 ) -> SurfaceSweep:
     r"""The critical surface: one continuation task in :math:`H/\lambda` per wavelength.
@@ -923,7 +925,10 @@ def surface_sweep(
     Per wavelength two tasks: :func:`critical_line` at ``chi_c_deg`` and the surge-only
     thresholds (:func:`surge_threshold`) at the same steepnesses. Then ``check`` sample
     points of the surface (spread over the converged ones) are re-computed by bisection
-    by simulation, one task each, in a bracket of +-2e-3 around the connection's Fn.
+    by simulation, one task each, in a bracket of +-2e-3 around the connection's Fn,
+    to ``check_tol``; they agree when the connection's Fn is within ``agree_tol`` of the
+    bracket (the bisection itself starts the manifold ``1e-6`` off the saddle and
+    integrates at ``rtol = 1e-9``: a few 1e-6 in Fn were seen at gentle waves).
 
     Returns
     -------
@@ -979,12 +984,14 @@ def surface_sweep(
             )
             v = r.value if r.done else {}
             ok = r.done and v.get("status") == "SUCCESS"
-            checks.append({
-                "lambda_over_L": float(ls[i]), "H_over_lambda": float(hs[j]),
-                "Fn": float(Fn[i, j]), "Fn_lower": v.get("Fn_lower"), "Fn_upper": v.get("Fn_upper"),
-                "status": v.get("status", "FAILED"), "message": v.get("message", ""),
-                "agrees": bool(ok and v["Fn_lower"] - 1e-6 <= Fn[i, j] <= v["Fn_upper"] + 1e-6),
-            })  # fmt: skip
+            f = float(Fn[i, j])
+            diff = max(v["Fn_lower"] - f, f - v["Fn_upper"], 0.0) if ok else math.nan
+            checks.append(
+                {"lambda_over_L": float(ls[i]), "H_over_lambda": float(hs[j]), "Fn": f,
+                 "Fn_lower": v.get("Fn_lower"), "Fn_upper": v.get("Fn_upper"),
+                 "status": v.get("status", "FAILED"), "message": v.get("message", ""),
+                 "difference": _finite(diff), "agrees": bool(ok and diff <= agree_tol)}
+            )  # fmt: skip
     return SurfaceSweep(
         float(chi_c_deg), hs, ls, Fn, Fs, tuple(reasons), res, tuple(checks), check_res
     )
