@@ -123,3 +123,13 @@ def test_boundary_sweep_same_table_on_processes_and_in_process(tmp_path, ship):
     assert d.success and np.isclose(a.Fn[0], d.Fn, rtol=0, atol=1e-12)
     again = S.boundary_sweep("purse_seiner", 10.0, backend="serial", store=tmp_path / "a", **opts)
     assert again.boundaries.n_executed == 0 and again.outcomes.n_executed == 0
+
+
+def test_vessel_files_are_named_by_absolute_path_for_remote_workers(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert S._vessel_ref("my_ship.toml") == str(tmp_path / "my_ship.toml")
+    assert S._vessel_ref("purse_seiner") == "purse_seiner"
+    with pytest.raises(ValueError, match="`vessel`"):
+        S._vessel_ref("")
+    # the context is the file's content: same content, same hash
+    assert S.vessel_context("purse_seiner") == S.vessel_context("purse_seiner")

@@ -651,6 +651,16 @@ def critical_line(
 _RUN_OPTIONS = ("store", "backend", "workers", "scheduler", "progress", "retry_failed")
 
 
+def _vessel_ref(vessel: Any) -> str:
+    """A vessel name as given; a vessel file as its absolute path (workers elsewhere)."""
+    from pathlib import Path
+
+    if not isinstance(vessel, str) or not vessel:
+        raise ValueError(f"`vessel` must be a vessel name or a .toml path, got {vessel!r}")
+    p = Path(vessel)
+    return str(p.resolve()) if p.suffix == ".toml" or p.is_file() else vessel
+
+
 def _run(keys: list[dict[str, Any]], vessel: str, desc: str, run: dict[str, Any]) -> SweepResult:
     bad = set(run) - set(_RUN_OPTIONS)
     if bad:
@@ -745,6 +755,7 @@ def boundary_sweep(
     -------
     BoundarySweep
     """
+    vessel = _vessel_ref(vessel)
     from .connection import critical_fn_bvp
 
     if isinstance(positions, int) and not isinstance(positions, bool):
@@ -840,6 +851,7 @@ def courses_sweep(
     -------
     CoursesSweep
     """
+    vessel = _vessel_ref(vessel)
     from .connection import critical_curve
 
     degs = np.asarray(chi_c_deg, dtype=float).reshape(-1)
@@ -934,6 +946,7 @@ def surface_sweep(
     -------
     SurfaceSweep
     """
+    vessel = _vessel_ref(vessel)
     hs = np.sort(np.asarray(H_over_lambda, dtype=float).reshape(-1))
     ls = np.sort(np.asarray(lambda_over_L, dtype=float).reshape(-1))
     for name, a in (("H_over_lambda", hs), ("lambda_over_L", ls)):
