@@ -133,3 +133,18 @@ def test_vessel_files_are_named_by_absolute_path_for_remote_workers(tmp_path, mo
         S._vessel_ref("")
     # the context is the file's content: same content, same hash
     assert S.vessel_context("purse_seiner") == S.vessel_context("purse_seiner")
+
+
+def test_an_interrupted_surface_stops_before_its_checks(monkeypatch):
+    from continuation.sweep import SweepResult
+
+    calls = []
+
+    def fake(fn, keys, **kw):
+        calls.append(keys)
+        return SweepResult((), tuple(keys), Status.INTERRUPTED, len(keys), 0, 0, "fake")
+
+    monkeypatch.setattr(S, "run_sweep", fake)
+    r = S.surface_sweep(H_over_lambda=[0.1], lambda_over_L=[1.5], check=2, backend="serial")
+    assert len(calls) == 1 and r.check_sweep is None and r.checks == ()
+    assert np.all(np.isnan(r.Fn)) and r.sweep.status is Status.INTERRUPTED

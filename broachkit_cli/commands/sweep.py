@@ -323,9 +323,9 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     for c in r.checks:
         log.info(
             "check lambda/L = %g, H/lambda = %g: connection Fn %.7f, bisection [%s, %s]: %s "
-            "(outside by %s)",
+            "(outside by %s; bisection %s)",
             c["lambda_over_L"], c["H_over_lambda"], c["Fn"], c["Fn_lower"], c["Fn_upper"],
-            "agrees" if c["agrees"] else "DISAGREES", c["difference"],
+            "agrees" if c["agrees"] else "DISAGREES", c["difference"], c["status"],
         )  # fmt: skip
     ok = r.sweep.success and (r.check_sweep is None or r.check_sweep.success)
     return data, ok

@@ -208,10 +208,13 @@ def _line(key: dict[str, Any]) -> dict[str, Any]:
 
 def _surge_line(key: dict[str, Any]) -> dict[str, Any]:
     s = _surge(key["vessel"])
-    out = [
-        surge_threshold(s, float(h), float(key["lambda_over_L"]), tol=float(key["tol"]))
-        for h in key["H_over_lambda"]
-    ]
+    out = []
+    for h in key["H_over_lambda"]:
+        try:
+            t = surge_threshold(s, float(h), float(key["lambda_over_L"]), tol=float(key["tol"]))
+        except (ContinuationError, ValueError) as exc:
+            t = SurgeThreshold(math.nan, (math.nan, math.nan), Status.UNDECIDED, str(exc))
+        out.append(t)
     return {
         "H_over_lambda": [float(h) for h in key["H_over_lambda"]],
         "Fn": [_finite(t.Fn) for t in out],
@@ -424,22 +427,41 @@ def surge_threshold(
     w = fb - fa
     # dense near the birth of the fixed points, where the connection ends
     fns = fa + w * np.concatenate([[1e-4, 1e-3, 1e-2], np.linspace(0.02, 0.98, n_scan)])
-    vals = [g(float(f)) for f in fns]
-    for i in range(fns.size - 1):
-        if vals[i] < 0 <= vals[i + 1]:
-            fn = so.brentq(g, fns[i], fns[i + 1], xtol=tol, rtol=4 * np.finfo(float).eps)
+    vals = []
+    for f in fns:
+        try:
+            vals.append(g(float(f)))
+        except ContinuationError as exc:  # e.g. fixed points too close to be resolved
+            log.info("surge threshold: no miss at Fn = %.6f: %s", f, exc)
+            vals.append(math.nan)
+    ok = [i for i, v in enumerate(vals) if math.isfinite(v)]
+    for i, k in zip(ok[:-1], ok[1:], strict=True):
+        if vals[i] < 0 <= vals[k]:
+            try:
+                fn = so.brentq(g, fns[i], fns[k], xtol=tol, rtol=4 * np.finfo(float).eps)
+            except ContinuationError as exc:
+                return SurgeThreshold(
+                    math.nan, (fa, fb), Status.UNDECIDED,
+                    f"Brent's method failed in [{fns[i]:.6f}, {fns[k]:.6f}]: {exc}", n,
+                )  # fmt: skip
             return SurgeThreshold(fn, (fa, fb), Status.SUCCESS, f"brentq, {n} simulations", n)
-    if vals[0] >= 0:
+    if not ok:
+        return SurgeThreshold(
+            math.nan, (fa, fb), Status.UNDECIDED, "no crest saddle resolved at any scanned Fn", n
+        )
+    if all(vals[i] >= 0 for i in ok):
         msg = (
             f"no connection: the upslope branch turns back to surf-riding already at "
-            f"Fn = {fns[0]:.6f}, just above the birth of the surf-riding points "
+            f"Fn = {fns[ok[0]]:.6f}, just above the birth of the surf-riding points "
             f"(Fn = {fa:.6f}; the threshold there is that saddle-node)"
         )
-    else:
+    elif all(vals[i] < 0 for i in ok):
         msg = (
             f"no connection: the upslope branch passes the next crest at every Fn with "
             f"surf-riding points ({fa:.5f} < Fn < {fb:.5f})"
         )
+    else:
+        msg = "the miss changes sign only from captured to periodic: no threshold found"
     return SurgeThreshold(math.nan, (fa, fb), Status.NO_BRACKET, msg, n)
 
 
@@ -788,7 +810,12 @@ def boundary_sweep(
     ]  # fmt: skip
     b = _run(keys, vessel, "boundary", run)
     outcomes = None
-    if map_offsets is not None and len(map_offsets) and het.success:
+    if (
+        map_offsets is not None
+        and len(map_offsets)
+        and het.success
+        and b.status is not Status.INTERRUPTED  # an interrupted study stops here
+    ):
         mk = [
             {"task": "outcome", "Fn": fh + float(d), "xi_0": float(x),
              "chi_c_deg": float(chi_c_deg), "t_max": float(t_max), **common}
@@ -981,7 +1008,7 @@ def surface_sweep(
     if isinstance(check, bool) or not isinstance(check, int) or check < 0:
         raise ValueError(f"`check` must be a non-negative integer, got {check!r}")
     pts = [(i, j) for i in range(ls.size) for j in range(hs.size) if np.isfinite(Fn[i, j])]
-    if check and pts:
+    if check and pts and res.status is not Status.INTERRUPTED:
         pick = [pts[int(k)] for k in np.unique(np.linspace(0, len(pts) - 1, check).round())]
         ck = [
             {"task": "bisect", "lambda_over_L": float(ls[i]), "H_over_lambda": float(hs[j]),
