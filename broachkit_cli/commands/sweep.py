@@ -325,7 +325,8 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
             "check lambda/L = %g, H/lambda = %g: connection Fn %.7f, bisection [%s, %s]: %s "
             "(outside by %s; bisection %s)",
             c["lambda_over_L"], c["H_over_lambda"], c["Fn"], c["Fn_lower"], c["Fn_upper"],
-            "agrees" if c["agrees"] else "DISAGREES", c["difference"], c["status"],
+            {True: "agrees", False: "DISAGREES", None: "inconclusive"}[c["agrees"]],
+            c["difference"], c["status"],
         )  # fmt: skip
     ok = r.sweep.success and (r.check_sweep is None or r.check_sweep.success)
     return data, ok

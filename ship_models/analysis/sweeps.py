@@ -230,7 +230,7 @@ def _bisect(key: dict[str, Any]) -> dict[str, Any]:
     b = critical_fn_bisection(
         math.radians(float(key["chi_c_deg"])), model=m, params=_params(m, key),
         bracket=(float(key["Fn_bracket"][0]), float(key["Fn_bracket"][1])),
-        tol=float(key["tol"]),
+        tol=float(key["tol"]), t_max=float(key.get("t_max", 600.0)),
     )  # fmt: skip
     if b.status is Status.INTERRUPTED:
         raise KeyboardInterrupt
@@ -957,6 +957,7 @@ def surface_sweep(
     check: int = 0,
     check_tol: float = 1e-6,
     agree_tol: float = 1e-5,
+    check_t_max: float = 1800.0,
     **run: Any,
 ) -> SurfaceSweep:
     r"""The critical surface: one continuation task in :math:`H/\lambda` per wavelength.
@@ -1013,7 +1014,7 @@ def surface_sweep(
         ck = [
             {"task": "bisect", "lambda_over_L": float(ls[i]), "H_over_lambda": float(hs[j]),
              "chi_c_deg": float(chi_c_deg), "Fn_bracket": [Fn[i, j] - 2e-3, Fn[i, j] + 2e-3],
-             "tol": float(check_tol), "vessel": vessel}
+             "tol": float(check_tol), "t_max": float(check_t_max), "vessel": vessel}
             for i, j in pick
         ]  # fmt: skip
         check_res = _run(ck, vessel, "surface checks", run)
@@ -1030,7 +1031,7 @@ def surface_sweep(
                 {"lambda_over_L": float(ls[i]), "H_over_lambda": float(hs[j]), "Fn": f,
                  "Fn_lower": v.get("Fn_lower"), "Fn_upper": v.get("Fn_upper"),
                  "status": v.get("status", "FAILED"), "message": v.get("message", ""),
-                 "difference": _finite(diff), "agrees": bool(ok and diff <= agree_tol)}
+                 "difference": _finite(diff), "agrees": bool(diff <= agree_tol) if ok else None}
             )  # fmt: skip
     return SurfaceSweep(
         float(chi_c_deg), hs, ls, Fn, Fs, tuple(reasons), res, tuple(checks), check_res
