@@ -1,6 +1,6 @@
 """Sweep scaling and simulation throughput (issue 13). Run on demand, once.
 
-    python benchmarks/sweep_scaling.py [--positions 4] [--out benchmarks/results]
+    python -m benchmarks.sweep_scaling [--positions 4] [--out benchmarks/results]
 
 1. Simulations per second of one sudden-change trajectory of the purse seiner
    (Fn = 0.1, chi_c = 0 orbit state, switched to the heteroclinic Fn at 10 deg,
