@@ -35,6 +35,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "broachkit_cli.commands.sensitivity",
     "broachkit_cli.commands.calibrate",
     "broachkit_cli.commands.demo",
+    "broachkit_cli.commands.sweep",
 )
 
 #: What ``broachkit`` runs without a sub-command.

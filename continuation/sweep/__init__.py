@@ -1,0 +1,38 @@
+"""Embarrassingly parallel sweeps: checkpointed, resumable, on any executor.
+
+:func:`run_sweep` runs ``fn(key)`` for many JSON keys on local processes, a Dask
+``LocalCluster`` or a Dask scheduler; each finished task is checkpointed atomically,
+keyed by a hash of its inputs, a caller-supplied context and the code version, so an
+interrupted sweep resumes without redoing any finished task. Knows nothing of the
+application.
+
+Public names: :func:`run_sweep`, :class:`SweepResult`, :class:`TaskRecord`,
+:func:`open_backend`, :class:`CheckpointStore`, :func:`file_digest`,
+:func:`source_version`, :func:`task_id`.
+"""
+
+from __future__ import annotations
+
+from .backends import BACKENDS, Backend, SerialExecutor, open_backend
+from .keys import canonical_json, file_digest, source_version, table_order, task_id
+from .run import DONE, FAILED, SweepResult, TaskRecord, execute_task, run_sweep
+from .store import CheckpointStore
+
+__all__ = [
+    "BACKENDS",
+    "DONE",
+    "FAILED",
+    "Backend",
+    "CheckpointStore",
+    "SerialExecutor",
+    "SweepResult",
+    "TaskRecord",
+    "canonical_json",
+    "execute_task",
+    "file_digest",
+    "open_backend",
+    "run_sweep",
+    "source_version",
+    "table_order",
+    "task_id",
+]

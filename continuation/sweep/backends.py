@@ -1,0 +1,220 @@
+"""Where the tasks run: any ``concurrent.futures`` executor, chosen by :func:`open_backend`.
+
+- ``"processes"`` (default): a :class:`concurrent.futures.ProcessPoolExecutor`, one
+  worker per core (``workers`` to change); rebuilt when a worker dies.
+- ``"dask"``: a Dask distributed ``LocalCluster`` started for the run (``workers``
+  processes, one thread each), closed at the end.
+- ``scheduler="tcp://HOST:PORT"``: a Dask ``Client`` of a running cluster.
+- a ``distributed.Client`` or any ``concurrent.futures.Executor`` passed in (left open).
+- ``"serial"``: in the calling process, one task after another (debugging).
+
+Nothing here schedules: Dask's scheduler or the process pool does. A worker that dies
+is charged to every task running on it. The ``LocalCluster`` started here has Dask's
+own resubmission switched off (``allowed-failures = 0``), so the sweep's single retry
+is the only one; a running cluster keeps its own setting (Dask's default: 3 silent
+resubmissions before ``KilledWorker``), then the sweep retries once more.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import logging
+import multiprocessing
+import os
+import signal
+from collections.abc import Callable
+from typing import Any
+
+log = logging.getLogger(__name__)
+
+BACKENDS = ("processes", "dask", "serial")
+
+
+class SerialExecutor(cf.Executor):
+    """Runs each task at ``submit`` in the calling process (a finished future back)."""
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> cf.Future:
+        fut: cf.Future = cf.Future()
+        fut.set_running_or_notify_cancel()
+        try:
+            fut.set_result(fn(*args, **kwargs))
+        except Exception as exc:
+            fut.set_exception(exc)
+        return fut
+
+
+def _ignore_sigint() -> None:
+    # the sweep's process handles Ctrl-C (cancels, then stops the workers)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class Backend:
+    """An executor plus what the sweep needs to know about it.
+
+    Attributes
+    ----------
+    name : str
+        ``"processes"``, ``"dask"``, ``"dask-scheduler"``, ``"executor"`` or ``"serial"``.
+    slots : int
+        Tasks that can run at once (the sweep keeps at most this many in flight, so a
+        dead worker is charged only to the tasks that were running).
+    """
+
+    def __init__(
+        self,
+        name: str,
+        executor: cf.Executor,
+        slots: int,
+        *,
+        rebuild: Callable[[], cf.Executor] | None = None,
+        owned: tuple[Any, ...] = (),
+    ) -> None:
+        self.name, self.executor, self.slots = name, executor, max(int(slots), 1)
+        self._rebuild, self._owned = rebuild, owned
+        #: Incremented each time the executor is replaced.
+        self.generation = 0
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> cf.Future:
+        """Submit ``fn(*args)``; a broken process pool is replaced first."""
+        try:
+            return self.executor.submit(fn, *args)
+        except cf.BrokenExecutor:
+            self.recover()
+            return self.executor.submit(fn, *args)
+
+    def recover(self) -> None:
+        """Replace a broken executor (a worker died) by a fresh one, if it can be rebuilt."""
+        if self._rebuild is None:
+            raise RuntimeError(f"the {self.name} executor broke and cannot be rebuilt")
+        log.warning("a worker died: starting a new %s pool", self.name)
+        self._stop_executor(cancel=True)
+        self.executor = self._rebuild()
+        self.generation += 1
+
+    def _stop_executor(self, cancel: bool) -> None:
+        ex = self.executor
+        if isinstance(ex, cf.ProcessPoolExecutor):
+            procs = list(getattr(ex, "_processes", {}).values()) if cancel else []
+            ex.shutdown(wait=not cancel, cancel_futures=cancel)
+            for p in procs:  # running tasks are abandoned: stop their processes now
+                if p.is_alive():
+                    p.terminate()
+            for p in procs:
+                p.join(timeout=5)
+        elif self._rebuild is not None or self.name == "serial":
+            ex.shutdown(wait=not cancel, cancel_futures=cancel)
+
+    def close(self, cancel: bool = False) -> None:
+        """Shut down what the sweep started (a passed-in executor or client stays open)."""
+        if self._rebuild is not None or self.name == "serial":
+            self._stop_executor(cancel)
+        elif cancel and self.name.startswith("dask"):
+            self.executor.shutdown(wait=False)
+        for obj in self._owned:
+            try:
+                obj.close()
+            except Exception as exc:  # pragma: no cover - best effort at shutdown
+                log.warning("closing %s failed: %s", type(obj).__name__, exc)
+
+
+def _check_workers(workers: Any) -> int | None:
+    if workers is None:
+        return None
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"`workers` must be a positive integer, got {workers!r}")
+    return workers
+
+
+def _process_pool(workers: int, start_method: str) -> cf.ProcessPoolExecutor:
+    ctx = multiprocessing.get_context(start_method)
+    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_ignore_sigint)
+
+
+def _client_backend(client: Any, name: str, owned: tuple[Any, ...]) -> Backend:
+    slots = sum(client.nthreads().values()) or 1
+    return Backend(name, client.get_executor(pure=False), slots, owned=owned)
+
+
+def _is_client(obj: Any) -> bool:
+    return type(obj).__name__ == "Client" and hasattr(obj, "get_executor")
+
+
+def open_backend(
+    backend: str | cf.Executor | Any = "processes",
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    start_method: str = "spawn",
+) -> Backend:
+    """Resolve the user's choice of executor.
+
+    Parameters
+    ----------
+    backend : {"processes", "dask", "serial"}, Executor or distributed.Client
+        See the module docstring.
+    workers : int, optional
+        Workers of a process pool or of the ``LocalCluster`` (default: one per core).
+    scheduler : str, optional
+        Address of a running Dask scheduler (overrides ``backend``).
+    start_method : str
+        Multiprocessing start method of the process pool.
+
+    Returns
+    -------
+    Backend
+
+    Raises
+    ------
+    ValueError
+        For an unknown backend, bad ``workers`` or an unreachable scheduler.
+    """
+    n = _check_workers(workers)
+    cores = os.cpu_count() or 1
+    if scheduler is not None:
+        if not isinstance(scheduler, str) or not scheduler:
+            raise ValueError(
+                f"`scheduler` must be an address like tcp://HOST:PORT, got {scheduler!r}"
+            )
+        from distributed import Client
+
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError) as exc:
+            raise ValueError(f"`scheduler`: cannot connect to {scheduler} ({exc})") from None
+        return _client_backend(client, "dask-scheduler", (client,))
+    if _is_client(backend):
+        return _client_backend(backend, "dask-scheduler", ())
+    if isinstance(backend, cf.Executor):
+        slots = getattr(backend, "_max_workers", None) or n or cores
+        return Backend("executor", backend, slots)
+    if backend == "processes":
+        k = n or cores
+        return Backend(
+            "processes", _process_pool(k, start_method), k,
+            rebuild=lambda: _process_pool(k, start_method),
+        )  # fmt: skip
+    if backend == "serial":
+        return Backend("serial", SerialExecutor(), 1)
+    if backend == "dask":
+        import dask
+        from distributed import Client, LocalCluster
+
+        k = n or cores
+        # the sweep retries a task once itself; Dask must not resubmit it on its own
+        with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+            cluster = LocalCluster(
+                n_workers=k,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=":0",
+                silence_logs=logging.ERROR,
+            )
+        client = Client(cluster)
+        return _client_backend(client, "dask", (client, cluster))
+    raise ValueError(
+        f"`backend` must be one of {', '.join(BACKENDS)}, a concurrent.futures.Executor or a "
+        f"distributed.Client, got {backend!r}"
+    )
+
+
+__all__ = ["BACKENDS", "Backend", "SerialExecutor", "open_backend"]
