@@ -102,24 +102,24 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .algorithms.base import (
+from ..algorithms.base import (
     ContinuationAlgorithm,
     StepOutcome,
     StepState,
     theta_norm,
     theta_weights,
 )
-from .algorithms.corrector import correct
-from .algorithms.palc import PALC
-from .algorithms.point import make_point
-from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
-from .driver import continue_branch
-from .errors import ContinuationError, ConvergenceError
-from .events import Event
-from .problem import EquilibriumProblem, difference, linearize
-from .settings import ContinuationSettings, NewtonSettings
-from .status import Status
-from .typing import FloatArray
+from ..algorithms.corrector import correct
+from ..algorithms.palc import PALC
+from ..algorithms.point import make_point
+from ..branch import Branch, BranchPoint, SpecialKind, SpecialPoint
+from ..driver import continue_branch
+from ..errors import ContinuationError, ConvergenceError
+from ..events import Event
+from ..problem import EquilibriumProblem, difference, linearize
+from ..settings import ContinuationSettings, NewtonSettings
+from ..status import Status
+from ..typing import FloatArray
 
 log = logging.getLogger(__name__)
 
