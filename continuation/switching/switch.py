@@ -1,91 +1,17 @@
-r"""Branch switching at simple branch points (AUTO's ``ISW=-1``, MATCONT's "BP -> EP").
+r"""Switch onto the branch crossing a computed one at a simple branch point.
 
-At a simple branch point :math:`u^* = (z^*, p^*)` of :math:`G(u) = 0`,
-:math:`G: R^{N+1} \to R^N`, two branches of solutions cross transversally. The
-Jacobian :math:`A = DG(u^*) = [G_z\; G_p]` (``N x (N+1)``) has rank ``N - 1``:
-
-.. math::
-
-    \ker A = \mathrm{span}\{q_1, q_2\}, \qquad \ker A^T = \mathrm{span}\{\psi\},
-
-with :math:`q_1, q_2` orthonormal in the ``theta`` inner product of the continuation
-(:func:`~continuation.algorithms.base.theta_weights`). Every branch through
-:math:`u^*` has the form :math:`u(s) = u^* + s\,(\alpha q_1 + \beta q_2) + O(s^2)`;
-projecting the second-order expansion of :math:`G(u(s)) = 0` on :math:`\psi` gives the
-*algebraic bifurcation equation* (ABE; Keller 1977; Doedel, Keller & Kernevez 1991;
-Govaerts 2000; Kuznetsov 2004, Sec. 10.2)
-
-.. math::
-
-    c_{11}\alpha^2 + 2 c_{12}\alpha\beta + c_{22}\beta^2 = 0, \qquad
-    c_{ij} = \psi^T D^2G(u^*)[q_i, q_j].
-
-The point is a *simple* branch point when :math:`c_{12}^2 - c_{11}c_{22} > 0`: the ABE
-then has two real root directions, the tangents of the two branches. One is the
-tangent :math:`t_{old}` of the branch the point was found on; the other,
-:math:`t_{new}`, is the tangent of the crossing branch. The roots are computed from the
-eigen-decomposition :math:`C = [[c_{11}, c_{12}], [c_{12}, c_{22}]] = \lambda_- e_-
-e_-^T + \lambda_+ e_+ e_+^T` (:math:`\lambda_- < 0 < \lambda_+`):
-:math:`(\alpha, \beta) \propto \sqrt{-\lambda_-}\, e_+ \pm \sqrt{\lambda_+}\, e_-`.
-Only when the two branches are orthogonal (transcritical and pitchfork bifurcations in
-the usual coordinates) is :math:`t_{new}` simply the kernel direction orthogonal to
-:math:`t_{old}`; in general it is not, which is why the ABE is solved.
-
-The second derivatives :math:`D^2G[a, b]` come from the CasADi trace of the model
-(forward-over-forward directional derivatives, ``casadi.jtimes``) for an
-:class:`~continuation.problem.EquilibriumProblem` of a traced
-:class:`~continuation.system.System`, else from central differences of the Jacobian,
-:math:`(A(u^* + h b) - A(u^* - h b))\, a / 2h`.
-
-The kernel comes from the SVD of :math:`A\, W^{-1/2}` (``W = diag(theta weights)``)
-for dense or moderately sized problems, and for large sparse ones from two solves with
-the bordered matrix (Govaerts 2000, on bordered matrices; Keller 1977)
-
-.. math::
-
-    M = \begin{pmatrix} A & b \\ C^T & 0 \end{pmatrix}, \quad
-    M \begin{pmatrix} q_k \\ y \end{pmatrix} = e_{N + k}, \quad
-    M^T \begin{pmatrix} \psi \\ \eta \end{pmatrix} = e_{N + 2},
-
-first with ``b`` random and ``C = W [t_old, r]``, then again with ``b = psi`` and
-``C = W [q_1, q_2]`` (which makes ``M`` well conditioned).
-
-Start on the crossing branch. With :math:`\varphi_2` the part of :math:`t_{new}`
-``theta``-orthogonal to :math:`t_{old}` and :math:`S = \langle\varphi_2,
-t_{new}\rangle_\theta = \sin\angle(t_{old}, t_{new})`, the start point for the half
-``sign = +-1`` solves, by Newton's method from :math:`u^* + \mathrm{sign}\, a\, t_{new}`,
-
-.. math::
-
-    G(u) = 0, \qquad \langle \varphi_2, u - u^* \rangle_\theta = \mathrm{sign}\, a S,
-
-a hyperplane *parallel to the current branch* at distance :math:`a S` from it, so the
-corrector cannot fall back onto the current branch near :math:`u^*` (``a`` is the
-``amplitude``). The corrected point is accepted only if it lies within ``a / 2`` of the
-prediction and its tangent is within 45 degrees of :math:`t_{new}`; the continuation is
-then started there with the tangent oriented along :math:`\pm t_{new}`
-(:func:`~continuation.driver.continue_branch`). With ``direction="both"`` the run
-towards :math:`u^*` passes through the branch point (where the driver detects it again,
-on the new branch) into the other half; the rows next to :math:`u^*` are checked to lie
-on the crossing branch (their offset from the current branch,
+:func:`switch_branch` checks its input, solves the algebraic bifurcation equation
+(:func:`~continuation.switching.bifurcation_equation.crossing_tangents`), rejects
+degenerate points by the size of its coefficients against the rows around the point,
+corrects a start point on the crossing branch (:mod:`~continuation.switching.start`)
+and continues from there with :func:`~continuation.driver.continue_branch`, the
+tangent oriented along :math:`\pm t_{new}`. With ``direction="both"`` the run towards
+:math:`u^*` passes through the branch point (where the driver detects it again, on the
+new branch) into the other half; the rows next to :math:`u^*` are checked to lie on
+the crossing branch (their offset from the current branch,
 :math:`\langle\varphi_2, u - u^*\rangle_\theta`, must be at least half of
-:math:`S \langle t_{new}, u - u^*\rangle_\theta`).
-
-References
-----------
-Keller, H. B. (1977), "Numerical solution of bifurcation and nonlinear eigenvalue
-problems", in *Applications of Bifurcation Theory*, P. H. Rabinowitz (ed.), Academic
-Press, 359-384.
-
-Doedel, E. J., Keller, H. B. & Kernevez, J. P. (1991), "Numerical analysis and control
-of bifurcation problems (I): bifurcation in finite dimensions", *Int. J. Bifurcation
-and Chaos* 1(3), 493-520.
-
-Govaerts, W. J. F. (2000), *Numerical Methods for Bifurcations of Dynamical
-Equilibria*, SIAM.
-
-Kuznetsov, Yu. A. (2004), *Elements of Applied Bifurcation Theory*, 3rd ed., Springer,
-Sec. 10.2.
+:math:`S \langle t_{new}, u - u^*\rangle_\theta`). Equations and references:
+:mod:`continuation.switching`.
 """
 
 from __future__ import annotations
@@ -94,61 +20,25 @@ import dataclasses
 import logging
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Any, Literal
 
-import casadi as ca
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
-from ..algorithms.base import (
-    ContinuationAlgorithm,
-    StepOutcome,
-    StepState,
-    theta_norm,
-    theta_weights,
-)
-from ..algorithms.corrector import correct
+from ..algorithms.base import ContinuationAlgorithm, theta_norm, theta_weights
 from ..algorithms.palc import PALC
-from ..algorithms.point import make_point
 from ..branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from ..driver import continue_branch
 from ..errors import ContinuationError, ConvergenceError
 from ..events import Event
-from ..problem import EquilibriumProblem, difference, linearize
-from ..settings import ContinuationSettings, NewtonSettings
+from ..problem import difference, linearize
+from ..settings import ContinuationSettings
 from ..status import Status
 from ..typing import FloatArray
+from .bifurcation_equation import CrossingTangents, solve_crossing_tangents
+from .kernel import DENSE_KERNEL_MAX, dense
+from .start import OrientedStart, offset_direction, start_point
 
 log = logging.getLogger(__name__)
-
-#: Problems with more unknowns than this and a sparse Jacobian get their kernel from
-#: bordered solves instead of a dense SVD.
-DENSE_KERNEL_MAX = 400
-
-#: The two smallest singular values of ``A W^{-1/2}`` must be separated by this factor
-#: (``sigma_N <= KERNEL_GAP * sigma_{N-1}``), else the kernel is not two-dimensional.
-KERNEL_GAP = 0.1
-
-#: ABE coefficients below this fraction of ``max ||D^2G[q_i, q_j]||`` count as zero.
-ABE_ZERO = 1e-8
-
-#: Smallest accepted ``min(|lambda_-|, lambda_+) / max |lambda|`` of the ABE matrix
-#: (about the squared angle between the roots): below it the two roots coincide to
-#: working accuracy and the branch point is not simple.
-ABE_SIMPLE = 1e-12
-
-#: The root of the ABE nearer the current branch must make at most this cosine with
-#: the new one (``theta`` metric; an angle of about 1.4e-5 rad), else the crossing
-#: branch is indistinguishable from the current one.
-MAX_COS_BRANCHES = 1.0 - 1e-10
-
-#: The start point must be within this fraction of the amplitude of its prediction.
-START_DISTANCE = 0.5
-
-#: ... and its tangent within this angle (degrees) of the crossing direction.
-START_ANGLE_DEG = 45.0
 
 #: Rows near the branch point must have at least this fraction of the off-branch
 #: offset that the crossing tangent predicts.
@@ -172,438 +62,10 @@ N_CROSSING_ATTEMPTS = 2
 #: point scale with ``amplitude * sin(angle)``).
 SMALL_ANGLE_SIN = 0.1
 
-_EPS = float(np.finfo(float).eps)
-
 Direction = Literal["forward", "backward", "both"]
 
 
-# ---------------------------------------------------------------------------- result types
-@dataclass(frozen=True, eq=False)
-class CrossingTangents:
-    r"""The two branch directions at a simple branch point (solution of the ABE).
-
-    Attributes
-    ----------
-    z : ndarray, shape (N,)
-    p : float
-        The branch point :math:`u^* = (z, p)`.
-    t_old : ndarray, shape (N + 1,)
-        Root of the ABE along the current branch (unit in the ``theta`` norm; sign as
-        the reference tangent). NaN when ``status`` is not ``SUCCESS``.
-    t_new : ndarray, shape (N + 1,)
-        Root of the ABE along the crossing branch (unit; sign arbitrary).
-    phi2 : ndarray, shape (N + 1,)
-        Unit part of ``t_new`` ``theta``-orthogonal to ``t_old``.
-    psi : ndarray, shape (N,)
-        Unit left null vector of ``A = [G_z G_p]``.
-    coefficients : tuple of float
-        ``(c11, c12, c22)`` of the ABE in the kernel basis ``(q1, q2)``.
-    angle_deg : float
-        Angle between the two branches (``theta`` metric), in ``(0, 90]``.
-    cos_reference : float
-        ``|<t_old, reference>_theta|``: how well the root identified as the current
-        branch matches the reference tangent passed in.
-    kernel_gap : float
-        ``sigma_N / sigma_{N-1}`` of ``A W^{-1/2}`` (dense kernel; 0 for ``N = 1``), or
-        the relative kernel residual ``max ||A q_k|| / ||A||`` (bordered kernel).
-    kernel : {"svd", "bordered"}
-    second_derivatives : {"casadi", "finite differences"}
-    status : Status
-        ``SUCCESS``, or ``SINGULAR`` when the point is not a simple branch point (no
-        two-dimensional kernel, a degenerate or double-rooted ABE).
-    message : str
-    """
-
-    z: FloatArray
-    p: float
-    t_old: FloatArray
-    t_new: FloatArray
-    phi2: FloatArray
-    psi: FloatArray
-    coefficients: tuple[float, float, float]
-    angle_deg: float
-    cos_reference: float
-    kernel_gap: float
-    kernel: str
-    second_derivatives: str
-    status: Status
-    message: str = ""
-
-    @property
-    def sin_angle(self) -> float:
-        """``S = <phi2, t_new>_theta``, the sine of the angle between the branches."""
-        return math.sin(math.radians(self.angle_deg))
-
-
-class _Failure(Exception):
-    def __init__(self, status: Status, message: str) -> None:
-        super().__init__(message)
-        self.status = status
-        self.message = message
-
-
-# ---------------------------------------------------------------------------- kernel
-def _dense(Gz: Any) -> FloatArray:
-    return np.asarray(Gz.toarray() if sp.issparse(Gz) else Gz, dtype=float)
-
-
-def _w_orthonormal(a: FloatArray, b: FloatArray, w: FloatArray) -> tuple[FloatArray, FloatArray]:
-    a = a / theta_norm(a, w)
-    b = b - float((w * a).dot(b)) * a
-    nb = theta_norm(b, w)
-    if not nb > 0:
-        raise _Failure(Status.SINGULAR, "the kernel of [G_z G_p] is not two-dimensional")
-    return a, b / nb
-
-
-def _kernel_svd(
-    Gz: Any, Gp: FloatArray, w: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray, float]:
-    """``q1, q2`` (``theta``-orthonormal kernel of ``A``), ``psi`` and the gap ratio."""
-    A = np.column_stack((_dense(Gz), Gp))
-    n = A.shape[0]
-    s = 1.0 / np.sqrt(w)
-    U, sv, Vt = np.linalg.svd(A * s[None, :])
-    if not np.all(np.isfinite(sv)):
-        raise _Failure(Status.NONFINITE, "non-finite Jacobian at the branch point")
-    gap = float(sv[-1] / sv[-2]) if n >= 2 and sv[-2] > 0 else 0.0
-    if n >= 2 and not gap <= KERNEL_GAP:
-        raise _Failure(
-            Status.SINGULAR,
-            f"[G_z G_p] has no two-dimensional kernel at the point (sigma_N / sigma_N-1 = "
-            f"{gap:.2g}): not a branch point",
-        )
-    if n >= 3 and sv[-2] <= KERNEL_GAP * sv[-3] and sv[-2] <= 1e-8 * sv[0]:
-        raise _Failure(
-            Status.SINGULAR,
-            "[G_z G_p] has a kernel of dimension > 2 at the point: not a simple branch point",
-        )
-    return s * Vt[-1], s * Vt[-2], U[:, -1].copy(), gap
-
-
-def _kernel_bordered(
-    Gz: Any, Gp: FloatArray, w: FloatArray, t_ref: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray, float]:
-    """Kernel and left null vector of ``A = [G_z G_p]`` from bordered sparse solves."""
-    n = Gp.size
-    A = sp.hstack([sp.csc_matrix(Gz), sp.csc_matrix(Gp.reshape(-1, 1))], format="csc")
-    rng = np.random.default_rng(20000)
-    c1, c2 = _w_orthonormal(t_ref, rng.standard_normal(n + 1), w)
-    b = rng.standard_normal(n)
-    rhs = np.zeros((n + 2, 2))
-    rhs[n, 0] = rhs[n + 1, 1] = 1.0
-    e_last = np.zeros(n + 2)
-    e_last[n + 1] = 1.0
-    for _ in range(2):  # the second pass borders with the first pass's vectors
-        C = np.column_stack((w * c1, w * c2))
-        M = sp.bmat([[A, sp.csc_matrix(b.reshape(-1, 1))], [sp.csc_matrix(C.T), None]])
-        try:
-            lu = spla.splu(sp.csc_matrix(M))
-            X = lu.solve(rhs)
-            Y = lu.solve(e_last, trans="T")
-        except RuntimeError as exc:  # SuperLU: exactly singular
-            raise _Failure(Status.SINGULAR, f"singular bordered matrix: {exc}") from None
-        if not (np.all(np.isfinite(X)) and np.all(np.isfinite(Y))):
-            raise _Failure(Status.SINGULAR, "singular bordered matrix at the branch point")
-        c1, c2 = _w_orthonormal(X[: n + 1, 0], X[: n + 1, 1], w)
-        psi = Y[:n]
-        npsi = float(np.linalg.norm(psi))
-        if not npsi > 0:
-            raise _Failure(Status.SINGULAR, "no left null vector of [G_z G_p]")
-        b = psi / npsi
-    scale = float(abs(A).max()) * max(float(np.max(np.abs(c1))), float(np.max(np.abs(c2))))
-    res = max(float(np.max(np.abs(A @ c1))), float(np.max(np.abs(A @ c2))))
-    gap = res / scale if scale > 0 else 0.0
-    if not gap <= 1e-6:
-        raise _Failure(
-            Status.SINGULAR,
-            f"[G_z G_p] has no two-dimensional kernel at the point (relative residual "
-            f"{gap:.2g} of the bordered kernel vectors): not a branch point",
-        )
-    return c1, c2, b, gap
-
-
-# ---------------------------------------------------------------------------- D^2 G
-SecondDerivative = Callable[[FloatArray, FloatArray, FloatArray], FloatArray]
-
-
-def _casadi_second_derivative(problem: EquilibriumProblem) -> SecondDerivative:
-    """``(u, a, b) -> D^2G(u)[a, b]`` from the CasADi trace of the system's ``rhs``."""
-    system = problem.system
-    n = system.n_states
-    idx = system.param_names.index(problem.free)
-    U = ca.SX.sym("u", n + 1)
-    a = ca.SX.sym("a", n + 1)
-    b = ca.SX.sym("b", n + 1)
-    vals = np.asarray(problem.params.values, dtype=float)
-    P = ca.vertcat(*[U[n] if k == idx else ca.SX(float(v)) for k, v in enumerate(vals)])
-    F = system.symbolic(U[0:n], P)
-    d2 = ca.jtimes(ca.jtimes(F, U, a), U, b)
-    fn = ca.Function("d2G", [U, a, b], [d2])
-
-    def d2G(u: FloatArray, aa: FloatArray, bb: FloatArray) -> FloatArray:
-        return np.asarray(fn(u, aa, bb), dtype=float).reshape(-1)
-
-    return d2G
-
-
-def _fd_second_derivative(problem: Any) -> SecondDerivative:
-    """``(u, a, b) -> D^2G(u)[a, b]`` by central differences of ``[G_z G_p] a``."""
-
-    def d2G(u: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
-        n = u.size - 1
-        h = _EPS ** (1.0 / 3.0) * max(1.0, float(np.max(np.abs(u)))) / float(np.max(np.abs(b)))
-        out = []
-        for sgn in (1.0, -1.0):
-            uu = u + sgn * h * b
-            _, Gz, Gp = linearize(problem, uu[:n], float(uu[n]))
-            out.append(np.asarray(Gz @ a[:n]).reshape(-1) + Gp * a[n])
-        return (out[0] - out[1]) / (2.0 * h)
-
-    return d2G
-
-
-def _second_derivative(problem: Any) -> tuple[SecondDerivative, str]:
-    system = getattr(problem, "system", None)
-    if isinstance(problem, EquilibriumProblem) and getattr(system, "has_casadi", False):
-        try:
-            return _casadi_second_derivative(problem), "casadi"
-        except Exception as exc:  # a model CasADi cannot trace twice: fall back
-            log.info("no CasADi second derivatives (%s); using finite differences", exc)
-    return _fd_second_derivative(problem), "finite differences"
-
-
-# ---------------------------------------------------------------------------- ABE
-def _abe_roots(
-    d2G: SecondDerivative, u: FloatArray, q1: FloatArray, q2: FloatArray, psi: FloatArray
-) -> tuple[tuple[float, float, float], FloatArray, FloatArray]:
-    """ABE coefficients and the two root directions (``theta``-unit, as combinations of
-    the ``theta``-orthonormal ``q1, q2``)."""
-    D = [d2G(u, q1, q1), d2G(u, q1, q2), d2G(u, q2, q2)]
-    if not all(np.all(np.isfinite(d)) for d in D):
-        raise _Failure(Status.NONFINITE, "non-finite second derivatives at the branch point")
-    c11, c12, c22 = (float(psi.dot(d)) for d in D)
-    scale = max(float(np.linalg.norm(d)) for d in D)
-    cmax = max(abs(c11), abs(c12), abs(c22))
-    if not (scale > 0 and cmax > ABE_ZERO * scale):
-        raise _Failure(
-            Status.SINGULAR,
-            "the algebraic bifurcation equation vanishes identically (all second-order "
-            f"coefficients ~0: c = ({c11:.3g}, {c12:.3g}, {c22:.3g})): a degenerate, not a "
-            "simple, branch point",
-        )
-    lam, E = np.linalg.eigh(np.array([[c11, c12], [c12, c22]]))
-    lmax = float(np.max(np.abs(lam)))
-    if not (lam[0] < 0.0 < lam[1] and min(-lam[0], lam[1]) > ABE_SIMPLE * lmax):
-        raise _Failure(
-            Status.SINGULAR,
-            "the algebraic bifurcation equation has no two distinct real roots "
-            f"(c12^2 - c11 c22 = {c12 * c12 - c11 * c22:.3g}, coefficients ({c11:.3g}, "
-            f"{c12:.3g}, {c22:.3g})): not a simple branch point",
-        )
-    e_minus, e_plus = E[:, 0], E[:, 1]
-    roots = []
-    for sgn in (1.0, -1.0):
-        ab = math.sqrt(-lam[0]) * e_plus + sgn * math.sqrt(lam[1]) * e_minus
-        ab = ab / float(np.linalg.norm(ab))
-        roots.append(ab[0] * q1 + ab[1] * q2)  # theta-unit since q1, q2 orthonormal
-    return (c11, c12, c22), roots[0], roots[1]
-
-
-def crossing_tangents(
-    problem: Any,
-    z: Any,
-    p: float,
-    reference: Any,
-    *,
-    theta: float = 0.5,
-    kernel: Literal["auto", "svd", "bordered"] = "auto",
-    throw: bool = False,
-) -> CrossingTangents:
-    r"""Tangents of the two branches through a simple branch point (solve the ABE).
-
-    Parameters
-    ----------
-    problem : ContinuationProblem
-        ``G(z, p) = 0`` (an :class:`~continuation.problem.EquilibriumProblem` of a
-        CasADi-traced system gets exact second derivatives; others finite differences).
-    z : array_like, shape (N,)
-    p : float
-        The (located) branch point.
-    reference : array_like, shape (N + 1,)
-        A direction close to the tangent of the current branch (e.g. the chord between
-        the two rows around the point); picks which ABE root is the current branch.
-    theta : float
-        Weight of the parameter in the inner product (as in the settings), in (0, 1].
-    kernel : {"auto", "svd", "bordered"}
-        Dense SVD of ``[G_z G_p]`` or sparse bordered solves; ``"auto"`` uses the
-        bordered solves for sparse Jacobians with more than ``DENSE_KERNEL_MAX``
-        unknowns.
-    throw : bool
-        Raise :class:`~continuation.errors.ContinuationError` instead of returning a
-        result with a failing ``status``.
-
-    Returns
-    -------
-    CrossingTangents
-        See the module notes for the equations.
-
-    Raises
-    ------
-    ValueError
-        Bad shapes, non-finite input, ``theta`` or ``kernel`` out of range.
-    """
-    n = int(problem.n_unknowns)
-    z = np.asarray(z, dtype=float)
-    if z.shape != (n,) or not np.all(np.isfinite(z)):
-        raise ValueError(f"`z` must be a finite array of shape ({n},), got {z!r}")
-    try:
-        p = float(p)
-    except (TypeError, ValueError):
-        raise ValueError(f"`p` must be a float, got {p!r}") from None
-    if not math.isfinite(p):
-        raise ValueError(f"`p` must be finite, got {p}")
-    ref = np.asarray(reference, dtype=float)
-    if ref.shape != (n + 1,) or not np.all(np.isfinite(ref)) or not np.any(ref):
-        raise ValueError(f"`reference` must be a finite non-zero array of shape ({n + 1},)")
-    if not (isinstance(theta, (int, float)) and 0 < theta <= 1):
-        raise ValueError(f"`theta` must be in (0, 1], got {theta!r}")
-    if kernel not in ("auto", "svd", "bordered"):
-        raise ValueError(f"`kernel` must be 'auto', 'svd' or 'bordered', got {kernel!r}")
-    w = theta_weights(n, float(theta))
-    ref = ref / theta_norm(ref, w)
-    u = np.append(z, p)
-    nan = np.full(n + 1, np.nan)
-    method, d2_name = "svd", "finite differences"
-    try:
-        _, Gz, Gp = linearize(problem, z, p)
-        use_bordered = kernel == "bordered" or (
-            kernel == "auto" and sp.issparse(Gz) and n > DENSE_KERNEL_MAX
-        )
-        if use_bordered:
-            method = "bordered"
-            q1, q2, psi, gap = _kernel_bordered(Gz, Gp, w, ref)
-        else:
-            q1, q2, psi, gap = _kernel_svd(Gz, Gp, w)
-        d2G, d2_name = _second_derivative(problem)
-        coef, r1, r2 = _abe_roots(d2G, u, q1, q2, psi)
-        cos1, cos2 = abs(float((w * r1).dot(ref))), abs(float((w * r2).dot(ref)))
-        t_old, t_new = (r1, r2) if cos1 >= cos2 else (r2, r1)
-        cos_ref = max(cos1, cos2)
-        if float((w * t_old).dot(ref)) < 0:
-            t_old = -t_old
-        c_on = abs(float((w * t_old).dot(t_new)))
-        if c_on > MAX_COS_BRANCHES:
-            raise _Failure(
-                Status.SINGULAR,
-                f"the two roots of the algebraic bifurcation equation are almost parallel "
-                f"(cos = {c_on:.6f}): not a simple branch point",
-            )
-        phi2 = t_new - float((w * t_new).dot(t_old)) * t_old
-        phi2 = phi2 / theta_norm(phi2, w)
-        if float((w * phi2).dot(t_new)) < 0:
-            phi2 = -phi2
-        angle = math.degrees(math.acos(min(1.0, c_on)))
-        if cos_ref < 0.9:
-            log.warning(
-                "neither root of the algebraic bifurcation equation matches the current "
-                "branch's direction well (best cosine %.3f): the point may not be located "
-                "accurately",
-                cos_ref,
-            )
-        return CrossingTangents(
-            z, p, t_old, t_new, phi2, psi, coef, angle, cos_ref, gap, method, d2_name,
-            Status.SUCCESS,
-        )  # fmt: skip
-    except (_Failure, np.linalg.LinAlgError) as exc:
-        status = exc.status if isinstance(exc, _Failure) else Status.SINGULAR
-        msg = exc.message if isinstance(exc, _Failure) else f"linear algebra failed: {exc}"
-        if throw:
-            raise ContinuationError(msg) from None
-        return CrossingTangents(
-            z, p, nan, nan, nan, np.full(n, np.nan), (math.nan,) * 3, math.nan, math.nan,
-            math.nan, method, d2_name, status, msg,
-        )  # fmt: skip
-
-
-# ---------------------------------------------------------------------------- start
-class _OrientedStart(ContinuationAlgorithm):
-    """Wraps an algorithm so that the start tangent points along ``+orient`` when
-    ``settings.ds > 0`` and along ``-orient`` otherwise (instead of the sign rule on
-    ``dp/ds``, which cannot tell the halves of a crossing branch apart where it is
-    vertical, e.g. at a pitchfork)."""
-
-    def __init__(self, inner: ContinuationAlgorithm, orient: FloatArray) -> None:
-        self.inner = inner
-        self.orient = orient
-        self.grow_iters = int(getattr(inner, "grow_iters", 3))
-
-    def init(
-        self, problem: Any, z0: FloatArray, p0: float, settings: ContinuationSettings
-    ) -> StepState:
-        state = self.inner.init(problem, z0, p0, settings)
-        pt = state.point
-        target = self.orient if settings.ds > 0 else -self.orient
-        if float((state.w * pt.tau).dot(target)) < 0:
-            state.point = make_point(
-                pt.z,
-                pt.p,
-                (pt.G, pt.Gz, pt.Gp),
-                pt.border,
-                state.w,
-                orient=state.w * target,
-                lu=pt.lu,
-            )
-            state.point.iters = pt.iters
-        state.direction = 1.0 if state.point.tau[-1] >= 0 else -1.0
-        return state
-
-    def step(
-        self, problem: Any, state: StepState, settings: ContinuationSettings
-    ) -> tuple[StepState, StepOutcome]:
-        return self.inner.step(problem, state, settings)
-
-    def __repr__(self) -> str:
-        return f"_OrientedStart({self.inner!r})"
-
-
-def _start_point(
-    problem: Any,
-    ct: CrossingTangents,
-    t_new: FloatArray,
-    amplitude: float,
-    sign: float,
-    w: FloatArray,
-    newton: NewtonSettings,
-) -> tuple[FloatArray | None, str]:
-    """Solve ``G(u) = 0, <phi2, u - u*>_theta = sign a S`` from ``u* + sign a t_new``;
-    returns ``(u, "")`` or ``(None, reason)``."""
-    u_star = np.append(ct.z, ct.p)
-    phi2 = ct.phi2 if float((w * ct.phi2).dot(t_new)) > 0 else -ct.phi2
-    S = float((w * phi2).dot(t_new))
-    u_pred = u_star + sign * amplitude * t_new
-    res = correct(problem, u_pred, u_star, w * phi2, sign * amplitude * S, newton)
-    if not res.converged or res.lin is None:
-        return None, f"the start point did not converge ({res.message or 'Newton failed'})"
-    dist = theta_norm(res.u - u_pred, w)
-    if dist > START_DISTANCE * amplitude:
-        return None, (
-            f"the corrected start point is {dist / amplitude:.3g} amplitudes away from its "
-            "prediction on the crossing branch"
-        )
-    try:
-        pt = make_point(res.z, res.p, res.lin, w * t_new, w)
-    except np.linalg.LinAlgError as exc:
-        return None, f"no tangent at the start point ({exc})"
-    cos = abs(float((w * pt.tau).dot(t_new)))
-    if cos < math.cos(math.radians(START_ANGLE_DEG)):
-        return None, (
-            f"the tangent at the start point turns by {math.degrees(math.acos(cos)):.1f} deg "
-            "from the crossing direction"
-        )
-    return np.array(res.u), ""
-
-
+# ---------------------------------------------------------------------------- checks
 def _check_crossing(
     br: Branch, ct: CrossingTangents, t_new: FloatArray, w: FloatArray, k0: int, side: float,
     amplitude: float,
@@ -619,8 +81,7 @@ def _check_crossing(
     s) there)``; ``(True, -1, nan)`` when every checked row passes.
     """
     u_star = np.append(ct.z, ct.p)
-    phi2 = ct.phi2 if float((w * ct.phi2).dot(t_new)) > 0 else -ct.phi2
-    S = float((w * phi2).dot(t_new))
+    phi2, S = offset_direction(ct, t_new, w)
     step = -1 if side > 0 else 1
     k = k0 + step
     radius = 4.0 * amplitude
@@ -758,7 +219,7 @@ def _row_abe_scale(problem: Any, branch: Branch, point: SpecialPoint, w: FloatAr
         if not d > 1e-8 * max(1.0, theta_norm(u_star, w)):
             continue
         _, Gz, Gp = linearize(problem, u[:-1], float(u[-1]))
-        A = np.column_stack((_dense(Gz), Gp)) * s[None, :]
+        A = np.column_stack((dense(Gz), Gp)) * s[None, :]
         try:
             sv = np.linalg.svd(A, compute_uv=False)
         except np.linalg.LinAlgError:
@@ -939,7 +400,9 @@ def switch_branch(
         return _empty(branch, problem, status, msg, settings, events)
 
     ref = _reference_tangent(branch, sp_, w)
-    ct = crossing_tangents(problem, z_star, sp_.p, ref, theta=settings.theta)
+    ct = solve_crossing_tangents(
+        problem, z_star, sp_.p, ref, settings.theta, "auto", False, DENSE_KERNEL_MAX
+    )
     if ct.status is not Status.SUCCESS:
         return fail(ct.status, ct.message)
     est = _row_abe_scale(problem, branch, sp_, w)
@@ -975,7 +438,7 @@ def switch_branch(
         side = 0.0
         out_of_bounds = 0
         for sd in sides:
-            u, reason = _start_point(problem, ct, t_new, amp, sd, w, settings.newton)
+            u, reason = start_point(problem, ct, t_new, amp, sd, w, settings.newton)
             if u is None:
                 last_reason = reason
                 continue
@@ -1002,7 +465,7 @@ def switch_branch(
             problem,
             start[:-1],
             float(start[-1]),
-            _OrientedStart(algorithm, t_new),
+            OrientedStart(algorithm, t_new),
             run_settings,
             events=events,
             direction=direction,
@@ -1055,4 +518,4 @@ def switch_branch(
     )
 
 
-__all__ = ["CrossingTangents", "crossing_tangents", "switch_branch"]
+__all__ = ["DENSE_KERNEL_MAX", "Direction", "switch_branch"]
