@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from helpers import bratu, pitchfork, transcritical
 
-import continuation.switching as sw
+import continuation.switching.switch as sw
 from continuation.algorithms.base import theta_weights
 from continuation.api import continue_equilibria
 from continuation.branch import Branch
