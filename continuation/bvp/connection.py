@@ -523,10 +523,12 @@ class HeteroclinicProblem:
     def _args(self, z: FloatArray, p: float | None) -> list[Any]:
         z = np.asarray(z, dtype=float)
         cache = self.__dict__.get("_data_cache")
-        if cache is None:
-            cache = self._data()
+        if cache is None:  # flattened once: the evaluator reads NumPy buffers
+            cache = self.functions.flat_args([z, self.param_vector(z, p), *self._data()])[2:]
             object.__setattr__(self, "_data_cache", cache)
-        return [z, self.param_vector(z, p), *cache]
+        if z.shape != (self.layout.n_unknowns,):
+            raise ValueError(f"`z` must have shape ({self.layout.n_unknowns},), got {z.shape}")
+        return [np.ascontiguousarray(z), self.param_vector(z, p), *cache]
 
     def residual(self, z: FloatArray, p: float | None = None) -> FloatArray:
         """``G(z, p)``, shape ``(N_z,)`` (``p``: value of ``vary``; ignored if ``vary`` is None)."""
