@@ -53,6 +53,7 @@ import scipy.sparse as sp
 from ..linalg import csc_with_data
 from ..typing import FloatArray
 from .collocation import CollocationMesh
+from .condense import StageCondenser
 
 
 @dataclass(frozen=True)
@@ -353,6 +354,13 @@ class ConnectionFunctions:
         # driver recognises the pattern and SciPy's format checks run once
         self._w_template = _template(self._w_pattern)
         self._p_template = _template(self._p_pattern)
+        # collocation rows and stage unknowns of each interval: the linear solves of
+        # Newton and of the driver condense the stages (continuation.bvp.condense)
+        stage_cols = np.array(_stage_columns(N, m)).reshape(N, m)
+        cols_s = (stage_cols[:, :, None] * n + np.arange(n)).reshape(N, m * n)
+        rows_s = np.arange(N * m * n).reshape(N, m * n)
+        self.condenser = StageCondenser(rows_s, cols_s)
+        self._w_template.condensed_lu = self.condenser.factor
         self.arg_sizes = tuple(int(self.G.nnz_in(i)) for i in range(self.G.n_in()))
         self._bG = _Buffered(self.G)
         self._bGw = _Buffered(self.G_w)
