@@ -30,7 +30,6 @@ the caller uses a general sparse LU instead.
 
 from __future__ import annotations
 
-import weakref
 from typing import Any
 
 import numpy as np
@@ -211,13 +210,13 @@ class StageCondenser:
     def __init__(self, rows_s: np.ndarray, cols_s: np.ndarray) -> None:
         self.rows_s = np.asarray(rows_s, dtype=np.int64)
         self.cols_s = np.asarray(cols_s, dtype=np.int64)
-        self._structs: weakref.WeakValueDictionary[Any, Any] = weakref.WeakValueDictionary()
         self._cache: dict[tuple[int, int, int], _Structure | None] = {}
 
     def _structure(self, M: sp.csc_matrix) -> _Structure | None:
         key = (id(M.indptr), id(M.indices), M.shape[0])
         st = self._cache.get(key, False)
-        if st is False or (st is not None and (st.indptr is not M.indptr or st.indices is not M.indices)):
+        stale = isinstance(st, _Structure) and (st.indptr is not M.indptr or st.indices is not M.indices)
+        if st is False or stale:
             if len(self._cache) >= 8:
                 self._cache.clear()
             try:
