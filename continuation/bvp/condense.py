@@ -41,6 +41,11 @@ from ..typing import FloatArray
 #: Largest accepted 1-norm condition estimate of a stage block (else: general LU).
 MAX_BLOCK_COND = 1e10
 
+#: Largest dense Schur complement factorised here; larger systems (long meshes, many
+#: states: the ship's 8 states on 90 intervals give about 750) are left to the sparse LU,
+#: for which the dense O(n_r^3) factorisation would cost more than it saves.
+MAX_SCHUR = 256
+
 
 class _Structure:
     """Index maps of one sparsity pattern of ``M`` (built once per pattern)."""
@@ -229,8 +234,9 @@ class StageCondenser:
     def factor(self, M: Any) -> CondensedLU | None:
         """Condensed factorisation of the square CSC ``M``, or None (use a general LU).
 
-        None when ``M`` is not in canonical CSC form, its stage blocks are coupled, a
-        block is singular or has ``cond_1 > MAX_BLOCK_COND``.
+        None when ``M`` is not in canonical CSC form, its stage blocks are coupled, the
+        Schur complement is larger than ``MAX_SCHUR``, or a block is singular or has
+        ``cond_1 > MAX_BLOCK_COND``.
 
         Raises
         ------
@@ -243,6 +249,8 @@ class StageCondenser:
         if st is None:
             return None
         N, b, nr = st.N, st.b, st.nr
+        if nr > MAX_SCHUR:
+            return None
         data = M.data
         A = np.zeros(N * b * b)
         A[st.ss[1]] = data[st.ss[0]]
