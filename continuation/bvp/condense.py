@@ -96,9 +96,7 @@ class _Structure:
         self.sr = (k_sr, br[k_sr] * b * wc + loc_r[r[k_sr]] * wc + sr_pos)
         self.rs = (k_rs, bc[k_rs] * wr * b + rs_pos * b + loc_c[c[k_rs]])
         # flat positions of the Schur updates in the padded (nr + 1)^2 matrix
-        self.upd = (
-            self.rs_rows[:, :, None] * (nr + 1) + self.sr_cols[:, None, :]
-        ).ravel()
+        self.upd = (self.rs_rows[:, :, None] * (nr + 1) + self.sr_cols[:, None, :]).ravel()
         # sign of the permutation [stages by block, rest] of rows times that of columns
         self.perm_sign = _parity(np.concatenate((rows_s.ravel(), rest_r))) * _parity(
             np.concatenate((cols_s.ravel(), rest_c))
@@ -220,7 +218,9 @@ class StageCondenser:
     def _structure(self, M: sp.csc_matrix) -> _Structure | None:
         key = (id(M.indptr), id(M.indices), M.shape[0])
         st = self._cache.get(key, False)
-        stale = isinstance(st, _Structure) and (st.indptr is not M.indptr or st.indices is not M.indices)
+        stale = isinstance(st, _Structure) and (
+            st.indptr is not M.indptr or st.indices is not M.indices
+        )
         if st is False or stale:
             if len(self._cache) >= 8:
                 self._cache.clear()
