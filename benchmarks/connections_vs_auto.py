@@ -43,7 +43,12 @@ import sys
 import tempfile
 import time
 
-import numpy as np
+# one BLAS/OpenMP thread, as AUTO-07p's runs (OMP_NUM_THREADS=1): idle OpenBLAS threads
+# spin and double the CPU time of the small dense products (set before NumPy loads)
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))

@@ -229,10 +229,15 @@ class BorderedLU:
         else:
             self.sparse = True
             M = assemble_bordered_csc(Gz, Gp, c)
-            try:
-                self._lu = spla.splu(M)
-            except RuntimeError as exc:
-                raise np.linalg.LinAlgError(str(exc)) from exc
+            # a problem may attach a structured factoriser to its Jacobian (e.g. the
+            # condensation of collocation stages, continuation.bvp.condense); None: SuperLU
+            factor = getattr(Gz, "condensed_lu", None)
+            self._lu = factor(M) if factor is not None else None
+            if self._lu is None:
+                try:
+                    self._lu = spla.splu(M)
+                except RuntimeError as exc:
+                    raise np.linalg.LinAlgError(str(exc)) from exc
             self._piv = None
 
     @classmethod
@@ -247,6 +252,8 @@ class BorderedLU:
         return self
 
     def _diag_parity(self) -> tuple[Any, int]:
+        if self.sparse and hasattr(self._lu, "diag_parity"):
+            return self._lu.diag_parity()
         if self.sparse:
             d = self._lu.U.diagonal()
             parity = _perm_parity(self._lu.perm_r) * _perm_parity(self._lu.perm_c)

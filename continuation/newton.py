@@ -50,7 +50,10 @@ class NewtonResult:
 def solve_linear(A: Any, b: FloatArray) -> FloatArray:
     """Solve ``A x = b`` for dense ndarray or SciPy sparse ``A``; raises LinAlgError if singular."""
     if sp.issparse(A):
-        lu = spla.splu(sp.csc_matrix(A))
+        factor = getattr(A, "condensed_lu", None)  # see linalg.BorderedLU
+        lu = factor(A) if factor is not None else None
+        if lu is None:
+            lu = spla.splu(sp.csc_matrix(A))
         x = lu.solve(np.asarray(b, dtype=float))
     else:
         # LAPACK getrf/getrs directly: the factorisation of scipy.linalg.lu_factor without

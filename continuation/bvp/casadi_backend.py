@@ -50,8 +50,10 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from ..linalg import csc_with_data
 from ..typing import FloatArray
 from .collocation import CollocationMesh
+from .condense import StageCondenser
 
 
 @dataclass(frozen=True)
@@ -348,33 +350,101 @@ class ConnectionFunctions:
             np.array(spp.colind(), dtype=np.int32),
             spp.shape,
         )
+        # CSC templates: every Jacobian shares their (canonical) index arrays, so the
+        # driver recognises the pattern and SciPy's format checks run once
+        self._w_template = _template(self._w_pattern)
+        self._p_template = _template(self._p_pattern)
+        # collocation rows and stage unknowns of each interval: the linear solves of
+        # Newton and of the driver condense the stages (continuation.bvp.condense)
+        stage_cols = np.array(_stage_columns(N, m)).reshape(N, m)
+        cols_s = (stage_cols[:, :, None] * n + np.arange(n)).reshape(N, m * n)
+        rows_s = np.arange(N * m * n).reshape(N, m * n)
+        self.condenser = StageCondenser(rows_s, cols_s)
+        self._w_template.condensed_lu = self.condenser.factor
+        self.arg_sizes = tuple(int(self.G.nnz_in(i)) for i in range(self.G.n_in()))
+        self._bG = _Buffered(self.G)
+        self._bGw = _Buffered(self.G_w)
+        self._bGP = _Buffered(self.G_P)
+        self._bAll = _Buffered(self.G_all)
 
-    @staticmethod
-    def _csc(out: ca.DM, pattern: tuple[np.ndarray, np.ndarray, tuple[int, int]]) -> sp.csc_matrix:
-        row, colind, shape = pattern
-        data = np.array(out.nonzeros(), dtype=float)
-        return sp.csc_matrix((data, row, colind), shape=shape)
+    def flat_args(self, args: list[Any]) -> list[FloatArray]:
+        """The inputs as contiguous float vectors (matrices column-major), sizes checked.
+
+        Parameters
+        ----------
+        args : list
+            ``[w, P, h, T, Qm, Qp, shift, ref, dref, pin]`` as arrays or scalars.
+
+        Returns
+        -------
+        list of ndarray
+            One 1-D float64 array per input, of length ``G.nnz_in(i)``.
+        """
+        out = []
+        for i, a in enumerate(args):
+            v = np.ascontiguousarray(np.asarray(a, dtype=float).ravel(order="F"))
+            if v.size != self.arg_sizes[i]:
+                raise ValueError(
+                    f"input {self.G.name_in(i)!r} of G has {v.size} entries, expected "
+                    f"{self.arg_sizes[i]}"
+                )
+            out.append(v)
+        return out
+
+    def _flat(self, args: list[Any]) -> list[FloatArray]:
+        if len(args) == len(self.arg_sizes) and all(
+            type(a) is np.ndarray and a.ndim == 1 and a.dtype == np.float64
+            and a.size == k and a.flags.c_contiguous
+            for a, k in zip(args, self.arg_sizes, strict=True)
+        ):  # fmt: skip
+            return args
+        return self.flat_args(args)
 
     def residual(self, args: list[Any]) -> FloatArray:
         """``G(*args)`` as a flat array, shape ``(n_eq,)``."""
-        return np.asarray(self.G(*args), dtype=float).reshape(-1)
+        return self._bG(self._flat(args))[0]
 
     def jacobian(self, args: list[Any]) -> sp.csc_matrix:
         """``dG/dw`` as SciPy CSC, shape ``(n_eq, n_eq)``."""
-        return self._csc(self.G_w(*args), self._w_pattern)
+        return csc_with_data(self._w_template, self._bGw(self._flat(args))[0])
 
     def linearize(self, args: list[Any]) -> tuple[FloatArray, sp.csc_matrix, sp.csc_matrix]:
         """``(G, dG/dw, dG/dP)`` in one evaluation."""
-        g, jw, jp = self.G_all(*args)
-        return (
-            np.asarray(g, dtype=float).reshape(-1),
-            self._csc(jw, self._w_pattern),
-            self._csc(jp, self._p_pattern),
-        )
+        g, jw, jp = self._bAll(self._flat(args))
+        return g, csc_with_data(self._w_template, jw), csc_with_data(self._p_template, jp)
 
     def param_jacobian(self, args: list[Any]) -> sp.csc_matrix:
         """``dG/dP`` as SciPy CSC, shape ``(n_eq, n_params)``."""
-        return self._csc(self.G_P(*args), self._p_pattern)
+        return csc_with_data(self._p_template, self._bGP(self._flat(args))[0])
+
+
+def _template(pattern: tuple[np.ndarray, np.ndarray, tuple[int, int]]) -> sp.csc_matrix:
+    row, colind, shape = pattern
+    A = sp.csc_matrix((np.ones(row.size), row, colind), shape=shape)
+    A.has_canonical_format  # noqa: B018  (CasADi sparsities are sorted, no duplicates)
+    return A
+
+
+class _Buffered:
+    """Evaluate a ``ca.Function`` on NumPy buffers (``Function.buffer``): no conversions.
+
+    The inputs are 1-D float64 arrays of the functions' input sizes (checked by the
+    caller); each call returns fresh output arrays of the outputs' nonzeros.
+    """
+
+    def __init__(self, fn: ca.Function) -> None:
+        self._buf, self._trigger = fn.buffer()
+        self._sizes = tuple(int(fn.nnz_out(i)) for i in range(fn.n_out()))
+
+    def __call__(self, args: list[FloatArray]) -> list[FloatArray]:
+        buf = self._buf
+        for i, a in enumerate(args):
+            buf.set_arg(i, memoryview(a))
+        outs = [np.empty(k) for k in self._sizes]
+        for i, o in enumerate(outs):
+            buf.set_res(i, memoryview(o))
+        self._trigger()
+        return outs
 
 
 _CACHE: weakref.WeakKeyDictionary[Any, dict[ConnectionLayout, ConnectionFunctions]] = (

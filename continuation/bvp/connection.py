@@ -523,10 +523,12 @@ class HeteroclinicProblem:
     def _args(self, z: FloatArray, p: float | None) -> list[Any]:
         z = np.asarray(z, dtype=float)
         cache = self.__dict__.get("_data_cache")
-        if cache is None:
-            cache = self._data()
+        if cache is None:  # flattened once: the evaluator reads NumPy buffers
+            cache = self.functions.flat_args([z, self.param_vector(z, p), *self._data()])[2:]
             object.__setattr__(self, "_data_cache", cache)
-        return [z, self.param_vector(z, p), *cache]
+        if z.shape != (self.layout.n_unknowns,):
+            raise ValueError(f"`z` must have shape ({self.layout.n_unknowns},), got {z.shape}")
+        return [np.ascontiguousarray(z), self.param_vector(z, p), *cache]
 
     def residual(self, z: FloatArray, p: float | None = None) -> FloatArray:
         """``G(z, p)``, shape ``(N_z,)`` (``p``: value of ``vary``; ignored if ``vary`` is None)."""
@@ -541,8 +543,7 @@ class HeteroclinicProblem:
         if self.vary is None:
             raise ValueError("`vary` is None: set a continuation parameter with with_vary(name)")
         J = self.functions.param_jacobian(self._args(z, p))
-        col = J[:, self.system.param_index(self.vary)]
-        return np.asarray(col.toarray(), dtype=float).reshape(-1)
+        return _csc_column(J, self.system.param_index(self.vary))
 
     def linearize(
         self, z: FloatArray, p: float | None = None
@@ -551,8 +552,7 @@ class HeteroclinicProblem:
         if self.vary is None:
             raise ValueError("`vary` is None: set a continuation parameter with with_vary(name)")
         g, jz, jp = self.functions.linearize(self._args(z, p))
-        col = jp[:, self.system.param_index(self.vary)]
-        return g, jz, np.asarray(col.toarray(), dtype=float).reshape(-1)
+        return g, jz, _csc_column(jp, self.system.param_index(self.vary))
 
     def stability(self, z: FloatArray, p: float | None = None) -> None:
         """Connections carry no stability eigenvalues here; returns None."""
@@ -712,6 +712,14 @@ def _mesh_changes(prob: HeteroclinicProblem, changes: dict[str, Any]) -> dict[st
     elif "T" in changes and "mesh" not in changes and changes["T"] is not None:
         changes["mesh"] = prob.mesh.with_T(float(changes["T"]))
     return changes
+
+
+def _csc_column(A: sp.csc_matrix, j: int) -> FloatArray:
+    """Column ``j`` of a CSC matrix as a dense vector, shape ``(A.shape[0],)``."""
+    out = np.zeros(A.shape[0])
+    a, b = A.indptr[j], A.indptr[j + 1]
+    out[A.indices[a:b]] = A.data[a:b]
+    return out
 
 
 def _replace_fast(prob: HeteroclinicProblem, **changes: Any) -> HeteroclinicProblem:

@@ -1,0 +1,283 @@
+r"""Condensation of the collocation stage unknowns: the linear solves of a BVP.
+
+The Jacobian of the collocation system, with the unknowns split into the stage
+values ``s`` (the ``n m`` values :math:`x_{j,1..m}` of each interval ``j``) and the
+rest ``r`` (mesh points, end points, Riccati unknowns, parameters and any border
+row and column of the continuation driver), and its equations into the collocation
+rows of each interval and the rest,
+
+.. math::
+
+    M = \begin{pmatrix} A_{ss} & A_{sr} \\ A_{rs} & A_{rr} \end{pmatrix},
+
+has a block-diagonal :math:`A_{ss}` (one ``(n m, n m)`` block per interval: the
+collocation equations of an interval involve only its own stages). Eliminating the
+stages interval by interval (as AUTO-07p's condensation of parameters does) leaves
+the Schur complement :math:`S = A_{rr} - A_{rs} A_{ss}^{-1} A_{sr}` on the
+``n (N + 1) + ...`` remaining unknowns, a small dense matrix:
+
+.. math::
+
+    S x_r = b_r - A_{rs} A_{ss}^{-1} b_s, \qquad
+    x_s = A_{ss}^{-1} (b_s - A_{sr} x_r), \qquad
+    \det M = \pm \det A_{ss} \det S .
+
+The block inverses are computed in one batched LAPACK call, the Schur complement by
+batched products on the few rest columns (rows) each block touches. Where a block is
+singular or badly conditioned (``cond_1 > 1e10``) the factorisation returns None and
+the caller uses a general sparse LU instead.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import scipy.linalg.lapack as lapack
+import scipy.sparse as sp
+
+from ..typing import FloatArray
+
+#: Largest accepted 1-norm condition estimate of a stage block (else: general LU).
+MAX_BLOCK_COND = 1e10
+
+#: Largest dense Schur complement factorised here; larger systems (long meshes, many
+#: states: the ship's 8 states on 90 intervals give about 750) are left to the sparse LU,
+#: for which the dense O(n_r^3) factorisation would cost more than it saves.
+MAX_SCHUR = 256
+
+
+class _Structure:
+    """Index maps of one sparsity pattern of ``M`` (built once per pattern)."""
+
+    def __init__(self, M: sp.csc_matrix, rows_s: np.ndarray, cols_s: np.ndarray) -> None:
+        size = M.shape[0]
+        N, b = rows_s.shape
+        self.size, self.N, self.b = size, N, b
+        self.indptr, self.indices = M.indptr, M.indices  # kept: ids stay valid
+        blk_r = np.full(size, -1)
+        loc_r = np.zeros(size, dtype=np.int64)
+        blk_c = np.full(size, -1)
+        loc_c = np.zeros(size, dtype=np.int64)
+        blk_r[rows_s.ravel()] = np.repeat(np.arange(N), b)
+        loc_r[rows_s.ravel()] = np.tile(np.arange(b), N)
+        blk_c[cols_s.ravel()] = np.repeat(np.arange(N), b)
+        loc_c[cols_s.ravel()] = np.tile(np.arange(b), N)
+        rest_r = np.flatnonzero(blk_r < 0)
+        rest_c = np.flatnonzero(blk_c < 0)
+        if rest_r.size != rest_c.size:
+            raise ValueError("stage rows and columns differ in number")
+        nr = rest_r.size
+        self.nr = nr
+        rix = np.full(size, -1)
+        rix[rest_r] = np.arange(nr)
+        cix = np.full(size, -1)
+        cix[rest_c] = np.arange(nr)
+        self.rows_s, self.cols_s, self.rest_r, self.rest_c = rows_s, cols_s, rest_r, rest_c
+        nnz = int(M.indptr[-1])
+        r = M.indices[:nnz].astype(np.int64)
+        c = np.repeat(np.arange(size), np.diff(M.indptr))
+        br, bc = blk_r[r], blk_c[c]
+        ss = (br >= 0) & (bc >= 0)
+        if np.any(br[ss] != bc[ss]):
+            raise ValueError("stage blocks are coupled: A_ss is not block diagonal")
+        k = np.flatnonzero(ss)
+        self.ss = (k, br[k] * b * b + loc_r[r[k]] * b + loc_c[c[k]])
+        k = np.flatnonzero((br < 0) & (bc < 0))
+        self.rr = (k, rix[r[k]] * nr + cix[c[k]])
+        # per block: the rest columns its rows touch (A_sr), the rest rows touching its
+        # columns (A_rs); padded to a common width with a dummy index nr (zero entries)
+        k_sr = np.flatnonzero((br >= 0) & (bc < 0))
+        k_rs = np.flatnonzero((br < 0) & (bc >= 0))
+        self.sr_cols, sr_pos = _per_block(br[k_sr], cix[c[k_sr]], N, nr)
+        self.rs_rows, rs_pos = _per_block(bc[k_rs], rix[r[k_rs]], N, nr)
+        wc, wr = self.sr_cols.shape[1], self.rs_rows.shape[1]
+        self.wc, self.wr = wc, wr
+        self.sr = (k_sr, br[k_sr] * b * wc + loc_r[r[k_sr]] * wc + sr_pos)
+        self.rs = (k_rs, bc[k_rs] * wr * b + rs_pos * b + loc_c[c[k_rs]])
+        # flat positions of the Schur updates in the padded (nr + 1)^2 matrix
+        self.upd = (self.rs_rows[:, :, None] * (nr + 1) + self.sr_cols[:, None, :]).ravel()
+        # sign of the permutation [stages by block, rest] of rows times that of columns
+        self.perm_sign = _parity(np.concatenate((rows_s.ravel(), rest_r))) * _parity(
+            np.concatenate((cols_s.ravel(), rest_c))
+        )
+
+
+def _per_block(blk: np.ndarray, idx: np.ndarray, N: int, pad: int) -> tuple[np.ndarray, np.ndarray]:
+    """Distinct ``idx`` per block (padded with ``pad``) and each entry's slot in its block."""
+    pairs = np.unique(blk * (pad + 1) + idx)
+    pb, pi = pairs // (pad + 1), pairs % (pad + 1)
+    counts = np.bincount(pb, minlength=N)
+    w = max(int(counts.max()) if counts.size else 0, 1)
+    table = np.full((N, w), pad)
+    start = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    slot = np.arange(pairs.size) - start[pb]
+    table[pb, slot] = pi
+    pos = slot[np.searchsorted(pairs, blk * (pad + 1) + idx)]
+    return table, pos
+
+
+def _parity(perm: np.ndarray) -> int:
+    perm = np.asarray(perm).copy()
+    seen = np.zeros(perm.size, dtype=bool)
+    odd = 0
+    for i in range(perm.size):
+        if not seen[i]:
+            j, length = i, 0
+            while not seen[j]:
+                seen[j] = True
+                j = perm[j]
+                length += 1
+            odd += length - 1
+    return -1 if odd % 2 else 1
+
+
+class CondensedLU:
+    """Factorisation of ``M`` by condensation of the stage blocks (see module doc).
+
+    Same interface as the parts of SciPy's ``SuperLU`` the engine uses:
+    ``solve(b, trans="N" | "T")``, plus ``diag_parity()`` for the determinant.
+    """
+
+    def __init__(
+        self, st: _Structure, Ainv: FloatArray, W: FloatArray, Ars: FloatArray,
+        lu: FloatArray, piv: np.ndarray, blocks: FloatArray,
+    ) -> None:  # fmt: skip
+        self._st, self._Ainv, self._W, self._Ars = st, Ainv, W, Ars
+        self._lu, self._piv, self._blocks = lu, piv, blocks
+        self.shape = (st.size, st.size)
+
+    def solve(self, rhs: FloatArray, trans: str = "N") -> FloatArray:
+        """``M^{-1} rhs`` (``trans="T"``: ``M^{-T} rhs``), rhs of shape (size,) or (size, k)."""
+        st = self._st
+        rhs = np.asarray(rhs, dtype=float)
+        one = rhs.ndim == 1
+        B = rhs.reshape(st.size, -1)
+        k = B.shape[1]
+        bs = B[st.rows_s if trans == "N" else st.cols_s]  # (N, b, k)
+        br = np.zeros((st.nr + 1, k))
+        br[:-1] = B[st.rest_r if trans == "N" else st.rest_c]
+        if trans == "N":
+            ys = self._Ainv @ bs
+            np.subtract.at(br, st.rs_rows, self._Ars @ ys)
+            xr, info = lapack.dgetrs(self._lu, self._piv, br[:-1])
+            xr_pad = np.vstack((xr, np.zeros((1, k))))
+            xs = ys - self._W @ xr_pad[st.sr_cols]
+            out = np.empty_like(B)
+            out[st.cols_s] = xs
+            out[st.rest_c] = xr
+        else:
+            ys = np.swapaxes(self._Ainv, 1, 2) @ bs
+            # A_sr^T y_s = (A_ss W)^T y_s = W^T A_ss^T y_s = W^T bs (block by block)
+            np.subtract.at(br, st.sr_cols, np.swapaxes(self._W, 1, 2) @ bs)
+            xr, info = lapack.dgetrs(self._lu, self._piv, br[:-1], trans=1)
+            xr_pad = np.vstack((xr, np.zeros((1, k))))
+            xs = ys - np.swapaxes(self._Ainv, 1, 2) @ (
+                np.swapaxes(self._Ars, 1, 2) @ xr_pad[st.rs_rows]
+            )
+            out = np.empty_like(B)
+            out[st.rows_s] = xs
+            out[st.rest_r] = xr
+        return out.ravel() if one else out
+
+    def diag_parity(self) -> tuple[FloatArray, int]:
+        """Numbers whose product is ``|det M|`` up to the sign returned, and that sign.
+
+        Returns ``(d, parity)`` with ``det M = parity * prod(d)``: ``d`` holds the
+        pivots of the Schur complement and, per stage block, ``|det|^(1/b)`` with the
+        block's sign folded into ``parity`` (the engine's convention for SuperLU).
+        """
+        st = self._st
+        sgn, logabs = np.linalg.slogdet(self._blocks)
+        dS = np.diagonal(self._lu).copy()
+        swaps = int(np.count_nonzero(self._piv != np.arange(self._piv.size)))
+        parity = st.perm_sign * (-1 if swaps % 2 else 1)
+        if np.any(sgn == 0):
+            return np.concatenate((np.zeros(1), dS)), parity
+        parity *= -1 if np.count_nonzero(sgn < 0) % 2 else 1
+        d_blocks = np.repeat(np.exp(logabs / st.b), st.b)
+        return np.concatenate((d_blocks, dS)), parity
+
+
+class StageCondenser:
+    """Condensing factoriser of the matrices of one collocation layout.
+
+    Parameters
+    ----------
+    rows_s, cols_s : ndarray of int, shape (N, n m)
+        Collocation rows and stage unknowns of each interval (the same for the
+        Jacobian and for the driver's bordered matrix, whose border is the last
+        row and column).
+    """
+
+    def __init__(self, rows_s: np.ndarray, cols_s: np.ndarray) -> None:
+        self.rows_s = np.asarray(rows_s, dtype=np.int64)
+        self.cols_s = np.asarray(cols_s, dtype=np.int64)
+        self._cache: dict[tuple[int, int, int], _Structure | None] = {}
+
+    def _structure(self, M: sp.csc_matrix) -> _Structure | None:
+        key = (id(M.indptr), id(M.indices), M.shape[0])
+        st = self._cache.get(key, False)
+        stale = isinstance(st, _Structure) and (
+            st.indptr is not M.indptr or st.indices is not M.indices
+        )
+        if st is False or stale:
+            if len(self._cache) >= 8:
+                self._cache.clear()
+            try:
+                st = _Structure(M, self.rows_s, self.cols_s)
+            except ValueError:
+                st = None
+            self._cache[key] = st
+        return st
+
+    def factor(self, M: Any) -> CondensedLU | None:
+        """Condensed factorisation of the square CSC ``M``, or None (use a general LU).
+
+        None when ``M`` is not in canonical CSC form, its stage blocks are coupled, the
+        Schur complement is larger than ``MAX_SCHUR``, or a block is singular or has
+        ``cond_1 > MAX_BLOCK_COND``.
+
+        Raises
+        ------
+        numpy.linalg.LinAlgError
+            If the Schur complement is exactly singular (then so is ``M``).
+        """
+        if not (sp.isspmatrix_csc(M) or isinstance(M, sp.csc_array)) or not M.has_canonical_format:
+            return None
+        st = self._structure(M)
+        if st is None:
+            return None
+        N, b, nr = st.N, st.b, st.nr
+        if nr > MAX_SCHUR:
+            return None
+        data = M.data
+        A = np.zeros(N * b * b)
+        A[st.ss[1]] = data[st.ss[0]]
+        A = A.reshape(N, b, b)
+        try:
+            Ainv = np.linalg.inv(A)
+        except np.linalg.LinAlgError:
+            return None
+        cond = np.abs(A).sum(axis=1).max(axis=1) * np.abs(Ainv).sum(axis=1).max(axis=1)
+        if not np.all(cond <= MAX_BLOCK_COND):
+            return None
+        Asr = np.zeros(N * b * st.wc)
+        Asr[st.sr[1]] = data[st.sr[0]]
+        Asr = Asr.reshape(N, b, st.wc)
+        Ars = np.zeros(N * st.wr * b)
+        Ars[st.rs[1]] = data[st.rs[0]]
+        Ars = Ars.reshape(N, st.wr, b)
+        W = Ainv @ Asr  # (N, b, wc)
+        S = np.zeros(nr * nr)
+        S[st.rr[1]] = data[st.rr[0]]
+        Sp = np.zeros((nr + 1, nr + 1))
+        Sp[:nr, :nr] = S.reshape(nr, nr)
+        np.subtract.at(Sp.reshape(-1), st.upd, (Ars @ W).ravel())
+        lu, piv, info = lapack.dgetrf(np.asfortranarray(Sp[:nr, :nr]), overwrite_a=1)
+        if info != 0:
+            raise np.linalg.LinAlgError(f"singular condensed matrix (getrf info={info})")
+        return CondensedLU(st, Ainv, W, Ars, lu, piv, A)
+
+
+__all__ = ["CondensedLU", "StageCondenser"]

@@ -1,0 +1,85 @@
+"""Condensation of the collocation stages (continuation.bvp.condense) against SuperLU.
+
+Reference: SciPy's general sparse LU of the same matrices (solutions, transposed
+solutions, sign and log-modulus of the determinant); the condensed factorisation
+is exact algebra, so they agree to round-off.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from continuation.bvp import find_connection
+from continuation.bvp.condense import CondensedLU, StageCondenser
+from continuation.linalg import BorderedLU, _perm_parity, assemble_bordered_csc
+from tests.connection_problems import cir
+
+CIR = {"nu": -0.72, "beta": 0.6, "gamma": 0.0, "r": 0.6, "a3": 0.328578, "b3": 0.933578}
+
+
+@pytest.fixture(scope="module")
+def linearised():
+    s = cir()
+    res = find_connection(s, s.params(**CIR), "nu", source=[0, 0, 0], shift=0)
+    assert res.success
+    prob = res.problem.with_vary("beta")
+    g, J, gp = prob.linearize(res.z, 0.6)
+    return J, gp
+
+
+def _det_sign_log(lu):
+    d = lu.U.diagonal()
+    parity = _perm_parity(lu.perm_r) * _perm_parity(lu.perm_c)
+    sign = -parity if np.count_nonzero(d < 0) % 2 else parity
+    return sign, float(np.log(np.abs(d)).sum())
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_bordered_solves_and_determinant_match_superlu(linearised, seed):
+    J, gp = linearised
+    rng = np.random.default_rng(seed)
+    c = rng.standard_normal(J.shape[0] + 1)
+    lu = BorderedLU(J, gp, c)
+    assert isinstance(lu._lu, CondensedLU)  # the hook was taken
+    ref = spla.splu(assemble_bordered_csc(J, gp, c))
+    b = rng.standard_normal(J.shape[0] + 1)
+    for trans, t in ((False, "N"), (True, "T")):
+        x = lu.solve(b, trans=trans)
+        x_ref = ref.solve(b, trans=t)
+        assert np.max(np.abs(x - x_ref)) <= 1e-10 * np.max(np.abs(x_ref))
+    sign, logdet = _det_sign_log(ref)
+    assert lu.sign == sign
+    assert lu.logabsdet == pytest.approx(logdet, rel=1e-12)
+    # flipping the sign of the border row flips the determinant
+    assert BorderedLU(J, gp, -c).sign == -sign
+
+
+def test_newton_system_and_multiple_rhs(linearised):
+    J, _ = linearised
+    rng = np.random.default_rng(3)
+    B = rng.standard_normal((J.shape[0], 3))
+    fac = J.condensed_lu(J)
+    X = fac.solve(B)
+    assert np.max(np.abs(J @ X - B)) <= 1e-10 * np.max(np.abs(B))
+
+
+def test_coupled_blocks_fall_back():
+    # a coupling between the stage blocks: not condensable, the caller's general LU
+    D = sp.random(6, 6, density=0.6, random_state=0).toarray() + np.eye(6)
+    D[0, 3] = 1.0
+    A = sp.csc_matrix(D)
+    A.sum_duplicates()
+    cond = StageCondenser(np.array([[0, 1], [2, 3]]), np.array([[0, 1], [2, 3]]))
+    assert cond.factor(A) is None
+
+
+def test_singular_block_falls_back():
+    A = sp.csc_matrix(np.array([[0.0, 0, 1], [0, 1, 0], [1, 0, 1]]))
+    A.sum_duplicates()
+    cond = StageCondenser(np.array([[0]]), np.array([[0]]))  # block A[0, 0] = 0
+    assert cond.factor(A) is None
+    x = spla.splu(A).solve(np.ones(3))
+    assert np.allclose(A @ x, 1.0)
