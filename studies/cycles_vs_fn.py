@@ -25,6 +25,7 @@ import numpy as np
 
 if __package__ in (None, ""):  # run as a script: make `_common` importable
     sys.path.insert(0, str(Path(__file__).resolve().parent))
+    sys.path.insert(1, str(Path(__file__).resolve().parents[1]))  # this checkout's packages
 
 from _common import new_figure, save_csv, save_figure
 
@@ -57,7 +58,21 @@ def _panels(cb: Any, x: np.ndarray, xlabel: str, mark: float, mark_label: str, p
         a.set_xlabel(f"|{mark_label} - {xlabel}|")
         a.set_ylabel("T (s)")
         a.set_title("T = a - b ln|p* - p|")
+    else:  # no end in range: the Floquet multipliers instead
+        a.plot(x, cb.mu_max, ".-", ms=3)
+        a.axhline(1.0, color="r", lw=0.8, ls="--")
+        a.set_xlabel(xlabel)
+        a.set_ylabel("max |Floquet multiplier|")
     save_figure(fig, path)
+
+
+def _no_nan(obj: Any) -> Any:
+    """NaN -> None (strict JSON)."""
+    if isinstance(obj, dict):
+        return {k: _no_nan(v) for k, v in obj.items()}
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
 
 
 def compute(out: Path) -> dict[str, Any]:
@@ -107,7 +122,7 @@ def compute(out: Path) -> dict[str, Any]:
                          "max_roll_deg": float(np.degrees(np.max(cc.max_roll)))},  # fmt: skip
         "seconds": time.perf_counter() - t0,
     }
-    (out / "cycles.json").write_text(json.dumps(summary, indent=2))
+    (out / "cycles.json").write_text(json.dumps(_no_nan(summary), indent=2))
     return summary
 
 
@@ -116,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("out/cycles"))
     args = ap.parse_args(argv)
-    print(json.dumps(compute(args.out), indent=2))
+    print(json.dumps(_no_nan(compute(args.out)), indent=2))
     return 0
 
 
