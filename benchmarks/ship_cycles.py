@@ -22,10 +22,10 @@ import time
 from pathlib import Path
 
 PARTS = {
-    "floquet (condensation + periodic eigenvalues)": "floquet.py:176(floquet)",
-    "Jacobian assembly (PeriodicOrbitProblem.linearize)": "problem.py:178(linearize)",
-    "CasADi f, f_x, f_p at the stages": "collocation.py:77(all)",
-    "SuperLU factorisations (splu)": "linsolve.py:329(splu)",
+    "floquet (condensation + periodic eigenvalues)": "floquet.py:floquet",
+    "Jacobian assembly (PeriodicOrbitProblem.linearize)": "problem.py:linearize",
+    "CasADi f, f_x, f_p at the stages": "collocation.py:all",
+    "SuperLU factorisations (splu)": "linsolve.py:splu",
 }
 
 
@@ -52,7 +52,7 @@ def main() -> int:
         stats = pstats.Stats(prof).stats  # type: ignore[attr-defined]
         for label, key in PARTS.items():
             parts[label] = sum(
-                v[3] for k, v in stats.items() if f"{Path(k[0]).name}:{k[1]}({k[2]})" == key
+                v[3] for k, v in stats.items() if f"{Path(k[0]).name}:{k[2]}" == key
             )
     res = {
         "start_cycle_s": t_start,
