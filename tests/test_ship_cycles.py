@@ -1,0 +1,111 @@
+"""The ship overtaken by waves as a collocated rotation orbit (ship_models.analysis.cycles).
+
+References: the return-map shooting solver (sudden_change.periodic_orbit, an independent
+method: simulation + Newton on the Poincare map), the heteroclinic Fn of the connection
+BVP (connection.critical_fn_bvp, computed at run time), the angle of vanishing stability,
+and a closed-form fit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from continuation.status import Status
+from ship_models import purse_seiner
+from ship_models.analysis.connection import critical_fn_bvp
+from ship_models.analysis.cycles import (
+    compare_with_shooting,
+    cycle_at,
+    cycle_branch,
+    fit_saddle_focus_limit,
+    section_state,
+    simulated_cycle,
+)
+from ship_models.analysis.events import capsize_angle
+from ship_models.analysis.sudden_change import periodic_orbit
+
+CHI10 = math.radians(10.0)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return purse_seiner()
+
+
+@pytest.fixture(scope="module")
+def cycle01(model):
+    return simulated_cycle(model, model.default_params().replace(Fn=0.1, chi_c=0.0))
+
+
+def test_cycle_fn01_chi0_against_shooting(model, cycle01):
+    """(Fn 0.1, chi_c 0): period to 1e-7 s, section state to 1e-7 (nondimensional),
+    multiplier moduli to 1e-3 (the shooting Jacobian is by finite differences)."""
+    o = cycle01
+    assert o.X[-1, 0] - o.X[0, 0] == pytest.approx(-1.0)  # one wave per period
+    s = periodic_orbit(model, o.params)
+    assert s.success and s.drift == -1
+    c = compare_with_shooting(o, s)
+    assert abs(c.dT) < 1e-7 and c.d_state < 1e-7 and c.d_multiplier < 1e-3, c
+    x, t = section_state(o, 0.0)
+    assert x[0] == 0.0 and 0.0 <= t < o.T
+
+
+@pytest.mark.slow
+def test_cycle_fn03_chi45_by_continuation_against_shooting(model, cycle01):
+    """(Fn 0.3, chi_c 45 deg), unreachable by simulation from the calm-water guess
+    (it capsizes), by continuation in chi_c then Fn; against shooting started at its
+    section state: period to 2e-6 s (of 19 s), state to 1e-6, multipliers to 1e-2;
+    its roll far inside the angle of vanishing stability."""
+    o45 = cycle_at(cycle01, chi_c=math.radians(45.0), Fn=0.3)
+    assert o45.param("Fn") == pytest.approx(0.3) and o45.param("chi_c") == pytest.approx(
+        math.radians(45.0)
+    )
+    s = periodic_orbit(model, o45.params, x_guess=section_state(o45, 0.0)[0])
+    assert s.success and s.attracting
+    c = compare_with_shooting(o45, s)
+    assert abs(c.dT) < 2e-6 and c.d_state < 1e-6 and c.d_multiplier < 1e-2, c
+    assert np.max(np.abs(o45.X[:, model.state_index("phi")])) < 0.25 * capsize_angle(model)
+
+
+@pytest.mark.slow
+def test_fn_branch_period_blows_up_at_the_heteroclinic_fn(model):
+    """chi_c = 10 deg from Fn 0.1: the period grows without bound; the limit fitted by
+    T = a - b ln|Fn* - Fn| agrees with the connection BVP to 1e-4 (measured 4e-6), the
+    saddle-focus fit too; the cycle loses stability before the end; its roll stays far
+    inside the angle of vanishing stability."""
+    fn_het = float(critical_fn_bvp(CHI10, model=model).Fn)
+    o = simulated_cycle(model, model.default_params().replace(Fn=0.1, chi_c=CHI10))
+    cb = cycle_branch(o, "Fn", p_max=0.4, period_max=60.0)
+    assert cb.status == Status.PERIOD_UNBOUNDED, cb.message
+    assert cb.T[-1] == pytest.approx(60.0) and cb.T[0] == pytest.approx(o.T)
+    assert abs(cb.limit - fn_het) < 1e-4
+    assert abs(cb.limit_saddle_focus - fn_het) < 1e-4
+    assert abs(cb.p[-1] - fn_het) < 1e-5
+    # stable at the start, unstable before the end (and before the period limit)
+    assert cb.n_unstable[0] == 0 and cb.mu_max[0] < 1.0
+    assert cb.lost_stability_at < fn_het and cb.n_unstable[-1] > 0
+    assert np.max(cb.max_roll) < 0.25 * capsize_angle(model)
+    js = cb.to_json()
+    assert js["status"] == "PERIOD_UNBOUNDED" and len(js["rows"]["Fn"]) == len(cb.p)
+
+
+def test_saddle_focus_fit_closed_form():
+    """Rows generated from the law itself: p* recovered to rounding."""
+    T = np.linspace(30.0, 60.0, 20)
+    p = 0.3 + np.exp(-0.07 * (T - 60.0)) * (1e-5 * np.cos(0.8 * T) - 2e-5 * np.sin(0.8 * T))
+    f = fit_saddle_focus_limit(p, T, 0.07, 0.8)
+    assert f.p_star == pytest.approx(0.3, abs=1e-14) and f.residual < 1e-14
+    with pytest.raises(ValueError, match="at least 4"):
+        fit_saddle_focus_limit(p[:3], T[:3], 0.07, 0.8)
+
+
+def test_bad_input(model, cycle01):
+    with pytest.raises(ValueError, match="`free`"):
+        cycle_branch(cycle01, "K_R")
+    with pytest.raises(ValueError, match="`nope`"):
+        cycle_at(cycle01, nope=1.0)
+    with pytest.raises(ValueError, match="`t_settle`"):
+        simulated_cycle(model, cycle01.params, t_settle=-1.0)
