@@ -78,7 +78,7 @@ def _no_nan(obj: Any) -> Any:
 def compute(out: Path) -> dict[str, Any]:
     """Run the study and write its files; returns the JSON summary."""
     import ship_models
-    from ship_models.analysis.connection import critical_fn_bvp
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
     from ship_models.analysis.cycles import cycle_at, cycle_branch, simulated_cycle
     from ship_models.analysis.events import capsize_angle
 

@@ -15,7 +15,7 @@ import pytest
 
 from continuation.status import Status
 from ship_models import purse_seiner
-from ship_models.analysis.connection import critical_fn_bvp
+from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.analysis.cycles import (
     compare_with_shooting,
     cycle_at,
@@ -46,7 +46,7 @@ def test_cycle_fn01_chi0_against_shooting(model, cycle01):
     o = cycle01
     assert o.X[-1, 0] - o.X[0, 0] == pytest.approx(-1.0)  # one wave per period
     s = periodic_orbit(model, o.params)
-    assert s.success and s.drift == -1
+    assert s.success and s.shift == -1
     c = compare_with_shooting(o, s)
     assert abs(c.dT) < 1e-7 and c.d_state < 1e-7 and c.d_multiplier < 1e-3, c
     x, t = section_state(o, 0.0)

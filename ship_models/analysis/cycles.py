@@ -15,7 +15,7 @@ continues it in ``Fn`` or ``chi_c``:
 * :func:`cycle_branch` -- the branch of cycles in ``Fn`` (or ``chi_c``); it ends where
   the period grows without bound, i.e. where the cycle becomes the heteroclinic orbit
   from the crest saddle to the next crest saddle (the paper's heteroclinic bifurcation,
-  :func:`~ship_models.analysis.connection.critical_fn_bvp`);
+  :func:`~ship_models.analysis.critical_bvp.critical_fn_bvp`);
 * :func:`cycle_at` -- the cycle at other controls by continuation (where simulation
   from the calm-water guess capsizes, e.g. ``Fn = 0.3``, ``chi_c = 45 deg``);
 * :func:`section_state`, :func:`compare_with_shooting` -- the cross-check against the
@@ -47,6 +47,8 @@ import scipy.optimize as so
 
 from continuation.branch import Branch
 from continuation.bvp import CollocationMesh
+from continuation.dynamics import simulate
+from continuation.dynamics.shooting import ShootingOrbit
 from continuation.errors import ContinuationError
 from continuation.params import Params
 from continuation.periodic import (
@@ -58,14 +60,12 @@ from continuation.periodic import (
     period_limit,
 )
 from continuation.settings import ContinuationSettings
-from continuation.simulate import simulate
 from continuation.status import Status
 from continuation.typing import FloatArray
 
-from .connection import crest_saddle
+from .crest_saddle import crest_saddle
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
-from .sudden_change import PeriodicOrbit as ShootingOrbit
 from .sudden_change import default_guess
 
 log = logging.getLogger(__name__)
@@ -435,7 +435,7 @@ def cycle_branch(
         limit = float(period_limit(br, n_fit=max(k, 4)).p_star)
         last = orbit_at(br, len(br) - 1)
         sad = crest_saddle(model, last.params)
-        lam = np.asarray(sad.eigenvalues)
+        lam = np.asarray(sad.eigen.values)
         stable = lam[lam.real < 0]
         lam_s = stable[np.argmax(stable.real)]
         fit = fit_saddle_focus_limit(br.p[-k:], T[-k:], float(-lam_s.real), float(abs(lam_s.imag)))
