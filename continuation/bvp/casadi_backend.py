@@ -323,31 +323,66 @@ class ConnectionFunctions:
             )
         inputs = [w, P, h, T, Qm, Qp, shift, ref, dref, pin]
         names = ["w", "P", "h", "T", "Qm", "Qp", "shift", "ref", "dref", "pin"]
+        self.G = ca.Function("G", inputs, [g], names, ["G"])
+        self.n_equations = int(g.shape[0])
+        # The Jacobians cost most of the construction (about 0.8 s of 1 s for the ship);
+        # a residual-only user (finite differences of G in a model coefficient) never
+        # needs them, so they are built on first use.
+        self._graph = (fns, layout, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T,
+                       mesh.D, n_par, w, P)  # fmt: skip
+        self._jac: dict[str, Any] | None = None
+
+    def _jacobians(self) -> dict[str, Any]:
+        if self._jac is not None:
+            return self._jac
+        (fns, layout, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T, D, n_par,
+         w, P) = self._graph  # fmt: skip
         # Collocation rows: Jacobian assembled from the mapped df/dx and df/dp of the
         # system (exact, one evaluation of each per collocation point). Other rows: AD.
         # The integral phase row is dense in the orbit unknowns; a dense row defeats the
         # column colouring of a forward-mode Jacobian, so it is differentiated on its own
         # (one reverse sweep).
-        Jc_w, Jc_P = _collocation_jacobian(fns, layout, Xs, P_eff, h_rep, T, mesh.D, n_par)
+        Jc_w, Jc_P = _collocation_jacobian(fns, layout, Xs, P_eff, h_rep, T, D, n_par)
         Jw = ca.vertcat(Jc_w, ca.jacobian(g_rest, w), ca.jacobian(phase, w))
         Jp = ca.vertcat(Jc_P, ca.jacobian(g_rest, P), ca.jacobian(phase, P))
-        self.G = ca.Function("G", inputs, [g], names, ["G"])
-        self.G_w = ca.Function("G_w", inputs, [Jw], names, ["G_w"])
-        self.G_P = ca.Function("G_P", inputs, [Jp], names, ["G_P"])
-        self.G_all = ca.Function("G_all", inputs, [g, Jw, Jp], names, ["G", "G_w", "G_P"])
-        self.n_equations = int(g.shape[0])
-        spw = self.G_w.sparsity_out(0)
-        self._w_pattern = (
-            np.array(spw.row(), dtype=np.int32),
-            np.array(spw.colind(), dtype=np.int32),
-            spw.shape,
-        )
-        spp = self.G_P.sparsity_out(0)
-        self._p_pattern = (
-            np.array(spp.row(), dtype=np.int32),
-            np.array(spp.colind(), dtype=np.int32),
-            spp.shape,
-        )
+        G_w = ca.Function("G_w", inputs, [Jw], names, ["G_w"])
+        G_P = ca.Function("G_P", inputs, [Jp], names, ["G_P"])
+        G_all = ca.Function("G_all", inputs, [g, Jw, Jp], names, ["G", "G_w", "G_P"])
+        spw, spp = G_w.sparsity_out(0), G_P.sparsity_out(0)
+        self._jac = {
+            "G_w": G_w,
+            "G_P": G_P,
+            "G_all": G_all,
+            "w_pattern": (np.array(spw.row(), dtype=np.int32),
+                          np.array(spw.colind(), dtype=np.int32), spw.shape),  # fmt: skip
+            "p_pattern": (np.array(spp.row(), dtype=np.int32),
+                          np.array(spp.colind(), dtype=np.int32), spp.shape),  # fmt: skip
+        }
+        self._graph = None
+        return self._jac
+
+    @property
+    def G_w(self) -> ca.Function:  # noqa: N802 (the paper's symbol)
+        """Jacobian in ``w`` (built on first use)."""
+        return self._jacobians()["G_w"]
+
+    @property
+    def G_P(self) -> ca.Function:  # noqa: N802
+        """Jacobian in ``P`` (built on first use)."""
+        return self._jacobians()["G_P"]
+
+    @property
+    def G_all(self) -> ca.Function:  # noqa: N802
+        """Residual and both Jacobians in one function (built on first use)."""
+        return self._jacobians()["G_all"]
+
+    @property
+    def _w_pattern(self) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
+        return self._jacobians()["w_pattern"]
+
+    @property
+    def _p_pattern(self) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
+        return self._jacobians()["p_pattern"]
 
     @staticmethod
     def _csc(out: ca.DM, pattern: tuple[np.ndarray, np.ndarray, tuple[int, int]]) -> sp.csc_matrix:
