@@ -37,7 +37,8 @@ def _result(sigmas: dict[str, float]) -> tuple[Sensitivity, UncertaintyBand]:
         _entry("hydrodynamics.m_x", 3.0e4, 1.3e-7),
         _entry("resistance.knot_spacing_Fn", 0.05, 0.1, "given", "numerical"),
     )
-    conn = SimpleNamespace(residual_norm=1e-12, orbit=SimpleNamespace(mesh=SimpleNamespace(n_intervals=80)))
+    mesh = SimpleNamespace(n_intervals=80)
+    conn = SimpleNamespace(residual_norm=1e-12, orbit=SimpleNamespace(mesh=mesh))
     sens = Sensitivity(math.radians(10.0), FN, entries, conn)  # type: ignore[arg-type]
     by = {e.key: e for e in entries}
     contrib = sorted(((k, abs(by[k].dFn_dtheta) * s) for k, s in sigmas.items()),
@@ -94,7 +95,8 @@ def test_report_section_reads_the_steps_summary(tmp_path: Path) -> None:
     assert 'src="sensitivity/tornado.png"' in html
     assert (tmp_path / "sensitivity" / "tornado.png").is_file()
     assert sensitivity_context({}) is None
-    assert "Not run (the <code>sensitivity</code> step" in write_report(tmp_path, {}, {}).read_text()
+    empty = write_report(tmp_path, {}, {}).read_text()
+    assert "Not run (the <code>sensitivity</code> step" in empty
 
 
 def test_step_is_in_the_main_job() -> None:
