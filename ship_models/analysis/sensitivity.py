@@ -603,6 +603,17 @@ def critical_fn_sensitivity(
     if not (math.isfinite(rel_step) and rel_step > 0 and math.isfinite(abs_step) and abs_step > 0):
         raise ValueError(f"`rel_step` and `abs_step` must be positive, got {rel_step}, {abs_step}")
     raw = vessel if isinstance(vessel, VesselData) else load_vessel(vessel)
+    with reuse_hydrostatics() as stats:  # the base build seeds the cache of the rebuilds
+        return _sensitivity(chi_c, raw, keys, connection, model, rel_step, abs_step,
+                            progress, bvp_options, stats, t0)  # fmt: skip
+
+
+def _sensitivity(chi_c: float, raw: VesselData, keys: Iterable[str] | None,
+                 connection: CriticalFn | None, model: Umeda4DOF | None, rel_step: float,
+                 abs_step: float, progress: Callable[[str], None] | None,
+                 bvp_options: Mapping[str, Any], stats: Mapping[str, int],
+                 t0: float) -> Sensitivity:  # fmt: skip
+    """Body of :func:`critical_fn_sensitivity` (inside :func:`reuse_hydrostatics`)."""
     base = build_vessel_model(raw)
     resolved = base.vessel
     m = model if model is not None else Umeda4DOF(base)
@@ -623,9 +634,8 @@ def critical_fn_sensitivity(
     e[_fn_index(prob)] = 1.0
     lam = lu.solve(e, trans="T")
     res = _Residuals(conn, raw, resolved, opts)
-    with reuse_hydrostatics() as stats:
-        entries = [_entry(k, res, lam, m, conn, raw, resolved, rel_step, abs_step, progress)
-                   for k in key_list]  # fmt: skip
+    entries = [_entry(k, res, lam, m, conn, raw, resolved, rel_step, abs_step, progress)
+               for k in key_list]  # fmt: skip
     log.info("sensitivity: %d coefficients, hydrostatics reused %d / %d calls",
              len(key_list), stats["hits"], stats["hits"] + stats["misses"])  # fmt: skip
     entries.sort(key=_sort_key)
