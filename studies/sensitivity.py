@@ -88,10 +88,29 @@ def write_outputs(out: Path, sens: Any, band: Any, *, seconds: float) -> dict[st
         tornado_figure(sens, tmp, top=TOP, band=band)
     write_json(out / "sensitivity.json", {"sensitivity": sens.to_json(), "band": band.to_json()})
     summary = summarise(sens, band)
+    summary["keys"] = [e.key for e in sens.entries]
     summary["elapsed_s"] = seconds
     summary["files"] = ["tornado.png", "sensitivity.json"]
     write_json(out / "summary.json", summary)
     return summary
+
+
+def main_job_keys(vessel: Any) -> list[str]:
+    """The coefficients the main job differentiates (the band's and the tornado's).
+
+    Every coefficient that carries an uncertainty in the vessel file (all the band
+    needs), the factors on intermediate force quantities (wave surge amplitude's
+    neighbours: resistance, thrust, lateral wave forces) and the parameters of the
+    dynamical system. The given hull dimensions are left to ``broachkit sensitivity``
+    (each re-runs the hydrostatics, ~2.5 s, more than all the others together).
+    """
+    from ship_models.analysis.sensitivity import FACTORS, SYSTEM_PARAMS
+    from ship_models.estimation import build_vessel_model
+
+    resolved = build_vessel_model(vessel).vessel
+    unc = [k for k in resolved.uncertainties if k in resolved.coefficients]
+    sys_p = [k for k in SYSTEM_PARAMS if k in resolved.coefficients and k not in unc]
+    return unc + sys_p + list(FACTORS)
 
 
 def compute(
@@ -99,11 +118,13 @@ def compute(
     progress: Callable[[str], None] | None = None,
     *,
     keys: Iterable[str] | None = None,
+    every_coefficient: bool = False,
 ) -> dict[str, Any]:
     """Sensitivities of the critical Fn at 10 deg, the linear band, the tornado figure.
 
-    ``keys`` restricts the coefficients (default: all of them; the band needs at least
-    every coefficient that carries an uncertainty).
+    ``keys``: the coefficients (default :func:`main_job_keys`, or all of them with
+    ``every_coefficient``; the band needs every coefficient that carries an
+    uncertainty).
     """
     from ship_models.analysis.sensitivity import critical_fn_sensitivity, uncertainty_band
     from ship_models.vessel import load_vessel
@@ -111,6 +132,8 @@ def compute(
     say = progress or (lambda msg: None)
     t0 = time.perf_counter()
     vessel = load_vessel("purse_seiner")
+    if keys is None and not every_coefficient:
+        keys = main_job_keys(vessel)
     say(f"critical Fn at chi_c = {CHI_C_DEG:g} deg and its derivative in every coefficient")
     sens = critical_fn_sensitivity(math.radians(CHI_C_DEG), vessel=vessel, keys=keys,
                                    progress=lambda k: say(f"  d Fn*/d {k}"))  # fmt: skip
@@ -124,8 +147,10 @@ def main(argv: list[str] | None = None) -> int:
     """Command-line entry: ``python studies/sensitivity.py [--out DIR]``."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("out") / "sensitivity")
+    ap.add_argument("--all", action="store_true", help="differentiate every coefficient")
     args = ap.parse_args(argv)
-    s = compute(args.out, progress=lambda m: sys.stderr.write(m + "\n"))
+    s = compute(args.out, progress=lambda m: sys.stderr.write(m + "\n"),
+                every_coefficient=args.all)  # fmt: skip
     sys.stdout.write(f"band [{s['band'][0]:.5f}, {s['band'][1]:.5f}]; "
                      f"paper inside: {s['paper_inside_band']}\n")  # fmt: skip
     return 0

@@ -104,3 +104,16 @@ def test_step_is_in_the_main_job() -> None:
 
     assert ("sensitivity", "sensitivity") == next(
         (k, m) for k, _, m in STUDY_STEPS if k == "sensitivity")
+
+
+def test_main_job_keys_cover_every_uncertainty() -> None:
+    from ship_models.analysis.sensitivity import FACTORS
+    from ship_models.estimation import build_vessel_model
+    from ship_models.vessel import load_vessel
+
+    v = load_vessel("purse_seiner")
+    keys = step.main_job_keys(v)
+    resolved = build_vessel_model(v).vessel
+    assert {k for k in resolved.uncertainties if k in resolved.coefficients} <= set(keys)
+    assert set(FACTORS) <= set(keys)
+    assert len(keys) == len(set(keys))
