@@ -117,3 +117,24 @@ def test_main_job_keys_cover_every_uncertainty() -> None:
     assert {k for k in resolved.uncertainties if k in resolved.coefficients} <= set(keys)
     assert set(FACTORS) <= set(keys)
     assert len(keys) == len(set(keys))
+
+
+def test_reused_hydrostatics_give_the_fresh_build_and_follow_changed_inputs() -> None:
+    from ship_models.analysis.sensitivity import reuse_hydrostatics
+    from ship_models.estimation import build_vessel_model
+    from ship_models.vessel import Coefficient, load_vessel
+
+    v = load_vessel("purse_seiner")
+    B = v.coefficients["particulars.B"]
+    wider = v.with_overrides({"particulars.B": Coefficient(B.value * 1.01, B.unit, B.source,
+                                                           B.status)})  # fmt: skip
+    fresh = [build_vessel_model(x).vessel.coefficients for x in (v, wider)]
+    with reuse_hydrostatics() as stats:
+        build_vessel_model(v)
+        cached = [build_vessel_model(x).vessel.coefficients for x in (v, wider)]
+    assert stats["hits"] >= 3  # gz_curve, topside fit and resistance fit of the second v
+    for a, b in zip(fresh, cached, strict=True):
+        assert {k: c.value for k, c in a.items()} == {k: c.value for k, c in b.items()}
+    # the wider hull changed the hydrostatics: its topside height is not the base one
+    top = "stability.topside_height"
+    assert cached[1][top].value != cached[0][top].value
