@@ -142,6 +142,36 @@ def key_number_rows(numbers: Mapping[str, Any]) -> list[tuple[str, str]]:
     return rows
 
 
+def sensitivity_context(results: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The report's sensitivity section from the ``sensitivity`` step's ``summary.json``.
+
+    ``None`` when the step did not run. Every number comes from the step's summary.
+    """
+    s = results.get("sensitivity")
+    if not s:
+        return None
+    lo, hi = s["band"]
+    plo, phi = s["paper_Fn"]
+    return {
+        "figure": "sensitivity/tornado.png",
+        "rows": [
+            (f"critical Fn at chi_c = {s['chi_c_deg']:g} deg", _fmt(s["Fn"])),
+            ("standard uncertainty (linear propagation)", _fmt(s["sigma_linear"])),
+            (f"band (Fn -+ {s['coverage']:g} sigma)", f"[{_fmt(lo)}, {_fmt(hi)}]"),
+            ("the paper's value", f"[{_fmt(plo)}, {_fmt(phi)}]"),
+            ("the paper's value inside the band", "yes" if s["paper_inside_band"] else "no"),
+            ("coefficients differentiated", _fmt(s["n_coefficients"])),
+        ],
+        "dominant": [
+            (d["key"], _fmt(d["sigma_Fn"]),
+             "n/a" if d["share"] is None else f"{100 * d['share']:.0f} %")  # fmt: skip
+            for d in s["dominant"]
+        ],
+        "elasticities": [(e["key"], e["status"], _fmt(e["elasticity"]))
+                         for e in s["elasticities"]],  # fmt: skip
+    }
+
+
 def write_report(out: Path, results: Mapping[str, Any], doc: Mapping[str, Any]) -> Path:
     """Render ``out/report.html`` from the step summaries and the job's document.
 
@@ -188,6 +218,7 @@ def write_report(out: Path, results: Mapping[str, Any], doc: Mapping[str, Any]) 
         claims=claims,
         all_figures=list(doc.get("figures", [])),
         vessel=vessel,
+        sensitivity=sensitivity_context(results),
         run={
             "started": doc.get("started", _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")),
             "total_seconds": doc.get("total_seconds"),

@@ -199,6 +199,14 @@ def _critical_10(r: Mapping[str, Any]) -> Finding:
         ("bisection on the upslope branch's fate", f"[{_fmt(lo)}, {_fmt(hi)}]"),
         ("connecting orbit (collocation)", _fmt(bvp, ".8f")),
     )
+    band = _get(r, "sensitivity", "band")
+    if band:  # the sensitivity step ran: its linear uncertainty band and the paper's place
+        nums += (
+            ("uncertainty band of the connection's Fn (linear)",
+             f"[{_fmt(band[0])}, {_fmt(band[1])}]"),  # fmt: skip
+            ("the paper's value inside that band",
+             "yes" if _get(r, "sensitivity", "paper_inside_band") else "no"),  # fmt: skip
+        )
     inside = bvp is not None and lo is not None and lo - 1e-5 <= bvp <= hi + 1e-5
     in_paper = bvp is not None and PAPER_FN_10DEG[0] <= bvp <= PAPER_FN_10DEG[1]
     reason = (

@@ -5,16 +5,17 @@ data (CSV/NPZ/JSON) under ``--out/<step>``, then ``--out/report.html`` (the pape
 statements beside this run's figures and numbers) and ``--out/reproduce.json``, and
 prints a short summary (``--json``: the JSON document):
 
-========== =========================================== =====================================
-step       what                                        module
-========== =========================================== =====================================
-demo       engine demo (Bratu fold, Brusselator Hopf)   ``broachkit demo``
-fig02_05   fixed points against chi_c and Fn           ``studies.fig02_05_fixed_points``
-fig06_09   eigenvalues and unstable eigenvectors       ``studies.fig06_09_eigen``
-fig10_15   critical Fn, unstable manifolds             ``studies.fig10_15_manifolds``
-fig21_23   connecting orbit, critical curve            ``studies.fig21_23_connection``
-fig16_22   sudden-change experiments                   ``studies.fig16_22_sudden_change``
-========== =========================================== =====================================
+=========== ========================================== =====================================
+step        what                                        module
+=========== ========================================== =====================================
+demo        engine demo (Bratu fold, Brusselator Hopf)   ``broachkit demo``
+fig02_05    fixed points against chi_c and Fn           ``studies.fig02_05_fixed_points``
+fig06_09    eigenvalues and unstable eigenvectors       ``studies.fig06_09_eigen``
+fig10_15    critical Fn, unstable manifolds             ``studies.fig10_15_manifolds``
+fig21_23    connecting orbit, critical curve            ``studies.fig21_23_connection``
+fig16_22    sudden-change experiments                   ``studies.fig16_22_sudden_change``
+sensitivity dFn*/dtheta, uncertainty band, tornado     ``studies.sensitivity``
+=========== ========================================== =====================================
 
 A step whose folder holds ``summary.json`` and no ``.incomplete`` marker is skipped
 unless ``--force``; a step that was interrupted (the marker is still there) is redone.
@@ -55,6 +56,7 @@ STUDY_STEPS: tuple[tuple[str, str, str], ...] = (
     ("fig10_15", "Figs. 10-15: critical Fn and unstable manifolds", "fig10_15_manifolds"),
     ("fig21_23", "Figs. 21, 23: connecting orbit and critical curve", "fig21_23_connection"),
     ("fig16_22", "Figs. 16-22: sudden-change experiments", "fig16_22_sudden_change"),
+    ("sensitivity", "Critical Fn: sensitivities, uncertainty band, tornado", "sensitivity"),
 )
 
 

@@ -325,47 +325,106 @@ class ConnectionFunctions:
             )
         inputs = [w, P, h, T, Qm, Qp, shift, ref, dref, pin]
         names = ["w", "P", "h", "T", "Qm", "Qp", "shift", "ref", "dref", "pin"]
-        # Collocation rows: Jacobian assembled from the mapped df/dx and df/dp of the
-        # system (exact, one evaluation of each per collocation point). Other rows: AD.
-        # The integral phase row is dense in the orbit unknowns; a dense row defeats the
-        # column colouring of a forward-mode Jacobian, so it is differentiated on its own
-        # (one reverse sweep).
-        Jc_w, Jc_P = _collocation_jacobian(fns, layout, Xs, P_eff, h_rep, T, mesh.D, n_par)
-        Jw = ca.vertcat(Jc_w, ca.jacobian(g_rest, w), ca.jacobian(phase, w))
-        Jp = ca.vertcat(Jc_P, ca.jacobian(g_rest, P), ca.jacobian(phase, P))
         self.G = ca.Function("G", inputs, [g], names, ["G"])
-        self.G_w = ca.Function("G_w", inputs, [Jw], names, ["G_w"])
-        self.G_P = ca.Function("G_P", inputs, [Jp], names, ["G_P"])
-        self.G_all = ca.Function("G_all", inputs, [g, Jw, Jp], names, ["G", "G_w", "G_P"])
         self.n_equations = int(g.shape[0])
-        spw = self.G_w.sparsity_out(0)
-        self._w_pattern = (
-            np.array(spw.row(), dtype=np.int32),
-            np.array(spw.colind(), dtype=np.int32),
-            spw.shape,
-        )
-        spp = self.G_P.sparsity_out(0)
-        self._p_pattern = (
-            np.array(spp.row(), dtype=np.int32),
-            np.array(spp.colind(), dtype=np.int32),
-            spp.shape,
-        )
-        # CSC templates: every Jacobian shares their (canonical) index arrays, so the
-        # driver recognises the pattern and SciPy's format checks run once
-        self._w_template = _template(self._w_pattern)
-        self._p_template = _template(self._p_pattern)
+        self.arg_sizes = tuple(int(self.G.nnz_in(i)) for i in range(self.G.n_in()))
+        self._bG = _Buffered(self.G)
         # collocation rows and stage unknowns of each interval: the linear solves of
         # Newton and of the driver condense the stages (continuation.bvp.condense)
         stage_cols = np.array(_stage_columns(N, m)).reshape(N, m)
         cols_s = (stage_cols[:, :, None] * n + np.arange(n)).reshape(N, m * n)
         rows_s = np.arange(N * m * n).reshape(N, m * n)
         self.condenser = StageCondenser(rows_s, cols_s)
-        self._w_template.condensed_lu = self.condenser.factor
-        self.arg_sizes = tuple(int(self.G.nnz_in(i)) for i in range(self.G.n_in()))
-        self._bG = _Buffered(self.G)
-        self._bGw = _Buffered(self.G_w)
-        self._bGP = _Buffered(self.G_P)
-        self._bAll = _Buffered(self.G_all)
+        # The Jacobians cost most of the construction (about 0.8 s of 1 s for the ship);
+        # a residual-only user (finite differences of G in a model coefficient) never
+        # needs them, so they are built on first use.
+        self._graph = (fns, layout, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T,
+                       mesh.D, n_par, w, P)  # fmt: skip
+        self._jac: dict[str, Any] | None = None
+
+    def _jacobians(self) -> dict[str, Any]:
+        if self._jac is not None:
+            return self._jac
+        (fns, layout, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T, D, n_par,
+         w, P) = self._graph  # fmt: skip
+        # Collocation rows: Jacobian assembled from the mapped df/dx and df/dp of the
+        # system (exact, one evaluation of each per collocation point). Other rows: AD.
+        # The integral phase row is dense in the orbit unknowns; a dense row defeats the
+        # column colouring of a forward-mode Jacobian, so it is differentiated on its own
+        # (one reverse sweep).
+        Jc_w, Jc_P = _collocation_jacobian(fns, layout, Xs, P_eff, h_rep, T, D, n_par)
+        Jw = ca.vertcat(Jc_w, ca.jacobian(g_rest, w), ca.jacobian(phase, w))
+        Jp = ca.vertcat(Jc_P, ca.jacobian(g_rest, P), ca.jacobian(phase, P))
+        G_w = ca.Function("G_w", inputs, [Jw], names, ["G_w"])
+        G_P = ca.Function("G_P", inputs, [Jp], names, ["G_P"])
+        G_all = ca.Function("G_all", inputs, [g, Jw, Jp], names, ["G", "G_w", "G_P"])
+        spw, spp = G_w.sparsity_out(0), G_P.sparsity_out(0)
+        w_pattern = (np.array(spw.row(), dtype=np.int32),
+                     np.array(spw.colind(), dtype=np.int32), spw.shape)  # fmt: skip
+        p_pattern = (np.array(spp.row(), dtype=np.int32),
+                     np.array(spp.colind(), dtype=np.int32), spp.shape)  # fmt: skip
+        # CSC templates: every Jacobian shares their (canonical) index arrays, so the
+        # driver recognises the pattern and SciPy's format checks run once
+        w_template = _template(w_pattern)
+        p_template = _template(p_pattern)
+        w_template.condensed_lu = self.condenser.factor
+        self._jac = {
+            "G_w": G_w,
+            "G_P": G_P,
+            "G_all": G_all,
+            "w_pattern": w_pattern,
+            "p_pattern": p_pattern,
+            "w_template": w_template,
+            "p_template": p_template,
+            "bGw": _Buffered(G_w),
+            "bGP": _Buffered(G_P),
+            "bAll": _Buffered(G_all),
+        }
+        self._graph = None
+        return self._jac
+
+    @property
+    def G_w(self) -> ca.Function:  # noqa: N802 (the paper's symbol)
+        """Jacobian in ``w`` (built on first use)."""
+        return self._jacobians()["G_w"]
+
+    @property
+    def G_P(self) -> ca.Function:  # noqa: N802
+        """Jacobian in ``P`` (built on first use)."""
+        return self._jacobians()["G_P"]
+
+    @property
+    def G_all(self) -> ca.Function:  # noqa: N802
+        """Residual and both Jacobians in one function (built on first use)."""
+        return self._jacobians()["G_all"]
+
+    @property
+    def _w_pattern(self) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
+        return self._jacobians()["w_pattern"]
+
+    @property
+    def _p_pattern(self) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
+        return self._jacobians()["p_pattern"]
+
+    @property
+    def _w_template(self) -> sp.csc_matrix:
+        return self._jacobians()["w_template"]
+
+    @property
+    def _p_template(self) -> sp.csc_matrix:
+        return self._jacobians()["p_template"]
+
+    @property
+    def _bGw(self) -> _Buffered:
+        return self._jacobians()["bGw"]
+
+    @property
+    def _bGP(self) -> _Buffered:
+        return self._jacobians()["bGP"]
+
+    @property
+    def _bAll(self) -> _Buffered:
+        return self._jacobians()["bAll"]
 
     def flat_args(self, args: list[Any]) -> list[FloatArray]:
         """The inputs as contiguous float vectors (matrices column-major), sizes checked.

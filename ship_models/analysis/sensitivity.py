@@ -66,11 +66,14 @@ Functions of :mod:`ship_models.analysis.critical_bvp` used: ``critical_fn_bvp``
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import inspect
 import logging
 import math
+import pickle
 import time
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -84,6 +87,7 @@ from continuation.ops import NUMPY_OPS, Ops
 from continuation.settings import NewtonSettings
 from continuation.typing import FloatArray
 
+from .. import estimation as _estimation
 from ..estimation import VesselModelData, build_vessel_model
 from ..forces import ShipForces
 from ..hydro.propeller import revolutions
@@ -198,6 +202,70 @@ def _with_factors(data: VesselModelData, factors: Mapping[str, float]) -> Vessel
 
 
 # ----------------------------------------------------------------------------- rebuilding
+#: Hydrostatic computations of the estimation that dominate a rebuild (the GZ curve and
+#: the IS-Code topside fit: about 1.3 s of 1.5 s); most coefficients leave their inputs
+#: (hull, GM, heel step) unchanged, so a rebuild at theta +- h reuses them.
+_HYDROSTATIC_CALLS = ("gz_curve", "marginal_topside_height")
+
+
+@contextlib.contextmanager
+def reuse_hydrostatics() -> Iterator[dict[str, int]]:
+    """Memoise the estimation's hydrostatic calls on their exact arguments.
+
+    Inside the context, :func:`ship_models.estimation.build_vessel_model` calls
+    ``gz_curve`` and ``marginal_topside_height`` through a cache keyed by the pickled
+    arguments (the hull form with all its arrays, ``GM`` and the keywords), so a call
+    with bit-identical inputs returns the earlier result and any changed input (a
+    hull dimension, GM, the heel step) recomputes; likewise ``fit_resistance``, keyed
+    by the resistance's values on the fit's own sample grid (what the fit depends on).
+    Yields ``{"hits": .., "misses": ..}``.
+    """
+    stats = {"hits": 0, "misses": 0}
+    saved = {name: getattr(_estimation, name) for name in _HYDROSTATIC_CALLS}
+
+    def cached(name: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+        store: dict[bytes, Any] = {}
+
+        def call(*args: Any, **kwargs: Any) -> Any:
+            key = pickle.dumps((args, sorted(kwargs.items())), protocol=4)
+            if key in store:
+                stats["hits"] += 1
+                return store[key]
+            stats["misses"] += 1
+            out = store[key] = fn(*args, **kwargs)
+            return out
+
+        call.__name__ = name
+        return call
+
+    fit = _estimation.fit_resistance
+    n_default = inspect.signature(fit).parameters["n_samples"].default
+    fits: dict[bytes, Any] = {}
+
+    def cached_fit(fun: Callable[[FloatArray], FloatArray], u_max: float,
+                   knot_spacing: float, **kwargs: Any) -> Any:  # fmt: skip
+        # the fit depends on ``fun`` only through its values on its sample grid
+        u = np.linspace(0.0, u_max, int(kwargs.get("n_samples", n_default)))
+        R = np.asarray(fun(u), dtype=float)
+        key = pickle.dumps((R, float(u_max), float(knot_spacing), sorted(kwargs.items())))
+        if key in fits:
+            stats["hits"] += 1
+            return fits[key]
+        stats["misses"] += 1
+        out = fits[key] = fit(fun, u_max, knot_spacing, **kwargs)
+        return out
+
+    try:
+        for name, fn in saved.items():
+            setattr(_estimation, name, cached(name, fn))
+        _estimation.fit_resistance = cached_fit
+        yield stats
+    finally:
+        for name, fn in saved.items():
+            setattr(_estimation, name, fn)
+        _estimation.fit_resistance = fit
+
+
 def _model_options(model: Any) -> dict[str, Any]:
     return {
         "saturation": bool(getattr(model, "saturation", True)),
@@ -535,6 +603,17 @@ def critical_fn_sensitivity(
     if not (math.isfinite(rel_step) and rel_step > 0 and math.isfinite(abs_step) and abs_step > 0):
         raise ValueError(f"`rel_step` and `abs_step` must be positive, got {rel_step}, {abs_step}")
     raw = vessel if isinstance(vessel, VesselData) else load_vessel(vessel)
+    with reuse_hydrostatics() as stats:  # the base build seeds the cache of the rebuilds
+        return _sensitivity(chi_c, raw, keys, connection, model, rel_step, abs_step,
+                            progress, bvp_options, stats, t0)  # fmt: skip
+
+
+def _sensitivity(chi_c: float, raw: VesselData, keys: Iterable[str] | None,
+                 connection: CriticalFn | None, model: Umeda4DOF | None, rel_step: float,
+                 abs_step: float, progress: Callable[[str], None] | None,
+                 bvp_options: Mapping[str, Any], stats: Mapping[str, int],
+                 t0: float) -> Sensitivity:  # fmt: skip
+    """Body of :func:`critical_fn_sensitivity` (inside :func:`reuse_hydrostatics`)."""
     base = build_vessel_model(raw)
     resolved = base.vessel
     m = model if model is not None else Umeda4DOF(base)
@@ -555,24 +634,32 @@ def critical_fn_sensitivity(
     e[_fn_index(prob)] = 1.0
     lam = lu.solve(e, trans="T")
     res = _Residuals(conn, raw, resolved, opts)
-    entries = []
-    for k in key_list:
-        if progress is not None:
-            progress(k)
-        if k in FACTORS:
-            value, unit, status, source = 1.0, "-", "factor", FACTORS[k]
-        else:
-            c = resolved.coefficients[k]
-            value, unit, status, source = c.value, c.unit, c.status, c.source
-        g, h, method = _g_theta(res, k, value, unit, rel_step, abs_step)
-        d = -float(lam @ g)
-        el = value / conn.Fn * d if value != 0 else None
-        sig = resolved.sigma(k) if k not in FACTORS and k in resolved.uncertainties else None
-        q = _factor_quantity(k, m, conn) if k in FACTORS else None
-        entries.append(SensitivityEntry(k, value, unit, status, source, d, el, h, method,
-                                        _kind(k, raw), q, sig))  # fmt: skip
+    entries = [_entry(k, res, lam, m, conn, raw, resolved, rel_step, abs_step, progress)
+               for k in key_list]  # fmt: skip
+    log.info("sensitivity: %d coefficients, hydrostatics reused %d / %d calls",
+             len(key_list), stats["hits"], stats["hits"] + stats["misses"])  # fmt: skip
     entries.sort(key=_sort_key)
     return Sensitivity(conn.chi_c, conn.Fn, tuple(entries), conn, time.perf_counter() - t0)
+
+
+def _entry(k: str, res: _Residuals, lam: FloatArray, m: Umeda4DOF, conn: CriticalFn,
+           raw: VesselData, resolved: VesselData, rel_step: float, abs_step: float,
+           progress: Callable[[str], None] | None) -> SensitivityEntry:  # fmt: skip
+    """The sensitivity entry of one key (see :func:`critical_fn_sensitivity`)."""
+    if progress is not None:
+        progress(k)
+    if k in FACTORS:
+        value, unit, status, source = 1.0, "-", "factor", FACTORS[k]
+    else:
+        c = resolved.coefficients[k]
+        value, unit, status, source = c.value, c.unit, c.status, c.source
+    g, h, method = _g_theta(res, k, value, unit, rel_step, abs_step)
+    d = -float(lam @ g)
+    el = value / conn.Fn * d if value != 0 else None
+    sig = resolved.sigma(k) if k not in FACTORS and k in resolved.uncertainties else None
+    q = _factor_quantity(k, m, conn) if k in FACTORS else None
+    return SensitivityEntry(k, value, unit, status, source, d, el, h, method,
+                            _kind(k, raw), q, sig)  # fmt: skip
 
 
 # ----------------------------------------------------------------------------- re-solves
