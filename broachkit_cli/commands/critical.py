@@ -134,11 +134,13 @@ def run(args: argparse.Namespace) -> int:
                 f"critical Fn = {result['fn_critical']:.7f} in [{lo:.7f}, {hi:.7f}] "
                 f"({result['fate_lo']} below, {result['fate_hi']} above)"
             )
+        elif args.method == "bvp" and result["status"] != "SUCCESS":
+            text = f"no critical Fn: {result['message']}"
         elif args.method == "bvp":
             text = (
                 f"critical Fn = {result['fn_critical']:.8f} (connecting orbit, "
-                f"|G| = {result['residual_norm']:.1e}, mesh change {result.get('delta_Fn_mesh')}, "
-                f"T change {result.get('delta_Fn_T')})"
+                f"|G| = {result['residual_norm']:.1e}, error estimate {result.get('error')}, "
+                f"mesh change {result.get('delta_Fn_mesh')}, T change {result.get('delta_Fn_T')})"
             )
         else:
             lo, hi = result["bracket"]
