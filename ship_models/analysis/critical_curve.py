@@ -76,6 +76,8 @@ class CriticalCurve:
         ``(chi_c, Fn)`` of the located folds of the curve in ``chi_c`` (rad).
     end_chi_c, end_Fn : float
         End of the first sheet (its first fold); NaN if the range ends before it.
+    fold_error : float
+        Change of ``end_chi_c`` in its last re-location (rad; NaN/inf if not re-located).
     crest_end_chi_c : float
         Fold of the crest saddle's branch in ``chi_c`` at ``Fn = end_Fn`` (rad; NaN
         if not computed): the crest saddle does not exist beyond it.
@@ -99,6 +101,7 @@ class CriticalCurve:
     end_chi_c: float = math.nan
     end_Fn: float = math.nan
     crest_end_chi_c: float = math.nan
+    fold_error: float = math.nan
 
     @property
     def success(self) -> bool:
@@ -127,6 +130,7 @@ class CriticalCurve:
             "end_chi_c_deg": _deg_or_none(self.end_chi_c),
             "end_Fn": None if not math.isfinite(self.end_Fn) else float(self.end_Fn),
             "crest_end_chi_c_deg": _deg_or_none(self.crest_end_chi_c),
+            "fold_error_deg": _deg_or_none(self.fold_error),
             "status": self.status.name,
             "message": self.message,
             "elapsed_s": self.elapsed,
@@ -211,6 +215,7 @@ def critical_curve(
     throw: bool = False,
     progress: Callable[[Any], None] | None = None,
     max_relocations: int = 3,
+    fold_tol: float = math.radians(0.02),
     **bvp_options: Any,
 ) -> CriticalCurve:
     r"""Critical ``Fn`` over a range of courses along the first sheet of the curve.
@@ -224,9 +229,9 @@ def critical_curve(
        mesh, error estimates (``error``), the capsizing-boundary check
        (:func:`~ship_models.analysis.boundary_check.boundary_refusal`).
     4. The fold located on the start mesh is only as good as that mesh: the branch is
-       continued again from the last solved course (its adapted mesh and ``T``), and
-       steps 3-4 repeat (at most ``max_relocations`` times) while courses remain below
-       the new fold.
+       continued again from a solve 0.5 deg before the fold (its adapted mesh and
+       ``T``), and steps 3-4 repeat (at most ``max_relocations`` times) until the fold
+       moves by less than ``fold_tol`` and no course remains below it.
     5. The end: the first fold is reported in ``folds`` and as ``end_chi_c``,
        ``end_Fn``; the crest saddle's own branch is followed in ``chi_c`` at ``end_Fn``
        (``crest_end_chi_c``). Courses beyond the fold have ``exists = False`` with the
@@ -251,7 +256,10 @@ def critical_curve(
     progress : callable, optional
         Called with every accepted branch point.
     max_relocations : int
-        Re-continuations from a solved course to re-locate the fold (step 4).
+        Re-continuations from a solve near the fold to re-locate it (step 4).
+    fold_tol : float
+        Stop re-locating when the fold moves by less than this (rad); the last move
+        is ``fold_error``.
     **bvp_options
         Passed to :func:`critical_fn_bvp` (start and per-course solves).
 
@@ -304,6 +312,8 @@ def critical_curve(
     fold = None
     end_chi, end_Fn = math.nan, math.nan
     folds: list[tuple[float, float]] = []
+    fold_error = math.inf
+    fold_offset = math.radians(0.5)
     pending = list(range(K))
     try:
         # courses between 0 and a start away from 0: a backward branch
@@ -330,20 +340,29 @@ def critical_curve(
             P, Z, fold = _first_sheet(branch, sign)
             sheet_end = float(P[-1]) if fold is None else float(fold.p)
             if fold is not None:
+                if math.isfinite(end_chi):
+                    fold_error = abs(float(fold.p) - end_chi)
                 end_chi = float(fold.p)
                 end_Fn = float(branch.problem.unpack(np.asarray(fold.x))["params"]["Fn"])
                 folds = [(end_chi, end_Fn)]
             todo = [k for k in pending if sign * chis[k] <= sign * sheet_end + 1e-12]
             todo.sort(key=lambda k: sign * chis[k])
-            if not todo:
+            if todo:
+                _solve_courses(m, params, branch.problem, P, Z, chis, todo, solved, bvp_options)
+                pending = [k for k in pending if k not in todo]
+            if fold is None or (not todo and fold_error <= fold_tol):
                 break
-            _solve_courses(m, params, branch.problem, P, Z, chis, todo, solved, bvp_options)
-            pending = [k for k in pending if k not in todo]
-            good = [k for k in todo if solved[k].success]
-            if fold is None or not good or not pending:
-                break
-            # re-locate the fold from the last solved course (adapted mesh, longer T)
-            cur = solved[max(good, key=lambda k: sign * chis[k])]
+            # re-locate the fold from a solve near it (adapted mesh and T there)
+            c_aux = end_chi - sign * fold_offset
+            near_fold = [
+                k for k in todo if solved[k].success and abs(chis[k] - c_aux) <= fold_offset
+            ]
+            if near_fold:
+                cur = solved[max(near_fold, key=lambda k: sign * chis[k])]
+            else:
+                cur = _solve_at(m, params, branch.problem, P, Z, c_aux, bvp_options)
+                if cur is None or not cur.success:
+                    break
     except KeyboardInterrupt:
         status = Status.INTERRUPTED
     crest_end = math.nan
@@ -407,7 +426,7 @@ def critical_curve(
         chis, Fn, res_n, ok, n_unst, branch, start, status, message,
         time.perf_counter() - t_start, orbits, exists=exists, reasons=tuple(reasons),
         error=err, folds=tuple(folds), end_chi_c=end_chi, end_Fn=end_Fn,
-        crest_end_chi_c=crest_end,
+        crest_end_chi_c=crest_end, fold_error=fold_error if math.isfinite(end_chi) else math.nan,
     )  # fmt: skip
 
 
@@ -453,20 +472,29 @@ def _solve_courses(
     bvp_options: dict[str, Any],
 ) -> None:
     """Solve each course ``chis[k]``, ``k`` in ``todo``, from the branch rows; into ``solved``."""
-    t_mesh = np.asarray(prob.mesh.t, dtype=float)
     for k in todo:
-        c = float(chis[k])
-        z0 = _predict(P, Z, c)
-        if z0 is None:
+        r = _solve_at(m, params, prob, P, Z, float(chis[k]), bvp_options)
+        if r is None:
             continue
-        parts = prob.unpack(z0)
-        r = critical_fn_bvp(
-            c, model=m, params=params, guess=(t_mesh, np.asarray(parts["X"], dtype=float)),
-            Fn_guess=float(parts["params"]["Fn"]), **bvp_options,
-        )  # fmt: skip
         if not r.success:
-            log.warning("course %.4g deg: %s", math.degrees(c), r.message)
+            log.warning("course %.4g deg: %s", math.degrees(chis[k]), r.message)
         solved[k] = r
+
+
+def _solve_at(
+    m: Any, params: Any, prob: Any, P: FloatArray, Z: FloatArray, c: float,
+    bvp_options: dict[str, Any],
+) -> CriticalFn | None:  # fmt: skip
+    """:func:`critical_fn_bvp` at course ``c`` from the branch orbit interpolated there."""
+    z0 = _predict(P, Z, c)
+    if z0 is None:
+        return None
+    parts = prob.unpack(z0)
+    return critical_fn_bvp(
+        c, model=m, params=params,
+        guess=(np.asarray(prob.mesh.t, dtype=float), np.asarray(parts["X"], dtype=float)),
+        Fn_guess=float(parts["params"]["Fn"]), **bvp_options,
+    )  # fmt: skip
 
 
 __all__ = ["CriticalCurve", "critical_curve"]
