@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import sys
 from collections.abc import Callable
@@ -115,6 +116,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run the command; a numerical failure is one line on stderr (exit 1), never a traceback."""
+    from continuation.errors import ContinuationError
+
+    try:
+        return _run(args)
+    except ContinuationError as exc:
+        logging.getLogger(__name__).debug("%s failed", NAME, exc_info=True)
+        sys.stderr.write(f"broachkit {NAME}: {exc}\n")
+        return 1
+
+
+def _run(args: argparse.Namespace) -> int:
     """Locate the critical Fn; returns 0 on success, 1 otherwise."""
     for opt in ("fn_min", "fn_max", "tol", "t_max", "fn_guess"):
         val = getattr(args, opt)
