@@ -229,7 +229,8 @@ def critical_curve(
        mesh, error estimates (``error``), the capsizing-boundary check
        (:func:`~ship_models.analysis.boundary_check.boundary_refusal`).
     4. The fold located on the start mesh is only as good as that mesh: the branch is
-       continued again from a solve 0.5 deg before the fold (its adapted mesh and
+       continued again from a solve 0.5 deg before the fold (or half-way from the
+       branch's start to it, if nearer) (its adapted mesh and
        ``T``), and steps 3-4 repeat (at most ``max_relocations`` times) until the fold
        moves by less than ``fold_tol`` and no course remains below it.
     5. The end: the first fold is reported in ``folds`` and as ``end_chi_c``,
@@ -353,7 +354,7 @@ def critical_curve(
             if fold is None or (not todo and fold_error <= fold_tol):
                 break
             # re-locate the fold from a solve near it (adapted mesh and T there)
-            c_aux = end_chi - sign * fold_offset
+            c_aux = end_chi - sign * min(fold_offset, 0.5 * abs(end_chi - float(P[0])))
             near_fold = [
                 k for k in todo if solved[k].success and abs(chis[k] - c_aux) <= fold_offset
             ]
