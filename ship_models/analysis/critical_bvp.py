@@ -394,7 +394,9 @@ def critical_fn_bvp(
     status = res.status
     message = res.message
     refusal = ""
-    if res.success:
+    # a converged orbit is checked even when its error estimate failed: a capsize
+    # is refused as such, whatever its accuracy
+    if res.success or res.status in (Status.DISCRETISATION_ERROR, Status.TRUNCATION_ERROR):
         refusal = boundary_refusal(m, res.x, res.x_from, base.replace(Fn=float(res.params["Fn"])))
         if refusal:
             status, message = Status.REJECTED, f"not a capsizing boundary: {refusal}"
