@@ -26,12 +26,13 @@ from typing import Any
 import numpy as np
 
 from continuation.branch import SpecialKind
-from continuation.bvp import continue_connection
+from continuation.bvp import continue_connection, solve_connection
 from continuation.errors import ContinuationError
 from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from .boundary_check import boundary_refusal
 from .critical_bvp import critical_fn_bvp
 from .critical_result import CriticalFn
 from .params import course, ship_model, ship_params
@@ -262,7 +263,7 @@ def critical_curve(
         Stop re-locating when the fold moves by less than this (rad); the last move
         is ``fold_error``.
     **bvp_options
-        Passed to :func:`critical_fn_bvp` (start and per-course solves).
+        Passed to :func:`critical_fn_bvp` for the start solve.
 
     Returns
     -------
@@ -316,6 +317,10 @@ def critical_curve(
     fold_error = math.inf
     fold_offset = math.radians(0.5)
     pending = list(range(K))
+    for k in range(K):
+        if abs(chis[k] - start.chi_c) < 1e-12:  # the start is a checked solve there
+            solved[k] = start
+    pending = [k for k in pending if k not in solved]
     try:
         # courses between 0 and a start away from 0: a backward branch
         near = [k for k in pending if sign * chis[k] < sign * start.chi_c - 1e-12]
@@ -372,6 +377,8 @@ def critical_curve(
     first_bad: Status | None = None
     for k in range(K):
         r = solved.get(k)
+        if math.isfinite(end_chi) and sign * chis[k] > sign * end_chi:
+            r = None  # solved before the fold was re-located below it: no boundary there
         if r is None:
             if status is Status.INTERRUPTED or not math.isfinite(end_chi):
                 reasons[k] = "not computed" if status is Status.INTERRUPTED else (
@@ -486,15 +493,33 @@ def _solve_at(
     m: Any, params: Any, prob: Any, P: FloatArray, Z: FloatArray, c: float,
     bvp_options: dict[str, Any],
 ) -> CriticalFn | None:  # fmt: skip
-    """:func:`critical_fn_bvp` at course ``c`` from the branch orbit interpolated there."""
+    """The connection at course ``c`` from the branch orbit interpolated there.
+
+    Solved by :func:`continuation.bvp.solve_connection` (adapted mesh, error
+    estimates) on the branch's problem at fixed ``chi_c = c``, which keeps its compiled
+    functions (a new problem, as :func:`critical_fn_bvp` builds, costs several times
+    the solve); then the capsizing-boundary check.
+    """
+    t0 = time.perf_counter()
     z0 = _predict(P, Z, c)
     if z0 is None:
         return None
     parts = prob.unpack(z0)
-    return critical_fn_bvp(
-        c, model=m, params=params,
-        guess=(np.asarray(prob.mesh.t, dtype=float), np.asarray(parts["X"], dtype=float)),
-        Fn_guess=float(parts["params"]["Fn"]), **bvp_options,
+    fixed = prob.replace(
+        vary=None, reference=None, params=prob.params.replace(chi_c=c, **parts["params"])
+    )
+    guess = (np.asarray(prob.mesh.t, dtype=float), np.asarray(parts["X"], dtype=float))
+    res = solve_connection(fixed, guess, method="broyden")
+    status, message = res.status, res.message
+    if res.success or res.status in (Status.DISCRETISATION_ERROR, Status.TRUNCATION_ERROR):
+        why = boundary_refusal(m, res.x, res.x_from, fixed.params.replace(**res.params))
+        if why:
+            status, message = Status.REJECTED, f"not a capsizing boundary: {why}"
+    errs = res.errors
+    return CriticalFn(
+        chi_c=c, Fn=float(res.params["Fn"]), method="bvp", status=status, message=message,
+        error=None if errs is None else float(errs.total("Fn")),
+        elapsed=time.perf_counter() - t0, orbit=res, residual_norm=float(res.residual_norm),
     )  # fmt: skip
 
 
