@@ -43,6 +43,14 @@ class Status(enum.Enum):
         "The estimated truncation error of a solved parameter exceeds its tolerance; "
         "lengthen the truncation interval T (or allow more extensions)."
     )
+    REJECTED = (
+        "A converged solution failed a validity check of the application (the message "
+        "says which); it is not a solution of the question asked."
+    )
+    NO_SOLUTION = (
+        "The sought solution does not exist at these parameters (the message says why, "
+        "e.g. the branch it lives on has ended at a fold)."
+    )
 
     @property
     def ok(self) -> bool:

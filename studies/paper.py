@@ -1,6 +1,6 @@
 """The statements of Umeda (1999) that the main job checks, and how each is checked.
 
-Each :class:`Claim` quotes the paper (its text, ``/work/shared/paper``; OCR slips
+Each :class:`Claim` quotes the paper (its text, ``shared/paper/`` beside the project; OCR slips
 corrected), names the figures of this run that show our side, and has a ``check``
 that reads this run's step summaries (``{step: summary.json contents}``) and returns
 a :class:`Finding`: this run's numbers and a verdict, ``"agrees"`` or ``"differs"``
@@ -16,10 +16,10 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from ship_models.paper import PAPER_FN, PAPER_FN_BRACKET
+
 #: The paper's bracket of the heteroclinic bifurcation at chi_c = 10 deg (Figs. 10-15).
-PAPER_FN_10DEG = (0.3247, 0.3248)
-#: The Fn of the paper's Figs. 2-13 and 16-21.
-PAPER_FN = 0.3248
+PAPER_FN_10DEG = PAPER_FN_BRACKET
 #: Relative spread of a boundary over the initial positions that still counts as
 #: "does not depend on the initial position" / "negligible" (0.1 % of Fn).
 NEGLIGIBLE_REL = 1e-3

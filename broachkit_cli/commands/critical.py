@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import sys
 from collections.abc import Callable
@@ -126,6 +127,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run the command; a numerical failure is one line on stderr (exit 1), never a traceback."""
+    from continuation.errors import ContinuationError
+
+    try:
+        return _run(args)
+    except ContinuationError as exc:
+        logging.getLogger(__name__).debug("%s failed", NAME, exc_info=True)
+        sys.stderr.write(f"broachkit {NAME}: {exc}\n")
+        return 1
+
+
+def _run(args: argparse.Namespace) -> int:
     """Locate the critical Fn; returns 0 on success, 1 otherwise."""
     finite("--fn-min", args.Fn_min, low=0.0)
     finite("--fn-max", args.Fn_max, low=0.0)
@@ -155,11 +168,13 @@ def run(args: argparse.Namespace) -> int:
                 f"critical Fn = {result['Fn']:.7f} in [{lo:.7f}, {hi:.7f}] "
                 f"({result['fate_lo']} below, {result['fate_hi']} above)"
             )
+        elif args.method == "bvp" and result["status"] != "SUCCESS":
+            text = f"no critical Fn: {result['message']}"
         elif args.method == "bvp":
             text = (
                 f"critical Fn = {result['Fn']:.8f} (connecting orbit, "
-                f"|G| = {result['residual_norm']:.1e}, mesh change {result.get('delta_Fn_mesh')}, "
-                f"T change {result.get('delta_Fn_T')})"
+                f"|G| = {result['residual_norm']:.1e}, error estimate {result.get('error')}, "
+                f"mesh change {result.get('delta_Fn_mesh')}, T change {result.get('delta_Fn_T')})"
             )
         else:
             lo, hi = result["bracket"]

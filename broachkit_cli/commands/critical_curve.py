@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import sys
 import time
@@ -105,12 +106,19 @@ def plot_curve(curve: Any, path: Path, *, paper: bool = True) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from ship_models.paper import PAPER_CHI_C_DEG, PAPER_FN_BRACKET
+
     fig, ax = plt.subplots(figsize=(5.2, 3.6))
     ok = curve.converged
     ax.plot(curve.chi_c_deg[ok], curve.Fn[ok], "o-", ms=3, label="BVP, this vessel")
+    for c, f in curve.folds:
+        ax.plot([np.degrees(c)], [f], "k^", ms=5, label="end (fold in chi_c)")
     if paper:
         ax.errorbar(
-            [10.0], [0.32475], yerr=[0.00005], fmt="s", color="tab:red", ms=5, capsize=3,
+            [PAPER_CHI_C_DEG],
+            [0.5 * sum(PAPER_FN_BRACKET)],
+            yerr=[0.5 * (PAPER_FN_BRACKET[1] - PAPER_FN_BRACKET[0])],
+            fmt="s", color="tab:red", ms=5, capsize=3,
             label="Umeda (1999), measured coeff.",
         )  # fmt: skip
     ax.set_xlabel("autopilot course chi_c (deg)")
@@ -126,6 +134,18 @@ def plot_curve(curve: Any, path: Path, *, paper: bool = True) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run the command; a numerical failure is one line on stderr (exit 1), never a traceback."""
+    from continuation.errors import ContinuationError
+
+    try:
+        return _run(args)
+    except ContinuationError as exc:
+        logging.getLogger(__name__).debug("%s failed", NAME, exc_info=True)
+        sys.stderr.write(f"broachkit {NAME}: {exc}\n")
+        return 1
+
+
+def _run(args: argparse.Namespace) -> int:
     """Compute the curve; print it (or JSON); write files under ``--out``. 0 on success."""
     from ship_models.analysis.critical_curve import critical_curve
 
@@ -164,8 +184,18 @@ def run(args: argparse.Namespace) -> int:
             f"{model.vessel.name}: critical Fn by continuing the heteroclinic connection "
             f"({curve.status.name}, {elapsed:.1f} s)\n   chi_c (deg)   Fn_critical\n"
         )
-        for c, f, ok in zip(curve.chi_c_deg, curve.Fn, curve.converged, strict=True):
-            sys.stdout.write(f"   {c:10.3f}   {f:.7f}\n" if ok else f"   {c:10.3f}   failed\n")
+        for c, f, ok, e, why in zip(
+            curve.chi_c_deg, curve.Fn, curve.converged, curve.error, curve.reasons, strict=True
+        ):
+            if ok:
+                sys.stdout.write(f"   {c:10.3f}   {f:.7f}   (error estimate {e:.1e})\n")
+            else:
+                sys.stdout.write(f"   {c:10.3f}   {'-':9s}   {why}\n")
+        for c, f in curve.folds:
+            sys.stdout.write(
+                f"   fold of the critical curve: chi_c = {math.degrees(c):.3f} deg, Fn = {f:.5f}\n"
+            )
+        sys.stdout.write(f"   {curve.message}\n")
         if args.out is not None:
             sys.stdout.write(f"wrote {args.out}/critical_curve.{{csv,json,png}}\n")
     return 0 if curve.success else 1

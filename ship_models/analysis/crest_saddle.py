@@ -40,9 +40,12 @@ def crest_equilibrium(model: Any, params: Params) -> tuple[FloatArray, float]:
     settings = NewtonSettings(tol=1e-11, max_iter=30, damping=True)
     res = model.find_equilibrium(params, "crest", settings=settings)
     if not res.converged:
+        import math
+
         raise ContinuationError(
-            f"no crest equilibrium at {dict(params.items())} (followed from chi_c = 0): "
-            f"{res.message}"
+            f"the crest saddle does not exist at chi_c = "
+            f"{math.degrees(float(params['chi_c'])):.4g} deg, Fn = {float(params['Fn']):.6g} "
+            f"(followed from chi_c = 0): {res.message}"
         )
     return np.asarray(res.z, dtype=float), float(res.residual_norm)
 

@@ -43,10 +43,12 @@ from continuation.bvp import (
     check_convergence,
     solve_connection,
 )
-from continuation.errors import ConvergenceError
+from continuation.errors import ContinuationError, ConvergenceError
 from continuation.settings import NewtonSettings
+from continuation.status import Status
 from continuation.typing import FloatArray
 
+from .boundary_check import boundary_refusal
 from .crest_saddle import crest_saddle
 from .critical_result import CriticalFn
 from .fixed_points import FixedPoint
@@ -299,41 +301,54 @@ def critical_fn_bvp(
         raise ValueError(f"`Fn_guess` must be positive, got {Fn_guess!r}")
     Fn_guess_used = math.nan
     i_xi = m.state_index("xi_G")
-    if isinstance(guess, ConnectionResult):
-        wl_shift = float(np.round(guess.x_to[i_xi] - guess.x_from[i_xi]))
-        Fn0 = float(guess.params["Fn"])
-        start = base.replace(Fn=Fn0)
-        saddle = crest_saddle(m, start)
-        t_g, x_g = None, None
-    else:
-        start = base.replace(Fn=Fn0)
-        if guess is None or isinstance(guess, UpslopeRun):
-            # a loose integrator tolerance suffices for a starting guess
-            if guess is None:
-                run = guess_run(m, start, guess_bracket)
-                Fn0 = float(run.params["Fn"])
-                start = base.replace(Fn=Fn0)
-            else:
-                run = guess
-            saddle = run.saddle
-            wl_shift = run.shift
-            t_g, x_g = connection_guess(run, start_distance=start_distance)
-            Fn_guess_used = Fn0
-        else:
+    try:
+        if isinstance(guess, ConnectionResult):
+            wl_shift = float(np.round(guess.x_to[i_xi] - guess.x_from[i_xi]))
+            Fn0 = float(guess.params["Fn"])
+            start = base.replace(Fn=Fn0)
             saddle = crest_saddle(m, start)
-            try:
-                t_g, x_g = (np.asarray(a, dtype=float) for a in guess)
-            except (TypeError, ValueError):
-                raise ValueError(
-                    "`guess` must be a ConnectionResult, CriticalFn, UpslopeRun or "
-                    f"(t, x) pair, got {type(guess).__name__}"
-                ) from None
-            if x_g.ndim != 2 or x_g.shape[1] != len(m.state_names) or t_g.shape != x_g[:, 0].shape:
-                raise ValueError(
-                    f"`guess` (t, x) must have shapes (K,) and (K, {len(m.state_names)}), "
-                    f"got {t_g.shape} and {x_g.shape}"
-                )
-            wl_shift = -1.0 if x_g[-1, i_xi] < x_g[0, i_xi] else 1.0
+            t_g, x_g = None, None
+        else:
+            start = base.replace(Fn=Fn0)
+            if guess is None or isinstance(guess, UpslopeRun):
+                # a loose integrator tolerance suffices for a starting guess
+                if guess is None:
+                    run = guess_run(m, start, guess_bracket)
+                    Fn0 = float(run.params["Fn"])
+                    start = base.replace(Fn=Fn0)
+                else:
+                    run = guess
+                saddle = run.saddle
+                wl_shift = run.shift
+                t_g, x_g = connection_guess(run, start_distance=start_distance)
+                Fn_guess_used = Fn0
+            else:
+                saddle = crest_saddle(m, start)
+                try:
+                    t_g, x_g = (np.asarray(a, dtype=float) for a in guess)
+                except (TypeError, ValueError):
+                    raise ValueError(
+                        "`guess` must be a ConnectionResult, CriticalFn, UpslopeRun or "
+                        f"(t, x) pair, got {type(guess).__name__}"
+                    ) from None
+                n_x = len(m.state_names)
+                if x_g.ndim != 2 or x_g.shape[1] != n_x or t_g.shape != x_g[:, 0].shape:
+                    raise ValueError(
+                        f"`guess` (t, x) must have shapes (K,) and (K, {len(m.state_names)}), "
+                        f"got {t_g.shape} and {x_g.shape}"
+                    )
+                wl_shift = -1.0 if x_g[-1, i_xi] < x_g[0, i_xi] else 1.0
+    except ContinuationError as exc:
+        # no crest saddle at this course / no usable simulated guess: nothing to solve
+        exists = "does not reach" not in str(exc) and "does not exist" not in str(exc)
+        if throw:
+            msg = f"critical Fn at chi_c={math.degrees(chi):g} deg: {exc}"
+            raise ConvergenceError(msg) from None
+        return CriticalFn(
+            chi_c=chi, Fn=math.nan, method="bvp",
+            status=Status.NO_BRACKET if exists else Status.NO_SOLUTION,
+            message=str(exc), elapsed=time.perf_counter() - t_start, Fn_guess=Fn0, tol=cfg.tol,
+        )  # fmt: skip
     if t_g is not None:
         shift = np.zeros(len(m.state_names))
         shift[i_xi] = wl_shift
@@ -378,13 +393,21 @@ def critical_fn_bvp(
         conv = check_convergence(res, newton=settings_n)
     status = res.status
     message = res.message
-    if throw and not res.success:
+    refusal = ""
+    # a converged orbit is checked even when its error estimate failed: a capsize
+    # is refused as such, whatever its accuracy
+    if res.success or res.status in (Status.DISCRETISATION_ERROR, Status.TRUNCATION_ERROR):
+        refusal = boundary_refusal(m, res.x, res.x_from, base.replace(Fn=float(res.params["Fn"])))
+        if refusal:
+            status, message = Status.REJECTED, f"not a capsizing boundary: {refusal}"
+    if throw and status is not Status.SUCCESS:
         raise ConvergenceError(f"critical Fn at chi_c={math.degrees(chi):g} deg: {message}")
-    error = None
+    errs = getattr(res, "errors", None)
+    error = float(errs.total("Fn")) if errs is not None else None
     if conv is not None:
         dm, dT = conv.delta_mesh.get("Fn"), conv.delta_T.get("Fn")
         if dm is not None and dT is not None:
-            error = max(abs(float(dm)), abs(float(dT)))
+            error = max(abs(float(dm)), abs(float(dT)), error or 0.0)
     return CriticalFn(
         chi_c=chi,
         Fn=float(res.params["Fn"]),

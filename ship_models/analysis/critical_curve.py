@@ -1,9 +1,16 @@
 r"""The critical curve: critical Fn against the autopilot course (Umeda 1999, Fig. 23).
 
 The heteroclinic connection of :mod:`ship_models.analysis.critical_bvp` (crest saddle
-to the same saddle one wavelength back, ``Fn`` unknown) is continued in ``chi_c`` by
-pseudo-arclength (:func:`continuation.bvp.continue_connection`), and every requested
-course is then corrected exactly.
+to the same saddle one wavelength back, ``Fn`` unknown) is solved at ``chi_c = 0`` (or
+at a given start) and continued in ``chi_c`` by pseudo-arclength
+(:func:`continuation.bvp.continue_connection`) along its *first sheet*: up to its first
+fold in ``chi_c``, where the curve turns back (beyond it the branch carries orbits that
+are no capsizing boundary, e.g. capsizes past the angle of vanishing stability). Every
+requested course on the sheet is then solved with error estimates from the branch's
+orbit; the fold is re-located from the last of them (adapted mesh) until no further
+course falls below it. Courses beyond the fold, or beyond the end of the crest saddle's
+own branch (its fold in ``chi_c`` at the fold's ``Fn``), do not exist and are reported
+as such with the reason, not as failures.
 """
 
 from __future__ import annotations
@@ -18,17 +25,17 @@ from typing import Any
 
 import numpy as np
 
-from continuation.bvp import continue_connection
-from continuation.bvp.simplified import JacobianCache, simplified_newton
+from continuation.branch import SpecialKind
+from continuation.bvp import continue_connection, solve_connection
 from continuation.errors import ContinuationError
-from continuation.newton import newton
 from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from .boundary_check import boundary_refusal
 from .critical_bvp import critical_fn_bvp
 from .critical_result import CriticalFn
-from .params import course, ship_model
+from .params import course, ship_model, ship_params
 
 log = logging.getLogger(__name__)
 
@@ -58,6 +65,23 @@ class CriticalCurve:
     message : str
     elapsed : float
         Wall time (s), the start solve included.
+    orbits : tuple of ndarray
+        With ``keep_orbits``: the orbit ``x (M, 8)`` of every converged course.
+    exists : ndarray of bool, shape (K,)
+        False for courses beyond the end of the curve (``reasons`` says why).
+    reasons : tuple of str, shape (K,)
+        Why a course has no value ("" where it has one).
+    error : ndarray, shape (K,)
+        Error estimate of ``Fn`` (discretisation + truncation) of each course.
+    folds : tuple of (float, float)
+        ``(chi_c, Fn)`` of the located folds of the curve in ``chi_c`` (rad).
+    end_chi_c, end_Fn : float
+        End of the first sheet (its first fold); NaN if the range ends before it.
+    fold_error : float
+        Change of ``end_chi_c`` in its last re-location (rad; NaN/inf if not re-located).
+    crest_end_chi_c : float
+        Fold of the crest saddle's branch in ``chi_c`` at ``Fn = end_Fn`` (rad; NaN
+        if not computed): the crest saddle does not exist beyond it.
     """
 
     chi_c: FloatArray
@@ -71,10 +95,18 @@ class CriticalCurve:
     message: str
     elapsed: float = 0.0
     orbits: tuple[FloatArray, ...] = field(default=(), repr=False)
+    exists: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    reasons: tuple[str, ...] = ()
+    error: FloatArray = field(default_factory=lambda: np.zeros(0))
+    folds: tuple[tuple[float, float], ...] = ()
+    end_chi_c: float = math.nan
+    end_Fn: float = math.nan
+    crest_end_chi_c: float = math.nan
+    fold_error: float = math.nan
 
     @property
     def success(self) -> bool:
-        """True when every requested course converged."""
+        """True when every existing requested course converged to a valid boundary."""
         return self.status is Status.SUCCESS
 
     @property
@@ -90,6 +122,16 @@ class CriticalCurve:
             "residual_norm": [float(r) for r in self.residual_norm],
             "converged": [bool(c) for c in self.converged],
             "n_unstable": [int(k) for k in self.n_unstable],
+            "exists": [bool(e) for e in self.exists],
+            "reasons": list(self.reasons),
+            "error": [None if not np.isfinite(e) else float(e) for e in self.error],
+            "folds": [
+                {"chi_c_deg": math.degrees(c), "Fn": float(f)} for c, f in self.folds
+            ],
+            "end_chi_c_deg": _deg_or_none(self.end_chi_c),
+            "end_Fn": None if not math.isfinite(self.end_Fn) else float(self.end_Fn),
+            "crest_end_chi_c_deg": _deg_or_none(self.crest_end_chi_c),
+            "fold_error_deg": _deg_or_none(self.fold_error),
             "status": self.status.name,
             "message": self.message,
             "elapsed_s": self.elapsed,
@@ -108,6 +150,59 @@ class CriticalCurve:
         return path
 
 
+def _deg_or_none(x: float) -> float | None:
+    return None if not math.isfinite(x) else math.degrees(x)
+
+
+class _FoldStop:
+    """Progress hook that stops a forward branch one row past its first fold in ``chi_c``.
+
+    The driver has no "stop at fold" setting; the hook raises ``KeyboardInterrupt`` after
+    the row beyond the fold (the driver has located the fold by then) and records that
+    it did, so the caller tells it from a user's Ctrl-C.
+    """
+
+    def __init__(self, sign: float, user: Callable[[Any], None] | None) -> None:
+        self.sign, self.user, self.last, self.fired = sign, user, None, False
+
+    def __call__(self, pt: Any) -> None:
+        if self.user is not None:
+            self.user(pt)
+        p = float(pt.p)
+        if self.last is not None and self.sign * (p - self.last) < 0:
+            self.fired = True
+            raise KeyboardInterrupt
+        self.last = p
+
+
+def _first_sheet(branch: Any, sign: float) -> tuple[FloatArray, FloatArray, Any]:
+    """Rows of the branch up to its first fold in ``chi_c`` (``P (k,)``, ``Z (k, N)``), fold."""
+    P = np.asarray(branch.p, dtype=float)
+    Z = np.asarray(branch.x, dtype=float)
+    folds = [sp for sp in branch.special_points if sp.kind is SpecialKind.FOLD]
+    fold = min(folds, key=lambda sp: sp.index) if folds else None
+    k = P.size if fold is None else fold.index + 1
+    # cut too at the first turn of p if the fold was not flagged
+    d = sign * np.diff(P[:k])
+    back = np.nonzero(d < 0)[0]
+    if back.size:
+        k = int(back[0]) + 1
+    return P[:k], Z[:k], fold
+
+
+def _crest_end(m: Any, params: Any, Fn: float, sign: float) -> float:
+    """``chi_c`` (rad) of the crest saddle branch's first fold at ``Fn``; NaN if none."""
+    from ship_models.umeda_4dof import follow_in_chi_c
+
+    p0 = ship_params(m, params, chi_c=0.0).replace(Fn=float(Fn))
+    r0 = m.find_equilibrium(p0, "crest")
+    if not r0.converged:
+        return math.nan
+    br = follow_in_chi_c(m, r0.z, p0, sign * math.radians(80.0), ds_max=0.05)
+    folds = [sp for sp in br.special_points if sp.kind is SpecialKind.FOLD and sp.located]
+    return float(folds[0].p) if folds else math.nan
+
+
 def critical_curve(
     chi_c_values: Sequence[float] | FloatArray | None = None,
     *,
@@ -120,43 +215,61 @@ def critical_curve(
     keep_orbits: bool = False,
     throw: bool = False,
     progress: Callable[[Any], None] | None = None,
+    max_relocations: int = 3,
+    fold_tol: float = math.radians(0.02),
     **bvp_options: Any,
 ) -> CriticalCurve:
-    r"""Critical ``Fn`` over a range of courses by continuing the connection in ``chi_c``.
+    r"""Critical ``Fn`` over a range of courses along the first sheet of the curve.
 
-    One connection is solved at the course of the requested range closest to its
-    middle (:func:`critical_fn_bvp`, or ``start``), then continued with
-    pseudo-arclength (:func:`continuation.bvp.continue_connection`, both directions)
-    across the range with ``Fn`` an unknown of the boundary-value problem. Every
-    requested course is then corrected exactly: the two branch rows around it give a
-    linear predictor in ``chi_c`` and Newton solves the connection at that fixed
-    course (same mesh, same compiled functions).
+    1. Start: the connection at ``chi_c = 0`` (:func:`critical_fn_bvp`; the simulated
+       guess is easiest there, the roll is decoupled), or ``start``.
+    2. Continue it in ``chi_c`` (:func:`continuation.bvp.continue_connection`, away
+       from 0) and stop one row past the first fold of the branch in ``chi_c``.
+    3. Every requested course on the sheet (between the start and the fold) is solved
+       by :func:`critical_fn_bvp` from the branch's orbit interpolated there: adapted
+       mesh, error estimates (``error``), the capsizing-boundary check
+       (:func:`~ship_models.analysis.boundary_check.boundary_refusal`).
+    4. The fold located on the start mesh is only as good as that mesh: the branch is
+       continued again from a solve 0.5 deg before the fold (or half-way from the
+       branch's start to it, if nearer) (its adapted mesh and
+       ``T``), and steps 3-4 repeat (at most ``max_relocations`` times) until the fold
+       moves by less than ``fold_tol`` and no course remains below it.
+    5. The end: the first fold is reported in ``folds`` and as ``end_chi_c``,
+       ``end_Fn``; the crest saddle's own branch is followed in ``chi_c`` at ``end_Fn``
+       (``crest_end_chi_c``). Courses beyond the fold have ``exists = False`` with the
+       reason (the curve folds back there / the crest saddle does not exist).
 
     Parameters
     ----------
     chi_c_values : array_like, shape (K,), optional
-        Courses (rad); default 0, 1, ..., 30 degrees.
+        Courses (rad), all of one sign (0 allowed); default 0, 1, ..., 30 degrees.
     model, params
         As for :func:`critical_fn_bvp`.
     start : CriticalFn, optional
-        A converged connection at one course inside the range.
+        A converged connection on the first sheet (default: solved at ``chi_c = 0``).
     ds, ds_max : float
         Pseudo-arclength step (initial and largest).
     tol : float
-        Newton tolerance of the continuation corrector and of the corrections.
+        Newton tolerance of the continuation corrector.
     keep_orbits : bool
-        Store the orbit ``x (M, 8)`` of every corrected course in ``orbits``.
+        Store the orbit ``x (M, 8)`` of every converged course in ``orbits``.
     throw : bool
-        Raise :class:`~continuation.errors.ContinuationError` if a course fails.
+        Raise :class:`~continuation.errors.ContinuationError` if an existing course fails.
     progress : callable, optional
         Called with every accepted branch point.
+    max_relocations : int
+        Re-continuations from a solve near the fold to re-locate it (step 4).
+    fold_tol : float
+        Stop re-locating when the fold moves by less than this (rad); the last move
+        is ``fold_error``.
     **bvp_options
         Passed to :func:`critical_fn_bvp` for the start solve.
 
     Returns
     -------
     CriticalCurve
-        ``status`` ``SUCCESS``, a failure status (some courses nan) or ``INTERRUPTED``.
+        ``SUCCESS`` when every course that exists is a valid boundary within its error
+        estimate; otherwise the status of the first failing course, or ``INTERRUPTED``.
     """
     t_start = time.perf_counter()
     if chi_c_values is None:
@@ -167,99 +280,177 @@ def critical_curve(
             raise ValueError("`chi_c_values` must be a non-empty 1-D array of courses (rad)")
         for c in chis:
             course(c, "chi_c_values")
+    if np.any(chis > 0) and np.any(chis < 0):
+        raise ValueError("`chi_c_values` must all have one sign (the curve starts at 0)")
     if not (math.isfinite(ds) and ds > 0 and math.isfinite(ds_max) and ds_max >= ds):
         raise ValueError(f"`ds` and `ds_max` must satisfy 0 < ds <= ds_max, got {ds}, {ds_max}")
+    sign = -1.0 if np.any(chis < 0) else 1.0
     m = ship_model(model)
-    lo_c, hi_c = float(chis.min()), float(chis.max())
     if start is None:
-        mid = chis[np.argmin(np.abs(chis - 0.5 * (lo_c + hi_c)))]
-        start = critical_fn_bvp(float(mid), model=m, params=params, **bvp_options)
+        start = critical_fn_bvp(0.0, model=m, params=params, **bvp_options)
     elif not isinstance(start, CriticalFn):
         raise ValueError(f"`start` must be a CriticalFn, got {type(start).__name__}")
-    nan = np.full(chis.size, np.nan)
+    K = chis.size
+    nan = np.full(K, np.nan)
+    Fn, res_n, err = nan.copy(), nan.copy(), nan.copy()
+    ok = np.zeros(K, dtype=bool)
+    exists = np.ones(K, dtype=bool)
+    reasons = [""] * K
+    n_unst = np.full(K, -1, dtype=int)
+    orbit_of: dict[int, FloatArray] = {}
     if not start.success:
         msg = f"the start connection did not converge: {start.message}"
         if throw:
             raise ContinuationError(msg)
         return CriticalCurve(
-            chis, nan, nan.copy(), np.zeros(chis.size, bool), np.full(chis.size, -1), None, start,
-            start.status, msg, time.perf_counter() - t_start,
+            chis, nan, nan.copy(), ok, n_unst, None, start, start.status, msg,
+            time.perf_counter() - t_start, exists=exists, reasons=tuple(reasons), error=err,
         )  # fmt: skip
-    margin = max(0.25 * (hi_c - lo_c) / max(chis.size - 1, 1), 1e-3)
-    settings = ContinuationSettings(
+    far = float(np.max(np.abs(chis)))
+    margin = math.radians(2.0)
+    status = Status.SUCCESS
+    solved: dict[int, CriticalFn] = {}
+    branch = None
+    fold = None
+    end_chi, end_Fn = math.nan, math.nan
+    folds: list[tuple[float, float]] = []
+    fold_error = math.inf
+    fold_offset = math.radians(0.5)
+    pending = list(range(K))
+    for k in range(K):
+        if abs(chis[k] - start.chi_c) < 1e-12:  # the start is a checked solve there
+            solved[k] = start
+    pending = [k for k in pending if k not in solved]
+    try:
+        # courses between 0 and a start away from 0: a backward branch
+        near = [k for k in pending if sign * chis[k] < sign * start.chi_c - 1e-12]
+        if near:
+            settings = _settings(ds, ds_max, tol, sign, 0.0, start.chi_c, margin)
+            back = continue_connection(
+                start.orbit, "chi_c", settings, direction="backward", progress=progress
+            )
+            if back.status is Status.INTERRUPTED:
+                raise KeyboardInterrupt
+            P, Z, _ = _first_sheet(back, -sign)
+            _solve_courses(m, params, back.problem, P, Z, chis, near, solved, bvp_options)
+            pending = [k for k in pending if k not in near]
+        cur = start
+        for _ in range(max_relocations + 1):
+            hook = _FoldStop(sign, progress)
+            settings = _settings(ds, ds_max, tol, sign, cur.chi_c, far, margin)
+            branch = continue_connection(
+                cur.orbit, "chi_c", settings, direction="forward", progress=hook
+            )
+            if branch.status is Status.INTERRUPTED and not hook.fired:
+                raise KeyboardInterrupt
+            P, Z, fold = _first_sheet(branch, sign)
+            sheet_end = float(P[-1]) if fold is None else float(fold.p)
+            if fold is not None:
+                if math.isfinite(end_chi):
+                    fold_error = abs(float(fold.p) - end_chi)
+                end_chi = float(fold.p)
+                end_Fn = float(branch.problem.unpack(np.asarray(fold.x))["params"]["Fn"])
+                folds = [(end_chi, end_Fn)]
+            todo = [k for k in pending if sign * chis[k] <= sign * sheet_end + 1e-12]
+            todo.sort(key=lambda k: sign * chis[k])
+            if todo:
+                _solve_courses(m, params, branch.problem, P, Z, chis, todo, solved, bvp_options)
+                pending = [k for k in pending if k not in todo]
+            if fold is None or (not todo and fold_error <= fold_tol):
+                break
+            # re-locate the fold from a solve near it (adapted mesh and T there)
+            c_aux = end_chi - sign * min(fold_offset, 0.5 * abs(end_chi - float(P[0])))
+            near_fold = [
+                k for k in todo if solved[k].success and abs(chis[k] - c_aux) <= fold_offset
+            ]
+            if near_fold:
+                cur = solved[max(near_fold, key=lambda k: sign * chis[k])]
+            else:
+                cur = _solve_at(m, params, branch.problem, P, Z, c_aux, bvp_options)
+                if cur is None or not cur.success:
+                    break
+    except KeyboardInterrupt:
+        status = Status.INTERRUPTED
+    crest_end = math.nan
+    if math.isfinite(end_Fn) and status is not Status.INTERRUPTED:
+        crest_end = _crest_end(m, params, end_Fn, sign)
+    first_bad: Status | None = None
+    for k in range(K):
+        r = solved.get(k)
+        if math.isfinite(end_chi) and sign * chis[k] > sign * end_chi:
+            r = None  # solved before the fold was re-located below it: no boundary there
+        if r is None:
+            if status is Status.INTERRUPTED or not math.isfinite(end_chi):
+                reasons[k] = "not computed" if status is Status.INTERRUPTED else (
+                    "not reached by the branch"
+                )
+                if status is not Status.INTERRUPTED:
+                    first_bad = first_bad or (branch.status if branch is not None else None)
+                continue
+            exists[k] = False
+            if math.isfinite(crest_end) and sign * chis[k] > sign * crest_end:
+                reasons[k] = (
+                    f"the crest saddle does not exist beyond chi_c = "
+                    f"{math.degrees(crest_end):.1f} deg at Fn {end_Fn:.4f}"
+                )
+            else:
+                reasons[k] = (
+                    f"beyond the end of the critical curve: it folds back at chi_c = "
+                    f"{math.degrees(end_chi):.2f} deg (Fn {end_Fn:.4f})"
+                )
+            continue
+        if r.orbit is not None:
+            res_n[k] = r.residual_norm
+        if r.success:
+            Fn[k], ok[k] = r.Fn, True
+            err[k] = math.nan if r.error is None else r.error
+            n_unst[k] = 1
+            if keep_orbits:
+                orbit_of[k] = np.asarray(r.orbit.x, dtype=float)
+        else:
+            reasons[k] = r.message
+            first_bad = first_bad or r.status
+    n_ok = int(ok.sum())
+    n_exist = int(exists.sum())
+    if status is not Status.INTERRUPTED and first_bad is not None:
+        status = first_bad if first_bad is not Status.SUCCESS else Status.NEWTON_FAILED
+    message = f"{n_ok}/{n_exist} existing courses"
+    if math.isfinite(end_chi):
+        message += (
+            f"; the critical curve ends at its fold chi_c = {math.degrees(end_chi):.2f} deg, "
+            f"Fn = {end_Fn:.4f}"
+        )
+        if math.isfinite(crest_end):
+            message += (
+                f"; the crest saddle does not exist beyond chi_c = "
+                f"{math.degrees(crest_end):.1f} deg at Fn {end_Fn:.4f}"
+            )
+    if n_exist < K:
+        message += f"; {K - n_exist} course(s) beyond the end do not exist"
+    if throw and status is not Status.SUCCESS and status is not Status.INTERRUPTED:
+        raise ContinuationError(f"critical curve incomplete: {message}")
+    orbits = tuple(orbit_of[k] for k in sorted(orbit_of))
+    return CriticalCurve(
+        chis, Fn, res_n, ok, n_unst, branch, start, status, message,
+        time.perf_counter() - t_start, orbits, exists=exists, reasons=tuple(reasons),
+        error=err, folds=tuple(folds), end_chi_c=end_chi, end_Fn=end_Fn,
+        crest_end_chi_c=crest_end, fold_error=fold_error if math.isfinite(end_chi) else math.nan,
+    )  # fmt: skip
+
+
+def _settings(
+    ds: float, ds_max: float, tol: float, sign: float, a: float, b: float, margin: float
+) -> ContinuationSettings:
+    """Continuation settings between courses ``a`` and ``b`` (``margin`` beyond ``b``)."""
+    lo, hi = sorted((a, b + sign * margin))
+    return ContinuationSettings(
         ds=ds,
         ds_max=ds_max,
-        p_min=min(lo_c, start.chi_c) - margin,
-        p_max=max(hi_c, start.chi_c) + margin,
+        p_min=lo - (1e-3 if sign > 0 else 0.0),
+        p_max=hi + (1e-3 if sign < 0 else 0.0),
         max_steps=400,
         newton=NewtonSettings(tol=tol, step_tol=1e-8, max_iter=8),
     )
-    direction = (
-        "both" if lo_c < start.chi_c < hi_c else ("forward" if start.chi_c <= lo_c else "backward")
-    )
-    branch = continue_connection(
-        start.orbit, "chi_c", settings, direction=direction, progress=progress
-    )
-    prob = branch.problem
-    P = np.asarray(branch.p, dtype=float)
-    Z = np.asarray(branch.x, dtype=float)
-    Fn = nan.copy()
-    res_n = nan.copy()
-    ok = np.zeros(chis.size, dtype=bool)
-    n_unst = np.full(chis.size, -1, dtype=int)
-    orbits: list[FloatArray] = []
-    status = branch.status if branch.status is Status.INTERRUPTED else Status.SUCCESS
-    corr = NewtonSettings(tol=tol, step_tol=1e-8, max_iter=15, damping=True)
-    chord_settings = NewtonSettings(tol=tol, step_tol=1e-8, max_iter=12)
-    jac_cache = JacobianCache()
-    try:
-        for k, c in enumerate(chis):
-            z0 = _predict(P, Z, float(c))
-            if z0 is None:
-                continue
-            # one factorised Jacobian serves neighbouring courses while it contracts fast
-            r = simplified_newton(
-                lambda z, c=c: prob.residual(z, c),
-                lambda z, c=c: prob.jacobian(z, c),
-                z0,
-                chord_settings,
-                cache=jac_cache,
-            )
-            if not r.converged:
-                jac_cache.clear()
-                r = newton(
-                    lambda z, c=c: prob.residual(z, c), lambda z, c=c: prob.jacobian(z, c), z0, corr
-                )
-            if not r.converged:
-                log.warning("course %.3g deg did not converge: %s", math.degrees(c), r.message)
-                continue
-            parts = prob.unpack(r.z)
-            pv = prob.param_vector(r.z, float(c))
-            n_unst[k] = int(np.sum(np.linalg.eigvals(m.jacobian(parts["x_from"], pv)).real > 0))
-            if n_unst[k] != 1:
-                log.warning(
-                    "course %.3g deg: the crest saddle has %d unstable eigenvalues",
-                    math.degrees(c),
-                    n_unst[k],
-                )
-                continue
-            Fn[k] = float(parts["params"]["Fn"])
-            res_n[k] = float(r.residual_norm)
-            ok[k] = True
-            if keep_orbits:
-                orbits.append(np.asarray(parts["X"], dtype=float))
-    except KeyboardInterrupt:
-        status = Status.INTERRUPTED
-    n_ok = int(ok.sum())
-    if status is Status.SUCCESS and n_ok < chis.size:
-        status = Status.NEWTON_FAILED if branch.status.ok else branch.status
-    message = f"{n_ok}/{chis.size} courses; branch: {branch.status.name} ({len(P)} points)"
-    if throw and status is not Status.SUCCESS and status is not Status.INTERRUPTED:
-        raise ContinuationError(f"critical curve incomplete: {message}")
-    return CriticalCurve(
-        chis, Fn, res_n, ok, n_unst, branch, start, status, message,
-        time.perf_counter() - t_start, tuple(orbits),
-    )  # fmt: skip
 
 
 def _predict(P: FloatArray, Z: FloatArray, c: float) -> FloatArray | None:
@@ -272,9 +463,64 @@ def _predict(P: FloatArray, Z: FloatArray, c: float) -> FloatArray | None:
             w = (c - a) / (b - a)
             return (1 - w) * Z[i] + w * Z[i + 1]
     j = int(np.argmin(np.abs(P - c)))
-    if abs(P[j] - c) < 1e-12:
+    if abs(P[j] - c) < 1e-6:
         return Z[j].copy()
     return None
+
+
+def _solve_courses(
+    m: Any,
+    params: Any,
+    prob: Any,
+    P: FloatArray,
+    Z: FloatArray,
+    chis: FloatArray,
+    todo: Sequence[int],
+    solved: dict[int, CriticalFn],
+    bvp_options: dict[str, Any],
+) -> None:
+    """Solve each course ``chis[k]``, ``k`` in ``todo``, from the branch rows; into ``solved``."""
+    for k in todo:
+        r = _solve_at(m, params, prob, P, Z, float(chis[k]), bvp_options)
+        if r is None:
+            continue
+        if not r.success:
+            log.warning("course %.4g deg: %s", math.degrees(chis[k]), r.message)
+        solved[k] = r
+
+
+def _solve_at(
+    m: Any, params: Any, prob: Any, P: FloatArray, Z: FloatArray, c: float,
+    bvp_options: dict[str, Any],
+) -> CriticalFn | None:  # fmt: skip
+    """The connection at course ``c`` from the branch orbit interpolated there.
+
+    Solved by :func:`continuation.bvp.solve_connection` (adapted mesh, error
+    estimates) on the branch's problem at fixed ``chi_c = c``, which keeps its compiled
+    functions (a new problem, as :func:`critical_fn_bvp` builds, costs several times
+    the solve); then the capsizing-boundary check.
+    """
+    t0 = time.perf_counter()
+    z0 = _predict(P, Z, c)
+    if z0 is None:
+        return None
+    parts = prob.unpack(z0)
+    fixed = prob.replace(
+        vary=None, reference=None, params=prob.params.replace(chi_c=c, **parts["params"])
+    )
+    guess = (np.asarray(prob.mesh.t, dtype=float), np.asarray(parts["X"], dtype=float))
+    res = solve_connection(fixed, guess, method="broyden")
+    status, message = res.status, res.message
+    if res.success or res.status in (Status.DISCRETISATION_ERROR, Status.TRUNCATION_ERROR):
+        why = boundary_refusal(m, res.x, res.x_from, fixed.params.replace(**res.params))
+        if why:
+            status, message = Status.REJECTED, f"not a capsizing boundary: {why}"
+    errs = res.errors
+    return CriticalFn(
+        chi_c=c, Fn=float(res.params["Fn"]), method="bvp", status=status, message=message,
+        error=None if errs is None else float(errs.total("Fn")),
+        elapsed=time.perf_counter() - t0, orbit=res, residual_norm=float(res.residual_norm),
+    )  # fmt: skip
 
 
 __all__ = ["CriticalCurve", "critical_curve"]

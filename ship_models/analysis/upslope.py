@@ -257,8 +257,10 @@ def guess_run(model: Any, params: Params, bracket: tuple[float, float]) -> Upslo
             break
     if best is None:
         raise ContinuationError(
-            f"no usable guess of the connection at {dict(params.items())}: the upslope "
-            f"branch does not approach the shifted crest saddle for Fn in {bracket}"
+            f"no usable guess of the connection at chi_c = "
+            f"{math.degrees(float(params['chi_c'])):.4g} deg: the upslope branch does not "
+            f"approach the shifted crest saddle at Fn_guess = {float(params['Fn']):.6g} nor "
+            f"for Fn in ({float(bracket[0]):.6g}, {float(bracket[1]):.6g})"
         )
     return best
 
