@@ -123,3 +123,44 @@ def test_cycles_fn_branch_ends_at_the_heteroclinic_fn(
     assert np.all(T > 0)
     assert (out / "cycles_fn.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(out.glob(".*tmp*"))
+
+
+def _fake_result(max_roll_deg: float, vanishing_deg: float = 63.3):
+    """A (doc, branch) pair shaped like compute()'s, without computing (for the writers)."""
+    from types import SimpleNamespace
+
+    p = np.linspace(0.1, 0.3, 5)
+    cb = SimpleNamespace(p=p, T=np.linspace(7.0, 60.0, 5),
+                         max_roll=np.radians(np.linspace(3.0, max_roll_deg, 5)),
+                         max_heading=np.full(5, 0.1), mu_max=np.linspace(0.9, 2.0, 5),
+                         mu_lead=np.linspace(0.9, 2.0, 5) + 0j,
+                         n_unstable=np.array([0, 0, 0, 1, 1]))  # fmt: skip
+    doc = {"vessel": "purse_seiner", "vary": "Fn", "Fn": 0.1, "chi_c_deg": 10.0,
+           "status": "PERIOD_UNBOUNDED", "message": "m", "rows": 5, "Fn_first": 0.1,
+           "Fn_last": 0.3, "T_last": 60.0, "Fn_limit_fit": 0.301, "Fn_limit_saddle_focus": 0.301,
+           "Fn_lost_stability": float(p[3]), "max_roll_deg": max_roll_deg,
+           "vanishing_angle_deg": vanishing_deg,
+           "rolls_past_vanishing_angle": max_roll_deg >= vanishing_deg}  # fmt: skip
+    return doc, cb
+
+
+@pytest.mark.parametrize(("roll", "code"), [(10.0, 0), (70.0, 1)])
+def test_cycles_files_and_capsize_verdict(
+    roll: float, code: int, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:  # fmt: skip
+    from broachkit_cli.commands import cycles
+
+    monkeypatch.setattr(cycles, "compute", lambda *a: _fake_result(roll))
+    assert main(["cycles", "--out", str(tmp_path)]) == code
+    text = capsys.readouterr().out
+    assert ("ROLLS PAST" in text) == (roll > 63.3)
+    assert "Fn* = 0.301" in text and "stability lost at Fn = 0.25" in text
+    lines = [ln for ln in (tmp_path / "cycles_fn.csv").read_text().splitlines() if ln[:1] != "#"]
+    rows = list(csv.DictReader(lines))
+    assert [float(r["max_roll_deg"]) for r in rows][-1] == pytest.approx(roll)
+    assert json.loads((tmp_path / "cycles_fn.json").read_text())["branch"]["T"][-1] == 60.0
+    assert (tmp_path / "cycles_fn.png").stat().st_size > 1000
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "cycles_fn.csv", "cycles_fn.json", "cycles_fn.png",
+    ]  # fmt: skip

@@ -255,8 +255,7 @@ def run(args: argparse.Namespace) -> int:
     of vanishing stability, else 1."""
     check_args(args)
     out = prepare_out(args.out)
-    model, params = ship_from_args(args)
-    check_fn(model, "--fn", args.Fn)
+    model, params = ship_from_args(args)  # checks --fn against the vessel's range
     if args.vary == "fn":
         check_fn(model, "--fn-max", args.Fn_max)
     doc, cb = compute(model, params, args)
