@@ -164,3 +164,18 @@ def test_cycles_files_and_capsize_verdict(
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "cycles_fn.csv", "cycles_fn.json", "cycles_fn.png",
     ]  # fmt: skip
+
+
+def test_cycles_text_without_blow_up_or_instability(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from broachkit_cli.commands import cycles
+
+    doc, cb = _fake_result(10.0)
+    doc.update(status="PARAM_BOUND", Fn_limit_fit=math.nan, Fn_limit_saddle_focus=math.nan,
+               Fn_lost_stability=math.nan)  # fmt: skip
+    monkeypatch.setattr(cycles, "compute", lambda *a: (doc, cb))
+    assert main(["cycles"]) == 0
+    text = capsys.readouterr().out
+    assert "no period blow-up: the branch ended by PARAM_BOUND" in text
+    assert "stable throughout" in text and "nan" not in text

@@ -157,6 +157,7 @@ def compute(model: Any, params: Any, args: argparse.Namespace) -> tuple[dict[str
         "rows": len(cb.p),
         f"{key}_first": float(cb.p[0]) * scale,
         f"{key}_last": float(cb.p[-1]) * scale,
+        f"{key}_range": [float(np.min(cb.p)) * scale, float(np.max(cb.p)) * scale],
         "T_last": float(cb.T[-1]),
         f"{key}_limit_fit": cb.limit * scale,
         f"{key}_limit_saddle_focus": cb.limit_saddle_focus * scale,
@@ -279,20 +280,31 @@ def _text(doc: dict[str, Any]) -> str:
     key = doc["vary"]
     unit = "" if key == "Fn" else " deg"
     name = "Fn" if key == "Fn" else "chi_c"
+    lo, hi = doc.get(f"{key}_range") or (doc[f"{key}_first"], doc[f"{key}_last"])
+    limit = doc[f"{key}_limit_fit"]
+    lost = doc[f"{key}_lost_stability"]
     lines = [
         f"{doc['vessel']}, cycle from Fn = {doc['Fn']:g}, chi_c = {doc['chi_c_deg']:g} deg, "
-        f"continued in {name}: {doc['rows']} cycles, {name} {_fmt(doc[f'{key}_first'], unit)}"
-        f" .. {_fmt(doc[f'{key}_last'], unit)}, last period {doc['T_last']:.4g} s",
+        f"continued in {name}: {doc['rows']} cycles, {name} in [{_fmt(lo, unit)}, "
+        f"{_fmt(hi, unit)}], last period {doc['T_last']:.4g} s",
         f"  end: {doc['status']}: {doc['message']}",
-        f"  period blow-up at {name}* = {_fmt(doc[f'{key}_limit_fit'], unit)} "
-        f"(T = a - b ln|p* - p|; saddle-focus law {_fmt(doc[f'{key}_limit_saddle_focus'], unit)})",
     ]
+    if limit is not None and math.isfinite(limit):
+        lines.append(
+            f"  period blow-up at {name}* = {_fmt(limit, unit)} (T = a - b ln|p* - p|; "
+            f"saddle-focus law {_fmt(doc[f'{key}_limit_saddle_focus'], unit)})"
+        )
+    else:
+        lines.append(f"  no period blow-up: the branch ended by {doc['status']}")
     if "Fn_bvp" in doc:
         lines.append(
             f"  connection solver: critical Fn = {_fmt(doc['Fn_bvp'])} ({doc['Fn_bvp_status']}); "
-            f"fit - connection = {doc['difference_fit_minus_bvp']:.1e}"
+            f"fit - connection = {_fmt(doc['difference_fit_minus_bvp'])}"
         )
-    lines.append(f"  stability lost at {name} = {_fmt(doc[f'{key}_lost_stability'], unit)}")
+    if lost is not None and math.isfinite(lost):
+        lines.append(f"  stability lost at {name} = {_fmt(lost, unit)}")
+    else:
+        lines.append("  stable throughout (no Floquet multiplier outside the unit circle)")
     verdict = (
         "ROLLS PAST it: a capsize, not a cycle" if doc["rolls_past_vanishing_angle"] else "below it"
     )
