@@ -36,6 +36,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "broachkit_cli.commands.calibrate",
     "broachkit_cli.commands.demo",
     "broachkit_cli.commands.sweep",
+    "broachkit_cli.commands.cycles",
 )
 
 #: What ``broachkit`` runs without a sub-command.
