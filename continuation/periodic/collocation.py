@@ -23,7 +23,14 @@ previous point of the branch), which removes the time-shift invariance.
 
 The right-hand side and its derivatives come from the system's CasADi trace mapped
 over the ``N m`` collocation points in one call (NumPy loop for systems without a
-trace). Everything is assembled into a SciPy CSC matrix on a fixed pattern.
+trace). Everything is assembled into a SciPy CSC matrix on a fixed pattern: the
+pattern (and its COO-to-CSC permutation) is built once per layout, every Jacobian
+shares its index arrays, and carries a ``condensed_lu`` hook
+(:class:`~continuation.bvp.condense.StageCondenser`: the collocation rows of interval
+``j`` involve only its own ``m`` stage values besides the nodes, so the stages are
+eliminated interval by interval before a small dense LU, as AUTO-07p does), which
+the driver's :class:`~continuation.linalg.BorderedLU` and Newton solves use instead
+of a general sparse LU.
 """
 
 from __future__ import annotations
@@ -35,6 +42,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..bvp.collocation import CollocationMesh
+from ..bvp.condense import StageCondenser
+from ..linalg import csc_with_data
 from ..typing import FloatArray
 
 
@@ -147,6 +156,40 @@ class CollocationLayout:
         # quadrature weights of the stage points (sum = 1)
         self.weights = (mesh.h[:, None] * mesh.b[None, :]).ravel()  # (N m,)
         self.stage_rows = self._T_rows.reshape(N, m, n).reshape(N * m, n)  # row of stage s, i
+        self._build_pattern()
+
+    def _build_pattern(self) -> None:
+        """The CSC pattern of ``dG/dz`` and the permutation of :meth:`assemble`'s values."""
+        n, M, N, m = self.n, self.M, self.N, self.m
+        m1 = m + 1
+        self._ph_cols = (self.stage_points[:, None] * n + np.arange(n)[None, :]).ravel()
+        rows = np.concatenate(
+            [self._col_rows, self._const_rows, self._T_rows,
+             np.full(self._ph_cols.size, self.row_phase)]
+        )  # fmt: skip
+        cols = np.concatenate(
+            [self._col_cols, self._const_cols, np.full(self._T_rows.size, self.T_col),
+             self._ph_cols]
+        )  # fmt: skip
+        size = n * M + 1
+        order = np.lexsort((rows, cols))  # column-major, rows sorted within a column
+        key = cols[order].astype(np.int64) * size + rows[order]
+        first = np.concatenate(([True], key[1:] != key[:-1]))
+        slot = np.cumsum(first) - 1  # CSC slot of each sorted value
+        self._order = order
+        self._slot_of = None if bool(np.all(first)) else slot  # duplicates: summed
+        ukey = key[first]
+        indices = (ukey % size).astype(np.int32)
+        indptr = np.searchsorted(ukey // size, np.arange(size + 1)).astype(np.int32)
+        template = sp.csc_matrix((np.ones(ukey.size), indices, indptr), shape=(size, size))
+        template.has_canonical_format  # noqa: B018  (flag checked once, shared)
+        # stage condensation: collocation rows and stage unknowns of interval j
+        base = np.arange(N)[:, None] * m1 * n
+        rows_s = base + np.arange(m * n)[None, :]
+        cols_s = base + n + np.arange(m * n)[None, :]
+        self.condenser = StageCondenser(rows_s, cols_s)
+        template.condensed_lu = self.condenser.factor
+        self._template = template
 
     # ------------------------------------------------------------------ unpacking
     def split(self, z: FloatArray) -> tuple[FloatArray, float]:
@@ -172,17 +215,11 @@ class CollocationLayout:
 
     def assemble(self, B: FloatArray, F: FloatArray, dref: FloatArray) -> sp.csc_matrix:
         """The sparse ``dG/dz`` from the blocks, ``f`` at the stages and the phase row."""
-        n, M = self.n, self.M
-        ph_cols = (self.stage_points[:, None] * n + np.arange(n)[None, :]).ravel()
         ph_vals = (self.weights[:, None] * dref).ravel()
-        rows = np.concatenate(
-            [self._col_rows, self._const_rows, self._T_rows, np.full(ph_cols.size, self.row_phase)]
-        )
-        cols = np.concatenate(
-            [self._col_cols, self._const_cols, np.full(self._T_rows.size, self.T_col), ph_cols]
-        )
-        vals = np.concatenate([B.ravel(), self._const_vals, -F.ravel(), ph_vals])
-        return sp.csc_matrix((vals, (rows, cols)), shape=(n * M + 1, n * M + 1))
+        vals = np.concatenate([B.ravel(), self._const_vals, -F.ravel(), ph_vals])[self._order]
+        if self._slot_of is not None:
+            vals = np.bincount(self._slot_of, weights=vals, minlength=self._template.nnz)
+        return csc_with_data(self._template, vals)
 
     def residual(
         self,
