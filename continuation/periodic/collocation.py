@@ -156,6 +156,7 @@ class CollocationLayout:
         # quadrature weights of the stage points (sum = 1)
         self.weights = (mesh.h[:, None] * mesh.b[None, :]).ravel()  # (N m,)
         self.stage_rows = self._T_rows.reshape(N, m, n).reshape(N * m, n)  # row of stage s, i
+        self._B_const = (mesh.D[None, :, :] / mesh.h[:, None, None])[..., None, None] * np.eye(n)
         self._build_pattern()
 
     def _build_pattern(self) -> None:
@@ -205,9 +206,7 @@ class CollocationLayout:
         r"""Collocation Jacobian blocks ``B[j, k, l] = D[k,l]/h_j I - [l = k+1] T f_x``,
         shape ``(N, m, m + 1, n, n)`` (``J``: ``f_x`` at the stages, ``(N m, n, n)``)."""
         N, m, n = self.N, self.m, self.n
-        D, h = self.mesh.D, self.mesh.h
-        B = np.zeros((N, m, m + 1, n, n))
-        B += (D[None, :, :] / h[:, None, None])[..., None, None] * np.eye(n)
+        B = self._B_const.copy()  # D[k,l]/h_j I, the same at every evaluation
         Js = J.reshape(N, m, n, n)
         for k in range(m):
             B[:, k, k + 1] -= T * Js[:, k]

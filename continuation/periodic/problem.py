@@ -28,6 +28,9 @@ from .collocation import CollocationLayout, StageEvaluator, monodromy_factors
 from .floquet import FloquetResult, exponents, floquet, ns_test, pd_test
 from .orbit import PeriodicOrbit
 
+#: Number of points whose Floquet multipliers :meth:`PeriodicOrbitProblem.floquet` keeps.
+FLOQUET_MEMO = 4
+
 
 def error_estimate(mesh: CollocationMesh, X: FloatArray) -> float:
     r"""Estimate of the uniform error of the collocation polynomial, max over states.
@@ -212,9 +215,11 @@ class PeriodicOrbitProblem:
         """Floquet multipliers of the cycle ``z`` by condensation of the collocation
         blocks (:func:`~continuation.periodic.collocation.monodromy_factors`)."""
         key = (np.asarray(z, dtype=float).tobytes(), float(p))
-        memo = self._slot.get("floquet")
-        if memo is not None and memo[0] == key:
-            return memo[1]  # type: ignore[no-any-return]
+        # a few points: the driver asks for the multipliers at a row, at the row moved
+        # along its tangent (the events' slopes) and at the row again (records), in turn
+        memo = self._slot.setdefault("floquet", {})
+        if key in memo:
+            return memo[key]  # type: ignore[no-any-return]
         B, _ = self._blocks(z, p)
         X, _ = self.layout.split(np.asarray(z, dtype=float))
         P = self.param_vector(p)
@@ -222,7 +227,9 @@ class PeriodicOrbitProblem:
         res = floquet(
             monodromy_factors(self.layout, B), f_nodes, self._slot.setdefault("schur", {})
         )
-        self._slot["floquet"] = (key, res)
+        if len(memo) >= FLOQUET_MEMO:
+            del memo[next(iter(memo))]  # oldest first (dicts keep insertion order)
+        memo[key] = res
         return res
 
     def monodromy(self, z: FloatArray, p: float) -> FloatArray:
