@@ -35,6 +35,7 @@ of a general sparse LU.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -78,10 +79,22 @@ class StageEvaluator:
                 c["f"].map("f_map", "serial", K, [1], []),
                 both.map("fjp_map", "serial", K, [1], []),
             )
+            if m > 0:
+                # dense outputs evaluated in place through CasADi's buffer interface
+                # (no DM conversions: about 3x less overhead per call than fns)
+                dense = [ca.densify(fx), ca.densify(ca.jacobian(fx, x)),
+                         ca.densify(ca.jacobian(fx, p))]  # fmt: skip
+                fb = ca.Function("fb", [x, p], dense[:1]).map("fb_map", "serial", K, [1], [])
+                ab = ca.Function("ab", [x, p], dense).map("ab_map", "serial", K, [1], [])
+                _BUFFERS[self] = (_Buffered(fb, K, n, m, (n,)),
+                                  _Buffered(ab, K, n, m, (n, n * n, n * m)))  # fmt: skip
         object.__setattr__(self, "_fns", fns)
 
     def f(self, Xs: FloatArray, P: FloatArray) -> FloatArray:
         """``f`` at the rows of ``Xs`` (K, n) -> (K, n)."""
+        buf = _BUFFERS.get(self)
+        if buf is not None and Xs.shape == (self.n_points, self.system.n_states):
+            return buf[0](Xs, P)[0].copy()
         if self._fns is not None:
             return np.asarray(self._fns[0](Xs.T, P), dtype=float).T
         return np.array([self.system.f(x, P) for x in Xs])
@@ -90,6 +103,13 @@ class StageEvaluator:
         """``(f (K, n), f_x (K, n, n), f_p (K, n, n_par))`` at the rows of ``Xs``."""
         K, n = Xs.shape
         npar = int(np.size(P))
+        buf = _BUFFERS.get(self)
+        if buf is not None and K == self.n_points and n == self.system.n_states:
+            Fo, Jo, Po = buf[1](Xs, P)
+            # column-major CasADi blocks: Jo[k] holds f_x(X_k)^T, Po[k] f_p(X_k)^T
+            J = Jo.reshape(K, n, n).transpose(0, 2, 1).copy()
+            Jp = Po.reshape(K, npar, n).transpose(0, 2, 1).copy()
+            return Fo.copy(), J, Jp
         if self._fns is not None:
             Fd, Jd, Pd = self._fns[1](Xs.T, P)
             F = np.asarray(Fd, dtype=float).T
@@ -103,6 +123,35 @@ class StageEvaluator:
         J = np.array([self.system.jacobian(x, P) for x in Xs])
         Jp = np.array([np.asarray(self.system.dfdp(x, P)).reshape(n, npar) for x in Xs])
         return F, J, Jp
+
+
+class _Buffered:
+    """A mapped CasADi function with dense outputs, evaluated in preallocated arrays.
+
+    Inputs: the ``K`` points ``(K, n)`` (column-major ``(n, K)`` for CasADi) and the
+    parameters ``(n_par,)``; outputs: one ``(K, w)`` array per output width ``w``.
+    """
+
+    def __init__(self, fn: Any, K: int, n: int, n_par: int, widths: tuple[int, ...]) -> None:
+        self._fn = fn  # (kept alive with its buffer)
+        self._buf, self._run = fn.buffer()
+        self._x = np.zeros((K, n))
+        self._p = np.zeros(n_par)
+        self._out = tuple(np.zeros((K, w)) for w in widths)
+        self._buf.set_arg(0, memoryview(self._x))
+        self._buf.set_arg(1, memoryview(self._p))
+        for i, o in enumerate(self._out):
+            self._buf.set_res(i, memoryview(o))
+
+    def __call__(self, Xs: FloatArray, P: FloatArray) -> tuple[FloatArray, ...]:
+        self._x[...] = Xs
+        self._p[...] = P
+        self._run()
+        return self._out
+
+
+#: Buffered evaluators per StageEvaluator (outside the instance: it stays picklable).
+_BUFFERS: weakref.WeakKeyDictionary[Any, tuple[_Buffered, _Buffered]] = weakref.WeakKeyDictionary()
 
 
 class CollocationLayout:
