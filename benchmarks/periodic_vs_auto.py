@@ -29,19 +29,24 @@ import pathlib
 import shutil
 import statistics
 import subprocess
+import sys
 import time
 
-import numpy as np
+# measure the checkout this script is in (the venv's editable install may point at
+# another one)
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from continuation import (
+import numpy as np  # noqa: E402
+
+from continuation import (  # noqa: E402
     ContinuationSettings,
     NewtonSettings,
     Params,
     System,
     continue_equilibria,
 )
-from continuation.bvp import CollocationMesh
-from continuation.periodic import (
+from continuation.bvp import CollocationMesh  # noqa: E402
+from continuation.periodic import (  # noqa: E402
     PeriodicOrbit,
     continue_periodic,
     multipliers,

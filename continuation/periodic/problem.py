@@ -28,6 +28,9 @@ from .collocation import CollocationLayout, StageEvaluator, monodromy_factors
 from .floquet import FloquetResult, exponents, floquet, ns_test, pd_test
 from .orbit import PeriodicOrbit
 
+#: Number of points whose Floquet multipliers :meth:`PeriodicOrbitProblem.floquet` keeps.
+FLOQUET_MEMO = 4
+
 
 def error_estimate(mesh: CollocationMesh, X: FloatArray) -> float:
     r"""Estimate of the uniform error of the collocation polynomial, max over states.
@@ -40,20 +43,42 @@ def error_estimate(mesh: CollocationMesh, X: FloatArray) -> float:
     :meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`). An
     estimate (good to a factor of a few on resolved meshes), not a bound.
     """
-    dm = mesh.highest_derivative(X)
-    N = mesh.n_intervals
-    if N < 3:
-        return float("nan")
-    mids = 0.5 * (mesh.nodes[:-1] + mesh.nodes[1:])
-    # periodic differences (the cycle closes on itself)
-    dmp = np.vstack([dm[-1:], dm, dm[:1]])
-    mp = np.concatenate([[mids[-1] - 1.0], mids, [mids[0] + 1.0]])
-    d1 = (dmp[2:] - dmp[:-2]) / (mp[2:] - mp[:-2])[:, None]
-    s = np.linspace(0.0, 1.0, 201)
-    m = mesh.degree
-    Cm = float(np.max(np.abs(np.prod(s[:, None] - mesh.c[None, :], axis=1))))
-    Cm /= float(np.prod(np.arange(1, m + 2)))
-    return float(np.max(Cm * mesh.h[:, None] ** (m + 1) * np.abs(d1)))
+    return _ErrorWeights(mesh)(X)
+
+
+class _ErrorWeights:
+    """The mesh-dependent factors of :func:`error_estimate`, computed once per mesh."""
+
+    def __init__(self, mesh: CollocationMesh) -> None:
+        N, m = mesh.n_intervals, mesh.degree
+        self.N, self.m1 = N, m + 1
+        if N < 3:
+            return
+        local = np.concatenate(([0.0], mesh.c))
+        # m-th derivative of the interval polynomial: lead_l / h_j^m times X_{j,l}
+        # (leading Lagrange coefficients times m!, as CollocationMesh.highest_derivative)
+        lead = np.array(
+            [1.0 / np.prod([local[k] - local[i] for i in range(m + 1) if i != k])
+             for k in range(m + 1)]
+        ) * float(np.prod(np.arange(1, m + 1)))  # fmt: skip
+        h = mesh.h
+        self.w = lead[None, :] / (h**m)[:, None]  # (N, m+1)
+        mids = 0.5 * (mesh.nodes[:-1] + mesh.nodes[1:])
+        # periodic differences (the cycle closes on itself)
+        mp = np.concatenate([[mids[-1] - 1.0], mids, [mids[0] + 1.0]])
+        s = np.linspace(0.0, 1.0, 201)
+        Cm = float(np.max(np.abs(np.prod(s[:, None] - mesh.c[None, :], axis=1))))
+        Cm /= float(np.prod(np.arange(1, m + 2)))
+        self.scale = (Cm * h ** (m + 1) / (mp[2:] - mp[:-2]))[:, None]  # (N, 1)
+
+    def __call__(self, X: FloatArray) -> float:
+        N, m1 = self.N, self.m1
+        if N < 3:
+            return float("nan")
+        Xb = np.asarray(X, dtype=float)[: N * m1].reshape(N, m1, -1)
+        dm = np.einsum("jl,jln->jn", self.w, Xb)
+        dmp = np.vstack([dm[-1:], dm, dm[:1]])
+        return float(np.max(self.scale * np.abs(dmp[2:] - dmp[:-2])))
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,6 +140,7 @@ class PeriodicOrbitProblem:
         object.__setattr__(self, "_layout", lay)
         object.__setattr__(self, "_eval", StageEvaluator(self.system, lay.N * lay.m))
         object.__setattr__(self, "_nodes_eval", StageEvaluator(self.system, lay.N + 1))
+        object.__setattr__(self, "_errw", _ErrorWeights(self.mesh))
         object.__setattr__(self, "_index", self.system.param_names.index(self.free))
         object.__setattr__(self, "_shift", np.asarray(self.winding, dtype=float) * per)
         self.accept(ref)
@@ -212,9 +238,11 @@ class PeriodicOrbitProblem:
         """Floquet multipliers of the cycle ``z`` by condensation of the collocation
         blocks (:func:`~continuation.periodic.collocation.monodromy_factors`)."""
         key = (np.asarray(z, dtype=float).tobytes(), float(p))
-        memo = self._slot.get("floquet")
-        if memo is not None and memo[0] == key:
-            return memo[1]  # type: ignore[no-any-return]
+        # a few points: the driver asks for the multipliers at a row, at the row moved
+        # along its tangent (the events' slopes) and at the row again (records), in turn
+        memo = self._slot.setdefault("floquet", {})
+        if key in memo:
+            return memo[key]  # type: ignore[no-any-return]
         B, _ = self._blocks(z, p)
         X, _ = self.layout.split(np.asarray(z, dtype=float))
         P = self.param_vector(p)
@@ -222,7 +250,9 @@ class PeriodicOrbitProblem:
         res = floquet(
             monodromy_factors(self.layout, B), f_nodes, self._slot.setdefault("schur", {})
         )
-        self._slot["floquet"] = (key, res)
+        if len(memo) >= FLOQUET_MEMO:
+            del memo[next(iter(memo))]  # oldest first (dicts keep insertion order)
+        memo[key] = res
         return res
 
     def monodromy(self, z: FloatArray, p: float) -> FloatArray:
@@ -264,7 +294,7 @@ class PeriodicOrbitProblem:
         fl = self.floquet(z, p)
         out["mu_max"] = float(np.max(np.abs(fl.multipliers))) if fl.multipliers.size else 0.0
         out["trivial_error"] = fl.trivial_error
-        out["error"] = error_estimate(self.mesh, X)
+        out["error"] = self._errw(X)  # type: ignore[attr-defined]
         return out
 
 
