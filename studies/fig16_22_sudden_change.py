@@ -267,6 +267,8 @@ def _compute(
         backend=be.executor if be is not None else "serial",
         progress=False, desc="fig16_22",
     )  # fmt: skip
+    if res.status is Status.INTERRUPTED:
+        raise KeyboardInterrupt  # finished tasks are checkpointed; a rerun resumes
     if not res.success:
         bad = [r for r in res.records if not r.done]
         raise RuntimeError(
