@@ -365,6 +365,17 @@ def _summary_text(doc: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run the steps; 0 when every step ran, 130 when interrupted."""
+    before = os.environ.get(WORKERS_ENV)
+    try:
+        return _run(args)
+    finally:  # the job's worker count is not left behind in this process
+        if before is None:
+            os.environ.pop(WORKERS_ENV, None)
+        else:
+            os.environ[WORKERS_ENV] = before
+
+
+def _run(args: argparse.Namespace) -> int:
     out = prepare_out(args.out)
     assert out is not None
     steps = _steps(args)
