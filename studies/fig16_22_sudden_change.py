@@ -43,6 +43,8 @@ import numpy as np
 if __package__ in (None, ""):  # run as a script: make the `studies` package importable
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from continuation.status import Status
+from continuation.sweep import open_backend
 from ship_models.paper import PAPER_FN_BRACKET
 from studies._common import (
     PLANE_LABELS,
@@ -54,11 +56,16 @@ from studies._common import (
     state_columns,
     write_json,
 )
+from studies._sudden_tasks import compute_orbits, load_orbits, sweep_workers, task
 
 CHI_TO_DEG = 10.0
 FROM_1 = (0.1, 0.0)  # (Fn, chi_c deg) of the first initial orbit (Figs. 16-21, 23)
 FROM_2 = (0.3, 45.0)  # of the second (Fig. 22)
 XI_FIG23 = 0.5
+#: Fn brackets of the Fig. 23 bisections about the heteroclinic Fn, tried in turn.
+FIG23_OFFSETS = ((-0.0063, 0.0017), (-0.03, 0.01))
+#: Sub-folder of the step's output with the sweep's checkpoints and the orbits.
+SWEEP_DIR = "sweep"
 PAPER_FN = PAPER_FN_BRACKET
 
 
@@ -105,29 +112,70 @@ def _draw_map(mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path
     save_figure(fig, path)
 
 
+def workers_of(be: Any) -> int:
+    """Worker processes of a backend (1: this process)."""
+    return 1 if be is None else int(be.slots)
+
+
 def compute(
     out: Path, progress: Callable[[str], None] | None = None, *, full: bool = False
 ) -> dict[str, Any]:
-    """Run the experiments; write figures and data; return the summary."""
+    """Run the experiments; write figures and data; return the summary.
+
+    The bisections and map rows run on :func:`~studies._sudden_tasks.sweep_workers`
+    local processes (``BROACHKIT_WORKERS=1``: all in this process), checkpointed in
+    ``out/sweep`` (a rerun after an interruption redoes no finished task).
+    """
     from ship_models import purse_seiner
-    from ship_models.analysis.critical_bvp import critical_fn_bvp
-    from ship_models.analysis.critical_curve import critical_curve
-    from ship_models.analysis.manifold import unstable_manifold
-    from ship_models.analysis.sudden_change import (
-        follow_orbit,
-        periodic_orbit,
-        sudden_change,
-        sudden_change_boundary,
-        sudden_change_map,
-    )
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
     t_all = time.perf_counter()
     model = purse_seiner()
+    workers = sweep_workers()
+    sweep_dir = out / SWEEP_DIR
+    sweep_dir.mkdir(parents=True, exist_ok=True)
+    orbits_path = str(sweep_dir / "orbits.pkl")
+    # one pool for the whole step: the old orbits are computed in a worker while this
+    # process solves the connecting orbit; then every bisection and map row is a task
+    be = open_backend("processes", workers=workers) if workers > 1 else None
+    try:
+        return _compute(out, say, full, model, orbits_path, be, t_all)
+    finally:
+        if be is not None:
+            be.close()
+
+
+def _compute(
+    out: Path,
+    say: Callable[[str], None],
+    full: bool,
+    model: Any,
+    orbits_path: str,
+    be: Any,
+    t_all: float,
+) -> dict[str, Any]:
+    from continuation.sweep import run_sweep, source_version
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
+    from ship_models.analysis.critical_curve import critical_curve
+    from ship_models.analysis.manifold import unstable_manifold
+    from ship_models.analysis.sudden_change import (
+        SuddenChangeBoundary,
+        SuddenChangeMap,
+        sudden_change,
+    )
+    from ship_models.analysis.sweeps import vessel_context
+
     chi10 = math.radians(CHI_TO_DEG)
     base = model.default_params()
     summary: dict[str, Any] = {"chi_c_to_deg": CHI_TO_DEG, "full": full}
+
+    say("periodic orbits: (0.1, 0 deg) from a calm-water start, (0.3, 45 deg) by following it")
+    orbit_job = None
+    if be is not None:
+        orbit_job = be.executor.submit(compute_orbits, orbits_path, FROM_1, FROM_2)
+    else:
+        orbit_info = compute_orbits(orbits_path, FROM_1, FROM_2)
 
     say("heteroclinic Fn (collocation) and the critical curve 0-30 deg")
     conn = critical_fn_bvp(chi10, model=model)
@@ -137,16 +185,12 @@ def compute(
     summary["heteroclinic_Fn_10deg"] = fn_het
     summary["curve"] = {"chi_c_deg": list(curve.chi_c_deg), "Fn": [float(v) for v in curve.Fn]}
 
-    say("periodic orbits: (0.1, 0 deg) from a calm-water start, (0.3, 45 deg) by following it")
-    p1 = base.replace(Fn=FROM_1[0], chi_c=math.radians(FROM_1[1]))
-    p2 = base.replace(Fn=FROM_2[0], chi_c=math.radians(FROM_2[1]))
-    orb1 = periodic_orbit(model, p1, throw=True)
-    direct2 = periodic_orbit(model, p2)
-    orb2 = follow_orbit(orb1, p2, steps=3, progress=say)
-    if not orb2.success:
-        raise RuntimeError(f"no periodic orbit at {FROM_2}: {orb2.message}")
+    if orbit_job is not None:
+        orbit_info = orbit_job.result()
+    orbits = load_orbits(orbits_path)
+    orb1, orb2 = orbits["from_1"], orbits["from_2"]
     summary["orbits"] = {"from_0.1_0deg": orb1.to_json(), "from_0.3_45deg": orb2.to_json()}
-    summary["orbit_0.3_45deg_from_calm_water"] = direct2.message
+    summary["orbit_0.3_45deg_from_calm_water"] = orbit_info["direct_2_message"]
     save_table(
         out / "orbits.csv",
         [
@@ -175,10 +219,7 @@ def compute(
         meta={"section": "xi_G/lambda = 0", "units": "SI, angles deg, rates deg/s"},
     )
 
-    def opt(n_def: int, n_full: int) -> int:
-        return n_full if full else n_def
-
-    # ---- Fig. 16 and Fig. 22: outcome maps and boundaries
+    # ---- Fig. 16 and Fig. 22: outcome maps and boundaries; Fig. 23 squares
     xi_grid = np.linspace(0.0, 0.9, 10) if full else np.array([0.0, 0.25, 0.5, 0.75])
     d1 = [-0.004, -0.0015, -0.0005, 0.0005, 0.003]
     d2 = [-0.014, -0.01, -0.006, -0.002, -0.0005, 0.0005]
@@ -186,15 +227,74 @@ def compute(
         d1 = list(np.linspace(-0.004, 0.004, 9))
         d2 = list(np.linspace(-0.015, 0.005, 11))
     tol_b = 2e-5 if full else 2e-4
+    sq_deg = courses_deg if full else np.array([0.0, 10.0, 20.0, 30.0])
+    cases = (
+        ("fig16", "from_1", d1, "fig16_map.png", "from the periodic orbit at Fn = 0.1, chi_c = 0"),
+        ("fig22", "from_2", d2, "fig22_map.png",
+         "from the periodic orbit at Fn = 0.3, chi_c = 45 deg"),
+    )  # fmt: skip
+    common = {"orbits": orbits_path, "tol": tol_b}
+    keys: list[dict[str, Any]] = []
+    sq_fh: dict[float, float] = {}
+    for deg in sq_deg:  # the longest tasks first
+        k = int(np.argmin(np.abs(curve.chi_c_deg - deg)))
+        fh = float(curve.Fn[k])
+        sq_fh[float(deg)] = fh
+        keys.append({
+            "task": "boundary", "name": f"fig23/{float(deg):g}", "orbit": "from_1",
+            "chi_c": math.radians(deg), "xi_0": XI_FIG23,
+            "Fn_brackets": [[fh + lo_d, fh + hi_d] for lo_d, hi_d in FIG23_OFFSETS], **common,
+        })  # fmt: skip
+    for key, orb_name, deltas, _, _ in cases:
+        lo_d, hi_d = min(deltas), max(deltas)
+        for xi in xi_grid:
+            keys.append({
+                "task": "boundary", "name": f"{key}/b/{float(xi):g}", "orbit": orb_name,
+                "chi_c": chi10, "xi_0": float(xi),
+                "Fn_brackets": [[fn_het + lo_d, fn_het + hi_d]], **common,
+            })  # fmt: skip
+        for i, dv in enumerate(deltas):
+            keys.append({
+                "task": "row", "name": f"{key}/row/{i}", "orbit": orb_name, "chi_c": chi10,
+                "Fn": float(fn_het + dv), "xi_0": [float(v) for v in xi_grid], **common,
+            })  # fmt: skip
+    say(f"{len(keys)} sudden-change tasks (bisections, map rows) on {workers_of(be)} worker(s)")
+    t_sweep = time.perf_counter()
+    res = run_sweep(
+        task, keys, store=Path(orbits_path).parent / "checkpoints",
+        context=orbit_info["digest"] + ";" + vessel_context("purse_seiner"),
+        code_version=source_version(task, "continuation", "ship_models"),
+        backend=be.executor if be is not None else "serial",
+        progress=False, desc="fig16_22",
+    )  # fmt: skip
+    if res.status is Status.INTERRUPTED:
+        raise KeyboardInterrupt  # finished tasks are checkpointed; a rerun resumes
+    if not res.success:
+        bad = [r for r in res.records if not r.done]
+        raise RuntimeError(
+            f"{len(bad)} sudden-change task(s) failed, e.g. {bad[0].key['name']}: {bad[0].errors}"
+            if bad
+            else f"sudden-change sweep: {res.message}"
+        )
+    value = {r.key["name"]: r.value for r in res.records}
+    summary["sweep"] = {"tasks": len(keys), "workers": workers_of(be), "reused": res.n_reused,
+                        "wall_s": round(time.perf_counter() - t_sweep, 2)}  # fmt: skip
+
+    def boundary(v: dict[str, Any], chi: float) -> Any:
+        return SuddenChangeBoundary(
+            v["Fn"], tuple(v["bracket"]), tuple(v["outcomes"]), chi, v["xi_0"], v["n_runs"],
+            Status[v["status"]], v["message"], v["elapsed_s"],
+        )  # fmt: skip
+
     maps: dict[str, Any] = {}
-    for key, orb, deltas, fig_name, title in (
-        ("fig16", orb1, d1, "fig16_map.png", "from the periodic orbit at Fn = 0.1, chi_c = 0"),
-        ("fig22", orb2, d2, "fig22_map.png", "from the periodic orbit at Fn = 0.3, chi_c = 45 deg"),
-    ):
+    for key, _, deltas, fig_name, title in cases:
         say(f"{key}: outcome map {len(deltas)} Fn x {xi_grid.size} positions")
-        mp = sudden_change_map(
-            model, None, chi10, xi_grid, fn_het + np.array(deltas), orbit=orb,
-            progress=None,
+        rows_v = [value[f"{key}/row/{i}"] for i in range(len(deltas))]
+        mp = SuddenChangeMap(
+            np.array([float(v) for v in xi_grid]), np.asarray(fn_het + np.array(deltas), float),
+            np.array([r["outcomes"] for r in rows_v], dtype=object),
+            np.array([[math.nan if t is None else t for t in r["times"]] for r in rows_v]),
+            chi10, Status.SUCCESS, sum(r["elapsed_s"] for r in rows_v),
         )  # fmt: skip
         save_table(
             out / f"{key}_map.csv",
@@ -202,14 +302,9 @@ def compute(
             _map_rows(mp),
             meta={"chi_c_to_deg": CHI_TO_DEG, "heteroclinic_Fn": fn_het},
         )
-        bxi = xi_grid  # the boundary by bisection at every plotted position
         bounds = {}
-        lo_d, hi_d = min(deltas), max(deltas)
-        for xi in bxi:
-            say(f"{key}: boundary at xi_0 = {xi:g} (tol {tol_b:g})")
-            b = sudden_change_boundary(
-                model, None, chi10, float(xi), (fn_het + lo_d, fn_het + hi_d), tol_b, orbit=orb
-            )
+        for xi in xi_grid:  # the boundary by bisection at every plotted position
+            b = boundary(value[f"{key}/b/{float(xi):g}"], chi10)
             if b.success:
                 bounds[float(xi)] = b
         maps[key] = {
@@ -229,23 +324,12 @@ def compute(
         )  # fmt: skip
     summary["maps"] = maps
 
-    # ---- Fig. 23 squares
     say("Fig. 23: experiment's boundary against the course")
-    sq_deg = courses_deg if full else np.array([0.0, 10.0, 20.0, 30.0])
     rows = []
     squares = {}
     for deg in sq_deg:
-        k = int(np.argmin(np.abs(curve.chi_c_deg - deg)))
-        fh = float(curve.Fn[k])
-        b = None
-        for lo_d, hi_d in ((-0.0063, 0.0017), (-0.03, 0.01)):
-            b = sudden_change_boundary(
-                model, None, math.radians(deg), XI_FIG23, (fh + lo_d, fh + hi_d), tol_b,
-                orbit=orb1,
-            )  # fmt: skip
-            if b.status.name != "NO_BRACKET":
-                break
-        assert b is not None
+        fh = sq_fh[float(deg)]
+        b = boundary(value[f"fig23/{float(deg):g}"], math.radians(deg))
         say(f"  {deg:g} deg: {b.Fn:.6f} ({b.outcomes[1]} above; heteroclinic {fh:.6f})")
         squares[deg] = b
         rows.append(

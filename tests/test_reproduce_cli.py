@@ -9,6 +9,7 @@ index 1 at both fixed points (the paper's Figs. 6-7 statement, also true for our
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import pytest
@@ -47,3 +48,62 @@ def test_reproduce_unknown_step_is_refused(
 ) -> None:
     assert main(["reproduce", "--out", str(tmp_path), "--only", "fig99"]) == 2
     assert "--only" in capsys.readouterr().err
+
+
+_FAKE_STUDY = """
+import json, os
+from pathlib import Path
+
+def compute(out, progress=None):
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    if os.environ.get("FAKE_FAIL") == out.name:
+        raise RuntimeError("fake failure")
+    doc = {"pid": os.getpid(), "workers_env": os.environ.get("BROACHKIT_WORKERS")}
+    (out / "summary.json").write_text(json.dumps(doc))
+    return doc
+"""
+
+
+def _fake_studies(folder: Path) -> Path:
+    folder.mkdir()
+    for module in ("fig10_15_manifolds", "fig21_23_connection", "fig16_22_sudden_change"):
+        (folder / f"{module}.py").write_text(_FAKE_STUDY)
+    return folder
+
+
+def test_reproduce_runs_other_steps_beside_the_sweep_step(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """--workers 2: the sweep step here, the others in one other process; same results."""
+    studies = _fake_studies(tmp_path / "studies")
+    out = tmp_path / "out"
+    args = ["reproduce", "--out", str(out), "--studies", str(studies), "--no-report", "--json"]
+    steps = ["--only", "fig10_15", "fig21_23", "fig16_22"]
+    assert main([*args, *steps, "--workers", "2"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["steps"] == ["fig10_15", "fig21_23", "fig16_22"]
+    assert doc["workers"] == 2
+    pids = {k: json.loads((out / k / "summary.json").read_text())["pid"] for k in doc["steps"]}
+    assert pids["fig16_22"] == os.getpid()
+    assert pids["fig10_15"] == pids["fig21_23"] != os.getpid()
+    for k in doc["steps"]:
+        assert not (out / k / ".incomplete").exists()
+        assert json.loads((out / k / "summary.json").read_text())["workers_env"] == "2"
+    # one worker: everything in this process
+    assert main([*args, *steps, "--workers", "1", "--force"]) == 0
+    capsys.readouterr()
+    for k in doc["steps"]:
+        assert json.loads((out / k / "summary.json").read_text())["pid"] == os.getpid()
+    # a failing background step: one line, non-zero, the failed step is not marked done
+    monkeypatch.setenv("FAKE_FAIL", "fig21_23")
+    assert main([*args, *steps, "--workers", "2", "--force"]) != 0
+    assert "fig21_23" in capsys.readouterr().err
+    assert (out / "fig21_23" / ".incomplete").exists()
+
+
+def test_reproduce_bad_workers_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["reproduce", "--out", str(tmp_path), "--only", "demo", "--workers", "0"]) == 2
+    assert "--workers" in capsys.readouterr().err

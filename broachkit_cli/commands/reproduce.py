@@ -18,7 +18,15 @@ sensitivity dFn*/dtheta, uncertainty band, tornado     ``studies.sensitivity``
 =========== ========================================== =====================================
 
 A step whose folder holds ``summary.json`` and no ``.incomplete`` marker is skipped
-unless ``--force``; a step that was interrupted (the marker is still there) is redone.
+unless ``--force``; a step that was interrupted (the marker is still there) is redone,
+resuming its sweep from the checkpoints in ``<step>/sweep`` (``--force`` deletes them).
+
+On ``--workers N`` local processes (default one per core): the sudden-change step
+(:data:`SWEEP_STEP`) runs its bisections and map rows on ``N`` worker processes
+(:mod:`continuation.sweep`, the environment variable ``BROACHKIT_WORKERS`` passes
+``N`` on), and, with ``N > 1``, the other steps run one after another in one
+background process at the same time. Every step computes exactly what it computes
+alone, so the outputs do not depend on ``N``.
 ``--only`` runs a subset. The studies are the package :mod:`studies`, installed with
 broachkit (``--studies DIR`` loads the scripts of another folder instead).
 """
@@ -31,8 +39,13 @@ import importlib
 import importlib.util
 import json
 import logging
+import multiprocessing
+import os
 import platform
+import queue
+import resource
 import shutil
+import signal
 import sys
 import time
 from collections.abc import Callable
@@ -58,6 +71,14 @@ STUDY_STEPS: tuple[tuple[str, str, str], ...] = (
     ("fig16_22", "Figs. 16-22: sudden-change experiments", "fig16_22_sudden_change"),
     ("sensitivity", "Critical Fn: sensitivities, uncertainty band, tornado", "sensitivity"),
 )
+
+
+#: The step that runs its own sweep on worker processes (in this process).
+SWEEP_STEP = "fig16_22"
+#: A step's sub-folder of sweep checkpoints (resumed after an interruption).
+SWEEP_DIR = "sweep"
+#: Environment variable with the sweeps' number of worker processes.
+WORKERS_ENV = "BROACHKIT_WORKERS"
 
 
 def load_study(path: Path) -> ModuleType:
@@ -105,6 +126,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="folder of study scripts to run instead of the packaged ones",
     )
     parser.add_argument("--no-report", action="store_true", help="do not write report.html")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="local worker processes (default: one per core; 1 runs everything in this process)",
+    )
     add_json(parser)
 
 
@@ -135,6 +163,78 @@ def _steps(args: argparse.Namespace) -> list[Step]:
             raise ValueError(f"--only: unknown step(s) {unknown}; steps are {keys}")
         steps = [s for s in steps if s[0] in args.only]
     return steps
+
+
+def _compute_step(key: str, module: str | None, folder: Path, studies: Path | None) -> Any:
+    """Run one step by name (the picklable form of a step, for another process)."""
+    if module is None:
+        return demo.compute(folder)
+    return study_module(module, studies).compute(folder, progress=lambda msg: None)
+
+
+def _background(
+    todo: list[tuple[str, str | None]], out: str, studies: str | None, results: Any
+) -> None:
+    """Child process: run ``todo`` one after another; put each result on ``results``.
+
+    Puts ``("done", key, summary, seconds)`` per step, ``("error", key, message)``
+    and stops at the first failure. Ignores Ctrl-C (the parent stops it).
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    folder = Path(studies) if studies else None
+    for key, module in todo:
+        t0 = time.perf_counter()
+        try:
+            value = _compute_step(key, module, Path(out) / key, folder)
+        except Exception as exc:  # noqa: BLE001 - reported by the parent
+            results.put(("error", key, f"{type(exc).__name__}: {exc}"))
+            return
+        results.put(("done", key, value, round(time.perf_counter() - t0, 1)))
+
+
+class _Background:
+    """Steps running in one child process while this one runs the sweep step."""
+
+    def __init__(self, todo: list[tuple[str, str | None]], out: Path, studies: Path | None):
+        ctx = multiprocessing.get_context("spawn")
+        self.results: Any = ctx.Queue()
+        self.pending = [k for k, _ in todo]
+        self.proc = ctx.Process(
+            target=_background,
+            args=(todo, str(out), str(studies) if studies else None, self.results),
+            name="broachkit-reproduce-steps",
+        )
+        self.proc.start()
+
+    def poll(self, timeout: float) -> tuple[Any, ...] | None:
+        """One message of the child, or ``None`` after ``timeout`` s."""
+        try:
+            return self.results.get(timeout=timeout)
+        except queue.Empty:
+            return None
+
+    def stop(self) -> None:
+        """End the child (finished steps were reported already)."""
+        if self.proc.is_alive():
+            self.proc.terminate()
+        self.proc.join(5.0)
+
+
+def _workers(args: argparse.Namespace) -> int:
+    n = args.workers
+    if n is None:
+        env = os.environ.get(WORKERS_ENV, "").strip()
+        n = int(env) if env.isdigit() else (os.cpu_count() or 1)
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise ValueError(f"--workers must be a positive integer, got {n!r}")
+    return n
+
+
+def _cpu_seconds() -> float:
+    """User + system CPU time of this process and its finished children (s)."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 class Progress:
@@ -267,22 +367,51 @@ def _summary_text(doc: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run the steps; 0 when every step ran, 130 when interrupted."""
+    before = os.environ.get(WORKERS_ENV)
+    try:
+        return _run(args)
+    finally:  # the job's worker count is not left behind in this process
+        if before is None:
+            os.environ.pop(WORKERS_ENV, None)
+        else:
+            os.environ[WORKERS_ENV] = before
+
+
+def _run(args: argparse.Namespace) -> int:
     out = prepare_out(args.out)
     assert out is not None
     steps = _steps(args)
+    workers = _workers(args)
+    os.environ[WORKERS_ENV] = str(workers)  # the studies' sweeps read it (and child processes)
+    modules: dict[str, str | None] = {"demo": None, **{k: m for k, _, m in STUDY_STEPS}}
     results: dict[str, Any] = {}
     timing: dict[str, float] = {}
     t_all = time.perf_counter()
     started = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     bar = Progress(len(steps), enabled=not args.json)
+    todo: list[tuple[int, str, str, Callable[[Path, Callable[[str], None]], Any]]] = []
+    for i, (key, title, fn) in enumerate(steps, 1):
+        folder = out / key
+        if is_complete(folder) and not args.force:
+            bar.start(i, key, title, skipped=True)
+            results[key] = json.loads((folder / "summary.json").read_text())
+            bar.finish()
+            continue
+        if args.force:  # a forced rerun starts its sweeps afresh
+            shutil.rmtree(folder / SWEEP_DIR, ignore_errors=True)
+        todo.append((i, key, title, fn))
+    # with several workers, the other steps run in one child process beside the sweep step
+    side = None
+    if workers > 1 and len(todo) > 1 and any(k == SWEEP_STEP for _, k, _, _ in todo):
+        others = [(k, modules.get(k)) for _, k, _, _ in todo if k != SWEEP_STEP]
+        for k, _ in others:
+            mark_incomplete(out / k)
+        side = _Background(others, out, args.studies)
+        todo = [t for t in todo if t[1] == SWEEP_STEP]
+        log.info("steps %s run in a background process", ", ".join(k for k, _ in others))
     try:
-        for i, (key, title, fn) in enumerate(steps, 1):
+        for i, key, title, fn in todo:
             folder = out / key
-            if is_complete(folder) and not args.force:
-                bar.start(i, key, title, skipped=True)
-                results[key] = json.loads((folder / "summary.json").read_text())
-                bar.finish()
-                continue
             bar.start(i, key, title)
             mark_incomplete(folder)
             t0 = time.perf_counter()
@@ -299,14 +428,50 @@ def run(args: argparse.Namespace) -> int:
             timing[key] = round(time.perf_counter() - t0, 1)
             log.info("%s: done in %.1f s", key, timing[key])
             bar.finish()
+        while side is not None and side.pending:
+            bar.message(f"waiting for {', '.join(side.pending)} (background process)")
+            msg = side.poll(1.0)
+            if msg is None:
+                if not side.proc.is_alive():
+                    msg = side.poll(1.0)  # a message sent just before it ended
+                    if msg is None:
+                        raise RuntimeError(
+                            f"the background process running {', '.join(side.pending)} died "
+                            f"(exit code {side.proc.exitcode})"
+                        )
+                else:
+                    continue
+            if msg[0] == "error":
+                raise RuntimeError(f"step {msg[1]} failed: {msg[2]}")
+            _, key, value, seconds = msg
+            results[key], timing[key] = value, seconds
+            mark_complete(out / key)
+            side.pending.remove(key)
+            log.info("%s: done in %.1f s (background)", key, seconds)
+    except KeyboardInterrupt:
+        bar.close()
+        sys.stderr.write(
+            f"interrupted; finished steps are kept in {out} (a rerun redoes the rest)\n"
+        )
+        return 130
     finally:
         bar.close()
+        if side is not None:
+            while side.pending and (msg := side.poll(0.05)) is not None:  # keep what finished
+                if msg[0] == "done":
+                    mark_complete(out / msg[1])
+                    side.pending.remove(msg[1])
+            side.stop()
+    results = {k: results[k] for k, _, _ in steps if k in results}  # in step order
+    timing = {k: timing[k] for k, _, _ in steps if k in timing}
     total = round(time.perf_counter() - t_all, 1)
     keys = list(results)
     doc: dict[str, Any] = {
         "steps": keys,
         "seconds": timing,
         "total_seconds": total,
+        "cpu_seconds": round(_cpu_seconds(), 1),
+        "workers": workers,
         "out": str(out),
         "key_numbers": key_numbers(results),
         "figures": _figures(out, keys),
