@@ -18,16 +18,16 @@ import json
 import math
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script: make `_common` importable
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    sys.path.insert(1, str(Path(__file__).resolve().parents[1]))  # this checkout's packages
+if __package__ in (None, ""):  # run as a script: make the `studies` package importable
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from _common import new_figure, save_csv, save_figure
+from studies._common import new_figure, save_csv, save_figure, write_json
 
 CHI_C_DEG = 10.0
 FN_CHI = 0.3
@@ -75,8 +75,13 @@ def _no_nan(obj: Any) -> Any:
     return obj
 
 
-def compute(out: Path) -> dict[str, Any]:
-    """Run the study and write its files; returns the JSON summary."""
+def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Run the study and write its files (atomically); returns the JSON summary.
+
+    ``summary.json`` holds the summary (the main job's step record and the report's
+    source); the CSVs have angles in degrees (``*_deg``), as every CSV of the job.
+    """
+    say = progress or (lambda msg: None)
     import ship_models
     from ship_models.analysis.critical_bvp import critical_fn_bvp
     from ship_models.analysis.cycles import cycle_at, cycle_branch, simulated_cycle
@@ -86,25 +91,32 @@ def compute(out: Path) -> dict[str, Any]:
     model = ship_models.get_model("purse_seiner")
     chi = math.radians(CHI_C_DEG)
     t0 = time.perf_counter()
+    say("connection at 10 deg")
     fn_het = float(critical_fn_bvp(chi, model=model).Fn)
+    say("cycle at Fn 0.1 (simulated, then collocated)")
     o = simulated_cycle(model, model.default_params().replace(Fn=0.1, chi_c=chi))
     t1 = time.perf_counter()
+    say("cycle continued in Fn")
     cb = cycle_branch(o, "Fn", p_max=0.4, period_max=60.0)
     t_fn = time.perf_counter() - t1
     _panels(cb, cb.p, "Fn", fn_het, "Fn* (BVP)", out / "cycles_vs_fn.png")
-    save_csv(out / "cycles_fn.csv", {"Fn": cb.p, "T": cb.T, "max_roll": cb.max_roll,
-             "max_heading": cb.max_heading, "mu_max": cb.mu_max,
+    save_csv(out / "cycles_fn.csv", {"Fn": cb.p, "T": cb.T,
+             "max_roll_deg": np.degrees(cb.max_roll),
+             "max_heading_deg": np.degrees(cb.max_heading), "mu_max": cb.mu_max,
              "mu_lead_real": cb.mu_lead.real, "n_unstable": cb.n_unstable},
              meta={"chi_c_deg": CHI_C_DEG, "Fn_bvp": fn_het, "Fn_fit": cb.limit})  # fmt: skip
     # ---- in chi_c at Fn = 0.3
+    say("cycle continued in chi_c at Fn 0.3")
     o3 = cycle_at(o, Fn=FN_CHI)
     cc = cycle_branch(o3, "chi_c", p_min=0.0, p_max=math.radians(60.0), ds=0.02, ds_max=0.05,
                       period_max=60.0, direction="both")  # fmt: skip
     _panels(cc, np.degrees(cc.p), "chi_c (deg)", math.degrees(cc.limit), "chi_c* (fit)",
             out / "cycles_vs_chi_c.png")  # fmt: skip
-    save_csv(out / "cycles_chi_c.csv", {"chi_c": cc.p, "T": cc.T, "max_roll": cc.max_roll,
-             "max_heading": cc.max_heading, "mu_max": cc.mu_max, "n_unstable": cc.n_unstable},
-             meta={"Fn": FN_CHI, "chi_c_fit": cc.limit})  # fmt: skip
+    save_csv(out / "cycles_chi_c.csv", {"chi_c_deg": np.degrees(cc.p), "T": cc.T,
+             "max_roll_deg": np.degrees(cc.max_roll),
+             "max_heading_deg": np.degrees(cc.max_heading), "mu_max": cc.mu_max,
+             "n_unstable": cc.n_unstable},
+             meta={"Fn": FN_CHI, "chi_c_fit_deg": math.degrees(cc.limit)})  # fmt: skip
     summary = {
         "chi_c_deg": CHI_C_DEG,
         "Fn_bvp": fn_het,
@@ -122,7 +134,10 @@ def compute(out: Path) -> dict[str, Any]:
                          "max_roll_deg": float(np.degrees(np.max(cc.max_roll)))},  # fmt: skip
         "seconds": time.perf_counter() - t0,
     }
-    (out / "cycles.json").write_text(json.dumps(_no_nan(summary), indent=2))
+    summary = _no_nan(summary)
+    summary["figures"] = ["cycles_vs_fn.png", "cycles_vs_chi_c.png"]
+    write_json(out / "cycles.json", summary)
+    write_json(out / "summary.json", summary)
     return summary
 
 

@@ -300,6 +300,30 @@ def _transient(r: Mapping[str, Any]) -> Finding:
                                    "capsize to port"))  # fmt: skip
 
 
+
+# ---------------------------------------------------------------- the periodic motion
+def _cycle_end(r: Mapping[str, Any]) -> Finding:
+    cy = r.get("cycles")
+    if not cy:
+        return _not_run("cycles")
+    fit, bvp = cy.get("Fn_fit_log"), cy.get("Fn_bvp")
+    lost, roll, vanish = cy.get("Fn_lost_stability"), cy.get("max_roll_deg"), cy.get(
+        "vanishing_angle_deg")
+    nums = (
+        ("Fn* from the period's blow-up, T = a - b ln(Fn* - Fn)", _fmt(fit, ".8f")),
+        ("Fn* of the connecting orbit (collocation)", _fmt(bvp, ".8f")),
+        ("the cycle loses stability at Fn", _fmt(lost, ".6f")),
+        ("largest roll on the cycles (deg) / angle of vanishing stability (deg)",
+         f"{_fmt(roll, '.1f')} / {_fmt(vanish, '.1f')}"),  # fmt: skip
+    )
+    ok = (fit is not None and bvp is not None and abs(fit - bvp) <= 1e-4
+          and roll is not None and vanish is not None and roll < vanish)  # fmt: skip
+    return Finding(nums, *_verdict(
+        ok, "the cycle's period limit and the connection disagree (or the cycle capsizes)",
+        "the harmonic motion (the ship overtaken by waves) ends where its period blows up, "
+        "at the heteroclinic bifurcation: a third method, independent of the paper's two"))
+
+
 CLAIMS: tuple[Claim, ...] = (
     Claim("two_points", "Figs. 2-5",
           "In the case of chi_c = 0 ... there are usually two fixed points: an unstable one "
@@ -368,6 +392,12 @@ CLAIMS: tuple[Claim, ...] = (
           "The heteroclinic bifurcation is slightly larger than the boundary obtained by "
           "numerical experiments (squares, (xi_G/lambda)_0 = 0.5).",
           ("fig16_22/fig23_critical_condition.png",), _squares),
+    Claim("cycle_end", "Sect. 1; Figs. 16, 21",
+          "A ship running in waves usually has a periodic motion ... When a certain "
+          "condition is satisfied, the ship may meet a transition from a harmonic motion to "
+          "a nonharmonic motion. ... If the ship situates below this heteroclinic trajectory, "
+          "capsizing due to broaching is not likely to occur and a periodic motion is likely.",
+          ("cycles/cycles_vs_fn.png",), _cycle_end),
 )  # fmt: skip
 
 __all__ = ["AGREES", "CLAIMS", "DIFFERS", "NOT_RUN", "PAPER_FN", "PAPER_FN_10DEG", "Claim",

@@ -15,6 +15,7 @@ fig10_15    critical Fn, unstable manifolds             ``studies.fig10_15_manif
 fig21_23    connecting orbit, critical curve            ``studies.fig21_23_connection``
 fig16_22    sudden-change experiments                   ``studies.fig16_22_sudden_change``
 sensitivity dFn*/dtheta, uncertainty band, tornado     ``studies.sensitivity``
+cycles      the cycle in Fn and chi_c, period blow-up   ``studies.cycles_vs_fn``
 =========== ========================================== =====================================
 
 A step whose folder holds ``summary.json`` and no ``.incomplete`` marker is skipped
@@ -70,6 +71,7 @@ STUDY_STEPS: tuple[tuple[str, str, str], ...] = (
     ("fig21_23", "Figs. 21, 23: connecting orbit and critical curve", "fig21_23_connection"),
     ("fig16_22", "Figs. 16-22: sudden-change experiments", "fig16_22_sudden_change"),
     ("sensitivity", "Critical Fn: sensitivities, uncertainty band, tornado", "sensitivity"),
+    ("cycles", "The periodic motion: the cycle in Fn, its period blow-up", "cycles_vs_fn"),
 )
 
 
