@@ -22,6 +22,7 @@ import traceback
 import warnings
 from types import ModuleType
 
+from .interrupt import acknowledge, sticky_interrupt
 from .options import OneLineParser, add_verbose
 
 #: Sub-command modules, in the order shown by ``broachkit --help``.
@@ -125,8 +126,10 @@ def main(argv: list[str] | None = None) -> int:
             if not verbose:
                 warnings.filterwarnings("ignore", module="matplotlib")
                 warnings.filterwarnings("ignore", category=UserWarning, message=".*[Ll]ayout.*")
-            return int(cmds[name].run(args))
+            with sticky_interrupt():
+                return int(cmds[name].run(args))
     except KeyboardInterrupt:
+        acknowledge()
         sys.stderr.write("interrupted; finished results are kept on disk\n")
         return 130
     except ValueError as exc:

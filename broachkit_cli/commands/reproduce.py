@@ -55,6 +55,7 @@ from types import ModuleType
 from typing import Any
 
 from ..files import is_complete, mark_complete, mark_incomplete, write_json
+from ..interrupt import acknowledge
 from ..options import add_json, add_out, json_safe, prepare_out
 from . import demo
 
@@ -420,6 +421,7 @@ def _run(args: argparse.Namespace) -> int:
             try:
                 results[key] = fn(folder, bar.message)
             except KeyboardInterrupt:
+                acknowledge()
                 bar.close()
                 sys.stderr.write(
                     f"interrupted during {key}; finished steps are kept in {out} "
@@ -451,6 +453,7 @@ def _run(args: argparse.Namespace) -> int:
             side.pending.remove(key)
             log.info("%s: done in %.1f s (background)", key, seconds)
     except KeyboardInterrupt:
+        acknowledge()
         bar.close()
         sys.stderr.write(
             f"interrupted; finished steps are kept in {out} (a rerun redoes the rest)\n"

@@ -1,0 +1,65 @@
+"""Ctrl-C that stops the command, even through library code that keeps partial results.
+
+The engine turns a ``KeyboardInterrupt`` inside a long computation into an
+``INTERRUPTED`` status with the part computed so far (a branch, a trajectory), which is
+right for a library but lets a study go on to its next computation. The command line
+wants the whole command to stop: :func:`sticky_interrupt` installs a SIGINT handler that
+raises ``KeyboardInterrupt`` as usual and, from then on, raises it again in the main
+thread every ``repeat`` seconds (``_thread.interrupt_main``) until the command
+acknowledges it (:func:`acknowledge`, called where the interrupt is handled), so the
+command ends within about ``repeat`` seconds of the last computation that swallowed it.
+"""
+
+from __future__ import annotations
+
+import _thread
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+from typing import Any
+
+_state: dict[str, Any] = {"requested": threading.Event(), "done": threading.Event()}
+
+
+def acknowledge() -> None:
+    """The interrupt has reached the command's handler: stop repeating it."""
+    _state["done"].set()
+
+
+def _repeat(repeat: float) -> None:
+    requested, done = _state["requested"], _state["done"]
+    requested.wait()
+    while not done.wait(repeat):
+        _thread.interrupt_main(signal.SIGINT)
+
+
+@contextlib.contextmanager
+def sticky_interrupt(repeat: float = 0.5) -> Iterator[None]:
+    """Inside: Ctrl-C raises ``KeyboardInterrupt`` and keeps raising it until handled.
+
+    Only in the main thread (elsewhere it does nothing); the previous SIGINT handler is
+    restored on exit.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _state["requested"], _state["done"] = threading.Event(), threading.Event()
+
+    def handler(signum: int, frame: Any) -> None:
+        if not _state["done"].is_set():
+            _state["requested"].set()
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, handler)
+    watcher = threading.Thread(target=_repeat, args=(repeat,), daemon=True)
+    watcher.start()
+    try:
+        yield
+    finally:
+        _state["done"].set()
+        _state["requested"].set()  # let the watcher end
+        signal.signal(signal.SIGINT, previous)
+
+
+__all__ = ["acknowledge", "sticky_interrupt"]
