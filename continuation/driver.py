@@ -345,6 +345,8 @@ def continue_branch(
     direction: Literal["forward", "backward", "both"] = "forward",
     throw: bool = False,
     progress: ProgressFn | None = None,
+    start_fixed: int | None = None,
+    start_orient: Any = None,
 ) -> Branch:
     r"""Continue the solutions of ``G(z, p) = 0`` in the free parameter ``p``.
 
@@ -378,6 +380,16 @@ def continue_branch(
     progress : callable, optional
         ``progress(BranchPoint)`` after every accepted point (``index`` counts within
         the current direction).
+    start_fixed : int, optional
+        Index of an unknown of ``z`` held fixed in the start correction instead of
+        ``p`` (then ``p0`` is corrected too): for a start where ``p`` is the better
+        determined unknown, e.g. the period of a cycle near a homoclinic orbit, which
+        is far more sensitive to ``p`` than ``p`` to it.
+    start_orient : array_like, shape (N + 1,), optional
+        A direction in ``(z, p)`` the first tangent of the forward run points along
+        (positive ``theta``-weighted product; the backward run the opposite), instead
+        of the sign of ``ds`` in ``p``: for a start where ``dp/ds`` is about zero
+        (a fold, or a cycle near a homoclinic orbit). Not with ``direction="both"``.
 
     Returns
     -------
@@ -396,13 +408,26 @@ def continue_branch(
     )
     n = z.size
 
-    start = _correct_start(problem, z, p0, settings)
+    if start_fixed is not None and not (
+        isinstance(start_fixed, (int, np.integer)) and -n <= int(start_fixed) < n
+    ):
+        raise ValueError(f"`start_fixed` must be an index of z (size {n}), got {start_fixed!r}")
+    orient0 = None
+    if start_orient is not None:
+        if direction == "both":
+            raise ValueError('`start_orient` cannot be used with direction="both"')
+        orient0 = np.asarray(start_orient, dtype=float).reshape(-1)
+        if orient0.shape != (n + 1,) or not np.all(np.isfinite(orient0)):
+            raise ValueError(f"`start_orient` must be a finite vector of size {n + 1}")
+    start = _correct_start(problem, z, p0, settings, start_fixed)
     if not start.converged:
         msg = f"start point did not converge at {problem.free}={p0:.10g}: {start.message}"
         log.warning(msg)
         if throw:
             raise ConvergenceError(msg)
         return _empty_branch(problem, n, Status.NEWTON_FAILED, msg, settings, p0, events)
+    if start_fixed is not None:
+        p0 = float(start.p)  # corrected with z[start_fixed] held
 
     ctx_args = (problem, algorithm)
     ds_abs = abs(settings.ds)
@@ -411,7 +436,8 @@ def continue_branch(
     def run_dir(sign: float, orient: FloatArray | None, rightmost: bool) -> _Run:
         st = dataclasses.replace(settings, ds=sign * ds_abs)
         ctx = RunContext(*ctx_args, st, events, progress, rightmost)
-        return _run(ctx, start.z, p0, start.iters, orient, warn_fold=direction != "both")
+        return _run(ctx, start.z, p0, start.iters, orient,
+                    warn_fold=direction != "both" and orient is None)  # fmt: skip
 
     def run_all(rightmost: bool) -> Branch:
         if direction == "both":
@@ -429,7 +455,9 @@ def continue_branch(
                 rows, ds, specials = fwd.rows, [r.ds for r in fwd.rows], fwd.specials
             status, message = _combine(back, fwd)
         else:
-            one = run_dir(sgn if direction == "forward" else -sgn, None, rightmost)
+            fwd_dir = direction == "forward"
+            o = None if orient0 is None else (orient0 if fwd_dir else -orient0)
+            one = run_dir(sgn if fwd_dir else -sgn, o, rightmost)
             rows, ds, specials = one.rows, [r.ds for r in one.rows], one.specials
             status, message = one.status, one.message
         return _make_branch(problem, rows, ds, specials, status, message, settings, p0, n, events)
@@ -488,12 +516,17 @@ def _checked_inputs(
 
 
 def _correct_start(
-    problem: Any, z: FloatArray, p0: float, settings: ContinuationSettings
+    problem: Any,
+    z: FloatArray,
+    p0: float,
+    settings: ContinuationSettings,
+    fixed: int | None = None,
 ) -> CorrectorResult:
-    """Newton's method on ``G(z, p0) = 0`` at fixed ``p0`` (bordered with ``e_p``)."""
+    """Newton's method on ``G(z, p0) = 0`` at fixed ``p0`` (bordered with ``e_p``), or
+    with the unknown ``z[fixed]`` held instead (bordered with its unit vector)."""
     u0 = np.append(z, p0)
     e_p = np.zeros(u0.size)
-    e_p[-1] = 1.0
+    e_p[-1 if fixed is None else int(fixed) % z.size] = 1.0
     res = correct(problem, u0, u0, e_p, 0.0, settings.newton)
     if not res.converged and not res.message:
         res.message = "Newton did not converge"

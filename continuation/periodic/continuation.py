@@ -185,6 +185,8 @@ def continue_periodic(
     progress: Callable[[Any], None] | None = None,
     throw: bool = False,
     adapt_every: int = 0,
+    error_tol: float | None = None,
+    max_intervals: int = 400,
 ) -> Branch:
     r"""Continue a branch of periodic orbits in the parameter ``free``.
 
@@ -228,11 +230,23 @@ def continue_periodic(
         (:func:`adapt_mesh`); ``settings.max_steps`` counts all steps. The branch's
         ``problem`` is then a :class:`CycleSegments` (one problem per mesh). 0: one
         mesh throughout.
+    error_tol : float, optional
+        Tolerance of the collocation error estimate (record ``error``,
+        :func:`~continuation.periodic.problem.error_estimate`, in the states' units).
+        Where a segment ends above it, the next mesh gets more intervals,
+        :math:`N' = \lceil 1.2 N (e/\text{tol})^{1/(m+1)} \rceil` (at most
+        ``max_intervals``); rows left above it are named in the branch's message.
+        Implies ``adapt_every = 10`` when ``adapt_every`` is 0. Without it the number
+        of intervals never changes, and the error of a cycle whose period grows (near
+        a homoclinic orbit) grows with it: watch ``records["error"]``.
+    max_intervals : int
+        Cap on the number of intervals for ``error_tol``.
 
     Returns
     -------
     Branch
-        Rows: the unknowns ``[vec X, T]`` (:func:`orbit_at` gives the cycle), records
+        Rows: the unknowns ``[vec X, T]`` (:func:`orbit_at` gives the cycle; where
+        ``error_tol`` added intervals, rows of the coarser meshes are NaN-padded), records
         ``T``, ``max_*``, ``min_*``, ``L2``,
         ``mu_max``, ``trivial_error``, ``error``; ``eigenvalues`` are the Floquet
         exponents ``ln|mu| + i arg mu`` (nontrivial ones; :func:`multipliers` gives the
@@ -255,6 +269,14 @@ def continue_periodic(
         winding_vector(system, winding)
     if isinstance(adapt_every, bool) or not (isinstance(adapt_every, int) and adapt_every >= 0):
         raise ValueError(f"`adapt_every` must be an integer >= 0, got {adapt_every!r}")
+    if error_tol is not None:
+        if not (isinstance(error_tol, (int, float)) and math.isfinite(error_tol) and error_tol > 0):
+            raise ValueError(f"`error_tol` must be a positive number, got {error_tol!r}")
+        adapt_every = adapt_every or 10
+    if isinstance(max_intervals, bool) or not (
+        isinstance(max_intervals, int) and max_intervals >= 2
+    ):
+        raise ValueError(f"`max_intervals` must be an integer >= 2, got {max_intervals!r}")
     orb = _as_orbit(system, orbit_start, params, mesh, winding)
     settings = settings if settings is not None else ContinuationSettings()
     settings = dataclasses.replace(
@@ -266,7 +288,7 @@ def continue_periodic(
     def one(st: ContinuationSettings) -> Branch:
         if adapt_every == 0:
             return _continue_once(orb, free, st, **run)  # type: ignore[arg-type]
-        return _continue_segments(orb, free, st, adapt_every, run)
+        return _continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals)
 
     back = dataclasses.replace(settings, ds=-settings.ds)
     if direction == "forward":
@@ -282,7 +304,7 @@ def continue_periodic(
             br = dataclasses.replace(
                 br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
             )
-    return _finish(br, free, period_max)
+    return _finish(br, free, period_max, error_tol)
 
 
 def _segments_of(br: Branch) -> tuple[list[PeriodicOrbitProblem], list[int]]:
@@ -339,8 +361,13 @@ def _continue_once(
     events: Sequence[Event],
     progress: Callable[[Any], None] | None,
     throw: bool,
+    fix_period: bool = False,
+    period_sign: float = 0.0,
 ) -> Branch:
-    """One driver run on one mesh (PD/NS/T_max events, phase reference per step)."""
+    """One driver run on one mesh (PD/NS/T_max events, phase reference per step);
+    ``fix_period``: the start is corrected at its period rather than its parameter;
+    ``period_sign`` (+1/-1): the branch leaves the start with the period growing /
+    shrinking (0: by the sign of ``settings.ds`` in the parameter)."""
     prob = PeriodicOrbitProblem.from_orbit(orb, free)
     T_col = prob.layout.T_col
     evs: list[Event] = []
@@ -359,7 +386,8 @@ def _continue_once(
 
     br = continue_branch(
         prob, prob.reference, orb.param(free), settings=settings, events=evs,
-        throw=throw, progress=accept,
+        throw=throw, progress=accept, start_fixed=T_col if fix_period else None,
+        start_orient=_period_orient(prob, period_sign),
     )  # fmt: skip
     return dataclasses.replace(br, special_points=_relabel(br.special_points, prob))
 
@@ -400,20 +428,34 @@ class CycleSegments:
         return self.problems[max(i, 0)]
 
 
+def _period_orient(prob: PeriodicOrbitProblem, sign: float) -> FloatArray | None:
+    """The unit vector of the period in ``(z, p)`` times ``sign`` (None for 0)."""
+    if sign == 0.0:
+        return None
+    e = np.zeros(prob.n_unknowns + 1)
+    e[prob.layout.T_col] = math.copysign(1.0, sign)
+    return e
+
+
 def _continue_segments(
     orb: PeriodicOrbit,
     free: str,
     settings: ContinuationSettings,
     every: int,
     run: dict[str, Any],
+    error_tol: float | None = None,
+    max_intervals: int = 400,
 ) -> Branch:
     """Segments of ``every`` steps with an equidistributed mesh each (see
-    :func:`continue_periodic`), merged into one branch."""
+    :func:`continue_periodic`), merged into one branch; with ``error_tol`` the number
+    of intervals grows where the error estimate of a segment's last cycle exceeds it."""
     segs: list[Branch] = []
     left = settings.max_steps
     st = settings
+    fixed_T, t_sign = False, 0.0
     while True:
-        br = _continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)), **run)
+        br = _continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)),
+                            fix_period=fixed_T, period_sign=t_sign, **run)  # fmt: skip
         if segs and len(br) == 0:
             # the restart on the new mesh failed (e.g. near a homoclinic orbit, where the
             # start correction at fixed parameter is ill-conditioned): keep the branch
@@ -430,12 +472,14 @@ def _continue_segments(
             break
         last = orbit_at(br, len(br) - 1)
         orb = last
+        n_new = _refined_intervals(last, float(br.records["error"][-1]), error_tol, max_intervals)
         # at fixed parameter first; at fixed period where that fails (near a homoclinic
         # orbit the period is far more sensitive than the parameter)
         for fix_period in (False, True):
             try:
-                orb = adapt_mesh(last, rounds=1, free=free, newton=st.newton,
-                                 fix_period=fix_period)  # fmt: skip
+                orb = adapt_mesh(last, n_new, rounds=1 if n_new is None else 2, free=free,
+                                 newton=st.newton, fix_period=fix_period)  # fmt: skip
+                fixed_T = fix_period
                 break
             except ConvergenceError as exc:
                 log.info("mesh adaptation (fix_period=%s) failed at %s=%.8g: %s",
@@ -443,9 +487,28 @@ def _continue_segments(
         else:
             log.warning("mesh adaptation failed at %s=%.8g; mesh kept", free, br.p[-1])
         sgn = 1.0 if br.p[-1] >= br.p[-2] else -1.0
+        # where the parameter hardly moves (near a homoclinic orbit) its sign is noise:
+        # go on in the direction of the period instead
+        dT = float(br.records["T"][-1] - br.records["T"][-2])
+        dp_rel = abs(float(br.p[-1] - br.p[-2])) / max(abs(float(br.p[-1])), 1.0)
+        t_sign = math.copysign(1.0, dT) if dp_rel < 1e-8 and dT != 0.0 else 0.0
         ds = min(max(abs(float(br.ds[-1])), abs(st.ds)), st.ds_max)
         st = dataclasses.replace(st, ds=sgn * ds)
     return _merge_segments(segs)
+
+
+def _refined_intervals(
+    orb: PeriodicOrbit, error: float, error_tol: float | None, max_intervals: int
+) -> int | None:
+    """Number of intervals for the next segment (None: keep), from the error estimate
+    ``error`` of ``orb`` (order ``m + 1`` in the interval length)."""
+    N = orb.mesh.n_intervals
+    if error_tol is None or not math.isfinite(error) or error <= error_tol or N >= max_intervals:
+        return None
+    factor = 1.2 * (error / error_tol) ** (1.0 / (orb.mesh.degree + 1))
+    n_new = min(max_intervals, max(N + 1, math.ceil(N * factor)))
+    log.info("error estimate %.3g > error_tol %.3g: %d -> %d intervals", error, error_tol, N, n_new)
+    return n_new
 
 
 def _merge_segments(segs: list[Branch]) -> Branch:
@@ -475,6 +538,9 @@ def _merge_segments(segs: list[Branch]) -> Branch:
         base += len(b) - 1
         s_base += float(b.arclength[-1]) if len(b) else 0.0
     last = segs[-1]
+    wide = max(x.shape[1] for x in rows["x"])  # meshes of more intervals: NaN-pad the rest
+    rows["x"] = [np.pad(x, ((0, 0), (0, wide - x.shape[1])), constant_values=np.nan)
+                 for x in rows["x"]]  # fmt: skip
     ev = [e for e in rows["eig"] if e.size]
     width = max((e.shape[1] for e in ev), default=0)
     eig = np.vstack([np.pad(e, ((0, 0), (0, width - e.shape[1])), constant_values=np.nan)
@@ -507,8 +573,10 @@ def _merge_segments(segs: list[Branch]) -> Branch:
     )
 
 
-def _finish(br: Branch, free: str, period_max: float | None) -> Branch:
-    """Status PERIOD_UNBOUNDED and the multiplier-accuracy note."""
+def _finish(
+    br: Branch, free: str, period_max: float | None, error_tol: float | None = None
+) -> Branch:
+    """Status PERIOD_UNBOUNDED, the multiplier-accuracy and the error-estimate notes."""
     specials = br.special_points
     status, message = br.status, br.message
     if (
@@ -545,7 +613,23 @@ def _finish(br: Branch, free: str, period_max: float | None) -> Branch:
             )
             log.warning(note.strip())
             message = message + note
+    if len(br) and error_tol is not None and "error" in br.records:
+        over = np.flatnonzero(br.records["error"] > error_tol)
+        if over.size:
+            note = (
+                f" Collocation error estimate above error_tol={error_tol:g} at {over.size} of "
+                f"{len(br)} rows (from {free}={br.p[over[0]]:.8g}; up to "
+                f"{float(np.max(br.records['error'])):.3g}): raise max_intervals or lower "
+                "adapt_every."
+            )
+            log.warning(note.strip())
+            message = message + note
     return dataclasses.replace(br, special_points=specials, status=status, message=message)
+
+
+def _row(branch: Branch, k: int) -> FloatArray:
+    """The unknowns of row ``k`` (rows of meshes with fewer intervals are NaN-padded)."""
+    return np.asarray(branch.x[k][: problem_at(branch, k).n_unknowns], dtype=float)
 
 
 def problem_at(branch: Branch, k: int) -> PeriodicOrbitProblem:
@@ -560,7 +644,7 @@ def problem_at(branch: Branch, k: int) -> PeriodicOrbitProblem:
 
 def multipliers(branch: Branch) -> np.ndarray:
     """Nontrivial Floquet multipliers at every row of a cycle branch, ``(N, n - 1)``."""
-    return np.array([problem_at(branch, k).floquet(branch.x[k], branch.p[k]).multipliers
+    return np.array([problem_at(branch, k).floquet(_row(branch, k), branch.p[k]).multipliers
                      for k in range(len(branch))])  # fmt: skip
 
 
@@ -569,7 +653,7 @@ def orbit_at(branch: Branch, k: int | SpecialPoint) -> PeriodicOrbit:
     if isinstance(k, SpecialPoint):
         return problem_at(branch, k.index).orbit(k.x, k.p)
     k = int(k) + len(branch) if k < 0 else int(k)
-    return problem_at(branch, k).orbit(branch.x[k], branch.p[k])
+    return problem_at(branch, k).orbit(_row(branch, k), branch.p[k])
 
 
 @dataclass(frozen=True)
@@ -584,6 +668,8 @@ class PeriodLimit:
     rate : float
         ``b``; ``1/b`` estimates the unstable eigenvalue of the saddle that the cycle
         approaches (for a homoclinic orbit of a saddle with ``lambda_u < |lambda_s|``).
+        NaN where the last rows do not determine it (the parameter has converged to
+        round-off): the fit then uses ``b = 1 / lambda_u``.
     p_last, T_last : float
         Parameter and period of the last row.
     saddle : ndarray, shape (n,)
@@ -597,6 +683,8 @@ class PeriodLimit:
         The last cycle.
     free : str
         The continuation parameter.
+    lambda_u : float
+        Largest real part of the eigenvalues at :attr:`saddle` (its unstable rate).
     """
 
     p_star: float
@@ -609,6 +697,7 @@ class PeriodLimit:
     fit_residual: float
     orbit: PeriodicOrbit
     free: str
+    lambda_u: float = math.nan
 
     def connection_problem(self, mesh: CollocationMesh | None = None) -> Any:
         """A :class:`~continuation.bvp.HeteroclinicProblem` for the limiting connection.
@@ -644,11 +733,15 @@ class PeriodLimit:
                                    saddle_from=x, shift=orb.shift, mesh=mesh)  # fmt: skip
 
 
-def _log_fit(p: FloatArray, T: FloatArray) -> tuple[float, float, float]:
+def _log_fit(
+    p: FloatArray, T: FloatArray, b_fixed: float | None = None
+) -> tuple[float, float, float]:
     """Fit ``p = p* + c exp(-T / b)`` (i.e. ``T = a - b ln|p - p*|``); returns
     ``(p*, b, rms of the fit in p)``. For fixed ``b`` the fit is linear in ``(p*, c)``;
-    ``b`` is found by a bounded scalar search on ``ln b``."""
-    Tn = T - T[-1]
+    ``b`` is found by a bounded scalar search on ``ln b``. Where that search ends on a
+    bound or the rows agree to ``1e-10`` relative (``b`` is not determined by the rows),
+    the fit with ``b = b_fixed`` is returned, with ``b`` as NaN."""
+    Tn = T - float(np.min(T))  # exponentials in (0, 1]: no overflow
 
     def lsq(lb: float) -> tuple[float, float, float]:
         A = np.column_stack([np.ones_like(Tn), np.exp(-Tn / math.exp(lb))])
@@ -657,10 +750,21 @@ def _log_fit(p: FloatArray, T: FloatArray) -> tuple[float, float, float]:
         return float(coef[0]), float(coef[1]), float(np.sqrt(np.mean(r**2)))
 
     span = float(np.ptp(T)) + 1e-300
-    res = so.minimize_scalar(lambda q: lsq(q)[2], bounds=(math.log(span) - 8, math.log(span) + 4),
-                             method="bounded", options={"xatol": 1e-10})  # fmt: skip
-    p_star, _, rms = lsq(float(res.x))
-    return p_star, math.exp(float(res.x)), rms
+    lo, hi = math.log(span) - 8, math.log(span) + 4
+    res = so.minimize_scalar(lambda q: lsq(q)[2], bounds=(lo, hi), method="bounded",
+                             options={"xatol": 1e-10})  # fmt: skip
+    q = float(res.x)
+    p_star, _, rms = lsq(q)
+    if b_fixed is not None and math.isfinite(b_fixed) and b_fixed > 0:
+        # the rate is not determined by these rows where the search ends on a bound or
+        # the parameter has converged to round-off: then the fit with the saddle's own
+        # rate, and no rate
+        p_fix, _, rms_fix = lsq(math.log(b_fixed))
+        at_bound = q - lo < 0.05 or hi - q < 0.05
+        flat = float(np.ptp(p)) <= 1e-10 * max(1.0, float(np.max(np.abs(p))))
+        if at_bound or flat:
+            return p_fix, math.nan, rms_fix
+    return p_star, math.exp(q), rms
 
 
 def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
@@ -682,18 +786,28 @@ def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
     k = min(n_fit, len(branch))
     p = np.asarray(branch.p[-k:], dtype=float)
     T = np.asarray(branch.records["T"][-k:], dtype=float)
-    try:
-        p_star, b, rms = _log_fit(p, T)
-    except (ValueError, np.linalg.LinAlgError, FloatingPointError):
-        p_star, b, rms = math.nan, math.nan, math.nan
     orb = orbit_at(branch, len(branch) - 1)
     F = np.array([orb.system.f(x, orb.params.values) for x in orb.X])
     q = int(np.argmin(np.linalg.norm(F, axis=1)))
+    lam_u = _unstable_rate(orb, orb.X[q])
+    try:
+        p_star, b, rms = _log_fit(p, T, 1.0 / lam_u if lam_u > 0 else None)
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError):
+        p_star, b, rms = math.nan, math.nan, math.nan
     t0 = float(orb.t[q])
     t = np.linspace(t0, t0 + orb.T, 4 * orb.mesh.n_points)
     x = orb(t)
     return PeriodLimit(p_star, b, float(branch.p[-1]), float(T[-1]), orb.X[q].copy(),
-                       t - t0, x, rms, orb, branch.free)  # fmt: skip
+                       t - t0, x, rms, orb, branch.free, lam_u)  # fmt: skip
+
+
+def _unstable_rate(orb: PeriodicOrbit, x: FloatArray) -> float:
+    """Largest real part of the eigenvalues of ``f_x`` at ``x`` (the saddle guess)."""
+    try:
+        ev = np.linalg.eigvals(orb.system.jacobian(x, np.asarray(orb.params.values, float)))
+    except (np.linalg.LinAlgError, ValueError):
+        return math.nan
+    return float(np.max(ev.real))
 
 
 __all__ = [

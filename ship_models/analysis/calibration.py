@@ -49,7 +49,9 @@ from ..vessel import Coefficient, VesselData, dump_vessel, load_vessel
 from .critical_bvp import critical_fn_bvp
 from .critical_curve import CriticalCurve, critical_curve
 from .critical_result import CriticalFn
-from .sensitivity import FACTORS, SYSTEM_PARAMS, _fn_index, _model_options, model_at
+from .sensitivity.adjoint import _fn_index
+from .sensitivity.factors import FACTORS, SYSTEM_PARAMS
+from .sensitivity.rebuild import _model_options, model_at
 
 log = logging.getLogger(__name__)
 
