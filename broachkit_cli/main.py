@@ -38,6 +38,8 @@ COMMAND_MODULES: tuple[str, ...] = (
     "broachkit_cli.commands.demo",
     "broachkit_cli.commands.sweep",
     "broachkit_cli.commands.cycles",
+    "broachkit_cli.commands.periodic",
+    "broachkit_cli.commands.periodic_branch",
 )
 
 #: What ``broachkit`` runs without a sub-command.

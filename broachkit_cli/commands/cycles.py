@@ -115,17 +115,31 @@ def check_args(args: argparse.Namespace) -> None:
 
 
 def _start_cycle(model: Any, params: Any) -> Any:
-    """The cycle at ``params``: simulated there, or continued from ``Fn = START_FN``."""
+    """The cycle at ``params``: simulated there, or continued there from a simulated one
+    at ``Fn = START_FN`` on the same course, or at ``Fn = START_FN`` in head-on following
+    waves (``chi_c = 0``: course first, then Fn)."""
+    from continuation.errors import ContinuationError
     from ship_models.analysis.cycles import cycle_at, simulated_cycle
 
+    Fn, chi_c = float(params["Fn"]), float(params["chi_c"])
     try:
         return simulated_cycle(model, params)
-    except ValueError:
-        Fn = float(params["Fn"])
-        if math.isclose(Fn, START_FN):
-            raise
-        orbit = simulated_cycle(model, params.replace(Fn=START_FN))
-        return cycle_at(orbit, Fn=Fn)
+    except ValueError as exc:
+        first = exc
+    starts = [(START_FN, chi_c), (START_FN, 0.0)]
+    for fn0, chi0 in starts:
+        if math.isclose(fn0, Fn) and math.isclose(chi0, chi_c):
+            continue
+        try:
+            orbit = simulated_cycle(model, params.replace(Fn=fn0, chi_c=chi0))
+            return cycle_at(orbit, chi_c=chi_c, Fn=Fn)
+        except (ValueError, ContinuationError):
+            continue
+    raise ValueError(
+        f"no overtaken-by-waves cycle found at Fn = {Fn:g}, chi_c = {math.degrees(chi_c):g} "
+        f"deg: {first}; continuation from Fn = {START_FN:g} (this course, and chi_c = 0) "
+        "did not reach it either"
+    )
 
 
 def compute(model: Any, params: Any, args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
