@@ -153,6 +153,9 @@ class _ReturnWatch:
 #: Largest and smallest number of samples per integration segment of
 #: :func:`_manifold_to_return`.
 _SEGMENT_SAMPLES = (100, 5)
+#: Local error tolerances (relative, absolute) of the manifold integration: the guess
+#: only starts Newton's method, which converges to the same discrete solution.
+_MANIFOLD_TOL = (1e-10, 1e-12)
 
 
 def _manifold_to_return(
@@ -181,17 +184,15 @@ def _manifold_to_return(
     mu = max(float(np.max(lam)), 1e-6)
     lo, hi = _SEGMENT_SAMPLES[1], _SEGMENT_SAMPLES[0]
     t1 = min(t_max, hi * dt)
+    rtol, atol = _MANIFOLD_TOL
     man = unstable_manifold(
-        system, pvec, x_m, eps=end_distance, t_max=t1, dt=dt, branches=(branch,), refine=False
-    )
+        system, pvec, x_m, eps=end_distance, t_max=t1, dt=dt, branches=(branch,),
+        refine=False, rtol=rtol, atol=atol,
+    )  # fmt: skip
     traj = man.branch(branch).trajectory
     ts, xs = [np.asarray(traj.t, dtype=float)], [np.asarray(traj.x, dtype=float)]
-    sim = Simulator(system, pvec)
-    while (
-        traj.status is Status.SUCCESS
-        and not watch.closed(xs[-1])
-        and t1 < t_max * (1.0 - 1e-12)
-    ):
+    sim = Simulator(system, pvec, rtol=rtol, atol=atol)
+    while traj.status is Status.SUCCESS and not watch.closed(xs[-1]) and t1 < t_max * (1.0 - 1e-12):
         t0 = t1
         k = hi
         if watch.level is not None:
