@@ -288,3 +288,23 @@ def test_the_manifold_stopped_at_the_window_end_gives_the_cut_of_the_full_run(na
         assert t[-1] < 0.5 * t_max, (name, t[-1], t_max)
     assert t[k] == pytest.approx(tf[kf], abs=1e-9 * t_max), (name, t[k], tf[kf])
     np.testing.assert_allclose(x[k], xf[kf], rtol=1e-5, atol=1e-7 * (1 + df))
+
+
+def test_expanded_functions_equal_the_mx_graph(monkeypatch):
+    """The SX expansion of a small system's collocation functions (casadi_backend)
+    gives the residual and both Jacobians of the MX graph, at a solved orbit."""
+    import continuation.bvp.casadi_backend as cb
+
+    case = CASES["cir"]
+    res = _find(case, accuracy=ConnectionAccuracy(estimate=False))
+    prob = res.problem
+    args = prob._args(res.z, None)
+    sx = cb.ConnectionFunctions(case.system, prob.layout)
+    monkeypatch.setattr(cb, "MAX_EXPANDED_POINT_INSTRUCTIONS", 0)
+    mx = cb.ConnectionFunctions(case.system, prob.layout)
+    assert sx._expand and not mx._expand
+    for a, b in zip(sx.linearize(args), mx.linearize(args), strict=True):
+        a = a.toarray() if hasattr(a, "toarray") else a
+        b = b.toarray() if hasattr(b, "toarray") else b
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(sx.residual(args), mx.residual(args), rtol=1e-12, atol=1e-12)
