@@ -1,230 +1,625 @@
-"""Connecting orbits: broachkit against AUTO-07p/HomCont (native) on the demos cir and san.
+r"""Connecting orbits: broachkit against AUTO-07p/HomCont (native), at equal accuracy.
 
-For each problem, one continuation of the connecting orbit in a second parameter over
-the same range, by both tools, and the error of the solved parameter at the end of the
-range against a tight reference (broachkit at ``rtol = 1e-11``):
+For each demo of :mod:`benchmarks.connection_demos` (``kpr``, ``cir``, ``san``), in one run:
 
-* ``cir`` (Freire et al. 1993; HomCont demo cir, run 2 without its test functions):
-  saddle-focus homoclinic orbit, ``nu`` solved, ``beta`` from 0.6 down to 0.1. AUTO
-  starts from its run 1 at ``PERIOD = 100`` (label UZ2); broachkit from
-  :func:`find_connection` at ``beta = 0.6`` (the saddle alone).
-* ``san`` (Sandstede 1995; HomCont demo san, run 1): homoclinic orbit, ``mu~`` solved,
-  ``a`` from 0 to 0.25, from the explicit solution at ``a = 0`` (AUTO: STPNT, ``T = 20``;
-  broachkit: :func:`find_connection` at ``a = 0``).
+(a) **one connection solve** at the demo's parameters. AUTO: the demo's own route to it
+    (its runs from its start: the ``ISTART=3`` homotopy from the saddle for kpr, our
+    starting data for cir, the closed-form orbit at ``a = 0`` for san), as a native
+    executable; broachkit: :func:`continuation.bvp.find_connection` from the saddle
+    alone (its unstable manifold integrated until the closest return, cut, one solve
+    on ``N`` intervals with 0-2 rounds of mesh adaptation), :func:`bk_solve`. broachkit's
+    time includes its starting orbit; AUTO's does not for cir (its data are given).
+(b) **one continuation** of that connection in a second parameter, from the solution
+    of (a) to a fixed end value of the second parameter (AUTO: ``UZSTOP``; broachkit:
+    the bound ``p_min``/``p_max``), with AUTO's ``DS`` and ``DSMAX``.
 
-Also timed: broachkit's one solve from the saddle alone (:func:`find_connection`:
-manifold simulation, adaptive mesh, discretisation and truncation estimates). AUTO has
-no such one-shot solve; its start-point correction is part of its run.
+Accuracy is the error of the solved parameter against a reference computed here: the
+closed form where there is one (san: ``mu~ = 0`` exactly, the orbit lies on
+``y^2 = x^2 (1 - x), z = 0`` for every ``a, alpha``), else a fine-mesh, long-interval
+solve by broachkit (400 intervals, adapted, ``T = 3 T_demo``), cross-checked by AUTO on
+``NTST x 6`` with ``T`` doubled (their difference is reported). broachkit's setting in
+(a): for each ``T`` (its own from the eigenvalues, 1, 1.5 and 2 times ``T_demo``) and
+number of adaptation rounds (0, 1, 2), the smallest ``N`` (8..200) whose error is at most
+AUTO's; of these candidates the fastest (least of 5 runs), then timed. In (b) the same
+scan of the start solve, by the error at the end of the continuation (the start
+solve is not timed in (b), as AUTO's (b) restarts from its (a)), the fastest
+continuation timed. A
+setting that cannot reach AUTO's error is reported as such, never rounded into a win.
 
-AUTO-07p is built from its sources (``git archive`` of github.com/auto-07p/auto-07p, then
-``./configure && make -C src``, serially) into ``$AUTO_DIR`` (default
-``/tmp/conn_auto``); each demo is compiled against ``$AUTO_DIR/lib/*.o`` (setup, not
-timed) and its executable run in a scratch directory (timed: wall clock of the
-process, AUTO's normal ``@r``). Times are CPU times (user + system: of the AUTO child
-process, of this process for broachkit), best of ``--repeats`` runs: the machine is
-shared and wall times swing with its load. broachkit's "cold" solve builds its CasADi
-functions (a fresh System); "warm" and the curve reuse them (as AUTO's executable is
-compiled before the timed runs).
+Timing: CPU time (user + system; AUTO: of its child processes, broachkit: of this
+process), medians of ``--repeats`` runs; wall times are in the JSON. Both run on one
+thread: AUTO with ``OMP_NUM_THREADS=1``, broachkit with one BLAS thread (set before
+NumPy loads: idle OpenBLAS threads spin and double the CPU time of these small
+problems). AUTO's time is that of its executables (process start to exit, reading
+``fort.2``/``fort.3``, writing ``fort.7/8/9``), compiled before; broachkit's is the call in
+this process with one :class:`~continuation.system.System` per demo, after one untimed
+warm-up (CasADi's functions are built at the first call and cached per system).
 
-Usage::
+Run (after ``bash benchmarks/setup_env.sh``)::
 
-    python benchmarks/connections_vs_auto.py [--repeats 3]
+    benchmarks/_work/venv/bin/python benchmarks/connections_vs_auto.py
+
+writes ``benchmarks/results/connections_vs_auto.{json,md}`` (options ``--demos``,
+``--repeats``, ``--out``).
 """
 
 from __future__ import annotations
 
-import argparse
 import os
-import pathlib
-import resource
-import shutil
-import subprocess
-import sys
-import tempfile
-import time
 
-# one BLAS/OpenMP thread, as AUTO-07p's runs (OMP_NUM_THREADS=1): idle OpenBLAS threads
-# spin and double the CPU time of the small dense products (set before NumPy loads)
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+    os.environ.setdefault(_var, "1")  # one thread for both tools (before NumPy loads)
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import json  # noqa: E402
+import logging  # noqa: E402
+import math  # noqa: E402
+import pathlib  # noqa: E402
+import platform  # noqa: E402
+import resource  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
 
-from continuation.bvp import ConnectionAccuracy, continue_connection, find_connection  # noqa: E402
-from continuation.settings import ContinuationSettings  # noqa: E402
-from tests.connection_problems import cir, san  # noqa: E402
+from benchmarks.connection_demos import DEMOS, Demo, guess_on, manifold_guess  # noqa: E402
+from benchmarks.peers import auto_native as an  # noqa: E402
+from benchmarks.peers.common import PeerUnavailable  # noqa: E402
 
-AUTO_DIR = pathlib.Path(os.environ.get("AUTO_DIR", "/tmp/conn_auto"))
-LIBS = (
-    "main auto_constants compat blas lapack ae bvp equilibrium floquet homcont interfaces "
-    "io maps mesh mpi optimization parabolic periodic solvebv support timeint toolboxae "
-    "toolboxbv"
-).split()
+log = logging.getLogger("connections_vs_auto")
 
-CIR_PARAMS = {"nu": -0.72, "beta": 0.6, "gamma": 0.0, "r": 0.6, "a3": 0.328578, "b3": 0.933578}
-SAN_PARAMS = {
-    "a": 0.0, "b": 1.0, "c": -2.0, "alpha": 0.0, "beta": 1.0, "gamma": 0.0, "mu": 0.0,
-    "mut": 0.01,
-}  # fmt: skip
-
-CIR_C1 = (AUTO_DIR / "demos/cir/c.cir.1").read_text() if AUTO_DIR.exists() else ""
-CIR_C2 = """NDIM=   3, IPS =   9, IRS =   2, ILP =   0
-ICP =  [1, 2]
-NTST=  35, NCOL=   4, IAD =   1, ISP =   0, ISW = 1, IPLT= 0, NBC= 0, NINT= 0
-NMX=  200, NPR=  200, MXBF=   0, IID =   2, ITMX=  10, ITNW= 7, NWTN= 3, JAC= 1
-EPSL= 1e-07, EPSU = 1e-07, EPSS = 1e-05
-DS  =  0.01, DSMIN=0.0001, DSMAX=  0.01, IADS=   1
-NPAR = 14, THL =  {}, THU =  {}
-UZSTOP = {2: 0.1}
-IEQUIB = 0
-"""
-SAN_C1 = """NDIM=   3, IPS =   9, IRS =   0, ILP =   0
-ICP =  [1, 8]
-NTST=  35, NCOL=   4, IAD =   3, ISP =   0, ISW = 1, IPLT= 0, NBC= 0, NINT= 0
-NMX=99999, NPR=99999, MXBF=  10, IID =   2, ITMX= 9, ITNW= 7, NWTN= 3, JAC=-1
-EPSL= 1e-07, EPSU = 1e-07, EPSS = 1e-05
-DS  =  0.05, DSMIN= 0.005, DSMAX=   0.1, IADS=   1
-NPAR = 14, THL =  {}, THU =  {}
-UZSTOP = {1: 0.25}
-IEQUIB=   0
-"""
+# broachkit's candidate meshes for "equal accuracy", cheapest first; T: None = its own
+N_CANDIDATES = (8, 10, 12, 14, 16, 18, 20, 22, 25, 28, 30, 33, 36, 40, 45, 50, 55, 60, 70, 80,
+                100, 120, 140, 170, 200)  # fmt: skip
+T_FACTORS: tuple[float | None, ...] = (None, 1.0, 1.5, 2.0)
+ADAPT_ROUNDS = (0, 1, 2)  # rounds of mesh equidistribution in broachkit's solve
+ADAPT_REFERENCE = 2
 
 
-def _build(demo: str, work: pathlib.Path) -> pathlib.Path:
-    src = AUTO_DIR / "demos" / demo / f"{demo}.f90"
-    exe = work / f"{demo}.exe"
-    objs = [str(AUTO_DIR / "lib" / f"{n}.o") for n in LIBS]
-    subprocess.run(
-        ["gfortran", "-O", "-fopenmp", str(src), f"-I{AUTO_DIR / 'include'}", *objs, "-o",
-         str(exe)],
-        check=True, cwd=work,
-    )  # fmt: skip
-    return exe
+# ======================================================================= broachkit side
+# Everything broachkit-specific is in these three functions.
+def bk_solve(demo: Demo, system: Any, N: int, T: float | None, adapt: int) -> Any:
+    """One broachkit connection from the saddle alone: ``find_connection`` (homoclinic,
+    ``N`` intervals of degree 4, ``T`` or its own, ``adapt`` rounds of mesh adaptation,
+    no error estimates); returns the ConnectionResult (``.success``, ``.value(name)``)."""
+    from continuation.bvp import ConnectionAccuracy, find_connection
 
-
-def _auto_run(exe: pathlib.Path, work: pathlib.Path, constants: str, fort3: pathlib.Path | None):
-    """Run once in ``work``: fort.2 = constants, fort.3 = start data; returns (s, fort.8 path)."""
-    for f in ("fort.7", "fort.8", "fort.9"):
-        (work / f).unlink(missing_ok=True)
-    (work / "fort.2").write_text(constants)
-    if fort3 is not None:
-        shutil.copy(fort3, work / "fort.3")
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    env = {**os.environ, "OMP_NUM_THREADS": "1"}  # one thread, as broachkit's solves
-    subprocess.run([str(exe)], cwd=work, check=True, stdout=subprocess.DEVNULL, env=env)
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-    return cpu, work / "fort.8"
-
-
-def _last_par(fort8: pathlib.Path, index: int) -> float:
-    """``PAR(index)`` of the last solution in an AUTO solution file."""
-    sys.path.insert(0, str(AUTO_DIR / "python"))
-    from auto import parseS  # AUTO-07p's own reader of its solution files
-
-    sols = parseS.parseS(str(fort8))
-    return float(sols[-1][f"PAR({index})"])
-
-
-def _best(fn, repeats: int):
-    best, out = np.inf, None
-    for _ in range(repeats):
-        t0 = time.process_time()
-        out = fn()
-        best = min(best, time.process_time() - t0)
-    return best, out
-
-
-def bench_cir(repeats: int) -> dict:
-    s = cir()
-    work = pathlib.Path(tempfile.mkdtemp(prefix="cir_"))
-    exe = _build("cir", work)
-    # setup: run 1 (continuation in PERIOD) gives the start at PERIOD = 100 (label 2);
-    # its constants name the data file (dat = 'cir': cir.dat in the run directory)
-    shutil.copy(AUTO_DIR / "demos/cir/cir.dat", work / "cir.dat")
-    _auto_run(exe, work, CIR_C1, None)
-    shutil.copy(work / "fort.8", work / "s.start")
-    t_auto = min(_auto_run(exe, work, CIR_C2, work / "s.start")[0] for _ in range(repeats))
-    nu_auto = _last_par(work / "fort.8", 1)
-    beta_auto = _last_par(work / "fort.8", 2)
-
-    def ours_solve(system=None):
-        sy = cir() if system is None else system
-        return find_connection(sy, sy.params(**CIR_PARAMS), "nu", source=[0, 0, 0], shift=0)
-
-    t_cold, _ = _best(ours_solve, repeats)  # a fresh System: CasADi functions built
-    start = ours_solve(s)
-    t_solve, start = _best(lambda: ours_solve(s), repeats)
-    settings = ContinuationSettings(ds=-0.02, ds_max=0.1, p_min=0.1, p_max=0.61)
-    t_curve, br = _best(lambda: continue_connection(start, "beta", settings), repeats)
-    i = int(np.argmin(br.p))
-    nu_ours = float(br.records["nu"][i])
-    ref = find_connection(
-        s, s.params(**{**CIR_PARAMS, "beta": float(br.p[i]), "nu": nu_ours}), "nu",
-        source=[0, 0, 0], shift=0, accuracy=ConnectionAccuracy(rtol=1e-11, atol=1e-13),
-    )  # fmt: skip
-    ref_auto = find_connection(
-        s, s.params(**{**CIR_PARAMS, "beta": beta_auto, "nu": nu_auto}), "nu",
-        source=[0, 0, 0], shift=0, accuracy=ConnectionAccuracy(rtol=1e-11, atol=1e-13),
-    )  # fmt: skip
-    return {
-        "problem": "cir: nu(beta), beta 0.6 -> 0.1",
-        "t_auto": t_auto, "t_ours_curve": t_curve, "t_ours_solve": t_solve, "t_ours_cold": t_cold,
-        "err_auto": abs(nu_auto - ref_auto.value("nu")),
-        "err_ours": abs(nu_ours - ref.value("nu")),
-        "end_ours": float(br.p[i]), "end_auto": beta_auto, "steps_ours": len(br.p),
-    }  # fmt: skip
-
-
-def bench_san(repeats: int) -> dict:
-    s = san()
-    work = pathlib.Path(tempfile.mkdtemp(prefix="san_"))
-    exe = _build("san", work)
-    t_auto = min(_auto_run(exe, work, SAN_C1, None)[0] for _ in range(repeats))
-    mut_auto = _last_par(work / "fort.8", 8)
-
-    def ours_solve(system=None):
-        sy = san() if system is None else system
-        return find_connection(sy, sy.params(**SAN_PARAMS), "mut", source=[0, 0, 0], shift=0)
-
-    t_cold, _ = _best(ours_solve, repeats)
-    start = ours_solve(s)
-    t_solve, start = _best(lambda: ours_solve(s), repeats)
-    settings = ContinuationSettings(ds=0.05, ds_max=0.1, p_min=-0.01, p_max=0.25)
-    t_curve, br = _best(lambda: continue_connection(start, "a", settings), repeats)
-    i = int(np.argmax(br.p))
-    return {
-        "problem": "san: mu~(a), a 0 -> 0.25",
-        "t_auto": t_auto, "t_ours_curve": t_curve, "t_ours_solve": t_solve, "t_ours_cold": t_cold,
-        "err_auto": abs(mut_auto), "err_ours": abs(float(br.records["mut"][i])),
-        "end_ours": float(br.p[i]), "end_auto": 0.25, "steps_ours": len(br.p),
-    }  # fmt: skip
-
-
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeats", type=int, default=3)
-    args = ap.parse_args()
-    if not (AUTO_DIR / "lib" / "main.o").exists():
-        raise SystemExit(f"AUTO-07p is not built in {AUTO_DIR} (see the module docstring)")
-    rows = [bench_cir(args.repeats), bench_san(args.repeats)]
-    print(
-        "| problem | AUTO-07p curve (CPU s) | broachkit curve (CPU s) | ratio AUTO/broachkit | "
-        "end (AUTO / broachkit) | error AUTO | error broachkit | broachkit solve from the "
-        "saddle, warm / cold (CPU s) |"
+    return find_connection(
+        system,
+        system.params(**demo.params),
+        demo.solved,
+        source=demo.saddle(demo.pvec()),
+        shift=0,
+        branch=demo.branch,
+        T=T,
+        n_intervals=N,
+        accuracy=ConnectionAccuracy(estimate=False),
+        adapt=adapt,
     )
-    print("|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        print(
-            f"| {r['problem']} | {r['t_auto']:.3f} | {r['t_ours_curve']:.3f} | "
-            f"{r['t_auto'] / r['t_ours_curve']:.2f} | {r['end_auto']:.4g} / {r['end_ours']:.4g}"
-            f" | {r['err_auto']:.1e} | {r['err_ours']:.1e} | {r['t_ours_solve']:.3f} / "
-            f"{r['t_ours_cold']:.3f} |"
+
+
+def bk_reference(
+    demo: Demo, system: Any, params: dict[str, float], orbit: tuple[np.ndarray, np.ndarray],
+    N: int, T: float,
+) -> Any:  # fmt: skip
+    """A reference solve at ``params`` from the orbit ``(t, x)``: ``N`` intervals on
+    ``[0, T]``, adapted twice, no estimates."""
+    from continuation.bvp import (
+        CollocationMesh,
+        ConnectionAccuracy,
+        HeteroclinicProblem,
+        solve_connection,
+    )
+
+    vals = {**demo.params, **params}
+    xs = demo.saddle(np.array([vals[k] for k in demo.params]))
+    prob = HeteroclinicProblem(
+        system,
+        system.params(**vals),
+        demo.solved,
+        saddle_from=xs,
+        shift=np.zeros(len(xs)),
+        mesh=CollocationMesh(N, 4, T),
+    )
+    acc = ConnectionAccuracy(estimate=False)
+    return solve_connection(prob, guess_on(*orbit, T), adapt=ADAPT_REFERENCE, accuracy=acc)
+
+
+def bk_continue(result: Any, demo: Demo, end: float, ds: float, ds_max: float) -> Any:
+    """Continue the connection ``result`` in ``demo.second`` from its value to ``end``
+    (``continue_connection``; pseudo-arclength); returns the Branch."""
+    from continuation.bvp import continue_connection
+    from continuation.settings import ContinuationSettings
+
+    p0 = result.params[demo.second]
+    lo, hi = (end, math.inf) if end < p0 else (-math.inf, end)
+    settings = ContinuationSettings(
+        ds=ds, ds_max=ds_max, ds_min=1e-6, p_min=lo, p_max=hi, max_steps=400
+    )
+    return continue_connection(
+        result, demo.second, settings, direction="backward" if end < p0 else "forward"
+    )
+
+
+# Where the continuation (b) ends, in the second parameter (inside the demo's branch).
+CONTINUE_TO = {"kpr": -2.0, "cir": 0.3, "san": 1.0}  # cir: hyperbolic for beta > 0 only
+
+
+def _cpu() -> float:
+    return time.process_time()
+
+
+def _median_time(fn: Callable[[], Any], repeats: int) -> tuple[float, float, Any]:
+    """``(median CPU s, median wall s, result)`` of ``fn`` after one untimed warm-up."""
+    out = fn()  # warm-up (and the result)
+    cpu, wall = [], []
+    for _ in range(repeats):
+        c0, w0 = _cpu(), time.perf_counter()
+        fn()
+        cpu.append(_cpu() - c0)
+        wall.append(time.perf_counter() - w0)
+    return statistics.median(cpu), statistics.median(wall), out
+
+
+def _min_time(fn: Callable[[], Any], repeats: int = 5) -> float:
+    """Least CPU s of ``repeats`` runs of ``fn`` (the selection among candidates: the
+    least time is the least disturbed by other load)."""
+    fn()
+    best = math.inf
+    for _ in range(repeats):
+        c0 = _cpu()
+        fn()
+        best = min(best, _cpu() - c0)
+    return best
+
+
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _auto_times(fn: Callable[[], an.ChainResult], repeats: int) -> tuple[float, float, float]:
+    """``(median CPU s of the child processes, median wall s, AUTO's own Total Time)``."""
+    cpu, wall, tot = [], [], []
+    for _ in range(repeats):
+        c0 = _children_cpu()
+        r = fn()
+        cpu.append(_children_cpu() - c0)
+        wall.append(r.seconds)
+        tot.append(r.auto_seconds)
+    return statistics.median(cpu), statistics.median(wall), statistics.median(tot)
+
+
+# ============================================================================ AUTO side
+class AutoDemo:
+    """The AUTO-07p executable of a demo and its runs (see connection_demos)."""
+
+    def __init__(self, demo: Demo, work: pathlib.Path) -> None:
+        self.demo = demo
+        self.work = work / demo.key
+        src = demo.fortran
+        self.files: dict[str, str] = {}
+        if demo.key == "cir":  # starting data: our simulated manifold, T of the data
+            t, _ = manifold_guess(demo)
+            src = src.replace("NU0", f"{demo.params['nu']!r}d0").replace(
+                "T0", f"{float(t[-1] - t[0])!r}d0"
+            )
+        if demo.auto_files is not None:
+            self.files = demo.auto_files(demo)
+        self.exe = an.build(src, self.work / "build")
+
+    def _resolve(
+        self, chain: list[dict[str, Any]], scale: int = 1, prev: list[an.Point] | None = None
+    ) -> list[dict[str, Any]]:
+        out = []
+        d = self.work / "resolve"
+        for c in chain:
+            c = dict(c)
+            if scale != 1:
+                c["NTST"] = c["NTST"] * scale
+                c["DSMAX"] = c["DSMAX"]
+            if isinstance(c.get("IRS"), tuple):
+                c["IRS"] = an.label_of(prev, *c["IRS"])
+            out.append(c)
+            if len(out) < len(chain):
+                prev = an.run_chain(self.exe, d, out, self.files).runs[-1]
+        return out
+
+    def solve_chain(self, scale: int = 1) -> list[dict[str, Any]]:
+        return self._resolve(self.demo.auto_solve, scale)
+
+    def solve(self, chain: list[dict[str, Any]], tag: str = "solve") -> an.ChainResult:
+        return an.run_chain(self.exe, self.work / tag, chain, self.files)
+
+    def continue_constants(
+        self, solved: an.ChainResult, end: float, scale: int = 1
+    ) -> dict[str, Any]:
+        c = dict(self.demo.auto_continue)
+        c["IRS"] = an.last(solved.runs[-1]).lab
+        c["UZSTOP"] = {self.demo.auto_index[self.demo.second]: end}
+        c["NMX"] = 400
+        if scale != 1:
+            c["NTST"] = c["NTST"] * scale
+        return c
+
+    def cont(self, solved: an.ChainResult, c: dict[str, Any], tag: str = "cont") -> an.ChainResult:
+        return an.run_chain(
+            self.exe, self.work / tag, [c], self.files, fort3=solved.directory / "fort.8"
         )
+
+    def extend_T(self, solved: an.ChainResult, T: float, ntst: int) -> float:
+        """The solved parameter after continuing in (T, solved) to ``T`` on NTST=ntst."""
+        c = dict(self.demo.auto_solve[-1])
+        c.update(
+            IRS=an.last(solved.runs[-1]).lab,
+            ICP=[11, self.demo.auto_index[self.demo.solved]],
+            NTST=ntst,
+            NMX=400,
+            UZSTOP={11: T},
+            ISTART=1,
+        )
+        c.pop("dat", None)
+        c.pop("UZR", None)
+        r = an.run_chain(
+            self.exe, self.work / "extend", [c], self.files, fort3=solved.directory / "fort.8"
+        )
+        return self.value(r)
+
+    def value(self, r: an.ChainResult, name: str | None = None) -> float:
+        name = name or self.demo.solved
+        return an.last(r.runs[-1]).values[f"PAR({self.demo.auto_index[name]})"]
+
+
+# ============================================================================== driver
+def reference(
+    demo: Demo, system: Any, params: dict[str, float], orbit: tuple[np.ndarray, np.ndarray]
+) -> dict[str, Any]:
+    """The solved parameter at ``params`` (the solved one: a guess): closed form (san),
+    else broachkit on 400 adapted intervals with ``T = 3 T_demo`` (its change from
+    ``2 T_demo`` is reported as a truncation check). ``orbit``: ``(t, x)`` near it."""
+    if demo.key == "san":
+        return {"value": 0.0, "how": "closed form (mu~ = 0)"}
+    r2 = bk_reference(demo, system, params, orbit, 400, 2 * demo.T)
+    r3 = bk_reference(demo, system, params, orbit, 400, 3 * demo.T)
+    if not (r2.success and r3.success):
+        raise RuntimeError(f"{demo.key}: reference solve failed: {r2.message} / {r3.message}")
+    v2, v3 = r2.value(demo.solved), r3.value(demo.solved)
+    return {
+        "value": v3,
+        "how": "broachkit N=400 adapted, T = 3 T_demo",
+        "change_2T_to_3T": abs(v3 - v2),
+    }
+
+
+def _orbit(result: Any) -> tuple[np.ndarray, np.ndarray]:
+    return np.asarray(result.t, dtype=float), np.asarray(result.x, dtype=float)
+
+
+def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "key": demo.key,
+        "title": demo.title,
+        "solved": demo.solved,
+        "second": demo.second,
+        "T_demo": demo.T,
+    }
+    system = demo.system()  # one per demo: its CasADi functions are built once
+    ad = AutoDemo(demo, work)
+    # ---- (a) AUTO solve
+    chain = ad.solve_chain()
+    solved = ad.solve(chain)
+    a_val = ad.value(solved)
+    a_cpu, a_wall, a_tot = _auto_times(lambda: ad.solve(chain), repeats)
+    first = bk_solve(demo, system, 40, None, 2)
+    if not first.success:
+        raise RuntimeError(f"{demo.key}: find_connection failed: {first.message}")
+    ref = reference(demo, system, demo.params, _orbit(first))
+    # AUTO fine (cross-check): NTST x 6 for the last run, T doubled
+    try:
+        fine = ad.solve(
+            ad.solve_chain(scale=1)[:-1] + [{**chain[-1], "NTST": chain[-1]["NTST"] * 6}],
+            tag="fine",
+        )
+        a_fine = ad.extend_T(fine, 2 * demo.T, chain[-1]["NTST"] * 6)
+        ref["auto_fine_2T"] = a_fine
+        ref["auto_fine_minus_ref"] = a_fine - ref["value"]
+    except RuntimeError as exc:
+        ref["auto_fine_2T"] = f"failed: {str(exc)[:200]}"
+    a_err = abs(a_val - ref["value"])
+    out["reference"] = ref
+    out["auto_solve"] = {
+        "value": a_val,
+        "error": a_err,
+        "seconds": a_cpu,
+        "wall_seconds": a_wall,
+        "auto_total_time": a_tot,
+        "runs": len(chain),
+        "steps": [len(r) for r in solved.runs],
+        "NTST": chain[-1]["NTST"],
+        "NCOL": chain[-1]["NCOL"],
+    }
+    # ---- (a) broachkit at equal accuracy: for each T and number of adaptation rounds
+    # the smallest N whose error is at most AUTO's; of those, the fastest
+    passing: list[tuple[int, float | None, int]] = []
+    scan = []
+    for f in T_FACTORS:
+        T = None if f is None else f * demo.T
+        for adapt in ADAPT_ROUNDS:
+            for N in N_CANDIDATES:
+                r = bk_solve(demo, system, N, T, adapt)
+                err = abs(r.value(demo.solved) - ref["value"]) if r.success else math.inf
+                scan.append(
+                    {"N": N, "T": r.mesh.T, "adapt": adapt, "status": r.status.name, "error": err}
+                )
+                if err <= a_err:
+                    passing.append((N, T, adapt))
+                    break
+    bk: dict[str, Any] = {"scan": scan}
+    if not passing:
+        bk["status"] = "did not reach AUTO's error on any candidate mesh"
+        out["broachkit_solve"] = bk
+        return out
+    quick = [_min_time(lambda c=c: bk_solve(demo, system, *c)) for c in passing]
+    bk["candidates"] = [
+        {"N": N, "T": T, "adapt": ad, "seconds": q}
+        for (N, T, ad), q in zip(passing, quick, strict=True)
+    ]
+    N, T, adapt = passing[int(np.argmin(quick))]
+    sec, wall, res = _median_time(lambda: bk_solve(demo, system, N, T, adapt), repeats)
+    bk.update(
+        N=N,
+        T=res.mesh.T,
+        T_own=T is None,
+        adapt=adapt,
+        degree=4,
+        value=res.value(demo.solved),
+        error=abs(res.value(demo.solved) - ref["value"]),
+        seconds=sec,
+        wall_seconds=wall,
+        ratio=sec / out["auto_solve"]["seconds"],
+        newton_iters=res.newton_iters,
+    )
+    out["broachkit_solve"] = bk
+    # ---- (b) AUTO continuation to the end value
+    end = CONTINUE_TO[demo.key]
+    cc = ad.continue_constants(solved, end)
+    ar = ad.cont(solved, cc)
+    last = an.last(ar.runs[-1])
+    a_end_second = last.values[f"PAR({demo.auto_index[demo.second]})"]
+    a_end_val = last.values[f"PAR({demo.auto_index[demo.solved]})"]
+    c_cpu, c_wall, c_tot = _auto_times(lambda: ad.cont(solved, cc), repeats)
+    from continuation.bvp import connection_at
+
+    # the orbit at the end for the references: from the 40-interval adapted solve (the
+    # setting chosen for (a) may be too coarse to give a guess there)
+    br0 = bk_continue(first, demo, end, cc["DS"], cc["DSMAX"])
+    end_orbit = _orbit(connection_at(br0, -1))
+    ref_end = reference(
+        demo, system, {**demo.params, demo.second: a_end_second, demo.solved: a_end_val},
+        end_orbit,
+    )  # fmt: skip
+    out["auto_continue"] = {
+        "end": a_end_second,
+        "reached": abs(a_end_second - end) < 1e-6,
+        "value_at_end": a_end_val,
+        "error_at_end": abs(a_end_val - ref_end["value"]),
+        "steps": len(ar.runs[-1]),
+        "seconds": c_cpu,
+        "wall_seconds": c_wall,
+        "auto_total_time": c_tot,
+        "NTST": cc["NTST"],
+        "DS": cc["DS"],
+        "DSMAX": cc["DSMAX"],
+        "reference_at_end": ref_end,
+    }
+    try:  # cross-check of the end reference: AUTO's continuation on NTST x 6
+        fine_c = ad.cont(solved, ad.continue_constants(solved, end, scale=6), tag="cont_fine")
+        ref_end["auto_fine"] = an.last(fine_c.runs[-1]).values[
+            f"PAR({demo.auto_index[demo.solved]})"
+        ]
+        ref_end["auto_fine_minus_ref"] = ref_end["auto_fine"] - ref_end["value"]
+    except RuntimeError as exc:
+        ref_end["auto_fine"] = f"failed: {str(exc)[:200]}"
+    # ---- (b) broachkit continuation: the smallest N (same T as the solve) whose error
+    # at the end is at most AUTO's; each candidate run once, the chosen one timed
+    a_err_end = out["auto_continue"]["error_at_end"]
+    bc: dict[str, Any] = {"scan": []}
+    # reference at broachkit's end (the bound itself), from the orbit at br0's end
+    end_bk = float(br0.p[-1])
+    if abs(end_bk - a_end_second) > 1e-12:
+        ref_bk = reference(
+            demo,
+            system,
+            {**demo.params, demo.second: end_bk, demo.solved: float(br0.records[demo.solved][-1])},
+            end_orbit,
+        )["value"]
+    else:
+        ref_bk = ref_end["value"]
+    bc["reference_at_end"] = ref_bk
+    picks = []
+    for f in T_FACTORS:
+        TT = None if f is None else f * demo.T
+        for ad in ADAPT_ROUNDS:
+            for NN in N_CANDIDATES:
+                start = bk_solve(demo, system, NN, TT, ad)
+                row: dict[str, Any] = {"N": NN, "T": start.mesh.T, "adapt": ad}
+                if not start.success:
+                    bc["scan"].append({**row, "status": start.status.name})
+                    continue
+                br = bk_continue(start, demo, end, cc["DS"], cc["DSMAX"])
+                p_end = float(br.p[-1])
+                v_end = float(br.records[demo.solved][-1])
+                err = abs(v_end - ref_bk) if abs(p_end - end_bk) < 1e-12 else math.inf
+                bc["scan"].append({**row, "status": br.status.name, "end": p_end, "error": err})
+                if err <= a_err_end:
+                    picks.append((NN, ad, start, p_end, v_end, err))
+                    break
+    if not picks:
+        bc["status"] = "did not reach AUTO's error at the end on any candidate mesh"
+    else:
+        quick = [
+            _min_time(lambda c=c: bk_continue(c[2], demo, end, cc["DS"], cc["DSMAX"]))
+            for c in picks
+        ]
+        bc["candidates"] = [
+            {"N": c[0], "T": c[2].mesh.T, "adapt": c[1], "seconds": q}
+            for c, q in zip(picks, quick, strict=True)
+        ]
+        NN, adapt_b, start, p_end, v_end, err = picks[int(np.argmin(quick))]
+        sec, wall, br = _median_time(
+            lambda: bk_continue(start, demo, end, cc["DS"], cc["DSMAX"]), repeats
+        )
+        bc.update(
+            N=NN,
+            adapt=adapt_b,
+            T=start.mesh.T,
+            steps=len(br.p) - 1,
+            status=br.status.name,
+            end=p_end,
+            value_at_end=v_end,
+            error_at_end=err,
+            seconds=sec,
+            wall_seconds=wall,
+            ratio=sec / out["auto_continue"]["seconds"],
+        )
+    out["broachkit_continue"] = bc
+    return out
+
+
+def _fmt(x: Any, spec: str = ".2e") -> str:
+    return format(x, spec) if isinstance(x, (int, float)) and math.isfinite(x) else str(x)
+
+
+def render(results: list[dict[str, Any]], meta: dict[str, Any]) -> str:
+    lines = [
+        "# Connecting orbits: broachkit vs AUTO-07p/HomCont (native)",
+        "",
+        f"Command: `{meta['command']}`  ",
+        f"Machine: {meta['machine']}; {meta['date']}; load average {meta['load']}; "
+        f"repeats {meta['repeats']} (medians of CPU seconds, one thread each).",
+        "",
+        "## (a) one connection solve at the demo's parameters",
+        "",
+        "| demo | solved | reference | AUTO value | AUTO error | AUTO s (NTST x NCOL) "
+        "| broachkit N x 4, T, adapt | bk error | bk s | bk/AUTO |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        a, b, ref = r.get("auto_solve", {}), r.get("broachkit_solve", {}), r.get("reference", {})
+        if "error" in r:
+            lines.append(f"| {r['key']} | failed: {r['error']} |||||||||")
+            continue
+        lines.append(
+            f"| {r['key']} | {r['solved']} | {ref.get('value', float('nan')):.12g} | "
+            f"{a['value']:.12g} | {_fmt(a['error'])} | "
+            f"{a['seconds']:.4f} ({a['NTST']}x{a['NCOL']}) | "
+            + (
+                f"{b['N']}, {b['T']:.4g}{' (own)' if b['T_own'] else ''}, adapt {b['adapt']} | "
+                f"{_fmt(b['error'])} | {b['seconds']:.4f} | {b['ratio']:.2f} |"
+                if "seconds" in b
+                else f"{b.get('status', '-')} ||||"
+            )
+        )
+    lines += [
+        "",
+        "## (b) one continuation of it in a second parameter",
+        "",
+        "| demo | second: from -> to | AUTO steps | AUTO error at end | AUTO s "
+        "| bk N, T, adapt | bk steps | bk status | bk error at end | bk s | bk/AUTO |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        a, b = r.get("auto_continue"), r.get("broachkit_continue")
+        if not a or not b:
+            continue
+        if "seconds" not in b:
+            lines.append(
+                f"| {r['key']} | {r['second']} | {a['steps']} | "
+                f"{_fmt(a['error_at_end'])} | {a['seconds']:.4f} | {b['status']} |||||"
+            )
+            continue
+        lines.append(
+            f"| {r['key']} | {r['second']}: {r['start_second']:g} -> {a['end']:.6g} | "
+            f"{a['steps']} | "
+            f"{_fmt(a['error_at_end'])} | {a['seconds']:.4f} | "
+            f"{b['N']}, {b['T']:.4g}, adapt {b['adapt']} | {b['steps']} | "
+            f"{b['status']} | {_fmt(b['error_at_end'])} | {b['seconds']:.4f} | {b['ratio']:.2f} |"
+        )
+    lines += ["", "References and cross-checks:", ""]
+    for r in results:
+        ref = r.get("reference", {})
+        lines.append(
+            f"* {r['key']}: {ref.get('how')}; AUTO NTST x 6 with T doubled: "
+            f"{_fmt(ref.get('auto_fine_2T'), '.12g')} "
+            f"(minus reference {_fmt(ref.get('auto_fine_minus_ref'))}); "
+            f"change of the reference from 2T to 3T: {_fmt(ref.get('change_2T_to_3T'))}"
+        )
+        re_ = r.get("auto_continue", {}).get("reference_at_end", {})
+        if re_:
+            lines.append(
+                f"  * at the end of (b): reference {_fmt(re_.get('value'), '.12g')}; "
+                f"AUTO NTST x 6: {_fmt(re_.get('auto_fine'), '.12g')} (minus reference "
+                f"{_fmt(re_.get('auto_fine_minus_ref'))})"
+            )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--demos", default=",".join(DEMOS))
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--out", default=str(HERE / "results" / "connections_vs_auto"))
+    args = ap.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    logging.getLogger("continuation").setLevel(logging.WARNING)  # (the scan's solves)
+    try:
+        an.library_paths()
+    except PeerUnavailable as exc:
+        print(f"AUTO-07p not available: {exc}", file=sys.stderr)
+        return 2
+    load0 = " ".join(f"{v:.2f}" for v in os.getloadavg())
+    results = []
+    with tempfile.TemporaryDirectory(prefix="conn_vs_auto_") as tmp:
+        for key in args.demos.split(","):
+            demo = DEMOS[key]
+            log.info("%s ...", key)
+            try:
+                r = bench_demo(demo, pathlib.Path(tmp), args.repeats)
+            except Exception as exc:  # a failed demo is reported, not hidden
+                r = {"key": key, "error": f"{type(exc).__name__}: {str(exc)[:300]}"}
+            r["start_second"] = demo.params[demo.second]
+            results.append(r)
+            log.info("%s", json.dumps(r, default=str)[:400])
+    meta = {
+        "command": "benchmarks/_work/venv/bin/python benchmarks/connections_vs_auto.py "
+        + " ".join(argv if argv is not None else sys.argv[1:]),
+        "machine": f"{platform.machine()}, {platform.python_version()}",
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        "repeats": args.repeats,
+        "load": " ".join(f"{v:.2f}" for v in os.getloadavg()),
+        "load_at_start": load0,
+    }
+    out = pathlib.Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".json").write_text(
+        json.dumps(
+            {"meta": meta, "results": results},
+            indent=1,
+            default=lambda o: dataclasses.asdict(o) if dataclasses.is_dataclass(o) else str(o),
+        )
+    )
+    out.with_suffix(".md").write_text(render(results, meta))
+    print(out.with_suffix(".md").read_text())
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

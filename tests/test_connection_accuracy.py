@@ -254,3 +254,57 @@ def test_wrong_branch_says_so():
     res = find_connection(s, s.params(**case.params), case.free, **kw)
     assert not res.success
     assert "other `branch`" in res.message
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_the_manifold_stopped_at_the_window_end_gives_the_cut_of_the_full_run(name):
+    """find_connection integrates W^u only until the cut's window closes; the cut (time
+    and state of the closest approach) is that of the integration to the full t_max on
+    the same sample grid (independent: one run, cut afterwards)."""
+    from continuation.bvp.connection import _refine_equilibrium
+    from continuation.bvp.find import _manifold_to_return
+
+    case = CASES[name]
+    s = case.system
+    p = np.array(s.params(**case.params).values, dtype=float)
+    x_m = _refine_equilibrium(s, np.asarray(case.source, dtype=float), p, "source")
+    if case.target is not None:
+        x_p = _refine_equilibrium(s, np.asarray(case.target, dtype=float), p, "target")
+    elif isinstance(case.shift, dict):
+        x_p = x_m + np.array([2 * np.pi, 0.0])
+    else:
+        x_p = x_m.copy()
+    lam_u = float(np.max(np.linalg.eigvals(s.jacobian(x_m, p)).real))
+    t_max = 200.0 + 40.0 / lam_u
+    t, x = _manifold_to_return(s, p, x_m, x_p, case.branch, 1e-4, t_max)
+    k, d = cut_at_closest_approach(t, x, x_m, x_p)
+    wu = unstable_manifold(s, p, x_m, eps=1e-4, t_max=t_max, dt=t_max / 1000.0,
+                           branches=(case.branch,), refine=False)  # fmt: skip
+    tf = np.asarray(wu.branch(case.branch).trajectory.t)
+    xf = np.asarray(wu.branch(case.branch).trajectory.x)
+    kf, df = cut_at_closest_approach(tf, xf, x_m, x_p)
+    assert t[-1] <= tf[-1] + 1e-9
+    if name in ("cir", "kpr", "san"):  # homoclinic: stopped well before t_max
+        assert t[-1] < 0.5 * t_max, (name, t[-1], t_max)
+    assert t[k] == pytest.approx(tf[kf], abs=1e-9 * t_max), (name, t[k], tf[kf])
+    np.testing.assert_allclose(x[k], xf[kf], rtol=1e-5, atol=1e-7 * (1 + df))
+
+
+def test_expanded_functions_equal_the_mx_graph(monkeypatch):
+    """The SX expansion of a small system's collocation functions (casadi_backend)
+    gives the residual and both Jacobians of the MX graph, at a solved orbit."""
+    import continuation.bvp.casadi_backend as cb
+
+    case = CASES["cir"]
+    res = _find(case, accuracy=ConnectionAccuracy(estimate=False))
+    prob = res.problem
+    args = prob._args(res.z, None)
+    sx = cb.ConnectionFunctions(case.system, prob.layout)
+    monkeypatch.setattr(cb, "MAX_EXPANDED_POINT_INSTRUCTIONS", 0)
+    mx = cb.ConnectionFunctions(case.system, prob.layout)
+    assert sx._expand and not mx._expand
+    for a, b in zip(sx.linearize(args), mx.linearize(args), strict=True):
+        a = a.toarray() if hasattr(a, "toarray") else a
+        b = b.toarray() if hasattr(b, "toarray") else b
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(sx.residual(args), mx.residual(args), rtol=1e-12, atol=1e-12)

@@ -135,6 +135,7 @@ def _linear_flow(A: FloatArray, d: FloatArray, s: FloatArray, unstable: bool) ->
     c = np.linalg.solve(V, d.astype(complex))
     keep = lam.real > 0 if unstable else lam.real < 0
     c = np.where(keep, c, 0.0)
+    lam = np.where(keep, lam, 0.0)  # the dropped modes would overflow exp at large |s|
     return np.real((V[None, :, :] * np.exp(np.outer(s, lam))[:, None, :]) @ c)
 
 

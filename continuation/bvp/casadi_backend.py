@@ -234,6 +234,13 @@ def _collocation_jacobian(
     return J_w, J_P
 
 
+#: The functions are expanded from MX to SX when the system's right-hand side has at
+#: most this many instructions times the number of collocation points (the small
+#: demos: 10^3-10^4; the ship's 12 000-instruction model on 360 points stays MX, whose
+#: expansion would take minutes and much memory).
+MAX_EXPANDED_POINT_INSTRUCTIONS = 100_000
+
+
 class ConnectionFunctions:
     """Compiled residual and Jacobians of one :class:`ConnectionLayout` (see module doc).
 
@@ -326,6 +333,11 @@ class ConnectionFunctions:
         inputs = [w, P, h, T, Qm, Qp, shift, ref, dref, pin]
         names = ["w", "P", "h", "T", "Qm", "Qp", "shift", "ref", "dref", "pin"]
         self.G = ca.Function("G", inputs, [g], names, ["G"])
+        # small systems: the functions are expanded to SX (one flat instruction list,
+        # about half the evaluation time of the MX graph with its mapped calls)
+        self._expand = f_fun.n_instructions() * N * m <= MAX_EXPANDED_POINT_INSTRUCTIONS
+        if self._expand:
+            self.G = self.G.expand()
         self.n_equations = int(g.shape[0])
         self.arg_sizes = tuple(int(self.G.nnz_in(i)) for i in range(self.G.n_in()))
         self._bG = _Buffered(self.G)
@@ -358,6 +370,8 @@ class ConnectionFunctions:
         G_w = ca.Function("G_w", inputs, [Jw], names, ["G_w"])
         G_P = ca.Function("G_P", inputs, [Jp], names, ["G_P"])
         G_all = ca.Function("G_all", inputs, [g, Jw, Jp], names, ["G", "G_w", "G_P"])
+        if self._expand:
+            G_w, G_P, G_all = G_w.expand(), G_P.expand(), G_all.expand()
         spw, spp = G_w.sparsity_out(0), G_P.sparsity_out(0)
         w_pattern = (np.array(spw.row(), dtype=np.int32),
                      np.array(spw.colind(), dtype=np.int32), spw.shape)  # fmt: skip

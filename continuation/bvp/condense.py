@@ -85,6 +85,7 @@ class _Structure:
         self.ss = (k, br[k] * b * b + loc_r[r[k]] * b + loc_c[c[k]])
         k = np.flatnonzero((br < 0) & (bc < 0))
         self.rr = (k, rix[r[k]] * nr + cix[c[k]])
+        self.rr_pad = rix[r[k]] * (nr + 1) + cix[c[k]]  # the same in the padded matrix
         # per block: the rest columns its rows touch (A_sr), the rest rows touching its
         # columns (A_rs); padded to a common width with a dummy index nr (zero entries)
         k_sr = np.flatnonzero((br >= 0) & (bc < 0))
@@ -269,11 +270,10 @@ class StageCondenser:
         Ars[st.rs[1]] = data[st.rs[0]]
         Ars = Ars.reshape(N, st.wr, b)
         W = Ainv @ Asr  # (N, b, wc)
-        S = np.zeros(nr * nr)
-        S[st.rr[1]] = data[st.rr[0]]
-        Sp = np.zeros((nr + 1, nr + 1))
-        Sp[:nr, :nr] = S.reshape(nr, nr)
-        np.subtract.at(Sp.reshape(-1), st.upd, (Ars @ W).ravel())
+        # S = A_rr - A_rs W, the updates summed by bincount (no ufunc.at), padded
+        Sp = -np.bincount(st.upd, weights=(Ars @ W).ravel(), minlength=(nr + 1) * (nr + 1))
+        Sp[st.rr_pad] += data[st.rr[0]]
+        Sp = Sp.reshape(nr + 1, nr + 1)
         lu, piv, info = lapack.dgetrf(np.asfortranarray(Sp[:nr, :nr]), overwrite_a=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"singular condensed matrix (getrf info={info})")

@@ -6,7 +6,8 @@ Steps:
    :math:`x_+ = x_- + \text{shift}`); the source must have a one-dimensional unstable
    manifold.
 2. Integrate the chosen branch of :math:`W^u(x_-)` from :math:`x_- \pm \delta v_u`,
-   :math:`\delta` = ``end_distance`` (:func:`continuation.dynamics.manifolds.unstable_manifold`).
+   :math:`\delta` = ``end_distance`` (:func:`continuation.dynamics.manifolds.unstable_manifold`,
+   CVODES), in segments until the window of step 3 has closed, at most ``t_max``.
 3. Cut it at its closest approach to :math:`x_+`: for a heteroclinic target the
    nearest sample after the orbit has left :math:`x_-` (half its largest distance
    from :math:`x_-`); for a homoclinic one the first local minimum of the distance
@@ -33,8 +34,10 @@ from typing import Any
 import numpy as np
 
 from ..dynamics.manifolds import unstable_manifold
+from ..dynamics.simulate import Simulator
 from ..params import Params
 from ..settings import NewtonSettings
+from ..status import Status
 from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, _linear_flow
 from .collocation import CollocationMesh
@@ -107,6 +110,101 @@ def cut_at_closest_approach(
     return k, float(d_to[k])
 
 
+class _ReturnWatch:
+    """Whether the window of :func:`cut_at_closest_approach` has closed, sample by sample.
+
+    Called on consecutive pieces of the sampled orbit, in time order, it returns
+    whether the distance to ``x_to`` has risen out of the cut's window again, after
+    which the cut no longer depends on the rest of the orbit. Homoclinic: the window
+    opens at the first sample below half the running maximum of the distance (once
+    that maximum is at least ten times the start distance) and closes above half that
+    maximum. Heteroclinic (distance ``L`` between the saddles): it opens below
+    ``L / 4`` and closes above ``L / 2``. ``level`` is None until the window opens.
+    """
+
+    def __init__(self, x_from: FloatArray, x_to: FloatArray, d0: float) -> None:
+        self.x_to = x_to
+        L = float(np.linalg.norm(x_to - x_from))
+        self.hetero = L > 1e-12 * (1.0 + float(np.linalg.norm(x_from)))
+        self.L = L
+        self.d0 = max(d0, 1e-300)
+        self.peak = 0.0
+        self.level: float | None = None
+
+    def closed(self, x: FloatArray) -> bool:
+        """Feed the next samples ``x`` (K, n); True once the window has closed."""
+        d = np.linalg.norm(x - self.x_to, axis=1)
+        if self.level is None:
+            if self.hetero:
+                opened = np.flatnonzero(d < 0.25 * self.L)
+                level = 0.5 * self.L
+            else:
+                m = np.maximum(np.maximum.accumulate(d), self.peak)
+                opened = np.flatnonzero((m >= 10.0 * self.d0) & (d < 0.5 * m))
+                self.peak = float(m[-1])
+                level = 0.5 * float(m[opened[0]]) if opened.size else 0.0
+            if opened.size == 0:
+                return False
+            self.level = level
+            d = d[int(opened[0]) :]
+        return bool(np.any(d > self.level))
+
+
+#: Largest and smallest number of samples per integration segment of
+#: :func:`_manifold_to_return`.
+_SEGMENT_SAMPLES = (100, 5)
+#: Local error tolerances (relative, absolute) of the manifold integration: the guess
+#: only starts Newton's method, which converges to the same discrete solution.
+_MANIFOLD_TOL = (1e-10, 1e-12)
+
+
+def _manifold_to_return(
+    system: Any,
+    pvec: FloatArray,
+    x_m: FloatArray,
+    x_p: FloatArray,
+    branch: int,
+    end_distance: float,
+    t_max: float,
+) -> tuple[FloatArray, FloatArray]:
+    """Branch ``branch`` of ``W^u(x_m)`` sampled every ``t_max / 1000``, integrated in
+    segments until the window of :func:`cut_at_closest_approach` has closed
+    (:class:`_ReturnWatch`) or to ``t_max``; ``(t, x)`` of shapes (K,) and (K, n).
+
+    Segments are 100 samples long until the window opens. Inside it, where the orbit
+    at distance ``d`` from ``x_+`` leaves at most at the rate ``mu`` of the fastest
+    unstable eigenvalue of ``x_+`` (linearised flow), a segment spans the time
+    ``ln(level / d) / mu`` the orbit needs to reach the closing level, at least 5
+    samples: beyond the window the orbit may blow up, and a failing CVODES call
+    costs its whole step budget (san: 0.15 s against 10 ms for the orbit).
+    """
+    dt = t_max / 1000.0
+    watch = _ReturnWatch(x_m, x_p, end_distance)
+    lam = np.linalg.eigvals(np.asarray(system.jacobian(x_p, pvec), dtype=float)).real
+    mu = max(float(np.max(lam)), 1e-6)
+    lo, hi = _SEGMENT_SAMPLES[1], _SEGMENT_SAMPLES[0]
+    t1 = min(t_max, hi * dt)
+    rtol, atol = _MANIFOLD_TOL
+    man = unstable_manifold(
+        system, pvec, x_m, eps=end_distance, t_max=t1, dt=dt, branches=(branch,),
+        refine=False, rtol=rtol, atol=atol,
+    )  # fmt: skip
+    traj = man.branch(branch).trajectory
+    ts, xs = [np.asarray(traj.t, dtype=float)], [np.asarray(traj.x, dtype=float)]
+    sim = Simulator(system, pvec, rtol=rtol, atol=atol)
+    while traj.status is Status.SUCCESS and not watch.closed(xs[-1]) and t1 < t_max * (1.0 - 1e-12):
+        t0 = t1
+        k = hi
+        if watch.level is not None:
+            d = float(np.linalg.norm(xs[-1][-1] - x_p))
+            k = int(min(hi, max(lo, math.log(watch.level / max(d, 1e-300)) / mu / dt)))
+        t1 = min(t_max, t0 + k * dt)
+        traj = sim.run(xs[-1][-1], (t0, t1), dt=dt)
+        ts.append(np.asarray(traj.t, dtype=float)[1:])
+        xs.append(np.asarray(traj.x, dtype=float)[1:])
+    return np.concatenate(ts), np.vstack(xs)
+
+
 def _end_pad(
     A: FloatArray, x_to: FloatArray, x_end: FloatArray, end_distance: float, n_samples: int = 60
 ) -> tuple[FloatArray, FloatArray]:
@@ -142,6 +240,7 @@ def find_connection(
     newton: NewtonSettings | None = None,
     method: str = "newton",
     throw: bool = False,
+    adapt: int | None = None,
 ) -> ConnectionResult:
     r"""A connecting orbit from the saddle ``source`` alone (steps: module docstring).
 
@@ -169,13 +268,18 @@ def find_connection(
     end_distance : float
         Distance (state 2-norm) of both ends of the guess from the saddles.
     t_max : float, optional
-        Integration time of the manifold; default ``200 + 40 / lambda_u``.
+        Longest integration time of the manifold; default ``200 + 40 / lambda_u``. The
+        integration stops earlier, once the distance to the target has risen out of
+        the cut's window again (:func:`cut_at_closest_approach`: the rest of the orbit
+        cannot change the cut).
     n_intervals, degree : int
         Starting mesh (adapted by the solve).
     phase : "integral" or PinPhase
         Phase condition.
-    accuracy, newton, method, throw
-        As for :func:`~continuation.bvp.solve.solve_connection`.
+    accuracy, newton, method, throw, adapt
+        As for :func:`~continuation.bvp.solve.solve_connection` (``adapt`` with
+        ``accuracy=ConnectionAccuracy(estimate=False)``: adaptation rounds of a plain
+        solve on ``n_intervals`` intervals).
 
     Returns
     -------
@@ -216,11 +320,7 @@ def find_connection(
     lam_u = float(np.max(lam_m.real))
     if t_max is None:
         t_max = 200.0 + 40.0 / lam_u
-    man = unstable_manifold(
-        system, pvec, x_m, eps=end_distance, t_max=t_max, branches=(branch,), refine=False
-    )
-    traj = man.branch(branch).trajectory
-    t, x = np.asarray(traj.t, dtype=float), np.asarray(traj.x, dtype=float)
+    t, x = _manifold_to_return(system, pvec, x_m, x_p, branch, end_distance, t_max)
     k, d_min = cut_at_closest_approach(t, x, x_m, x_p)
     t, x = t[: k + 1] - t[0], x[: k + 1]
     if k < 2:
@@ -255,7 +355,7 @@ def find_connection(
         )
     log.info(note)
     res = solve_connection(
-        prob, (t, x), accuracy=accuracy, newton=newton, method=method, throw=False
+        prob, (t, x), accuracy=accuracy, newton=newton, method=method, throw=False, adapt=adapt
     )
     res = dataclasses.replace(res, message=f"{res.message} ({note})")
     if throw and not res.success:
