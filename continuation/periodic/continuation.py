@@ -35,6 +35,7 @@ from typing import Any, Literal
 import numpy as np
 import scipy.optimize as so
 
+from .._threads import blas_threads_for
 from ..algorithms.corrector import correct
 from ..branch import Branch, SpecialKind, SpecialPoint
 from ..bvp.collocation import CollocationMesh
@@ -113,7 +114,8 @@ def solve_orbit(
     u0 = np.append(prob.reference, p0)
     e_p = np.zeros(u0.size)
     e_p[prob.layout.T_col if fix_period else -1] = 1.0
-    res = correct(prob, u0, u0, e_p, 0.0, newton)
+    with blas_threads_for(u0.size, sparse=True):
+        res = correct(prob, u0, u0, e_p, 0.0, newton)
     if not res.converged:
         raise ConvergenceError(f"the cycle did not converge at {free}={p0:.10g}: {res.message}")
     return prob.orbit(res.z, res.p)
@@ -269,20 +271,25 @@ def continue_periodic(
         return _continue_segments(orb, free, st, adapt_every, run)
 
     back = dataclasses.replace(settings, ds=-settings.ds)
-    if direction == "forward":
-        br = one(settings)
-    elif direction == "backward":
-        br = one(back)
-    else:
-        b, f = one(back), one(settings)
-        if len(b) == 0 or len(f) == 0:
-            br = f if len(f) else b
+    # one BLAS thread for the whole run, the start corrections and mesh adaptations
+    # included (the driver limits only its own steps): the blocks are small, and on a
+    # loaded 2-core machine OpenBLAS's second thread made the condensed factorisations
+    # of AUTO's demo ab up to 100x slower (benchmarks/README.md)
+    with blas_threads_for(orb.X.size, sparse=True):
+        if direction == "forward":
+            br = one(settings)
+        elif direction == "backward":
+            br = one(back)
         else:
-            br = _merge_segments([_reverse(b), f])
-            br = dataclasses.replace(
-                br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
-            )
-    return _finish(br, free, period_max)
+            b, f = one(back), one(settings)
+            if len(b) == 0 or len(f) == 0:
+                br = f if len(f) else b
+            else:
+                br = _merge_segments([_reverse(b), f])
+                br = dataclasses.replace(
+                    br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
+                )
+        return _finish(br, free, period_max)
 
 
 def _segments_of(br: Branch) -> tuple[list[PeriodicOrbitProblem], list[int]]:
@@ -560,8 +567,9 @@ def problem_at(branch: Branch, k: int) -> PeriodicOrbitProblem:
 
 def multipliers(branch: Branch) -> np.ndarray:
     """Nontrivial Floquet multipliers at every row of a cycle branch, ``(N, n - 1)``."""
-    return np.array([problem_at(branch, k).floquet(branch.x[k], branch.p[k]).multipliers
-                     for k in range(len(branch))])  # fmt: skip
+    with blas_threads_for(branch.x.shape[1] if branch.x.ndim == 2 else 0, sparse=True):
+        return np.array([problem_at(branch, k).floquet(branch.x[k], branch.p[k]).multipliers
+                         for k in range(len(branch))])  # fmt: skip
 
 
 def orbit_at(branch: Branch, k: int | SpecialPoint) -> PeriodicOrbit:

@@ -138,10 +138,11 @@ class PeriodicOrbitProblem:
             raise ValueError(f"`reference` must have shape ({lay.n_unknowns},), got {ref.shape}")
         per = np.asarray(getattr(self.system, "period", np.zeros(n)), dtype=float)
         object.__setattr__(self, "_layout", lay)
-        object.__setattr__(self, "_eval", StageEvaluator(self.system, lay.N * lay.m))
+        index = self.system.param_names.index(self.free)
+        object.__setattr__(self, "_eval", StageEvaluator(self.system, lay.N * lay.m, index))
         object.__setattr__(self, "_nodes_eval", StageEvaluator(self.system, lay.N + 1))
         object.__setattr__(self, "_errw", _ErrorWeights(self.mesh))
-        object.__setattr__(self, "_index", self.system.param_names.index(self.free))
+        object.__setattr__(self, "_index", index)
         object.__setattr__(self, "_shift", np.asarray(self.winding, dtype=float) * per)
         self.accept(ref)
 
@@ -211,7 +212,7 @@ class PeriodicOrbitProblem:
         B = lay.blocks(X, T, J)
         Gz = lay.assemble(B, F, s["dref"])
         Gp = np.zeros(lay.n_unknowns)
-        Gp[lay.stage_rows.ravel()] = -T * Jp[:, :, self._index].ravel()  # type: ignore[attr-defined]
+        Gp[lay.stage_rows.ravel()] = -T * Jp[:, :, 0].ravel()  # (the free column only)
         self._slot["cache"] = (z.copy(), float(p), B, F)
         return G, Gz, Gp
 
