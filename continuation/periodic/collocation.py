@@ -46,6 +46,7 @@ from ..bvp.collocation import CollocationMesh
 from ..bvp.condense import StageCondenser
 from ..linalg import csc_with_data
 from ..typing import FloatArray
+from .compiled import compiled
 
 
 def _point_functions(system: Any, free: int | None) -> tuple[Any, Any]:
@@ -108,11 +109,25 @@ class StageEvaluator:
         if getattr(self.system, "has_casadi", False) and self.system.n_params > 0:
             fb, ab = _mapped(self.system, self.free, self.n_points)
             n, m, K = self.system.n_states, self.system.n_params, self.n_points
-            wp = n * (m if self.free is None else 1)
             # dense outputs evaluated in place through CasADi's buffer interface
             # (no DM conversions: about 3x less overhead per call than DM calls)
-            _BUFFERS[self] = (_Buffered(fb, K, n, m, (n,)),
-                              _Buffered(ab, K, n, m, (n, n * n, wp)))  # fmt: skip
+            _BUFFERS[self] = [_Buffered(fb, K, n, m, (n,)),
+                              _Buffered(ab, K, n, m, (n, n * n, n * self.n_p)), False]  # fmt: skip
+
+    def _upgrade(self) -> None:
+        """Switch ``f, f_x, f_p`` to the compiled function once it is available
+        (:mod:`continuation.periodic.compiled`; a large model only)."""
+        buf = _BUFFERS[self]
+        fn = compiled(_point_functions(self.system, self.free)[1])
+        if fn is None:
+            return
+        cache = self.system.__dict__.setdefault("_periodic_stage_maps", {})
+        key = ("compiled", -1 if self.free is None else int(self.free), int(self.n_points))
+        if key not in cache:
+            cache[key] = fn.map("fjp_map_c", "serial", self.n_points, [1], [])
+        n, m = self.system.n_states, self.system.n_params
+        buf[1] = _Buffered(cache[key], self.n_points, n, m, (n, n * n, n * self.n_p))
+        buf[2] = True
 
     @property
     def n_p(self) -> int:
@@ -132,6 +147,8 @@ class StageEvaluator:
         npar = self.n_p
         buf = _BUFFERS.get(self)
         if buf is not None and K == self.n_points and n == self.system.n_states:
+            if not buf[2]:
+                self._upgrade()
             Fo, Jo, Po = buf[1](Xs, P)
             # column-major CasADi blocks: Jo[k] holds f_x(X_k)^T, Po[k] f_p(X_k)^T
             J = Jo.reshape(K, n, n).transpose(0, 2, 1).copy()
@@ -172,7 +189,7 @@ class _Buffered:
 
 
 #: Buffered evaluators per StageEvaluator (outside the instance: it stays picklable).
-_BUFFERS: weakref.WeakKeyDictionary[Any, tuple[_Buffered, _Buffered]] = weakref.WeakKeyDictionary()
+_BUFFERS: weakref.WeakKeyDictionary[Any, list[Any]] = weakref.WeakKeyDictionary()
 
 
 class CollocationLayout:

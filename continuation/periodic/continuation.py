@@ -360,7 +360,7 @@ def _continue_once(
     evs.extend(events)
 
     def accept(bp: Any) -> None:
-        prob.accept(np.asarray(bp.x))
+        prob.accept(np.asarray(bp.x), float(bp.p))
         if progress is not None:
             progress(bp)
 

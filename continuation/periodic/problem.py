@@ -177,9 +177,20 @@ class PeriodicOrbitProblem:
         return v
 
     # ------------------------------------------------------------------ phase reference
-    def accept(self, z: FloatArray) -> None:
-        """Make the cycle ``z`` the reference of the integral phase condition."""
+    def accept(self, z: FloatArray, p: float | None = None) -> None:
+        """Make the cycle ``z`` the reference of the integral phase condition.
+
+        With ``p`` (an accepted row of the branch): its Floquet multipliers, if already
+        computed, are kept for the life of the problem, so that
+        :func:`~continuation.periodic.continuation.multipliers` of the branch does not
+        compute them again.
+        """
         lay = self.layout
+        if p is not None:
+            key = (np.asarray(z, dtype=float).tobytes(), float(p))
+            res = self._slot.get("floquet", {}).get(key)
+            if res is not None:
+                self._slot.setdefault("rows", {})[key] = res
         X, _ = lay.split(np.asarray(z, dtype=float))
         self._slot["ref"] = X[lay.stage_points].copy()
         self._slot["dref"] = self.mesh.derivative(X)
@@ -244,6 +255,9 @@ class PeriodicOrbitProblem:
         memo = self._slot.setdefault("floquet", {})
         if key in memo:
             return memo[key]  # type: ignore[no-any-return]
+        rows = self._slot.get("rows")
+        if rows is not None and key in rows:
+            return rows[key]  # type: ignore[no-any-return]
         B, _ = self._blocks(z, p)
         X, _ = self.layout.split(np.asarray(z, dtype=float))
         P = self.param_vector(p)
