@@ -13,9 +13,11 @@ with the same Newton tolerances and step bounds. Only the periodic continuation 
 
   with ``B = 14, beta = 3``: equilibria in ``D`` from ``u = 0``, cycles in ``(D, T)``
   from HB1 as in the demo's run 3 (``IPS = 2``, ``NTST = 70``, ``NCOL = 4``, adaptive
-  mesh ``IAD = 3``, ``EPSL = EPSU = 1e-7``, ``DS = 0.01``, ``DSMAX = 0.5``) up to
-  ``D = 0.25`` (period cap 200). broachkit: the same mesh size, ``newton.tol = 1e-7``,
-  the mesh equidistributed every 3 steps (``adapt_every=3``, as ``IAD = 3``).
+  mesh ``IAD = 3``, ``EPSL = EPSU = 1e-7``, ``DS = 0.01``, ``DSMAX = 0.5``, ``ILP = 0``,
+  ``ISP = 1``: Floquet multipliers computed, no folds, branch points, PD or torus
+  points detected) up to ``D = 0.25`` (period cap 200). broachkit: the same mesh size,
+  ``newton.tol = 1e-7``, the mesh equidistributed every 3 steps (``adapt_every=3``, as
+  ``IAD = 3``), multipliers at every row, fold, branch-point, PD and NS detection off.
 * ``bru``: the Brusselator ``x' = A - (B + 1) x + x^2 y``, ``y' = B x - x^2 y``,
   ``A = 1.5`` (Hopf at ``B = 1 + A^2 = 3.25``), cycles continued in ``B`` up to 5 on
   ``NTST = 40`` without mesh adaptation (``IAD = 0``), tolerances ``1e-10``, ``DS =
@@ -24,10 +26,12 @@ with the same Newton tolerances and step bounds. Only the periodic continuation 
   older ``periodic_vs_auto.py``, which ran AUTO through bifpy's Python front end from
   a first-harmonic guess.
 
-Accuracy: the period at user points (AUTO ``UZR``, broachkit a located event) of the
-continuation parameter, against a reference computed at the *same* parameter value:
-broachkit on ``REF_FACTOR`` times the intervals, mesh adapted 3 times, at AUTO's
-printed parameter for AUTO's error and at the exact check value for broachkit's.
+Special points (and the user points below) are located to AUTO's ``EPSS``
+(broachkit's ``detect.tol``). Accuracy: the period at user points (AUTO ``UZR``,
+broachkit a located event) of the continuation parameter, against a reference
+computed at the *same* parameter value: broachkit on ``REF_FACTOR`` times the
+intervals, mesh adapted 3 times, at AUTO's printed parameter for AUTO's error and at
+broachkit's located value for broachkit's.
 AUTO locates its user points only to ``EPSS``, and on ``ab`` the period changes by
 about 140 per unit of ``D`` near ``D = 0.17``; comparing at the nominal value would
 charge AUTO with its location error (2.6e-5). The reference is cross-checked against
@@ -164,6 +168,7 @@ class Demo:
     tol: float
     adapt_every: int
     period_max: float | None
+    detect: bool  # folds, branch points, PD, NS (AUTO: ILP = 1 and ISP = 2)
 
     @property
     def ntst(self) -> int:
@@ -204,7 +209,7 @@ DEMOS = {
         eq_settings={"ds": 0.05, "ds_max": 0.05, "p_min": 0.0, "p_max": 0.25},
         bk_settings={"ds": 0.01, "ds_min": 1e-3, "ds_max": 0.5, "p_min": 0.0, "p_max": 0.25,
                      "max_steps": 500},
-        tol=1e-7, adapt_every=3, period_max=200.0,
+        tol=1e-7, adapt_every=3, period_max=200.0, detect=False,
     ),
     "bru": Demo(
         name="bru", fortran=BRU_F90, state_names=("x", "y"), param_names=("A", "B"),
@@ -220,7 +225,7 @@ DEMOS = {
         checks=(4.0,),
         eq_settings={"ds": 0.02, "ds_max": 0.05, "p_min": 2.5, "p_max": 4.0},
         bk_settings={"ds": 0.02, "ds_min": 1e-4, "ds_max": 0.1, "p_max": 5.0, "max_steps": 500},
-        tol=1e-10, adapt_every=0, period_max=None,
+        tol=1e-10, adapt_every=0, period_max=None, detect=True,
     ),
 }
 
@@ -290,15 +295,20 @@ def bk_equilibria(demo: Demo) -> Any:
 
 def bk_periodic(demo: Demo, eq: Any, ntst: int | None = None, adapt: int | None = None) -> Any:
     """broachkit's periodic branch from H1 (the timed call)."""
-    from continuation import ContinuationSettings, Event, NewtonSettings
+    from continuation import ContinuationSettings, DetectionSettings, Event, NewtonSettings
     from continuation.bvp import CollocationMesh
     from continuation.periodic import continue_from_hopf
 
-    st = ContinuationSettings(newton=NewtonSettings(tol=demo.tol), **demo.bk_settings)
+    # special points located to AUTO's EPSS
+    detect = DetectionSettings(fold=demo.detect, branch_point=demo.detect,
+                               tol=float(demo.periodic["EPSS"]))  # fmt: skip
+    st = ContinuationSettings(newton=NewtonSettings(tol=demo.tol), detect=detect,
+                              **demo.bk_settings)  # fmt: skip
     events = [Event(f"UZ{k + 1}", lambda z, p, c=c: p - c) for k, c in enumerate(demo.checks)]
     return continue_from_hopf(
         eq, "H1", st, mesh=CollocationMesh(ntst or demo.ntst, 4, 1.0), events=events,
         period_max=demo.period_max, adapt_every=demo.adapt_every if adapt is None else adapt,
+        detect_pd=demo.detect, detect_ns=demo.detect,
     )  # fmt: skip
 
 

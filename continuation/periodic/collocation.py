@@ -192,6 +192,11 @@ class _Buffered:
 _BUFFERS: weakref.WeakKeyDictionary[Any, list[Any]] = weakref.WeakKeyDictionary()
 
 
+#: Index patterns of this many layout sizes ``(n, N, m)`` are kept (oldest dropped).
+PATTERNS_KEPT = 8
+_PATTERNS: dict[tuple[Any, ...], dict[str, Any]] = {}
+
+
 class CollocationLayout:
     """Index bookkeeping of the discretised cycle on one mesh (see module doc).
 
@@ -204,8 +209,27 @@ class CollocationLayout:
     """
 
     def __init__(self, n: int, mesh: CollocationMesh) -> None:
-        self.n = n
+        # the index arrays, the CSC pattern and its condenser depend on (n, N, m) only:
+        # shared by all meshes of that size (a branch re-meshed every few steps builds
+        # them once, and the condenser's structures are reused)
+        key = (int(n), mesh.n_intervals, mesh.degree, np.asarray(mesh.e).tobytes())
+        shared = _PATTERNS.get(key)
+        if shared is None:
+            obj = CollocationLayout.__new__(CollocationLayout)
+            obj._indices(n, mesh)
+            shared = dict(obj.__dict__)
+            if len(_PATTERNS) >= PATTERNS_KEPT:
+                del _PATTERNS[next(iter(_PATTERNS))]
+            _PATTERNS[key] = shared
+        self.__dict__.update(shared)
         self.mesh = mesh
+        # quadrature weights of the stage points (sum = 1)
+        self.weights = (mesh.h[:, None] * mesh.b[None, :]).ravel()  # (N m,)
+        self._B_const = (mesh.D[None, :, :] / mesh.h[:, None, None])[..., None, None] * np.eye(n)
+
+    def _indices(self, n: int, mesh: CollocationMesh) -> None:
+        """The mesh-independent part of :meth:`__init__`."""
+        self.n = n
         N, m = mesh.n_intervals, mesh.degree
         self.N, self.m = N, m
         self.M = mesh.n_points
@@ -240,10 +264,7 @@ class CollocationLayout:
         j, k, i = np.meshgrid(np.arange(N), np.arange(m), np.arange(n), indexing="ij")
         self._T_rows = (j * m1 * n + k * n + i).ravel()
         self.T_col = n * self.M
-        # quadrature weights of the stage points (sum = 1)
-        self.weights = (mesh.h[:, None] * mesh.b[None, :]).ravel()  # (N m,)
         self.stage_rows = self._T_rows.reshape(N, m, n).reshape(N * m, n)  # row of stage s, i
-        self._B_const = (mesh.D[None, :, :] / mesh.h[:, None, None])[..., None, None] * np.eye(n)
         self._build_pattern()
 
     def _build_pattern(self) -> None:

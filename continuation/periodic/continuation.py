@@ -115,7 +115,10 @@ def solve_orbit(
     e_p = np.zeros(u0.size)
     e_p[prob.layout.T_col if fix_period else -1] = 1.0
     with blas_threads_for(u0.size, sparse=True):
-        res = correct(prob, u0, u0, e_p, 0.0, newton)
+        # exact=False: the factorisation at the returned point is not needed here (the
+        # acceptance test of continuation steps; saves one linearisation and one
+        # factorisation per solve, i.e. per mesh adaptation of a branch)
+        res = correct(prob, u0, u0, e_p, 0.0, newton, exact=False)
     if not res.converged:
         raise ConvergenceError(f"the cycle did not converge at {free}={p0:.10g}: {res.message}")
     return prob.orbit(res.z, res.p)
@@ -415,43 +418,50 @@ def _continue_segments(
     run: dict[str, Any],
 ) -> Branch:
     """Segments of ``every`` steps with an equidistributed mesh each (see
-    :func:`continue_periodic`), merged into one branch."""
+    :func:`continue_periodic`), merged into one branch.
+
+    Each segment after the first starts from the last cycle interpolated onto the
+    equidistributed mesh; the driver's start correction (at fixed parameter) solves it
+    there. Where that fails (near a homoclinic orbit the period is far more sensitive
+    than the parameter) the cycle is solved on the new mesh at fixed period
+    (:func:`adapt_mesh` with ``fix_period``), and where that fails too the old mesh is
+    kept.
+    """
     segs: list[Branch] = []
     left = settings.max_steps
     st = settings
+    br = _continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)), **run)
     while True:
-        br = _continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)), **run)
-        if segs and len(br) == 0:
-            # the restart on the new mesh failed (e.g. near a homoclinic orbit, where the
-            # start correction at fixed parameter is ill-conditioned): keep the branch
-            msg = (
-                f"the restart after mesh adaptation failed at {free}={orb.param(free):.10g} "
-                f"({br.message}); the branch up to there is kept."
-            )
-            log.warning(msg)
-            segs[-1] = dataclasses.replace(segs[-1], status=br.status, message=msg)
-            break
         segs.append(br)
         left -= max(len(br) - 1, 0)
         if br.status != Status.MAX_STEPS or left <= 0 or len(br) < 2:
             break
         last = orbit_at(br, len(br) - 1)
-        orb = last
-        # at fixed parameter first; at fixed period where that fails (near a homoclinic
-        # orbit the period is far more sensitive than the parameter)
-        for fix_period in (False, True):
-            try:
-                orb = adapt_mesh(last, rounds=1, free=free, newton=st.newton,
-                                 fix_period=fix_period)  # fmt: skip
-                break
-            except ConvergenceError as exc:
-                log.info("mesh adaptation (fix_period=%s) failed at %s=%.8g: %s",
-                         fix_period, free, br.p[-1], exc)  # fmt: skip
-        else:
-            log.warning("mesh adaptation failed at %s=%.8g; mesh kept", free, br.p[-1])
         sgn = 1.0 if br.p[-1] >= br.p[-2] else -1.0
         ds = min(max(abs(float(br.ds[-1])), abs(st.ds)), st.ds_max)
-        st = dataclasses.replace(st, ds=sgn * ds)
+        st = dataclasses.replace(st, ds=sgn * ds, max_steps=min(every, left))
+        nxt = _continue_once(last.on_mesh(last.mesh.equidistributed(last.X)), free, st, **run)
+        if len(nxt) == 0:
+            log.info("restart on the adapted mesh failed at %s=%.8g: %s", free, br.p[-1],
+                     nxt.message)  # fmt: skip
+            try:
+                fixed = adapt_mesh(last, rounds=1, free=free, newton=st.newton, fix_period=True)
+            except ConvergenceError as exc:
+                log.warning("mesh adaptation failed at %s=%.8g (%s); mesh kept", free,
+                            br.p[-1], exc)  # fmt: skip
+                fixed = last
+            nxt = _continue_once(fixed, free, st, **run)
+        if len(nxt) == 0:
+            # the restart on the new mesh failed (e.g. near a homoclinic orbit, where the
+            # start correction at fixed parameter is ill-conditioned): keep the branch
+            msg = (
+                f"the restart after mesh adaptation failed at {free}={last.param(free):.10g} "
+                f"({nxt.message}); the branch up to there is kept."
+            )
+            log.warning(msg)
+            segs[-1] = dataclasses.replace(segs[-1], status=nxt.status, message=msg)
+            break
+        br = nxt
     return _merge_segments(segs)
 
 
