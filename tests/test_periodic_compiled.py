@@ -15,15 +15,16 @@ from continuation.periodic.collocation import _BUFFERS, StageEvaluator
 compiled_mod = importlib.import_module("continuation.periodic.compiled")
 
 
-def _system() -> System:
-    def rhs(x, p, ops):
-        return ops.stack([
-            p[0] - (p[1] + 1) * x[0] + x[0] ** 2 * x[1] + ops.sin(x[2]),
-            p[1] * x[0] - x[0] ** 2 * x[1],
-            ops.exp(-x[0]) * x[2] - p[0],
-        ])
+def _rhs(x, p, ops):
+    return ops.stack([
+        p[0] - (p[1] + 1) * x[0] + x[0] ** 2 * x[1] + ops.sin(x[2]),
+        p[1] * x[0] - x[0] ** 2 * x[1],
+        ops.exp(-x[0]) * x[2] - p[0],
+    ])
 
-    return System(rhs, ("x", "y", "z"), ("A", "B"))
+
+def _system() -> System:
+    return System(_rhs, ("x", "y", "z"), ("A", "B"))
 
 
 @pytest.fixture
@@ -77,3 +78,18 @@ def test_no_compiler_found(cache, monkeypatch):
     ev = StageEvaluator(_system(), 4, free=0)
     ev.all(_points(4), np.array([1.5, 3.2]))
     assert not _BUFFERS[ev][2]
+
+
+def test_stage_functions_are_not_pickled_with_the_system():
+    """The cached CasADi functions live beside the system, not in it: a system sent to
+    sweep workers pickles to the same bytes before and after a periodic evaluation."""
+    import pickle
+
+    s = _system()
+    before = len(pickle.dumps(s))
+    ev = StageEvaluator(s, 6, free=0)
+    ev.all(_points(6), np.array([1.5, 3.2]))
+    assert len(pickle.dumps(s)) == before
+    s2 = pickle.loads(pickle.dumps(s))
+    F2 = StageEvaluator(s2, 6, free=0).all(_points(6), np.array([1.5, 3.2]))[0]
+    np.testing.assert_allclose(F2, ev.all(_points(6), np.array([1.5, 3.2]))[0], rtol=1e-15)

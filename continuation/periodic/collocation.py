@@ -48,15 +48,25 @@ from ..linalg import csc_with_data
 from ..typing import FloatArray
 from .compiled import compiled
 
+#: CasADi functions per system, outside the system object (so that pickling a system,
+#: e.g. for sweep workers, does not carry them; they are rebuilt where needed).
+_SYSTEM_CACHE: weakref.WeakKeyDictionary[Any, dict[str, dict[Any, Any]]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _cache_of(system: Any, name: str) -> dict[Any, Any]:
+    return _SYSTEM_CACHE.setdefault(system, {}).setdefault(name, {})
+
 
 def _point_functions(system: Any, free: int | None) -> tuple[Any, Any]:
     """``f`` and ``(f, f_x, f_p)`` of one point as dense SX functions, built once per
-    system and free parameter (kept in the system's cache: every mesh and every
+    system and free parameter (kept beside the system: every mesh and every
     problem of a branch shares them; ``free`` not None: ``f_p`` is the one column
     ``df/dp_free``, by forward differentiation, instead of all ``n_par`` columns)."""
     import casadi as ca
 
-    cache = system.__dict__.setdefault("_periodic_stage_fns", {})
+    cache = _cache_of(system, "fns")
     key = -1 if free is None else int(free)
     if key in cache:
         return cache[key]  # type: ignore[no-any-return]
@@ -78,7 +88,7 @@ def _point_functions(system: Any, free: int | None) -> tuple[Any, Any]:
 
 def _mapped(system: Any, free: int | None, K: int) -> tuple[Any, Any]:
     """The point functions of :func:`_point_functions` mapped over ``K`` points (cached)."""
-    cache = system.__dict__.setdefault("_periodic_stage_maps", {})
+    cache = _cache_of(system, "maps")
     key = (-1 if free is None else int(free), int(K))
     if key not in cache:
         f_one, all_one = _point_functions(system, free)
@@ -121,7 +131,7 @@ class StageEvaluator:
         fn = compiled(_point_functions(self.system, self.free)[1])
         if fn is None:
             return
-        cache = self.system.__dict__.setdefault("_periodic_stage_maps", {})
+        cache = _cache_of(self.system, "maps")
         key = ("compiled", -1 if self.free is None else int(self.free), int(self.n_points))
         if key not in cache:
             cache[key] = fn.map("fjp_map_c", "serial", self.n_points, [1], [])
