@@ -46,7 +46,7 @@ from ..bvp.collocation import CollocationMesh
 from ..bvp.condense import StageCondenser
 from ..linalg import csc_with_data
 from ..typing import FloatArray
-from .compiled import compiled
+from .compiled import compiled, settled
 
 #: CasADi functions per system, outside the system object (so that pickling a system,
 #: e.g. for sweep workers, does not carry them; they are rebuilt where needed).
@@ -128,8 +128,11 @@ class StageEvaluator:
         """Switch ``f, f_x, f_p`` to the compiled function once it is available
         (:mod:`continuation.periodic.compiled`; a large model only)."""
         buf = _BUFFERS[self]
-        fn = compiled(_point_functions(self.system, self.free)[1])
+        point = _point_functions(self.system, self.free)[1]
+        fn = compiled(point)
         if fn is None:
+            if settled(point):
+                buf[2] = None  # the virtual machine for good: stop asking
             return
         cache = _cache_of(self.system, "maps")
         key = ("compiled", -1 if self.free is None else int(self.free), int(self.n_points))
@@ -157,7 +160,7 @@ class StageEvaluator:
         npar = self.n_p
         buf = _BUFFERS.get(self)
         if buf is not None and K == self.n_points and n == self.system.n_states:
-            if not buf[2]:
+            if buf[2] is False:
                 self._upgrade()
             Fo, Jo, Po = buf[1](Xs, P)
             # column-major CasADi blocks: Jo[k] holds f_x(X_k)^T, Po[k] f_p(X_k)^T

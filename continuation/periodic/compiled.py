@@ -146,6 +146,13 @@ def compiled(fn: Any) -> Any:
     return None
 
 
+def settled(fn: Any) -> bool:
+    """True once :func:`compiled` has given its final answer for ``fn`` (no compilation
+    pending)."""
+    entry = _STATE.get(id(fn))
+    return entry is not None and entry[0] is fn and entry[1] != "pending"
+
+
 def _poll(key: int) -> Any:
     proc, work = _PENDING[key]
     rc = proc.poll()
@@ -174,4 +181,4 @@ def wait(timeout: float | None = None) -> None:
             pass
 
 
-__all__ = ["CFLAGS", "MIN_INSTRUCTIONS", "cache_dir", "compiled", "wait"]
+__all__ = ["CFLAGS", "MIN_INSTRUCTIONS", "cache_dir", "compiled", "settled", "wait"]
