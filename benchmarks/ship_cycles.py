@@ -8,7 +8,13 @@ goes (``--profile``: a second run under cProfile, cumulative time of the engine'
 parts). Writes
 ``benchmarks/results/ship_cycles.json``.
 
-Run on demand: ``python benchmarks/ship_cycles.py [--profile]`` (about a minute each run).
+Also reported: CPU time (user + system of this process; a background compilation of the
+stage function runs in a child process, see ``continuation.periodic.compiled``), the
+load average, and whether the branch ran on the compiled stage function (``compiled``:
+false on the first run on a machine, while it compiles; ``BROACHKIT_COMPILE=0`` forces
+CasADi's virtual machine).
+
+Run on demand: ``python benchmarks/ship_cycles.py [--profile]`` (under a minute).
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ from __future__ import annotations
 import cProfile
 import json
 import math
+import os
 import pstats
 import sys
 import time
@@ -24,7 +31,7 @@ from pathlib import Path
 PARTS = {
     "floquet (condensation + periodic eigenvalues)": "floquet.py:floquet",
     "Jacobian assembly (PeriodicOrbitProblem.linearize)": "problem.py:linearize",
-    "CasADi f, f_x, f_p at the stages": "collocation.py:all",
+    "f, f_x, f_p at the stages (VM or compiled)": "collocation.py:all",
     "SuperLU factorisations (splu)": "linsolve.py:splu",
 }
 
@@ -40,9 +47,15 @@ def main() -> int:
     t0 = time.perf_counter()
     orbit = simulated_cycle(model, params)
     t_start = time.perf_counter() - t0
-    t1 = time.perf_counter()
+    load = os.getloadavg()
+    t1, c1 = time.perf_counter(), time.process_time()
     cb = cycle_branch(orbit, "Fn", p_max=0.4, period_max=60.0)
-    t_branch = time.perf_counter() - t1
+    t_branch, c_branch = time.perf_counter() - t1, time.process_time() - c1
+    from continuation.periodic import problem_at
+    from continuation.periodic.collocation import _BUFFERS
+
+    used = _BUFFERS.get(problem_at(cb.branch, len(cb.p) - 1)._eval)  # type: ignore[attr-defined]
+    compiled = bool(used is not None and used[2])
     parts = {}
     if "--profile" in sys.argv:  # a second, profiled run: where the time goes
         prof = cProfile.Profile()
@@ -57,6 +70,9 @@ def main() -> int:
     res = {
         "start_cycle_s": t_start,
         "branch_s": t_branch,
+        "branch_cpu_s": c_branch,
+        "compiled": compiled,
+        "load_average": load,
         "rows": len(cb.p),
         "s_per_step": t_branch / max(len(cb.p) - 1, 1),
         "Fn_last": float(cb.p[-1]),

@@ -46,6 +46,55 @@ from ..bvp.collocation import CollocationMesh
 from ..bvp.condense import StageCondenser
 from ..linalg import csc_with_data
 from ..typing import FloatArray
+from .compiled import compiled, settled
+
+#: CasADi functions per system, outside the system object (so that pickling a system,
+#: e.g. for sweep workers, does not carry them; they are rebuilt where needed).
+_SYSTEM_CACHE: weakref.WeakKeyDictionary[Any, dict[str, dict[Any, Any]]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _cache_of(system: Any, name: str) -> dict[Any, Any]:
+    return _SYSTEM_CACHE.setdefault(system, {}).setdefault(name, {})
+
+
+def _point_functions(system: Any, free: int | None) -> tuple[Any, Any]:
+    """``f`` and ``(f, f_x, f_p)`` of one point as dense SX functions, built once per
+    system and free parameter (kept beside the system: every mesh and every
+    problem of a branch shares them; ``free`` not None: ``f_p`` is the one column
+    ``df/dp_free``, by forward differentiation, instead of all ``n_par`` columns)."""
+    import casadi as ca
+
+    cache = _cache_of(system, "fns")
+    key = -1 if free is None else int(free)
+    if key in cache:
+        return cache[key]  # type: ignore[no-any-return]
+    n, m = system.n_states, system.n_params
+    x, p = ca.SX.sym("x", n), ca.SX.sym("p", max(m, 0))
+    fx = system.symbolic(x, p)
+    # one expression graph for f and both Jacobians (shared subexpressions: about
+    # 1.4x faster than calling three separate functions)
+    jx = ca.jacobian(fx, x)
+    if free is None:
+        jp = ca.jacobian(fx, p)
+    else:
+        jp = ca.jtimes(fx, p, ca.DM.eye(m)[:, key])
+    f_one = ca.Function("f_pt", [x, p], [ca.densify(fx)])
+    all_one = ca.Function("fjp_pt", [x, p], [ca.densify(fx), ca.densify(jx), ca.densify(jp)])
+    cache[key] = (f_one, all_one)
+    return f_one, all_one
+
+
+def _mapped(system: Any, free: int | None, K: int) -> tuple[Any, Any]:
+    """The point functions of :func:`_point_functions` mapped over ``K`` points (cached)."""
+    cache = _cache_of(system, "maps")
+    key = (-1 if free is None else int(free), int(K))
+    if key not in cache:
+        f_one, all_one = _point_functions(system, free)
+        cache[key] = (f_one.map("f_map", "serial", K, [1], []),
+                      all_one.map("fjp_map", "serial", K, [1], []))  # fmt: skip
+    return cache[key]  # type: ignore[no-any-return]
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,71 +106,73 @@ class StageEvaluator:
     system : System
     n_points : int
         Number of points evaluated per call.
+    free : int, optional
+        Index of the continuation parameter: :meth:`all` then returns the one column
+        ``df/dp_free`` of ``f_p``, shape ``(K, n, 1)`` (cheaper than all columns).
     """
 
     system: Any
     n_points: int
+    free: int | None = None
 
     def __post_init__(self) -> None:
-        fns = None
-        if getattr(self.system, "has_casadi", False):
-            import casadi as ca
+        if getattr(self.system, "has_casadi", False) and self.system.n_params > 0:
+            fb, ab = _mapped(self.system, self.free, self.n_points)
+            n, m, K = self.system.n_states, self.system.n_params, self.n_points
+            # dense outputs evaluated in place through CasADi's buffer interface
+            # (no DM conversions: about 3x less overhead per call than DM calls)
+            _BUFFERS[self] = [_Buffered(fb, K, n, m, (n,)),
+                              _Buffered(ab, K, n, m, (n, n * n, n * self.n_p)), False]  # fmt: skip
 
-            c = self.system.casadi_functions()
-            K = self.n_points
-            n, m = self.system.n_states, self.system.n_params
-            x, p = ca.SX.sym("x", n), ca.SX.sym("p", max(m, 0))
-            # one expression graph for f and both Jacobians (shared subexpressions:
-            # about 1.4x faster than calling the three compiled functions)
-            fx = c["f"](x, p)
-            both = ca.Function("fjp", [x, p], [fx, ca.jacobian(fx, x), ca.jacobian(fx, p)])
-            fns = (
-                c["f"].map("f_map", "serial", K, [1], []),
-                both.map("fjp_map", "serial", K, [1], []),
-            )
-            if m > 0:
-                # dense outputs evaluated in place through CasADi's buffer interface
-                # (no DM conversions: about 3x less overhead per call than fns)
-                dense = [ca.densify(fx), ca.densify(ca.jacobian(fx, x)),
-                         ca.densify(ca.jacobian(fx, p))]  # fmt: skip
-                fb = ca.Function("fb", [x, p], dense[:1]).map("fb_map", "serial", K, [1], [])
-                ab = ca.Function("ab", [x, p], dense).map("ab_map", "serial", K, [1], [])
-                _BUFFERS[self] = (_Buffered(fb, K, n, m, (n,)),
-                                  _Buffered(ab, K, n, m, (n, n * n, n * m)))  # fmt: skip
-        object.__setattr__(self, "_fns", fns)
+    def _upgrade(self) -> None:
+        """Switch ``f, f_x, f_p`` to the compiled function once it is available
+        (:mod:`continuation.periodic.compiled`; a large model only)."""
+        buf = _BUFFERS[self]
+        point = _point_functions(self.system, self.free)[1]
+        fn = compiled(point)
+        if fn is None:
+            if settled(point):
+                buf[2] = None  # the virtual machine for good: stop asking
+            return
+        cache = _cache_of(self.system, "maps")
+        key = ("compiled", -1 if self.free is None else int(self.free), int(self.n_points))
+        if key not in cache:
+            cache[key] = fn.map("fjp_map_c", "serial", self.n_points, [1], [])
+        n, m = self.system.n_states, self.system.n_params
+        buf[1] = _Buffered(cache[key], self.n_points, n, m, (n, n * n, n * self.n_p))
+        buf[2] = True
+
+    @property
+    def n_p(self) -> int:
+        """Number of ``f_p`` columns :meth:`all` returns."""
+        return int(self.system.n_params) if self.free is None else 1
 
     def f(self, Xs: FloatArray, P: FloatArray) -> FloatArray:
         """``f`` at the rows of ``Xs`` (K, n) -> (K, n)."""
         buf = _BUFFERS.get(self)
         if buf is not None and Xs.shape == (self.n_points, self.system.n_states):
             return buf[0](Xs, P)[0].copy()
-        if self._fns is not None:
-            return np.asarray(self._fns[0](Xs.T, P), dtype=float).T
         return np.array([self.system.f(x, P) for x in Xs])
 
     def all(self, Xs: FloatArray, P: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """``(f (K, n), f_x (K, n, n), f_p (K, n, n_par))`` at the rows of ``Xs``."""
+        """``(f (K, n), f_x (K, n, n), f_p (K, n, n_p))`` at the rows of ``Xs``."""
         K, n = Xs.shape
-        npar = int(np.size(P))
+        npar = self.n_p
         buf = _BUFFERS.get(self)
         if buf is not None and K == self.n_points and n == self.system.n_states:
+            if buf[2] is False:
+                self._upgrade()
             Fo, Jo, Po = buf[1](Xs, P)
             # column-major CasADi blocks: Jo[k] holds f_x(X_k)^T, Po[k] f_p(X_k)^T
             J = Jo.reshape(K, n, n).transpose(0, 2, 1).copy()
             Jp = Po.reshape(K, npar, n).transpose(0, 2, 1).copy()
             return Fo.copy(), J, Jp
-        if self._fns is not None:
-            Fd, Jd, Pd = self._fns[1](Xs.T, P)
-            F = np.asarray(Fd, dtype=float).T
-            J = np.asarray(Jd, dtype=float).reshape(n, K, n).transpose(1, 0, 2)  # (n, n K)
-            if npar:
-                Jp = np.asarray(Pd, dtype=float).reshape(n, K, npar).transpose(1, 0, 2)
-            else:
-                Jp = np.zeros((K, n, 0))
-            return F, J, Jp
         F = np.array([self.system.f(x, P) for x in Xs])
         J = np.array([self.system.jacobian(x, P) for x in Xs])
-        Jp = np.array([np.asarray(self.system.dfdp(x, P)).reshape(n, npar) for x in Xs])
+        m = int(np.size(P))
+        Jp = np.array([np.asarray(self.system.dfdp(x, P)).reshape(n, m) for x in Xs])
+        if self.free is not None:
+            Jp = Jp[:, :, self.free : self.free + 1]
         return F, J, Jp
 
 
@@ -151,7 +202,12 @@ class _Buffered:
 
 
 #: Buffered evaluators per StageEvaluator (outside the instance: it stays picklable).
-_BUFFERS: weakref.WeakKeyDictionary[Any, tuple[_Buffered, _Buffered]] = weakref.WeakKeyDictionary()
+_BUFFERS: weakref.WeakKeyDictionary[Any, list[Any]] = weakref.WeakKeyDictionary()
+
+
+#: Index patterns of this many layout sizes ``(n, N, m)`` are kept (oldest dropped).
+PATTERNS_KEPT = 8
+_PATTERNS: dict[tuple[Any, ...], dict[str, Any]] = {}
 
 
 class CollocationLayout:
@@ -166,8 +222,27 @@ class CollocationLayout:
     """
 
     def __init__(self, n: int, mesh: CollocationMesh) -> None:
-        self.n = n
+        # the index arrays, the CSC pattern and its condenser depend on (n, N, m) only:
+        # shared by all meshes of that size (a branch re-meshed every few steps builds
+        # them once, and the condenser's structures are reused)
+        key = (int(n), mesh.n_intervals, mesh.degree, np.asarray(mesh.e).tobytes())
+        shared = _PATTERNS.get(key)
+        if shared is None:
+            obj = CollocationLayout.__new__(CollocationLayout)
+            obj._indices(n, mesh)
+            shared = dict(obj.__dict__)
+            if len(_PATTERNS) >= PATTERNS_KEPT:
+                del _PATTERNS[next(iter(_PATTERNS))]
+            _PATTERNS[key] = shared
+        self.__dict__.update(shared)
         self.mesh = mesh
+        # quadrature weights of the stage points (sum = 1)
+        self.weights = (mesh.h[:, None] * mesh.b[None, :]).ravel()  # (N m,)
+        self._B_const = (mesh.D[None, :, :] / mesh.h[:, None, None])[..., None, None] * np.eye(n)
+
+    def _indices(self, n: int, mesh: CollocationMesh) -> None:
+        """The mesh-independent part of :meth:`__init__`."""
+        self.n = n
         N, m = mesh.n_intervals, mesh.degree
         self.N, self.m = N, m
         self.M = mesh.n_points
@@ -202,10 +277,7 @@ class CollocationLayout:
         j, k, i = np.meshgrid(np.arange(N), np.arange(m), np.arange(n), indexing="ij")
         self._T_rows = (j * m1 * n + k * n + i).ravel()
         self.T_col = n * self.M
-        # quadrature weights of the stage points (sum = 1)
-        self.weights = (mesh.h[:, None] * mesh.b[None, :]).ravel()  # (N m,)
         self.stage_rows = self._T_rows.reshape(N, m, n).reshape(N * m, n)  # row of stage s, i
-        self._B_const = (mesh.D[None, :, :] / mesh.h[:, None, None])[..., None, None] * np.eye(n)
         self._build_pattern()
 
     def _build_pattern(self) -> None:

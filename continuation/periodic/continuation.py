@@ -35,6 +35,7 @@ from typing import Any, Literal
 import numpy as np
 import scipy.optimize as so
 
+from .._threads import blas_threads_for
 from ..algorithms.corrector import correct
 from ..branch import Branch, SpecialKind, SpecialPoint
 from ..bvp.collocation import CollocationMesh
@@ -113,7 +114,11 @@ def solve_orbit(
     u0 = np.append(prob.reference, p0)
     e_p = np.zeros(u0.size)
     e_p[prob.layout.T_col if fix_period else -1] = 1.0
-    res = correct(prob, u0, u0, e_p, 0.0, newton)
+    with blas_threads_for(u0.size, sparse=True):
+        # exact=False: the factorisation at the returned point is not needed here (the
+        # acceptance test of continuation steps; saves one linearisation and one
+        # factorisation per solve, i.e. per mesh adaptation of a branch)
+        res = correct(prob, u0, u0, e_p, 0.0, newton, exact=False)
     if not res.converged:
         raise ConvergenceError(f"the cycle did not converge at {free}={p0:.10g}: {res.message}")
     return prob.orbit(res.z, res.p)
@@ -291,20 +296,25 @@ def continue_periodic(
         return _continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals)
 
     back = dataclasses.replace(settings, ds=-settings.ds)
-    if direction == "forward":
-        br = one(settings)
-    elif direction == "backward":
-        br = one(back)
-    else:
-        b, f = one(back), one(settings)
-        if len(b) == 0 or len(f) == 0:
-            br = f if len(f) else b
+    # one BLAS thread for the whole run, the start corrections and mesh adaptations
+    # included (the driver limits only its own steps): the blocks are small, and on a
+    # loaded 2-core machine OpenBLAS's second thread made the condensed factorisations
+    # of AUTO's demo ab up to 100x slower (benchmarks/README.md)
+    with blas_threads_for(orb.X.size, sparse=True):
+        if direction == "forward":
+            br = one(settings)
+        elif direction == "backward":
+            br = one(back)
         else:
-            br = _merge_segments([_reverse(b), f])
-            br = dataclasses.replace(
-                br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
-            )
-    return _finish(br, free, period_max, error_tol)
+            b, f = one(back), one(settings)
+            if len(b) == 0 or len(f) == 0:
+                br = f if len(f) else b
+            else:
+                br = _merge_segments([_reverse(b), f])
+                br = dataclasses.replace(
+                    br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
+                )
+        return _finish(br, free, period_max, error_tol)
 
 
 def _segments_of(br: Branch) -> tuple[list[PeriodicOrbitProblem], list[int]]:
@@ -380,7 +390,7 @@ def _continue_once(
     evs.extend(events)
 
     def accept(bp: Any) -> None:
-        prob.accept(np.asarray(bp.x))
+        prob.accept(np.asarray(bp.x), float(bp.p))
         if progress is not None:
             progress(bp)
 
@@ -448,44 +458,27 @@ def _continue_segments(
 ) -> Branch:
     """Segments of ``every`` steps with an equidistributed mesh each (see
     :func:`continue_periodic`), merged into one branch; with ``error_tol`` the number
-    of intervals grows where the error estimate of a segment's last cycle exceeds it."""
+    of intervals grows where the error estimate of a segment's last cycle exceeds it.
+
+    Each segment after the first starts from the last cycle interpolated onto the
+    equidistributed mesh; the driver's start correction (at fixed parameter) solves it
+    there. Where that fails (near a homoclinic orbit the period is far more sensitive
+    than the parameter) the start is corrected at fixed period instead, and where
+    that fails too the old mesh is kept. Where the parameter hardly moves, the next
+    segment leaves in the direction of growing (shrinking) period as the last did.
+    """
     segs: list[Branch] = []
     left = settings.max_steps
     st = settings
-    fixed_T, t_sign = False, 0.0
+    br = _continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)), **run)
     while True:
-        br = _continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)),
-                            fix_period=fixed_T, period_sign=t_sign, **run)  # fmt: skip
-        if segs and len(br) == 0:
-            # the restart on the new mesh failed (e.g. near a homoclinic orbit, where the
-            # start correction at fixed parameter is ill-conditioned): keep the branch
-            msg = (
-                f"the restart after mesh adaptation failed at {free}={orb.param(free):.10g} "
-                f"({br.message}); the branch up to there is kept."
-            )
-            log.warning(msg)
-            segs[-1] = dataclasses.replace(segs[-1], status=br.status, message=msg)
-            break
         segs.append(br)
         left -= max(len(br) - 1, 0)
         if br.status != Status.MAX_STEPS or left <= 0 or len(br) < 2:
             break
         last = orbit_at(br, len(br) - 1)
-        orb = last
-        n_new = _refined_intervals(last, float(br.records["error"][-1]), error_tol, max_intervals)
-        # at fixed parameter first; at fixed period where that fails (near a homoclinic
-        # orbit the period is far more sensitive than the parameter)
-        for fix_period in (False, True):
-            try:
-                orb = adapt_mesh(last, n_new, rounds=1 if n_new is None else 2, free=free,
-                                 newton=st.newton, fix_period=fix_period)  # fmt: skip
-                fixed_T = fix_period
-                break
-            except ConvergenceError as exc:
-                log.info("mesh adaptation (fix_period=%s) failed at %s=%.8g: %s",
-                         fix_period, free, br.p[-1], exc)  # fmt: skip
-        else:
-            log.warning("mesh adaptation failed at %s=%.8g; mesh kept", free, br.p[-1])
+        n_new = _refined_intervals(last, float(br.records["error"][-1]), error_tol,
+                                   max_intervals)  # fmt: skip
         sgn = 1.0 if br.p[-1] >= br.p[-2] else -1.0
         # where the parameter hardly moves (near a homoclinic orbit) its sign is noise:
         # go on in the direction of the period instead
@@ -493,7 +486,28 @@ def _continue_segments(
         dp_rel = abs(float(br.p[-1] - br.p[-2])) / max(abs(float(br.p[-1])), 1.0)
         t_sign = math.copysign(1.0, dT) if dp_rel < 1e-8 and dT != 0.0 else 0.0
         ds = min(max(abs(float(br.ds[-1])), abs(st.ds)), st.ds_max)
-        st = dataclasses.replace(st, ds=sgn * ds)
+        st = dataclasses.replace(st, ds=sgn * ds, max_steps=min(every, left))
+        moved = last.on_mesh(last.mesh.equidistributed(last.X, n_new))
+        nxt = _continue_once(moved, free, st, period_sign=t_sign, **run)
+        if len(nxt) == 0:
+            log.info("restart on the adapted mesh failed at %s=%.8g: %s", free, br.p[-1],
+                     nxt.message)  # fmt: skip
+            nxt = _continue_once(moved, free, st, fix_period=True, period_sign=t_sign, **run)
+        if len(nxt) == 0:
+            log.warning("restart at fixed period failed at %s=%.8g (%s); mesh kept", free,
+                        br.p[-1], nxt.message)  # fmt: skip
+            nxt = _continue_once(last, free, st, fix_period=True, period_sign=t_sign, **run)
+        if len(nxt) == 0:
+            # the restart on the new mesh failed (e.g. near a homoclinic orbit, where the
+            # start correction at fixed parameter is ill-conditioned): keep the branch
+            msg = (
+                f"the restart after mesh adaptation failed at {free}={last.param(free):.10g} "
+                f"({nxt.message}); the branch up to there is kept."
+            )
+            log.warning(msg)
+            segs[-1] = dataclasses.replace(segs[-1], status=nxt.status, message=msg)
+            break
+        br = nxt
     return _merge_segments(segs)
 
 
@@ -644,8 +658,9 @@ def problem_at(branch: Branch, k: int) -> PeriodicOrbitProblem:
 
 def multipliers(branch: Branch) -> np.ndarray:
     """Nontrivial Floquet multipliers at every row of a cycle branch, ``(N, n - 1)``."""
-    return np.array([problem_at(branch, k).floquet(_row(branch, k), branch.p[k]).multipliers
-                     for k in range(len(branch))])  # fmt: skip
+    with blas_threads_for(branch.x.shape[1] if branch.x.ndim == 2 else 0, sparse=True):
+        return np.array([problem_at(branch, k).floquet(_row(branch, k), branch.p[k]).multipliers
+                         for k in range(len(branch))])  # fmt: skip
 
 
 def orbit_at(branch: Branch, k: int | SpecialPoint) -> PeriodicOrbit:

@@ -114,6 +114,46 @@ def grouped(factors: FloatArray, groups: int = GROUPS) -> FloatArray:
     return out
 
 
+def dominance_basis(factors: FloatArray) -> FloatArray | None:
+    r"""A start for :func:`periodic_eigenvalues`: an orthonormal ``Q`` whose first ``k``
+    columns span the invariant subspace of the ``k`` eigenvalues of largest modulus of
+    the explicitly formed product (real and imaginary parts of the eigenvectors, by
+    decreasing modulus, orthonormalised in that order), for every ``k``.
+
+    The dominant invariant subspaces of the formed product are accurate even where its
+    small eigenvalues have lost all digits, so the iteration starts next to its fixed
+    point and converges in two or three sweeps instead of dozens (its rate is the
+    ratio of neighbouring moduli); the eigenvalues themselves still come from the
+    iteration. None if the product is not finite.
+    """
+    n = factors.shape[1]
+    with np.errstate(over="ignore", invalid="ignore"):
+        Mo = monodromy(factors)
+    if not np.all(np.isfinite(Mo)):
+        return None
+    try:
+        lam, V = np.linalg.eig(Mo)
+    except np.linalg.LinAlgError:
+        return None
+    order = np.argsort(-np.abs(lam), kind="stable")
+    cols: list[FloatArray] = []
+    used = np.zeros(n, dtype=bool)
+    for k in order:
+        if used[k]:
+            continue
+        used[k] = True
+        v = V[:, k]
+        cols.append(v.real)
+        if lam[k].imag != 0.0:
+            free = np.flatnonzero(~used)
+            if free.size:
+                j = free[np.argmin(np.abs(lam[free] - np.conj(lam[k])))]
+                used[j] = True
+            cols.append(v.imag)
+    Q, _ = np.linalg.qr(np.column_stack(cols[:n]))
+    return Q  # type: ignore[no-any-return]
+
+
 def periodic_eigenvalues(
     factors: FloatArray, Q_start: FloatArray | None = None
 ) -> tuple[ComplexArray, bool, FloatArray]:
@@ -221,8 +261,10 @@ def floquet(
         mu1 = np.array([sg * math.exp(min(lg, 709.0))], dtype=complex)
         return FloquetResult(mu1, complex(trivial), max(abs(trivial - 1.0), eps))
     Cg = grouped(C)
-    Q_start = memo.get("Q") if memo is not None else None
-    mu, ok, Q = periodic_eigenvalues(Cg, Q_start)  # type: ignore[arg-type]
+    Q_start = dominance_basis(Cg)
+    if Q_start is None and memo is not None:
+        Q_start = memo.get("Q")  # type: ignore[assignment]
+    mu, ok, Q = periodic_eigenvalues(Cg, Q_start)
     if memo is not None:
         memo["Q"] = Q
     if not ok:
@@ -282,6 +324,7 @@ __all__ = [
     "FloquetResult",
     "exponents",
     "floquet",
+    "dominance_basis",
     "grouped",
     "is_neimark_sacker",
     "monodromy",

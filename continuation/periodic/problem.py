@@ -138,10 +138,11 @@ class PeriodicOrbitProblem:
             raise ValueError(f"`reference` must have shape ({lay.n_unknowns},), got {ref.shape}")
         per = np.asarray(getattr(self.system, "period", np.zeros(n)), dtype=float)
         object.__setattr__(self, "_layout", lay)
-        object.__setattr__(self, "_eval", StageEvaluator(self.system, lay.N * lay.m))
+        index = self.system.param_names.index(self.free)
+        object.__setattr__(self, "_eval", StageEvaluator(self.system, lay.N * lay.m, index))
         object.__setattr__(self, "_nodes_eval", StageEvaluator(self.system, lay.N + 1))
         object.__setattr__(self, "_errw", _ErrorWeights(self.mesh))
-        object.__setattr__(self, "_index", self.system.param_names.index(self.free))
+        object.__setattr__(self, "_index", index)
         object.__setattr__(self, "_shift", np.asarray(self.winding, dtype=float) * per)
         self.accept(ref)
 
@@ -176,9 +177,20 @@ class PeriodicOrbitProblem:
         return v
 
     # ------------------------------------------------------------------ phase reference
-    def accept(self, z: FloatArray) -> None:
-        """Make the cycle ``z`` the reference of the integral phase condition."""
+    def accept(self, z: FloatArray, p: float | None = None) -> None:
+        """Make the cycle ``z`` the reference of the integral phase condition.
+
+        With ``p`` (an accepted row of the branch): its Floquet multipliers, if already
+        computed, are kept for the life of the problem, so that
+        :func:`~continuation.periodic.continuation.multipliers` of the branch does not
+        compute them again.
+        """
         lay = self.layout
+        if p is not None:
+            key = (np.asarray(z, dtype=float).tobytes(), float(p))
+            res = self._slot.get("floquet", {}).get(key)
+            if res is not None:
+                self._slot.setdefault("rows", {})[key] = res
         X, _ = lay.split(np.asarray(z, dtype=float))
         self._slot["ref"] = X[lay.stage_points].copy()
         self._slot["dref"] = self.mesh.derivative(X)
@@ -211,7 +223,7 @@ class PeriodicOrbitProblem:
         B = lay.blocks(X, T, J)
         Gz = lay.assemble(B, F, s["dref"])
         Gp = np.zeros(lay.n_unknowns)
-        Gp[lay.stage_rows.ravel()] = -T * Jp[:, :, self._index].ravel()  # type: ignore[attr-defined]
+        Gp[lay.stage_rows.ravel()] = -T * Jp[:, :, 0].ravel()  # (the free column only)
         self._slot["cache"] = (z.copy(), float(p), B, F)
         return G, Gz, Gp
 
@@ -243,6 +255,9 @@ class PeriodicOrbitProblem:
         memo = self._slot.setdefault("floquet", {})
         if key in memo:
             return memo[key]  # type: ignore[no-any-return]
+        rows = self._slot.get("rows")
+        if rows is not None and key in rows:
+            return rows[key]  # type: ignore[no-any-return]
         B, _ = self._blocks(z, p)
         X, _ = self.layout.split(np.asarray(z, dtype=float))
         P = self.param_vector(p)
