@@ -509,7 +509,7 @@ def capsizing_boundary_bvp(
     params_from: Any,
     chi_c_to: float,
     xi_0: Sequence[float],
-    fn_bracket: tuple[float, float],
+    fn_bracket: tuple[float, float] | None = None,
     *,
     orbit: ShootingOrbit | None = None,
     tol: float = 1e-6,
@@ -532,8 +532,9 @@ def capsizing_boundary_bvp(
         New course (rad).
     xi_0 : sequence of float
         Initial positions :math:`(\xi_G/\lambda)_0`.
-    fn_bracket : (float, float)
-        Bisection bracket (periodic below, capsize above) for every position.
+    fn_bracket : (float, float), optional
+        Bisection bracket (periodic below, capsize above) for every position; needed
+        unless ``bisections`` are given.
     orbit : ShootingOrbit, optional
         The old periodic orbit.
     tol : float
@@ -572,6 +573,8 @@ def capsizing_boundary_bvp(
         bis = sorted(bisections, key=lambda b: b.xi_0)
         if [b.xi_0 for b in bis] != xs:
             raise ValueError("`bisections` must hold one SuddenChangeBoundary per `xi_0`")
+    elif fn_bracket is None:
+        raise ValueError("give `fn_bracket` (or `bisections` already run)")
     else:
         bis = [sudden_change_boundary(model, None, chi, x, fn_bracket, tol, orbit=orb) for x in xs]
     points = []
