@@ -358,15 +358,15 @@ def _compute(
             b = boundary(value[f"{key}/b/{float(xi):g}"], chi10)
             if b.success:
                 bounds[float(xi)] = b
-        curve = None
+        bvp_curve = None
         if bvp:
-            curve = _bvp_boundary(model, orbits[orb_name], chi10, bounds, key, say)
+            bvp_curve = _bvp_boundary(model, orbits[orb_name], chi10, bounds, key, say)
             from ship_models.analysis.capsize_boundary import ROW_HEADER
 
             save_table(
-                out / f"{key}_boundary_bvp.csv", ROW_HEADER, curve.rows(),
+                out / f"{key}_boundary_bvp.csv", ROW_HEADER, bvp_curve.rows(),
                 meta={"chi_c_to_deg": CHI_TO_DEG, "bisection_tol": BVP_TOL,
-                      "notes": " | ".join(curve.notes) or "none"},
+                      "notes": " | ".join(bvp_curve.notes) or "none"},
             )  # fmt: skip
         maps[key] = {
             "xi_0": [float(v) for v in mp.xi_0],
@@ -377,13 +377,13 @@ def _compute(
             "boundary_minus_heteroclinic": {f"{k:g}": v.Fn - fn_het for k, v in bounds.items()},
             "seconds": mp.elapsed,
         }
-        if curve is not None:
-            maps[key]["boundary_bvp"] = curve.to_json()
+        if bvp_curve is not None:
+            maps[key]["boundary_bvp"] = bvp_curve.to_json()
         _draw_map(
             mp, fn_het, bounds,
             f"Sudden change to chi_c = {CHI_TO_DEG:g} deg (cf. Umeda 1999, Fig. {key[3:]})\n"
             f"{title}",
-            out / fig_name, curve,
+            out / fig_name, bvp_curve,
         )  # fmt: skip
     summary["maps"] = maps
 

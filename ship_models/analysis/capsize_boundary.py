@@ -41,6 +41,7 @@ bisection found, at that ``k``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -54,6 +55,7 @@ from continuation.bvp import (
     LandingProblem,
     LandingResult,
     continue_landing,
+    landing_at,
     solve_landing,
 )
 from continuation.dynamics import simulate
@@ -169,6 +171,9 @@ class BoundarySegment:
     status : Status
         The branch's status (``SUCCESS``/``PARAM_BOUND``: reached the next position).
     message : str
+    end_Fn, end_error : float
+        The last row re-solved with error estimates (branch rows carry none: the mesh
+        and ``T`` are those of the start), and that estimate; nan if not re-solved.
     """
 
     k: int
@@ -176,6 +181,8 @@ class BoundarySegment:
     Fn: FloatArray
     status: Status
     message: str = ""
+    end_Fn: float = math.nan
+    end_error: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -438,6 +445,12 @@ def _solve_point(
         return failed(Status.NO_SOLUTION, str(exc))
     tm = np.clip(prob.mesh.t, t[0], t[-1])
     res = solve_landing(prob, (tm, at(tm)), accuracy=accuracy, newton=_NEWTON)
+    if res.errors is None and not res.success:
+        # long orbits past many saddle passages: Newton's basin is small; once more on
+        # a mesh twice as fine (the guess, an exact run, is then closer to a solution)
+        prob = _problem(orb, pt, xi, saddle.x, k, t, x, 0.5 * interval_length, degree)
+        tm = np.clip(prob.mesh.t, t[0], t[-1])
+        res = solve_landing(prob, (tm, at(tm)), accuracy=accuracy, newton=_NEWTON)
     return _point(model, res, b, k)
 
 
@@ -465,7 +478,9 @@ def _point(model: Any, res: LandingResult, b: SuddenChangeBoundary, k: int) -> B
     )
 
 
-def _bridge(a: BoundaryPoint, b: BoundaryPoint) -> tuple[BoundarySegment | None, str]:
+def _bridge(
+    a: BoundaryPoint, b: BoundaryPoint, accuracy: ConnectionAccuracy
+) -> tuple[BoundarySegment | None, str]:
     """Continue ``a``'s landing to ``b.xi_0``; a segment and a note (empty if fine)."""
     res = a.orbit
     if res is None:
@@ -495,10 +510,16 @@ def _bridge(a: BoundaryPoint, b: BoundaryPoint) -> tuple[BoundarySegment | None,
             f"continuation at k = {a.k} from xi_0 = {a.xi_0:g} stopped at "
             f"{xs[-1]:.6g} before {b.xi_0:g}: {br.status.name}"
         )
-    if b.success and abs(fns[-1] - b.Fn) > 10 * max(a.error, b.error, 1e-9):
+    row = landing_at(br, -1)
+    end = solve_landing(row.problem, row, accuracy=accuracy, newton=_NEWTON)
+    seg = dataclasses.replace(seg, end_Fn=end.value("Fn"), end_error=end.error("Fn"))
+    if not end.success:
+        return seg, f"the continued landing at xi_0 = {b.xi_0:g} does not re-solve: {end.message}"
+    if b.success and abs(end.value("Fn") - b.Fn) > end.error("Fn") + b.error + 1e-12:
         return seg, (
-            f"continued landing at xi_0 = {b.xi_0:g} (Fn = {fns[-1]:.9f}) differs "
-            f"from the solve there ({b.Fn:.9f}): another landing of the same k"
+            f"continued landing at xi_0 = {b.xi_0:g} (Fn = {end.value('Fn'):.10f}) differs "
+            f"from the solve there ({b.Fn:.10f}) beyond their estimates: another landing of "
+            "the same k"
         )
     return seg, ""
 
@@ -596,7 +617,7 @@ def capsizing_boundary_bvp(
             )
             continue
         if bridge:
-            seg, note = _bridge(a, b)
+            seg, note = _bridge(a, b, acc)
             if seg is not None:
                 segments.append(seg)
             if note:
