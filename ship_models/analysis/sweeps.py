@@ -176,7 +176,7 @@ def _boundary(key: dict[str, Any]) -> dict[str, Any]:
         "Fn_upper": b.bracket[1],
         "outcome_lower": b.outcomes[0],
         "outcome_upper": b.outcomes[1],
-        "n_runs": b.n_evaluations,
+        "n_runs": b.n_runs,
         "status": b.status.name,
         "message": b.message,
     }
