@@ -20,6 +20,8 @@ are suddenly changed and the transient is classified (capsize or periodic motion
 Writes to ``--out`` (default ``out/fig16_22``): ``fig16_map.png``, ``fig17_20_transient.png``,
 ``fig21_final_stage.png``, ``fig22_map.png``, ``fig23_critical_condition.png``; ``fig16_map.csv``,
 ``fig22_map.csv``, ``fig23_boundaries.csv``, ``transient.csv``, ``orbits.csv``,
+with ``--bvp`` also ``fig16_boundary_bvp.csv``, ``fig22_boundary_bvp.csv`` (the boundary
+as a landing BVP beside bisections to 1e-6, drawn on the maps),
 ``summary.json``.
 
 Run: ``python studies/fig16_22_sudden_change.py [--out DIR] [--full]`` (the default
@@ -67,6 +69,33 @@ FIG23_OFFSETS = ((-0.0063, 0.0017), (-0.03, 0.01))
 #: Sub-folder of the step's output with the sweep's checkpoints and the orbits.
 SWEEP_DIR = "sweep"
 PAPER_FN = PAPER_FN_BRACKET
+#: Bisection tolerance of the comparison with the landing BVP (``--bvp``).
+BVP_TOL = 1e-6
+
+
+def _bvp_boundary(
+    model: Any,
+    orb: Any,
+    chi: float,
+    bounds: dict[float, Any],
+    key: str,
+    say: Callable[[str], None],
+) -> Any:
+    """The boundary as a landing BVP at the bisected positions, beside tight bisections."""
+    from ship_models.analysis.capsize_boundary import capsizing_boundary_bvp
+    from ship_models.analysis.sudden_change import sudden_change_boundary
+
+    xs = sorted(bounds)
+    say(f"{key}: re-bisecting {len(xs)} brackets to {BVP_TOL:g}, then the landing BVP")
+    tight = [
+        sudden_change_boundary(model, None, chi, x, bounds[x].bracket, BVP_TOL, orbit=orb)
+        for x in xs
+    ]
+    curve = capsizing_boundary_bvp(model, None, chi, xs, orbit=orb, bisections=tight,
+                                   progress=lambda m: say(f"  {m}"))  # fmt: skip
+    for note in curve.notes:
+        say(f"  note: {note}")
+    return curve
 
 
 def _map_rows(mp: Any) -> list[list[Any]]:
@@ -77,7 +106,9 @@ def _map_rows(mp: Any) -> list[list[Any]]:
     ]
 
 
-def _draw_map(mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path: Path) -> None:
+def _draw_map(
+    mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path: Path, bvp: Any = None
+) -> None:
     from ship_models.analysis.outcomes import ShipOutcome
 
     CAPSIZE, PERIODIC = ShipOutcome.CAPSIZE, ShipOutcome.PERIODIC
@@ -103,6 +134,16 @@ def _draw_map(mp: Any, fn_het: float, bounds: dict[float, Any], title: str, path
             yerr=[0.5 * (bounds[x].bracket[1] - bounds[x].bracket[0]) for x in xs],
             fmt="D", color="tab:green", ms=5, capsize=3, label="boundary by bisection (bracket)",
         )  # fmt: skip
+    if bvp is not None:
+        for i, seg in enumerate(bvp.segments):
+            ax.plot(seg.xi_0, seg.Fn, "-", color="tab:purple", lw=1.3,
+                    label="BVP landing continued in xi_0 (same k)" if i == 0 else None)  # fmt: skip
+        ok = [p for p in bvp.points if p.success]
+        ax.plot([p.xi_0 for p in ok], [p.Fn for p in ok], "*", color="tab:purple", ms=9,
+                label="boundary by BVP (landing on the crest saddle)")  # fmt: skip
+        for p in ok:
+            ax.annotate(f"k={p.k}", (p.xi_0, p.Fn), textcoords="offset points", xytext=(4, -10),
+                        fontsize=6, color="tab:purple")  # fmt: skip
     ax.set_xlabel("initial longitudinal position (xi_G / lambda)_0")
     ax.set_ylabel("nominal Froude number")
     ax.set_title(title, fontsize=8.5)
@@ -118,9 +159,18 @@ def workers_of(be: Any) -> int:
 
 
 def compute(
-    out: Path, progress: Callable[[str], None] | None = None, *, full: bool = False
+    out: Path,
+    progress: Callable[[str], None] | None = None,
+    *,
+    full: bool = False,
+    bvp: bool = False,
 ) -> dict[str, Any]:
     """Run the experiments; write figures and data; return the summary.
+
+    ``bvp=True`` (``--bvp``) also solves the capsizing boundary of Figs. 16 and 22 as a
+    landing BVP at every plotted position (:func:`~ship_models.analysis.capsize_boundary.
+    capsizing_boundary_bvp`), after re-bisecting each bracket to :data:`BVP_TOL` for the
+    comparison; it adds a few minutes of CPU, so the main job leaves it off.
 
     The bisections and map rows run on :func:`~studies._sudden_tasks.sweep_workers`
     local processes (``BROACHKIT_WORKERS=1``: all in this process), checkpointed in
@@ -140,7 +190,7 @@ def compute(
     # process solves the connecting orbit; then every bisection and map row is a task
     be = open_backend("processes", workers=workers) if workers > 1 else None
     try:
-        return _compute(out, say, full, model, orbits_path, be, t_all)
+        return _compute(out, say, full, model, orbits_path, be, t_all, bvp)
     finally:
         if be is not None:
             be.close()
@@ -154,6 +204,7 @@ def _compute(
     orbits_path: str,
     be: Any,
     t_all: float,
+    bvp: bool = False,
 ) -> dict[str, Any]:
     from continuation.sweep import run_sweep, source_version
     from ship_models.analysis.critical_bvp import critical_fn_bvp
@@ -287,7 +338,7 @@ def _compute(
         )  # fmt: skip
 
     maps: dict[str, Any] = {}
-    for key, _, deltas, fig_name, title in cases:
+    for key, orb_name, deltas, fig_name, title in cases:
         say(f"{key}: outcome map {len(deltas)} Fn x {xi_grid.size} positions")
         rows_v = [value[f"{key}/row/{i}"] for i in range(len(deltas))]
         mp = SuddenChangeMap(
@@ -307,6 +358,16 @@ def _compute(
             b = boundary(value[f"{key}/b/{float(xi):g}"], chi10)
             if b.success:
                 bounds[float(xi)] = b
+        bvp_curve = None
+        if bvp:
+            bvp_curve = _bvp_boundary(model, orbits[orb_name], chi10, bounds, key, say)
+            from ship_models.analysis.capsize_boundary import ROW_HEADER
+
+            save_table(
+                out / f"{key}_boundary_bvp.csv", ROW_HEADER, bvp_curve.rows(),
+                meta={"chi_c_to_deg": CHI_TO_DEG, "bisection_tol": BVP_TOL,
+                      "notes": " | ".join(bvp_curve.notes) or "none"},
+            )  # fmt: skip
         maps[key] = {
             "xi_0": [float(v) for v in mp.xi_0],
             "Fn": [float(v) for v in mp.Fn],
@@ -316,11 +377,13 @@ def _compute(
             "boundary_minus_heteroclinic": {f"{k:g}": v.Fn - fn_het for k, v in bounds.items()},
             "seconds": mp.elapsed,
         }
+        if bvp_curve is not None:
+            maps[key]["boundary_bvp"] = bvp_curve.to_json()
         _draw_map(
             mp, fn_het, bounds,
             f"Sudden change to chi_c = {CHI_TO_DEG:g} deg (cf. Umeda 1999, Fig. {key[3:]})\n"
             f"{title}",
-            out / fig_name,
+            out / fig_name, bvp_curve,
         )  # fmt: skip
     summary["maps"] = maps
 
@@ -469,8 +532,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("out/fig16_22"))
     ap.add_argument("--full", action="store_true", help="fine grids, every 5 deg, tol 2e-5")
+    ap.add_argument(
+        "--bvp", action="store_true", help="also the boundary as a landing BVP (Figs. 16, 22)"
+    )
     args = ap.parse_args(argv)
-    s = compute(args.out, progress=lambda m: print(m, flush=True), full=args.full)
+    s = compute(args.out, progress=lambda m: print(m, flush=True), full=args.full, bvp=args.bvp)
     print(json.dumps({k: s[k] for k in ("heteroclinic_Fn_10deg", "fig23_squares", "seconds")},
                      indent=2))  # fmt: skip
     return 0

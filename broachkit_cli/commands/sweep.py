@@ -118,6 +118,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     b.add_argument("--follow-steps", type=int, default=0, help="follow the old orbit from (0.1, 0)")
     b.add_argument("--no-map", action="store_true", help="skip the outcome map")
     b.add_argument("--t-max", type=float, default=600.0, help="time limit of each run (s)")
+    b.add_argument(
+        "--method", choices=("bisection", "bvp"), default="bisection",
+        help="bvp: also the boundary as a landing BVP at each bisected position (slower)",
+    )  # fmt: skip
     _common(b)
     c = sub.add_parser("courses", help="critical Fn per course (Fig. 23 squares)")
     c.add_argument("--chi-c", default="0:30:10", help="courses 'a:b:step' or 'a,b' (degrees)")
@@ -181,6 +185,14 @@ def _clean(v: Any) -> Any:
     return v
 
 
+def _clean_json(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {k: _clean_json(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_clean_json(x) for x in v]
+    return _clean(v)
+
+
 def _boundary(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     from ship_models.analysis.sweeps import MAP_OFFSETS, boundary_sweep
 
@@ -197,10 +209,18 @@ def _boundary(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     r = boundary_sweep(
         args.vessel, args.chi_c, initial=parse_initial(args.initial), positions=args.positions,
         tol=args.tol, Fn_bracket=bracket, map_offsets=None if args.no_map else MAP_OFFSETS,
-        follow_steps=args.follow_steps, t_max=args.t_max, **_run_options(args),
+        follow_steps=args.follow_steps, t_max=args.t_max, method=args.method,
+        **_run_options(args),
     )  # fmt: skip
     out = args.out
     r.boundaries.write_csv(out / "boundary.csv")
+    if r.bvp is not None:
+        from ship_models.analysis.capsize_boundary import ROW_HEADER
+
+        with (out / "boundary_bvp.csv").open("w") as fh:
+            fh.write(",".join(ROW_HEADER) + "\n")
+            for row in r.bvp.rows():
+                fh.write(",".join(str(v) for v in row) + "\n")
     if r.outcomes is not None:
         r.outcomes.write_csv(out / "boundary_map.csv")
     data = {
@@ -211,6 +231,7 @@ def _boundary(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
         "Fn": _clean(r.Fn),
         "boundaries": r.boundaries.to_json(),
         "outcome_map": None if r.outcomes is None else r.outcomes.to_json(),
+        "bvp": None if r.bvp is None else _clean_json(r.bvp.to_json()),
     }
     plt = _plt()
     fig, ax = plt.subplots(figsize=(5.6, 3.9))
@@ -222,6 +243,12 @@ def _boundary(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
                 ax.plot(rec.key["xi_0"], rec.key["Fn"], m, color=col, mfc="none", ms=5)
     ok = np.isfinite(r.Fn)
     ax.plot(r.xi_0[ok], r.Fn[ok], "D-", color="tab:green", ms=3, lw=0.8, label="boundary")
+    if r.bvp is not None:
+        for seg in r.bvp.segments:
+            ax.plot(seg.xi_0, seg.Fn, "-", color="tab:purple", lw=1.0)
+        pts = [p for p in r.bvp.points if p.success]
+        ax.plot([p.xi_0 for p in pts], [p.Fn for p in pts], "*", color="tab:purple", ms=7,
+                label="boundary by BVP (landing)")  # fmt: skip
     if math.isfinite(r.heteroclinic_Fn):
         ax.axhline(r.heteroclinic_Fn, color="k", lw=0.8, ls="--", label="heteroclinic Fn")
     ax.set_xlabel("initial position (xi_G/lambda)_0")

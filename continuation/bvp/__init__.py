@@ -13,6 +13,10 @@ Public names:
 * :func:`solve_connection` (adaptive mesh and error estimates by default,
   :class:`ConnectionAccuracy`, :class:`ErrorEstimates`), :func:`check_convergence`,
   :func:`continue_connection`, :func:`connection_at`;
+* :class:`LandingProblem`, :func:`solve_landing`, :class:`LandingResult`,
+  :func:`continue_landing`, :func:`landing_at` — an orbit from a given start point
+  ``x0(s)`` onto a saddle's stable manifold, one system parameter solved per unstable
+  direction, continued in ``s`` (:mod:`continuation.bvp.landing`);
 * :func:`simplified_newton`, :class:`JacobianCache` — Newton with few Jacobians (chord
   steps with Broyden updates; one factorisation shared between nearby solves), behind
   ``solve_connection(..., method="broyden" | "chord")``.
@@ -49,6 +53,8 @@ from .accuracy import ConnectionAccuracy
 from .collocation import CollocationMesh
 from .connection import HeteroclinicProblem, PinPhase
 from .find import find_connection
+from .landing import LandingProblem
+from .landing_solve import LandingResult, continue_landing, landing_at, solve_landing
 from .result import ConnectionResult, ErrorEstimates
 from .simplified import JacobianCache, simplified_newton
 from .solve import (
@@ -69,11 +75,16 @@ __all__ = [
     "ErrorEstimates",
     "HeteroclinicProblem",
     "JacobianCache",
+    "LandingProblem",
+    "LandingResult",
     "PinPhase",
     "check_convergence",
     "connection_at",
     "find_connection",
     "continue_connection",
+    "continue_landing",
+    "landing_at",
     "simplified_newton",
     "solve_connection",
+    "solve_landing",
 ]

@@ -176,7 +176,7 @@ def _boundary(key: dict[str, Any]) -> dict[str, Any]:
         "Fn_upper": b.bracket[1],
         "outcome_lower": b.outcomes[0],
         "outcome_upper": b.outcomes[1],
-        "n_runs": b.n_evaluations,
+        "n_runs": b.n_runs,
         "status": b.status.name,
         "message": b.message,
     }
@@ -714,6 +714,10 @@ class BoundarySweep:
     boundaries : SweepResult
     outcomes : SweepResult or None
         The outcome map (``Fn x xi_0``).
+    bvp : CapsizeBoundary or None
+        With ``method="bvp"``: the boundary as a landing BVP at the bisected positions
+        (:func:`~ship_models.analysis.capsize_boundary.capsizing_boundary_bvp`), beside
+        the bisection brackets.
     """
 
     chi_c_deg: float
@@ -722,6 +726,7 @@ class BoundarySweep:
     heteroclinic_Fn: float
     boundaries: SweepResult
     outcomes: SweepResult | None
+    bvp: Any = None
 
     @property
     def complete(self) -> bool:
@@ -755,6 +760,7 @@ def boundary_sweep(
     t_max: float = 600.0,
     H_over_lambda: float | None = None,
     lambda_over_L: float | None = None,
+    method: str = "bisection",
     **run: Any,
 ) -> BoundarySweep:
     r"""Figs. 16/22: critical Fn of the sudden change per initial position, by bisection.
@@ -769,6 +775,9 @@ def boundary_sweep(
     ----------
     vessel : str
         Name or path of the vessel file.
+    method : {"bisection", "bvp"}
+        ``"bvp"``: also solve the boundary as a landing BVP at every bisected position
+        (in this process, after the sweep; its bracket is the reference).
     run
         ``store``, ``backend``, ``workers``, ``scheduler``, ``progress``,
         ``retry_failed`` of :func:`continuation.sweep.run_sweep`.
@@ -777,6 +786,8 @@ def boundary_sweep(
     -------
     BoundarySweep
     """
+    if method not in ("bisection", "bvp"):
+        raise ValueError(f"`method` must be 'bisection' or 'bvp', got {method!r}")
     vessel = _vessel_ref(vessel)
     from .critical_bvp import critical_fn_bvp
 
@@ -832,7 +843,30 @@ def boundary_sweep(
         ],
         dtype=float,
     )
-    return BoundarySweep(float(chi_c_deg), xs, Fn, fh, b, outcomes)
+    bvp = None
+    if method == "bvp" and b.status is not Status.INTERRUPTED:
+        bvp = _bvp_of_sweep(m, chi, b, {"vessel": vessel, **common})
+    return BoundarySweep(float(chi_c_deg), xs, Fn, fh, b, outcomes, bvp)
+
+
+def _bvp_of_sweep(m: Any, chi: float, b: SweepResult, key: dict[str, Any]) -> Any:
+    """The landing BVP at the positions the bisection tasks bracketed."""
+    from .capsize_boundary import capsizing_boundary_bvp
+    from .sudden_change import SuddenChangeBoundary
+
+    bis = []
+    for r in b.records:
+        v = r.value if r.done else None
+        if v and v.get("status") == "SUCCESS":
+            lo, hi = float(v["Fn_lower"]), float(v["Fn_upper"])
+            bis.append(SuddenChangeBoundary(
+                0.5 * (lo + hi), (lo, hi), (v["outcome_lower"], v["outcome_upper"]), chi,
+                float(r.key["xi_0"]), int(v["n_runs"]), Status.SUCCESS, v["message"],
+            ))  # fmt: skip
+    if not bis:
+        return None
+    xs = [x.xi_0 for x in sorted(bis, key=lambda x: x.xi_0)]
+    return capsizing_boundary_bvp(m, None, chi, xs, orbit=_orbit(key), bisections=bis)
 
 
 @dataclass(frozen=True, eq=False)

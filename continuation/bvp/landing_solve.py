@@ -1,0 +1,444 @@
+r"""Solve a landing orbit (:class:`~continuation.bvp.landing.LandingProblem`) and continue it.
+
+* :func:`solve_landing` -- damped Newton on the collocation system, mesh
+  equidistribution, and the error estimates of the solved parameters as for
+  connections (:class:`~continuation.bvp.accuracy.ConnectionAccuracy`):
+  discretisation by a re-solve on the mesh with every interval halved, truncation by a
+  re-solve on ``[0, T_factor T]`` (extended at the end only, the added part guessed by
+  the linearised flow onto the equilibrium). ``SUCCESS`` only when both are within
+  ``atol + rtol |p|``.
+* :func:`continue_landing` -- the curve of landings in the start parameter ``s`` by the
+  pseudo-arclength driver :func:`continuation.driver.continue_branch`.
+* :func:`landing_at` -- the orbit at one row of such a branch.
+
+Example (closed form; ``u' = u - p + y^2``, ``y' = -y``: the saddle ``(p, 0)`` has the
+stable manifold ``u = p - y^2 / 3``, so the orbit from ``(s, c)`` lands on it for
+``p = s + c^2 / 3``; with the end on the eigenspace at ``T``,
+``p(T) = s + c^2 (1 - e^{-3T}) / 3``)::
+
+    sys = System(lambda x, p, ops: ops.stack([x[0] - p[0] + x[1] ** 2, -x[1]]),
+                 ("u", "y"), ("p",))
+    prob = LandingProblem(sys, {"p": 0.3}, "p", start=lambda s: [s, 1.0],
+                          saddle=[0.3, 0.0], T=8.0, s=0.0, start_name="s")
+    res = solve_landing(prob, (np.linspace(0, 8, 50), np.zeros((50, 2))))
+    res.value("p"), res.error("p")        # 0.33333..., its bound
+    br = continue_landing(res, ContinuationSettings(p_min=-1, p_max=1))
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConvergenceError
+from ..newton import NewtonResult, newton
+from ..params import Params
+from ..settings import ContinuationSettings, NewtonSettings
+from ..status import Status
+from ..typing import FloatArray
+from .accuracy import ConnectionAccuracy, _linear_flow
+from .collocation import CollocationMesh
+from .landing import LandingProblem
+from .result import ErrorEstimates
+
+DEFAULT_NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=True)
+
+
+@dataclass(frozen=True, eq=False)
+class LandingResult:
+    """A (possibly failed) landing orbit.
+
+    Attributes
+    ----------
+    params : Params
+        All parameters, the solved ``free`` ones included.
+    free : tuple of str
+    s : float
+        Start parameter.
+    t : ndarray, shape (M,)
+    x : ndarray, shape (M, n)
+        The orbit; ``x[0]`` is the start point.
+    x_eq : ndarray, shape (n,)
+        The equilibrium the orbit lands on (``shift`` included).
+    residual_norm : float
+    mesh : CollocationMesh
+    status : Status
+    message : str
+    newton_iters : int
+    z : ndarray
+    problem : LandingProblem or None
+        Rebased at the solution.
+    errors : ErrorEstimates or None
+    """
+
+    params: Params
+    free: tuple[str, ...]
+    s: float
+    t: FloatArray
+    x: FloatArray
+    x_eq: FloatArray
+    residual_norm: float
+    mesh: CollocationMesh
+    status: Status
+    message: str
+    newton_iters: int = 0
+    z: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
+    problem: Any = field(default=None, repr=False)
+    errors: ErrorEstimates | None = None
+
+    @property
+    def success(self) -> bool:
+        """Converged (and, when estimated, within the error tolerances)."""
+        return self.status is Status.SUCCESS
+
+    @property
+    def T(self) -> float:
+        """Length of the orbit."""
+        return self.mesh.T
+
+    def value(self, name: str) -> float:
+        """Value of parameter ``name``."""
+        return float(self.params[name])
+
+    def error(self, name: str) -> float:
+        """Discretisation + truncation estimate of solved parameter ``name`` (nan if none)."""
+        if name not in self.free:
+            raise ValueError(f"`name` {name!r} is not a solved parameter; they are {self.free}")
+        return math.nan if self.errors is None else self.errors.total(name)
+
+    @property
+    def end_distance(self) -> float:
+        """``|x(T) - x_eq|`` (2-norm)."""
+        return float(np.linalg.norm(self.x[-1] - self.x_eq))
+
+
+def _to_result(prob: LandingProblem, z: FloatArray, status: Status, message: str,
+               iters: int, rn: float | None = None) -> LandingResult:  # fmt: skip
+    parts = prob.unpack(z)
+    if rn is None:
+        rn = float(np.max(np.abs(prob.residual(z))))
+    return LandingResult(
+        params=prob.params.with_vector(prob.param_vector(z)), free=prob.free, s=prob.s,
+        t=prob.mesh.t, x=np.array(parts["X"]), x_eq=np.array(parts["x_end"]),
+        residual_norm=float(rn), mesh=prob.mesh, status=status, message=message,
+        newton_iters=int(iters), z=np.array(z), problem=prob,
+    )  # fmt: skip
+
+
+def _newton(prob: LandingProblem, z0: FloatArray, settings: NewtonSettings) -> NewtonResult:
+    return newton(prob.residual, prob.jacobian, z0, settings)
+
+
+def _plain(prob: LandingProblem, z0: FloatArray, settings: NewtonSettings) -> LandingResult:
+    """One Newton solve, then a rebase (Schur basis at the solution) and a polish."""
+    res = _newton(prob, z0, settings)
+    if not res.converged:
+        return _to_result(prob, res.z, res.status, res.message, res.iterations, res.residual_norm)
+    try:
+        new, z = prob.rebased(res.z)
+    except ValueError as exc:
+        return _to_result(prob, res.z, Status.NEWTON_FAILED,
+                          f"converged, but not a valid landing: {exc}", res.iterations)  # fmt: skip
+    iters = res.iterations
+    rn = float(np.max(np.abs(new.residual(z))))
+    if rn > settings.tol:
+        res2 = _newton(new, z, settings)
+        iters += res2.iterations
+        if not res2.converged:
+            return _to_result(new, res2.z, res2.status, res2.message, iters)
+        z, rn = res2.z, res2.residual_norm
+    msg = f"converged in {iters} Newton iterations (|G|={rn:.2e})"
+    return _to_result(new, z, Status.SUCCESS, msg, iters, rn)
+
+
+def _adapt(result: LandingResult, settings: NewtonSettings) -> LandingResult:
+    prob = result.problem
+    new_mesh = prob.mesh.equidistributed(result.x)
+    X = prob.mesh.interpolate(result.x, new_mesh.tau)
+    new = prob.replace(mesh=new_mesh)
+    parts = prob.unpack(result.z)
+    return _plain(new, new.pack(X, parts["x_eq"], list(parts["params"].values())), settings)
+
+
+def _refined(result: LandingResult, settings: NewtonSettings) -> LandingResult:
+    prob = result.problem
+    new = prob.replace(mesh=prob.mesh.refined())
+    return _plain(new, new.initial_vector(result), settings)
+
+
+def extended_landing(result: LandingResult, T_factor: float) -> tuple[LandingProblem, FloatArray]:
+    """The problem on ``[0, T_factor T]`` (same nodes, end intervals added) and its ``z``.
+
+    Beyond ``T`` the guess is the linearised flow from ``x(T)`` onto the equilibrium
+    along its stable eigenspace (exact to first order in the end distance).
+    """
+    prob = result.problem
+    mesh = prob.mesh
+    T = mesh.T
+    tn = mesh.nodes * T
+    ext = (T_factor - 1.0) * T
+    cap = max(1, int(math.ceil((T_factor - 1.0) * mesh.n_intervals)))
+    k = min(cap, max(1, int(math.ceil(ext / (tn[-1] - tn[-2]) - 1e-9))))
+    T2 = T + ext
+    nodes = np.concatenate((tn, T + np.linspace(0.0, ext, k + 1)[1:])) / T2
+    nodes[-1] = 1.0
+    mesh2 = CollocationMesh(nodes.size - 1, mesh.degree, T2, nodes)
+    new = prob.replace(mesh=mesh2)
+    t2 = mesh2.t
+    x = mesh.interpolate(result.x, np.clip(t2 / T, 0.0, 1.0))
+    hi = t2 > T
+    pvec = np.array(result.params.values, dtype=float)
+    A = np.asarray(prob.system.jacobian(result.x_eq, pvec), dtype=float)
+    x[hi] = result.x_eq + _linear_flow(A, result.x[-1] - result.x_eq, t2[hi] - T, False)
+    parts = prob.unpack(result.z)
+    return new, new.pack(x, parts["x_eq"], list(parts["params"].values()))
+
+
+def _change(a: LandingResult, b: LandingResult, safety: float) -> dict[str, float]:
+    return {u: safety * abs(b.value(u) - a.value(u)) for u in a.free}
+
+
+def _worst(est: dict[str, float], tol: dict[str, float]) -> str | None:
+    bad = [u for u in est if not est[u] <= tol[u]]
+    return max(bad, key=lambda u: est[u] / max(tol[u], 1e-300)) if bad else None
+
+
+def solve_landing(
+    problem: LandingProblem,
+    guess: Any,
+    *,
+    accuracy: ConnectionAccuracy | None = None,
+    newton: NewtonSettings | None = None,
+    throw: bool = False,
+    progress: Callable[[LandingResult], None] | None = None,
+) -> LandingResult:
+    r"""Solve a landing orbit with error estimates of the solved parameters.
+
+    1. Newton from ``guess`` on ``problem.mesh``; ``adapt_rounds`` equidistribution
+       rounds (:meth:`CollocationMesh.equidistributed`).
+    2. Discretisation estimate ``safety |p(2N) - p(N)|``; above ``atol + rtol |p|`` the
+       halved mesh becomes the mesh (at most ``max_refinements`` times).
+    3. Truncation estimate ``safety |p(T_factor T) - p(T)|`` (:func:`extended_landing`);
+       above the tolerance the longer problem is adopted (at most ``max_extensions``
+       times) and 1-3 repeat.
+
+    Parameters
+    ----------
+    problem : LandingProblem
+    guess : LandingResult, (t, x) pair, object with ``t`` and ``x``/``y``, or ndarray
+        Starting orbit (see :meth:`LandingProblem.initial_vector`).
+    accuracy : ConnectionAccuracy, optional
+        ``ConnectionAccuracy(estimate=False)``: one plain solve (``SUCCESS`` then means
+        only that Newton converged; ``errors`` is None).
+    newton : NewtonSettings, optional
+        Default ``tol=1e-10`` (max-norm of the residual), damped, 40 iterations.
+    throw : bool
+        Raise :class:`~continuation.errors.ConvergenceError` unless ``SUCCESS``.
+    progress : callable, optional
+        Called with every intermediate result.
+
+    Returns
+    -------
+    LandingResult
+        ``SUCCESS``, ``DISCRETISATION_ERROR``, ``TRUNCATION_ERROR`` (message with the
+        estimate and the tolerance) or a Newton failure status.
+    """
+    if not isinstance(problem, LandingProblem):
+        raise ValueError(f"`problem` must be a LandingProblem, got {type(problem).__name__}")
+    acc = ConnectionAccuracy() if accuracy is None else accuracy
+    if not isinstance(acc, ConnectionAccuracy):
+        raise ValueError(f"`accuracy` must be a ConnectionAccuracy, got {type(acc).__name__}")
+    settings = DEFAULT_NEWTON if newton is None else newton
+    if not isinstance(settings, NewtonSettings):
+        raise ValueError(f"`newton` must be a NewtonSettings, got {type(settings).__name__}")
+    say = progress or (lambda r: None)
+    result = _plain(problem, problem.initial_vector(guess), settings)
+    say(result)
+    if acc.estimate and result.success:
+        result = _controlled(result, acc, settings, say)
+    if throw and not result.success:
+        raise ConvergenceError(result.message)
+    return result
+
+
+def _controlled(result: LandingResult, acc: ConnectionAccuracy, settings: NewtonSettings,
+                say: Callable[[LandingResult], None]) -> LandingResult:  # fmt: skip
+    e_d: dict[str, float] = {}
+    for n_ext in range(acc.max_extensions + 1):
+        for n_ref in range(acc.max_refinements + 1):
+            for _ in range(acc.adapt_rounds):
+                new = _adapt(result, settings)
+                say(new)
+                if not new.success:
+                    break
+                result = new
+            tol = {u: acc.tolerance(result.value(u)) for u in result.free}
+            fine = _refined(result, settings)
+            say(fine)
+            if not fine.success:
+                return dataclasses.replace(
+                    result, status=Status.DISCRETISATION_ERROR,
+                    message=f"the re-solve on the halved mesh failed: {fine.message}",
+                )  # fmt: skip
+            e_d = _change(result, fine, acc.safety)
+            bad = _worst(e_d, tol)
+            if bad is None:
+                break
+            if n_ref == acc.max_refinements:
+                return dataclasses.replace(
+                    result, status=Status.DISCRETISATION_ERROR,
+                    message=(f"discretisation error of {bad} estimated {e_d[bad]:.2e} > "
+                             f"tolerance {tol[bad]:.2e} after {acc.max_refinements} doublings "
+                             f"({result.mesh.n_intervals} intervals)"),
+                    errors=ErrorEstimates(e_d, {u: math.nan for u in e_d}, tol,
+                                          fine.mesh.n_intervals),
+                )  # fmt: skip
+            result = fine
+        prob_long, z_long = extended_landing(result, acc.T_factor)
+        long = _plain(prob_long, z_long, settings)
+        say(long)
+        if not long.success:
+            return dataclasses.replace(
+                result, status=Status.TRUNCATION_ERROR,
+                message=(f"the re-solve on T = {prob_long.mesh.T:.6g} failed ({long.message}): "
+                         "the truncation error cannot be estimated"),
+                errors=ErrorEstimates(e_d, {u: math.nan for u in e_d}, tol,
+                                      2 * result.mesh.n_intervals, prob_long.mesh.T),
+            )  # fmt: skip
+        e_T = _change(result, long, acc.safety)
+        errors = ErrorEstimates(e_d, e_T, tol, 2 * result.mesh.n_intervals, long.mesh.T)
+        bad = _worst(e_T, tol)
+        if bad is None:
+            return dataclasses.replace(
+                result, status=Status.SUCCESS, errors=errors,
+                message=(f"{result.message}; error estimates within tolerance "
+                         + ", ".join(f"{u}: {e_d[u]:.1e} (mesh) + {e_T[u]:.1e} (T)"
+                                     for u in e_d)),
+            )  # fmt: skip
+        if n_ext == acc.max_extensions:
+            return dataclasses.replace(
+                result, status=Status.TRUNCATION_ERROR, errors=errors,
+                message=(f"truncation error of {bad} estimated {e_T[bad]:.2e} > tolerance "
+                         f"{tol[bad]:.2e} at T = {result.T:.6g}: give a longer T"),
+            )  # fmt: skip
+        result = long
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+class ContinuedLanding:
+    """A :class:`LandingProblem` seen by the continuation driver (``free`` = ``start_name``)."""
+
+    def __init__(self, problem: LandingProblem) -> None:
+        if not callable(problem.start):
+            raise ValueError("the problem has a fixed start point: nothing to continue in")
+        self.problem = problem
+
+    @property
+    def free(self) -> str:
+        """The continuation parameter: the start parameter's name."""
+        return self.problem.start_name
+
+    @property
+    def n_unknowns(self) -> int:
+        """Length of ``z``."""
+        return self.problem.n_unknowns
+
+    def residual(self, z: FloatArray, p: float) -> FloatArray:
+        """``G(z, s)``."""
+        return self.problem.residual(z, p)
+
+    def jacobian(self, z: FloatArray, p: float) -> Any:
+        """``dG/dz``."""
+        return self.problem.jacobian(z, p)
+
+    def dp(self, z: FloatArray, p: float) -> FloatArray:
+        """``dG/ds``."""
+        return self.problem.dp(z, p)
+
+    def linearize(self, z: FloatArray, p: float) -> Any:
+        """``(G, dG/dz, dG/ds)``."""
+        return self.problem.linearize(z, p)
+
+    def stability(self, z: FloatArray, p: float) -> None:
+        """None: a landing orbit has no stability eigenvalues."""
+        return None
+
+    def record(self, z: FloatArray, p: float) -> dict[str, float]:
+        """Solved parameters, end distance, Riccati norm."""
+        return self.problem.record(z, p)
+
+
+def continue_landing(
+    result: LandingResult,
+    settings: ContinuationSettings | None = None,
+    *,
+    direction: str = "forward",
+    throw: bool = False,
+    progress: Callable[[Any], None] | None = None,
+) -> Any:
+    """Continue a landing orbit in its start parameter ``s`` (pseudo-arclength).
+
+    The mesh and ``T`` are those of ``result``; the Schur basis follows the branch
+    through the Riccati unknowns. Branch rows carry no error estimates (re-solve a
+    row with :func:`solve_landing` via :func:`landing_at` for them).
+
+    Parameters
+    ----------
+    result : LandingResult
+        A converged landing whose problem has a start callable.
+    settings : ContinuationSettings, optional
+        ``p_min``/``p_max`` bound ``s``; step sizes are in ``s`` and the unknowns.
+    direction, throw, progress
+        As :func:`continuation.driver.continue_branch`.
+
+    Returns
+    -------
+    Branch
+        ``branch.p`` holds ``s``; ``branch.records[name]`` the solved parameters and
+        ``end_distance``; folds in ``s`` are reported as special points.
+    """
+    from ..driver import continue_branch
+
+    if not isinstance(result, LandingResult) or result.problem is None:
+        raise ValueError("`result` must be a LandingResult with its problem attached")
+    if not result.success and result.errors is None:
+        raise ValueError(f"`result` did not converge ({result.status.name}); cannot continue")
+    prob = result.problem
+    return continue_branch(
+        ContinuedLanding(prob),
+        result.z,
+        prob.s,
+        None,
+        settings,
+        direction=direction,
+        throw=throw,
+        progress=progress,
+    )  # type: ignore[arg-type]
+
+
+def landing_at(branch: Any, index: int) -> LandingResult:
+    """The :class:`LandingResult` at row ``index`` of a :func:`continue_landing` branch."""
+    prob = getattr(getattr(branch, "problem", None), "problem", None)
+    if not isinstance(prob, LandingProblem):
+        raise ValueError("`branch` was not computed by continue_landing")
+    n = len(branch.p)
+    if not -n <= index < n:
+        raise ValueError(f"`index` {index} out of range for a branch of {n} points")
+    z, s = np.asarray(branch.x[index], dtype=float), float(branch.p[index])
+    new, z = prob.replace(s=s).rebased(z, s)
+    return _to_result(new, z, Status.SUCCESS, f"branch row {index}", 0)
+
+
+__all__ = [
+    "ContinuedLanding",
+    "LandingResult",
+    "continue_landing",
+    "extended_landing",
+    "landing_at",
+    "solve_landing",
+]
