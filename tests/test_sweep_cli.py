@@ -33,3 +33,18 @@ def test_sweep_boundary_workers_and_scheduler_give_identical_tables(tmp_path):
     again = json.loads((a / "boundary.json").read_text())["boundaries"]
     assert again["n_executed"] == 0 and again["n_reused"] == 2
     assert (a / "boundary.csv").read_text() == (b / "boundary.csv").read_text()
+
+
+def test_sweep_boundary_one_position_in_this_process(tmp_path):
+    """The default command path (bisection tasks on the sweep layer) end to end, fast:
+    one initial position, the Fig. 16 setup. Reference: the landing BVP of
+    ``tests/test_capsize_boundary.py`` at xi_0 = 0 (Fn 0.3014739, an independent method)."""
+    out = tmp_path / "one"
+    argv = ["sweep", "boundary", "--positions", "1", "--no-map", "--tol", "1e-3", "--serial",
+            "--out", str(out), "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    data = json.loads((out / "boundary.json").read_text())
+    assert data["boundaries"]["n_failed"] == 0
+    (fn,) = data["Fn"]
+    assert fn == pytest.approx(0.3014739, abs=1e-3)
+    assert (out / "boundary.csv").stat().st_size > 0 and (out / "boundary.png").stat().st_size > 0
