@@ -16,18 +16,19 @@ import pytest
 from broachkit_cli.main import main
 from continuation.status import Status
 from ship_models.analysis import sweeps as S
+from ship_models.analysis.sweeps import context as _ctx
 
 
 @pytest.fixture(scope="module")
 def ship():
-    return S._model("purse_seiner")
+    return _ctx._model("purse_seiner")
 
 
 def test_surge_threshold_equals_the_connection_at_chi_c_0(ship):
     from ship_models.analysis.critical_bvp import critical_fn_bvp
 
     p = ship.default_params()
-    st = S.surge_threshold(S._surge("purse_seiner"), p["H_over_lambda"], p["lambda_over_L"])
+    st = S.surge_threshold(_ctx._surge("purse_seiner"), p["H_over_lambda"], p["lambda_over_L"])
     assert st.success, st.message
     bvp = critical_fn_bvp(0.0, model=ship)
     assert bvp.success
@@ -38,7 +39,7 @@ def test_surge_threshold_equals_the_connection_at_chi_c_0(ship):
 
 
 def test_surge_threshold_says_why_there_is_no_connection_in_gentle_waves():
-    s = S._surge("purse_seiner")
+    s = _ctx._surge("purse_seiner")
     st = S.surge_threshold(s, 0.02, 1.5)
     assert st.status is Status.NO_BRACKET and math.isnan(st.Fn)
     assert "saddle-node" in st.message
@@ -92,7 +93,7 @@ def test_critical_line_against_one_shot_solves_and_bisection(ship):
         )
         assert one.success and abs(one.Fn - line.Fn[k]) < 1e-6
     # bisection by simulation on the fate of the upslope branch (a steep wave: at
-    # H/lambda = 0.06 the two differ by 1.5e-3, see the module notes of sweeps.py)
+    # H/lambda = 0.06 the two differ by 1.5e-3, see the notes of ship_models.analysis.sweeps)
     h = 0.08
     b = critical_fn_bisection(
         chi, model=ship, params=p.replace(H_over_lambda=h),
@@ -127,11 +128,13 @@ def test_boundary_sweep_same_table_on_processes_and_in_process(tmp_path, ship):
 
 
 def test_vessel_files_are_named_by_absolute_path_for_remote_workers(tmp_path, monkeypatch):
+    from ship_models.analysis.sweeps.context import _vessel_ref
+
     monkeypatch.chdir(tmp_path)
-    assert S._vessel_ref("my_ship.toml") == str(tmp_path / "my_ship.toml")
-    assert S._vessel_ref("purse_seiner") == "purse_seiner"
+    assert _vessel_ref("my_ship.toml") == str(tmp_path / "my_ship.toml")
+    assert _vessel_ref("purse_seiner") == "purse_seiner"
     with pytest.raises(ValueError, match="`vessel`"):
-        S._vessel_ref("")
+        _vessel_ref("")
     # the context is the file's content: same content, same hash
     assert S.vessel_context("purse_seiner") == S.vessel_context("purse_seiner")
 
@@ -145,7 +148,9 @@ def test_an_interrupted_surface_stops_before_its_checks(monkeypatch):
         calls.append(keys)
         return SweepResult((), tuple(keys), Status.INTERRUPTED, len(keys), 0, 0, "fake")
 
-    monkeypatch.setattr(S, "run_sweep", fake)
+    from ship_models.analysis.sweeps import context
+
+    monkeypatch.setattr(context, "run_sweep", fake)
     r = S.surface_sweep(H_over_lambda=[0.1], lambda_over_L=[1.5], check=2, backend="serial")
     assert len(calls) == 1 and r.check_sweep is None and r.checks == ()
     assert np.all(np.isnan(r.Fn)) and r.sweep.status is Status.INTERRUPTED
