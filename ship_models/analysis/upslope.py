@@ -207,19 +207,37 @@ def connection_guess(
     return np.asarray(tr.t[i0 : i1 + 1]), x[i0 : i1 + 1]
 
 
-def _try_guess(model: Any, params: Params) -> tuple[UpslopeRun | None, ShipOutcome]:
-    """The upslope branch at ``params`` and its fate; the run is None if unusable as a guess."""
+def _try_guess(
+    model: Any, params: Params, reasons: list[str] | None = None
+) -> tuple[UpslopeRun | None, ShipOutcome]:
+    """The upslope branch at ``params`` and its fate; the run is None if unusable as a guess.
+
+    Where the branch cannot be computed (no crest saddle of index 1 there, ...), the
+    reason is appended to ``reasons``."""
     try:
         # a guess needs no accuracy: start 1e-4 off the saddle (integrator errors
         # ~1e-6 stay well below that), sample every 0.1 s
         run = upslope_branch(model, params, eps=1e-4, rtol=1e-7, atol=1e-9, dt=0.1)
-    except ContinuationError:
+    except ContinuationError as exc:
+        if reasons is not None:
+            reasons.append(f"{float(params['Fn']):.6g}|{str(exc).split(':')[0]}")
         return None, ShipOutcome.UNDECIDED
     x = np.asarray(run.trajectory.x, dtype=float)
     far = np.min(np.linalg.norm(x - run.shifted_saddle(), axis=1)) > GUESS_REACH
     if run.fate is ShipOutcome.UNDECIDED or far:
         return None, run.fate
     return run, run.fate
+
+
+def _failed_attempts(reasons: list[str], attempts: int) -> str:
+    """Why the branch could not be computed: the first reason where every attempt failed
+    (e.g. no crest saddle at any Fn tried), else the Fn values where it failed."""
+    if not reasons:
+        return ""
+    if len(reasons) == attempts:
+        return f" ({reasons[0].split('|', 1)[1]}; likewise at every Fn tried)"
+    fns = ", ".join(r.split("|", 1)[0] for r in reasons)
+    return f" (no upslope branch could be computed at Fn = {fns})"
 
 
 def guess_run(model: Any, params: Params, bracket: tuple[float, float]) -> UpslopeRun:
@@ -238,16 +256,19 @@ def guess_run(model: Any, params: Params, bracket: tuple[float, float]) -> Upslo
     ContinuationError
         If no simulated branch approaches the shifted saddle.
     """
-    run, _ = _try_guess(model, params)
+    reasons: list[str] = []
+    run, _ = _try_guess(model, params, reasons)
     if run is not None:
         return run
     lo, hi = (float(b) for b in bracket)
     if not (0 < lo < hi and math.isfinite(hi)):
         raise ValueError(f"`guess_bracket` must be (Fn_lo, Fn_hi) with 0 < lo < hi, got {bracket}")
     best: UpslopeRun | None = None
+    attempts = 1
     while hi - lo > GUESS_WIDTH:
         mid = 0.5 * (lo + hi)
-        r, fate = _try_guess(model, params.replace(Fn=mid))
+        attempts += 1
+        r, fate = _try_guess(model, params.replace(Fn=mid), reasons)
         best = r or best
         if fate is ShipOutcome.PERIODIC:
             lo = mid
@@ -261,6 +282,7 @@ def guess_run(model: Any, params: Params, bracket: tuple[float, float]) -> Upslo
             f"{math.degrees(float(params['chi_c'])):.4g} deg: the upslope branch does not "
             f"approach the shifted crest saddle at Fn_guess = {float(params['Fn']):.6g} nor "
             f"for Fn in ({float(bracket[0]):.6g}, {float(bracket[1]):.6g})"
+            + _failed_attempts(reasons, attempts)
         )
     return best
 
