@@ -348,7 +348,7 @@ class Simulator:
                 stop = None
                 found: list[tuple[float, int, FloatArray]] = []
                 gvals = [w.values(tt[1:], xs[1:]) for w in watches]
-                fx = None  # derivatives at the block samples, computed on demand
+                fx: dict[int, FloatArray] = {}  # derivatives at block samples, on demand
                 for j in range(tt.size - 1):
                     ta, tb, xa, xb = tt[j], tt[j + 1], xs[j], xs[j + 1]
                     found.clear()
@@ -363,8 +363,8 @@ class Simulator:
                         exact = lambda s, _ta=ta, _xa=xa, _ip=interp: _ip(_ta, s, _xa)  # noqa: E731
                         approx = None
                         if not scipy_backend:
-                            if fx is None:
-                                fx = self.derivatives(xs)
+                            if j not in fx or j + 1 not in fx:
+                                fx[j], fx[j + 1] = self.derivatives(xs[j : j + 2])
                             approx = _hermite(ta, tb, xa, xb, fx[j], fx[j + 1])
                         for gfun in cands:
                             tr, xr = _locate(gfun, ta, tb, xa, xb, exact, approx, xtol)
