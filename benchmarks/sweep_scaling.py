@@ -69,18 +69,25 @@ def sims_per_second(repeats: int = 3) -> dict:
         )  # fmt: skip
         return sol.y[:, -1]
 
-    out = {}
+    out: dict = {}
     for name, fn in (("broachkit simulate", ours), ("solve_ivp + NumPy rhs", scipy_numpy)):
         fn()  # warm-up (compilation, caches)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         for _ in range(repeats):
             xe = fn()
         dt = (time.perf_counter() - t0) / repeats
-        out[name] = {"seconds_per_sim": dt, "sims_per_s": 1.0 / dt, "x_end": xe.tolist()}
+        cpu = (time.process_time() - c0) / repeats
+        out[name] = {
+            "seconds_per_sim": dt,
+            "sims_per_s": 1.0 / dt,
+            "cpu_seconds_per_sim": cpu,
+            "x_end": xe.tolist(),
+        }
     a, b = (np.asarray(v["x_end"]) for v in out.values())
-    out["ratio"] = (
-        out["broachkit simulate"]["sims_per_s"] / out["solve_ivp + NumPy rhs"]["sims_per_s"]
-    )
+    ours_, peer = out["broachkit simulate"], out["solve_ivp + NumPy rhs"]
+    out["ratio"] = ours_["sims_per_s"] / peer["sims_per_s"]
+    # CPU time: on a shared machine the wall-time ratio moves with the load
+    out["ratio_cpu"] = peer["cpu_seconds_per_sim"] / ours_["cpu_seconds_per_sim"]
     out["final_state_max_diff"] = float(np.max(np.abs(a - b)))
     out["t_end_s"], out["rtol"], out["atol"] = T, rtol, atol
     return out
@@ -153,22 +160,36 @@ def main() -> None:
     ap.add_argument("--positions", type=int, default=4)
     ap.add_argument("--line-points", type=int, default=4)
     ap.add_argument("--out", type=Path, default=Path(__file__).parent / "results")
+    ap.add_argument(
+        "--simulation-only",
+        action="store_true",
+        help="measure only the simulations per second (writes sweep_scaling_simulation.json)",
+    )
+    ap.add_argument("--repeats", type=int, default=3, help="timed simulations of each kind")
     args = ap.parse_args()
-    res = {
-        "cpu_count": os.cpu_count(),
-        "loadavg_start": os.getloadavg(),
-        "simulation": sims_per_second(),
-        "boundary": boundary_scaling(args.positions),
-        "surface": surface_cost(args.line_points),
-        "loadavg_end": os.getloadavg(),
-    }
+    load0 = os.getloadavg()
+    sim = sims_per_second(args.repeats)
+    res = {"cpu_count": os.cpu_count(), "loadavg_start": load0, "simulation": sim}
+    if not args.simulation_only:
+        res["boundary"] = boundary_scaling(args.positions)
+        res["surface"] = surface_cost(args.line_points)
+    res["loadavg_end"] = os.getloadavg()
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "sweep_scaling.json").write_text(json.dumps(res, indent=1) + "\n")
+    name = "sweep_scaling_simulation.json" if args.simulation_only else "sweep_scaling.json"
+    (args.out / name).write_text(json.dumps(res, indent=1) + "\n")
     s = res["simulation"]
-    print("| simulator | s / sim | sims/s |\n|---|---|---|")
+    print("| simulator | s / sim (wall) | CPU s / sim | sims/s |\n|---|---|---|---|")
     for k in ("broachkit simulate", "solve_ivp + NumPy rhs"):
-        print(f"| {k} | {s[k]['seconds_per_sim']:.3f} | {s[k]['sims_per_s']:.2f} |")
-    print(f"ratio {s['ratio']:.1f}x, final states differ by {s['final_state_max_diff']:.1e}\n")
+        print(
+            f"| {k} | {s[k]['seconds_per_sim']:.3f} | {s[k]['cpu_seconds_per_sim']:.3f} | "
+            f"{s[k]['sims_per_s']:.2f} |"
+        )
+    print(
+        f"ratio {s['ratio']:.1f}x (wall), {s['ratio_cpu']:.1f}x (CPU); final states differ "
+        f"by {s['final_state_max_diff']:.1e}; load average {load0} -> {res['loadavg_end']}\n"
+    )
+    if args.simulation_only:
+        return
     print("| backend | tasks | sweep s | tasks/s | speed-up |\n|---|---|---|---|---|")
     for k, v in res["boundary"]["runs"].items():
         print(

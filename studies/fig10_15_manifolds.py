@@ -250,12 +250,14 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         "cases": {},
     }
     mans = {}
+    case_points = {}
     for case, fn in cases.items():
         say(f"unstable manifold of the crest saddle at Fn = {fn:.7f} ({case})")
         p = base.replace(Fn=fn)
         pts = fixed_points(model, p)
         man = unstable_manifold(model, p, "crest", points=pts, t_max=1500.0)
         mans[case] = man
+        case_points[case] = pts
         if case == "above":
             nums = {"position": "10", "heading": "11", "position_heading": "12", "roll": "13"}
             title = f"Fn = {fn:.6f} (just above critical), $\\chi_c$ = {CHI_C_DEG:g} deg"
@@ -269,8 +271,17 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         data += _save_series(man, c, L, out, case)
         summary["cases"][case] = {"Fn": fn, **man.to_json()}
     say("global picture at the 'below' and 'above' cases")
-    g_lo = build_global_picture(model, base.replace(Fn=cases["below"]), t_max=1500.0)
-    g_hi = build_global_picture(model, base.replace(Fn=cases["above"]), t_max=1500.0)
+    # the crest manifolds of these two cases were computed above (same eps, t_max)
+    g_lo, g_hi = (
+        build_global_picture(
+            model,
+            base.replace(Fn=cases[case]),
+            points=case_points[case],
+            manifolds={"crest": mans[case]},
+            t_max=1500.0,
+        )
+        for case in ("below", "above")
+    )
     diff = compare_pictures(g_lo, g_hi)
     summary["global_picture"] = {
         "below": [(u, v, k) for u, v, k in g_lo.edges(keys=True)],

@@ -82,7 +82,7 @@ def compute(
     from continuation.dynamics import simulate
     from ship_models import purse_seiner
     from ship_models.analysis.critical_bisection import upslope_bisection
-    from ship_models.analysis.critical_bvp import critical_fn_bvp
+    from ship_models.analysis.critical_bvp import check_critical_bvp, critical_fn_bvp
     from ship_models.analysis.critical_curve import critical_curve
     from ship_models.analysis.events import capsize_event
     from ship_models.analysis.upslope import upslope_branch
@@ -97,7 +97,8 @@ def compute(
     say("critical Fn at chi_c = 10 deg by the boundary-value problem")
     conn = critical_fn_bvp(chi10, model=model)
     t_bvp = conn.elapsed
-    chk = critical_fn_bvp(chi10, model=model, check=True).convergence
+    # the check of critical_fn_bvp(check=True) on this solution (not solved again)
+    chk = check_critical_bvp(conn) if conn.orbit is not None and conn.orbit.success else None
     say(f"  Fn = {conn.Fn:.8f} ({t_bvp:.2f} s); bisection by simulation to 1e-6")
     bis = upslope_bisection(chi10, model=model, tol=1e-6)
     say(f"  bisection: Fn in [{bis.bracket[0]:.8f}, {bis.bracket[1]:.8f}] ({bis.elapsed:.2f} s)")

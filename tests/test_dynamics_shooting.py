@@ -14,6 +14,7 @@ References
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -57,6 +58,13 @@ def test_hopf_limit_cycle_closed_form():
     x = o.state_at(0.5 * math.sqrt(mu))
     assert x[1] == 0.5 * math.sqrt(mu)
     assert math.hypot(x[0], x[1]) == pytest.approx(math.sqrt(mu), abs=1e-7)
+    # a level asked again is the state found the first time (kept, not re-integrated),
+    # and changing a returned array does not change what is kept
+    x[0] = 99.0
+    again = o.state_at(0.5 * math.sqrt(mu))
+    assert math.hypot(again[0], again[1]) == pytest.approx(math.sqrt(mu), abs=1e-7)
+    fresh = dataclasses.replace(o).state_at(0.5 * math.sqrt(mu))  # a copy: found anew
+    np.testing.assert_array_equal(again, fresh)
 
 
 def test_pendulum_rotation_orbit_against_scipy_and_power_balance():

@@ -28,7 +28,7 @@ from continuation.dynamics import SimEvent, simulate
 from continuation.status import Status
 from ship_models import purse_seiner, purse_seiner_surge
 from ship_models.analysis.critical_bisection import upslope_bisection
-from ship_models.analysis.critical_bvp import critical_fn_bvp
+from ship_models.analysis.critical_bvp import check_critical_bvp, critical_fn_bvp
 from ship_models.analysis.critical_curve import critical_curve
 from ship_models.analysis.events import capsize_event
 from ship_models.analysis.outcomes import ShipOutcome
@@ -179,6 +179,19 @@ def test_mesh_and_truncation_convergence(bvp10):
     assert chk.ok
     assert chk.delta_mesh["Fn"] < 1e-6
     assert chk.delta_T["Fn"] < 1e-6
+
+
+def test_check_of_a_solved_result_equals_check_true(model, bvp10):
+    """check_critical_bvp(result) is the check that critical_fn_bvp(check=True) runs."""
+    with_check = critical_fn_bvp(10 * DEG, model=model, check=True)
+    assert with_check.Fn == bvp10.Fn  # the same deterministic solve
+    chk = check_critical_bvp(bvp10)
+    ref = with_check.convergence
+    assert chk.delta_mesh["Fn"] == ref.delta_mesh["Fn"]
+    assert chk.delta_T["Fn"] == ref.delta_T["Fn"]
+    assert chk.ok == ref.ok
+    with pytest.raises(ValueError, match="critical_fn_bvp"):
+        check_critical_bvp(bvp10.orbit)
 
 
 def test_bvp_independent_of_guess_fn(model, bvp10):

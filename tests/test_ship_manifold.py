@@ -198,3 +198,25 @@ def test_bad_input(model, params, above):
         unstable_manifold(model, params, above.saddle, branches=("sideways",))
     with pytest.raises(ValueError, match="t_max"):
         unstable_manifold(model, params, above.saddle, t_max=-1.0, points=above.points)
+
+
+def test_global_picture_reuses_given_manifolds(model, params, above):
+    """A crest manifold passed in gives the same graph as computing it (both t_max 600)."""
+    p = params.replace(Fn=0.3248)
+    computed = build_global_picture(model, p, points=above.points)
+    given = build_global_picture(model, p, points=above.points, manifolds={"crest": above})
+    assert given.graph["manifolds"]["crest"] is above
+    assert computed.graph["manifolds"]["crest"] is not above
+    assert not compare_pictures(computed, given).changed
+    assert not compare_pictures(computed, given).changed_via
+    assert sorted(given.edges(keys=True, data="fate")) == sorted(
+        computed.edges(keys=True, data="fate")
+    )
+    with pytest.raises(ValueError, match="other parameters"):
+        build_global_picture(
+            model, p.replace(Fn=0.33), points=above.points, manifolds={"crest": above}
+        )
+    with pytest.raises(ValueError, match="eps"):
+        build_global_picture(model, p, points=above.points, eps=1e-5, manifolds={"crest": above})
+    with pytest.raises(ValueError, match="no fixed point"):
+        build_global_picture(model, p, points=above.points, manifolds={"nowhere": above})

@@ -31,7 +31,7 @@ import logging
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -155,6 +155,10 @@ class ShootingOrbit:
     message: str = ""
     n_transient: int = 0
     elapsed: float = 0.0
+    #: States found by :meth:`state_at`, by level (each found once per orbit).
+    _levels: dict[float, FloatArray] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     @property
     def success(self) -> bool:
@@ -196,6 +200,9 @@ class ShootingOrbit:
             raise ValueError(f"`level` must be a finite number, got {level!r}")
         if not self.success:
             raise ContinuationError(f"the periodic orbit did not converge: {self.message}")
+        known = self._levels.get(level)
+        if known is not None:  # the same deterministic integration as the first time
+            return known.copy()
         i = self.state
         x = self.x_section.copy()
         per = _periods(self.system)[i]
@@ -218,6 +225,7 @@ class ShootingOrbit:
             raise ContinuationError(f"the orbit does not cross x[{i}] = {level}")
         out = np.array(hits.x[0], dtype=float)
         out[i] = level
+        self._levels[level] = out.copy()
         return out
 
     def states(self, levels: Sequence[float]) -> FloatArray:

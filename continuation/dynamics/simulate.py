@@ -51,8 +51,16 @@ from .trajectory import EventHits, Trajectory
 
 log = logging.getLogger(__name__)
 
-#: Samples per CVODES call: one call integrates this many output intervals at once.
+#: Samples of the first CVODES call of a run: one call integrates this many output
+#: intervals at once; each later call integrates :data:`_CHUNK_GROWTH` times more, up to
+#: :data:`_CHUNK_MAX`. Every call restarts CVODES (order 1, a fresh step size and
+#: Jacobian), so long calls save that start-up (for 50 s of the purse seiner at
+#: ``dt = 0.05``, 20 calls of 50 samples cost 1.6 times the right-hand-side evaluations
+#: of one call of 1000, and 2.1 times its CPU time); short first calls bound the time
+#: integrated past a terminal event to about the time integrated before it.
 _CHUNK = 50
+_CHUNK_GROWTH = 4
+_CHUNK_MAX = 1000
 #: Number of halvings used to get as close as possible to an integrator failure.
 _FAILURE_BISECTIONS = 12
 
@@ -200,18 +208,18 @@ class Simulator:
 
             k0 = 0
             x = x0
+            size = _CHUNK
+            # with a maximum step the integrator's step bound is set for chunk_span
+            # (time is scaled to [0, 1] per call), so the calls keep that length
+            growth = _CHUNK_GROWTH if not math.isfinite(self.max_step) else 1
             while k0 < n_samples:
-                k1 = min(k0 + _CHUNK, n_samples)
-                tt = times[k0 : k1 + 1]
-                try:
-                    xs = be.run(x, tt[-1] - tt[0], k1 - k0, chunk_span)
-                except _IntegrationFailure:
-                    # retry sample by sample, bisecting towards a failure
-                    x = yield from self._salvage(be, x, tt, chunk_span, interp)
-                else:
-                    yield tt, np.vstack([x[None, :], xs]), interp, np.ones(tt.size, dtype=bool)
-                    x = xs[-1]
+                rest = n_samples - k0
+                # a call of a multiple of _CHUNK samples, then the rest: few distinct
+                # call lengths, so few integrators are built (one per length)
+                k1 = k0 + (min(size, rest - rest % _CHUNK) if rest > _CHUNK else rest)
+                x = yield from self._chunk(be, x, times[k0 : k1 + 1], chunk_span, interp)
                 k0 = k1
+                size = min(size * growth, _CHUNK_MAX)
             return
         # SciPy: one block per internal step, with the grid samples inside it
         solver = self._backend.solver(t0, x0, t1)
@@ -246,6 +254,31 @@ class Simulator:
             t_prev, x_prev = t_new, x_new
             if solver.status == "finished":
                 return
+
+    def _chunk(
+        self,
+        be: _CvodesBackend,
+        x: FloatArray,
+        tt: FloatArray,
+        chunk_span: float,
+        interp: Callable[..., Any],
+    ) -> Any:
+        """Integrate the samples ``tt`` from ``x`` in one CVODES call; return the last state.
+
+        A call that fails is redone in pieces of :data:`_CHUNK` samples, and the piece
+        that fails again sample by sample (:meth:`_salvage`).
+        """
+        try:
+            xs = be.run(x, tt[-1] - tt[0], tt.size - 1, chunk_span)
+        except _IntegrationFailure:
+            if tt.size - 1 <= _CHUNK:
+                return (yield from self._salvage(be, x, tt, chunk_span, interp))
+            for k0 in range(0, tt.size - 1, _CHUNK):
+                piece = tt[k0 : k0 + _CHUNK + 1]
+                x = yield from self._chunk(be, x, piece, chunk_span, interp)
+            return x
+        yield tt, np.vstack([x[None, :], xs]), interp, np.ones(tt.size, dtype=bool)
+        return xs[-1]
 
     def _salvage(
         self,
@@ -315,7 +348,7 @@ class Simulator:
                 stop = None
                 found: list[tuple[float, int, FloatArray]] = []
                 gvals = [w.values(tt[1:], xs[1:]) for w in watches]
-                fx = None  # derivatives at the block samples, computed on demand
+                fx: dict[int, FloatArray] = {}  # derivatives at block samples, on demand
                 for j in range(tt.size - 1):
                     ta, tb, xa, xb = tt[j], tt[j + 1], xs[j], xs[j + 1]
                     found.clear()
@@ -330,8 +363,8 @@ class Simulator:
                         exact = lambda s, _ta=ta, _xa=xa, _ip=interp: _ip(_ta, s, _xa)  # noqa: E731
                         approx = None
                         if not scipy_backend:
-                            if fx is None:
-                                fx = self.derivatives(xs)
+                            if j not in fx or j + 1 not in fx:
+                                fx[j], fx[j + 1] = self.derivatives(xs[j : j + 2])
                             approx = _hermite(ta, tb, xa, xb, fx[j], fx[j + 1])
                         for gfun in cands:
                             tr, xr = _locate(gfun, ta, tb, xa, xb, exact, approx, xtol)

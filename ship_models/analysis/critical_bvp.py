@@ -39,6 +39,7 @@ import numpy as np
 from continuation.bvp import (
     CollocationMesh,
     ConnectionResult,
+    ConvergenceCheck,
     HeteroclinicProblem,
     check_convergence,
     solve_connection,
@@ -390,7 +391,7 @@ def critical_fn_bvp(
         res = solve_connection(res.problem, res, newton=settings_n, adapt=adapt, progress=progress)
     conv = None
     if res.success and check:
-        conv = check_convergence(res, newton=settings_n)
+        conv = check_convergence(res, newton=settings_n)  # as check_critical_bvp does
     status = res.status
     message = res.message
     refusal = ""
@@ -424,4 +425,29 @@ def critical_fn_bvp(
     )
 
 
-__all__ = ["BVPSettings", "critical_fn_bvp"]
+def check_critical_bvp(result: CriticalFn) -> ConvergenceCheck:
+    """The convergence check of ``critical_fn_bvp(..., check=True)`` for a result solved without it.
+
+    The same re-solves (:func:`continuation.bvp.check_convergence`: the mesh halved,
+    1.5 ``T``) with the same Newton settings (tolerance ``result.tol``), so
+    ``check_critical_bvp(critical_fn_bvp(chi_c))`` equals
+    ``critical_fn_bvp(chi_c, check=True).convergence`` without solving the connection
+    twice. ``ConvergenceCheck.delta_mesh["Fn"]`` and ``.delta_T["Fn"]`` are the changes
+    of the critical ``Fn``.
+
+    Raises
+    ------
+    ValueError
+        If ``result`` is not a converged connecting-orbit result (``method="bvp"``
+        with its orbit).
+    """
+    orbit = getattr(result, "orbit", None)
+    if not isinstance(result, CriticalFn) or result.method != "bvp" or orbit is None:
+        raise ValueError("`result` must be a CriticalFn of critical_fn_bvp with its orbit")
+    if not orbit.success:
+        raise ValueError(f"`result` did not converge ({orbit.status.name})")
+    tol = result.tol if math.isfinite(result.tol) else BVPSettings().tol
+    return check_convergence(orbit, newton=dataclasses.replace(_DEFAULT_NEWTON, tol=tol))
+
+
+__all__ = ["BVPSettings", "check_critical_bvp", "critical_fn_bvp"]

@@ -24,11 +24,12 @@ global bifurcation between them, e.g. the heteroclinic bifurcation of the paper.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import networkx as nx
+import numpy as np
 
 from continuation.params import Params
 
@@ -47,6 +48,7 @@ def build_global_picture(
     params: Params | None = None,
     *,
     points: Sequence[FixedPoint] | None = None,
+    manifolds: Mapping[str, ShipManifold] | None = None,
     eps: float = 1e-6,
     t_max: float = 600.0,
     progress: Callable[[str, str, float], None] | None = None,
@@ -61,6 +63,12 @@ def build_global_picture(
         Default: the model's defaults.
     points : sequence of FixedPoint, optional
         Default: :func:`~ship_models.analysis.fixed_points` at ``params``.
+    manifolds : mapping of str to ShipManifold, optional
+        Unstable manifolds already computed at ``params`` (by
+        :func:`~ship_models.analysis.manifold.unstable_manifold` with the same
+        ``eps``, ``t_max`` and classification options), by saddle label: used instead
+        of computing them again. Each must have both branches, the same ``params``
+        and ``eps``, and its saddle at the state of the point of that label.
     eps, t_max, **classify
         Passed to :func:`~ship_models.analysis.manifold.unstable_manifold`.
     progress : callable, optional
@@ -71,9 +79,18 @@ def build_global_picture(
     networkx.MultiDiGraph
         Graph attributes: ``params`` (dict), ``manifolds`` (dict label ->
         :class:`~ship_models.analysis.manifold.ShipManifold`).
+
+    Raises
+    ------
+    ValueError
+        If a manifold of ``manifolds`` does not belong to ``params``, ``eps`` and the
+        saddle of its label, or lacks a branch.
     """
     par = ship_params(model, params)
     pts = tuple(points) if points is not None else tuple(fixed_points(model, par))
+    given = dict(manifolds or {})
+    for label, pre in given.items():
+        _check_given(label, pre, pts, par, eps)
     g = nx.MultiDiGraph(params=par.as_dict(), manifolds={})
     for fp in pts:
         g.add_node(
@@ -90,7 +107,7 @@ def build_global_picture(
             g.nodes[fp.label]["manifold"] = f"dimension {fp.saddle_index}, not computed"
             continue
         cb = None if progress is None else (lambda b, t, _l=fp.label: progress(_l, b, t))
-        man: ShipManifold = unstable_manifold(
+        man: ShipManifold = given.get(fp.label) or unstable_manifold(
             model, par, fp, eps=eps, t_max=t_max, points=pts, progress=cb, **classify
         )
         g.graph["manifolds"][fp.label] = man
@@ -115,6 +132,26 @@ def build_global_picture(
                 shift=fate.shift,
             )
     return g
+
+
+def _check_given(
+    label: str, man: ShipManifold, pts: Sequence[FixedPoint], par: Params, eps: float
+) -> None:
+    """Refuse a precomputed manifold that is not the one :func:`build_global_picture` needs."""
+    match = [fp for fp in pts if fp.label == label]
+    why = ""
+    if not match:
+        why = "no fixed point has this label"
+    elif not np.array_equal(np.asarray(man.saddle.x), np.asarray(match[0].x)):
+        why = "its saddle is not the fixed point of this label"
+    elif not np.array_equal(np.asarray(man.params.values), np.asarray(par.values)):
+        why = "it was computed at other parameters"
+    elif man.eps != float(eps):
+        why = f"it was computed with eps={man.eps!r}, not {eps!r}"
+    elif set(man.branches) != {"downslope", "upslope"}:
+        why = f"it has the branches {sorted(man.branches)}, not both"
+    if why:
+        raise ValueError(f"`manifolds`: the manifold given for {label!r} does not fit: {why}")
 
 
 @dataclass(frozen=True)
