@@ -50,6 +50,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from ..casadi_compile import compiled
 from ..linalg import csc_with_data
 from ..typing import FloatArray
 from .collocation import CollocationMesh
@@ -210,14 +211,15 @@ def _collocation_jacobian(
     Kd = _to_dm(sp.csc_matrix((vals, (rows, cols)), shape=(n * Nm, n * M)))
     Sel = _to_dm(sp.csc_matrix((np.ones(len(srows)), (srows, scols)), shape=(n * Nm, n * M)))
     scale = ca.vec(ca.repmat(1.0 / (h_rep * T), n, 1))  # (n Nm,)
-    JF = fns["jac"].map("jac_map", "serial", Nm, [1], [])(Xs, P_eff)  # (n, n Nm)
+    JF = compiled(fns["jac"]).map("jac_map", "serial", Nm, [1], [])(Xs, P_eff)  # (n, n Nm)
     bd_sparsity = ca.kron(ca.DM(ca.Sparsity.diag(Nm), 1.0), ca.DM.ones(n, n)).sparsity()
     BD = ca.MX(bd_sparsity, ca.vec(JF))
     J_orbit = ca.mtimes(ca.diag(scale), Kd) - ca.mtimes(BD, Sel)
     q = len(layout.unknown_param_index)
     n_mid = layout.n_unknowns - n * M - q
     if n_par:
-        DP = fns["dfdp"].map("dfdp_map", "serial", Nm, [1], [])(Xs, P_eff)  # (n, n_par Nm)
+        dfdp_map = compiled(fns["dfdp"]).map("dfdp_map", "serial", Nm, [1], [])
+        DP = dfdp_map(Xs, P_eff)  # (n, n_par Nm)
         # stack the stage blocks vertically: row s n + i, column c = f_p(X_s)[i, c]
         R = ca.reshape(DP, n * n_par, Nm).T  # (Nm, n n_par), row s = vec(block s)
         V_perm = ca.reshape(R, Nm * n, n_par)  # row i Nm + s
@@ -294,7 +296,8 @@ class ConnectionFunctions:
         h_rep = ca.mtimes(h.T, _to_dm(E))
         Dbig = _to_dm(_derivative_matrix(N, m, mesh.D))
         Cbig = _to_dm(_continuity_matrix(N, m, mesh.e))
-        fmap = f_fun.map("fmap", "serial", N * m, [1], [])
+        # the stage evaluations (most of the cost) by compiled copies when possible
+        fmap = compiled(f_fun).map("fmap", "serial", N * m, [1], [])
         F = fmap(Xs, P_eff)
         colloc = ca.mtimes(X, Dbig) / ca.repmat(h_rep * T, n, 1) - F
         cont = ca.mtimes(X, Cbig)

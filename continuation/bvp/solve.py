@@ -29,7 +29,7 @@ from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, extended_problem, refined_problem
 from .connection import HeteroclinicProblem, _replace_fast
 from .result import ConnectionResult, ErrorEstimates
-from .simplified import simplified_newton
+from .simplified import JacobianCache, simplified_newton
 
 log = logging.getLogger(__name__)
 
@@ -40,8 +40,18 @@ DEFAULT_NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=T
 METHODS = ("newton", "broyden", "chord")
 
 
+def _store_key(prob: HeteroclinicProblem) -> tuple[Any, ...]:
+    """Key of a problem's Jacobian in a ``jacobians`` store: layout, ``T`` and the nodes."""
+    mesh = prob.mesh
+    return (prob.layout, float(mesh.T), np.asarray(mesh.nodes, dtype=float).tobytes())
+
+
 def _newton_solve(
-    prob: HeteroclinicProblem, z0: FloatArray, settings: NewtonSettings, method: str = "newton"
+    prob: HeteroclinicProblem,
+    z0: FloatArray,
+    settings: NewtonSettings,
+    method: str = "newton",
+    store: dict[Any, JacobianCache] | None = None,
 ) -> NewtonResult:
     p = prob.params[prob.vary] if prob.vary is not None else None
 
@@ -53,16 +63,23 @@ def _newton_solve(
 
     if method == "newton":
         return newton(res, jac, z0, settings)
-    out = simplified_newton(res, jac, z0, settings, broyden=method == "broyden")
+    cache = None if store is None else store.setdefault(_store_key(prob), JacobianCache())
+    out = simplified_newton(res, jac, z0, settings, broyden=method == "broyden", cache=cache)
     if not out.converged:  # e.g. far from the solution: the damped Newton method
         log.info("%s iteration failed (%s); falling back to Newton", method, out.message)
+        if cache is not None:
+            cache.clear()
         full = newton(res, jac, z0, settings)
         return dataclasses.replace(full, iterations=full.iterations + out.iterations)
     return out
 
 
 def _finish(
-    prob: HeteroclinicProblem, res: NewtonResult, settings: NewtonSettings, method: str = "newton"
+    prob: HeteroclinicProblem,
+    res: NewtonResult,
+    settings: NewtonSettings,
+    method: str = "newton",
+    store: dict[Any, JacobianCache] | None = None,
 ) -> ConnectionResult:
     """Rebase at a converged solution (one more Newton if needed) and wrap as a result."""
     p = prob.params[prob.vary] if prob.vary is not None else None
@@ -88,7 +105,7 @@ def _finish(
     rn = float(np.max(np.abs(new.residual(z, p))))
     iters = res.iterations
     if rn > settings.tol:
-        res2 = _newton_solve(new, z, settings, method)
+        res2 = _newton_solve(new, z, settings, method, store)
         iters += res2.iterations
         if not res2.converged:
             return new.to_result(
@@ -123,6 +140,7 @@ def solve_connection(
     adapt: int | None = None,
     progress: Callable[[ConnectionResult], None] | None = None,
     method: str = "newton",
+    jacobians: dict[Any, JacobianCache] | None = None,
 ) -> ConnectionResult:
     r"""Solve a connecting orbit: adapted mesh, error estimates of the solved parameters.
 
@@ -173,6 +191,13 @@ def solve_connection(
         refreshed otherwise (:func:`continuation.bvp.simplified.simplified_newton`);
         ``"chord"``: the same without the updates (Shamanskii). Both fall back to
         Newton if they fail; the convergence test is the same.
+    jacobians : dict, optional
+        With ``"broyden"``/``"chord"``: a store (initially ``{}``) shared by the solves
+        of a sequence of nearby problems (the courses of a curve). Every solve starts
+        from the factorised Jacobian the last solve of the same layout, ``T`` and mesh
+        nodes ended with (:class:`~continuation.bvp.simplified.JacobianCache`) and
+        refreshes it only when the residual stops contracting fast; the convergence
+        test is the same, so only the work changes.
 
     Returns
     -------
@@ -196,10 +221,15 @@ def solve_connection(
         raise ValueError(f"`accuracy` must be a ConnectionAccuracy, got {type(accuracy).__name__}")
     if method not in METHODS:
         raise ValueError(f"`method` must be one of {METHODS}, got {method!r}")
+    if jacobians is not None and not isinstance(jacobians, dict):
+        raise ValueError(f"`jacobians` must be a dict, got {type(jacobians).__name__}")
+    store = jacobians
     settings = DEFAULT_NEWTON if newton is None else newton
     prob, z0 = problem.initial_vector(guess)
     try:
-        result = _finish(prob, _newton_solve(prob, z0, settings, method), settings, method)
+        result = _finish(
+            prob, _newton_solve(prob, z0, settings, method, store), settings, method, store
+        )
     except KeyboardInterrupt:
         p = prob.params[prob.vary] if prob.vary is not None else None
         result = prob.to_result(
@@ -218,7 +248,7 @@ def solve_connection(
             for _ in range(adapt or 0):
                 if not result.success:
                     break
-                result = _adapt_once(result, settings, method)
+                result = _adapt_once(result, settings, method, store)
                 if progress is not None:
                     progress(result)
         elif result.success:
@@ -227,7 +257,15 @@ def solve_connection(
             last = [result]
             try:
                 result = _controlled(
-                    result, accuracy, rounds, settings, method, progress, last.append, first
+                    result,
+                    accuracy,
+                    rounds,
+                    settings,
+                    method,
+                    progress,
+                    last.append,
+                    first,
+                    store,
                 )
             except KeyboardInterrupt:
                 result = last[-1]
@@ -252,10 +290,14 @@ def _already_adapted(guess: Any, prob: HeteroclinicProblem) -> bool:
 
 
 def _plain(
-    problem: HeteroclinicProblem, guess: Any, settings: NewtonSettings, method: str
+    problem: HeteroclinicProblem,
+    guess: Any,
+    settings: NewtonSettings,
+    method: str,
+    store: dict[Any, JacobianCache] | None = None,
 ) -> ConnectionResult:
     prob, z0 = problem.initial_vector(guess)
-    return _finish(prob, _newton_solve(prob, z0, settings, method), settings, method)
+    return _finish(prob, _newton_solve(prob, z0, settings, method, store), settings, method, store)
 
 
 def _changes(a: ConnectionResult, b: ConnectionResult, safety: float) -> dict[str, float]:
@@ -274,11 +316,12 @@ def _adapted(
     method: str,
     progress: Callable[[ConnectionResult], None] | None,
     keep: Callable[[ConnectionResult], None],
+    store: dict[Any, JacobianCache] | None = None,
 ) -> ConnectionResult:
     """``rounds`` equidistribution solves; stop when the nodes no longer move."""
     for _ in range(rounds):
         old = result.mesh.nodes
-        new = _adapt_once(result, settings, method)
+        new = _adapt_once(result, settings, method, store)
         if new.success:
             keep(new)
         if progress is not None:
@@ -302,6 +345,7 @@ def _controlled(
     progress: Callable[[ConnectionResult], None] | None,
     keep: Callable[[ConnectionResult], None],
     first_rounds: int | None = None,
+    store: dict[Any, JacobianCache] | None = None,
 ) -> ConnectionResult:
     """Adapt, refine and lengthen until both estimates meet ``acc`` (see solve_connection).
 
@@ -311,11 +355,11 @@ def _controlled(
         # ---- discretisation: adapt, halve, compare; double the intervals if needed
         for n_ref in range(acc.max_refinements + 1):
             k = rounds if (n_ext or n_ref or first_rounds is None) else first_rounds
-            result = _adapted(result, k, settings, method, progress, keep)
+            result = _adapted(result, k, settings, method, progress, keep, store)
             if not result.success:
                 return result
             tol = {u: acc.tolerance(result.params[u]) for u in result.free}
-            fine = _plain(refined_problem(result), result, settings, method)
+            fine = _plain(refined_problem(result), result, settings, method, store)
             if progress is not None:
                 progress(fine)
             if not fine.success:
@@ -354,7 +398,7 @@ def _controlled(
             keep(fine)
         # ---- truncation: same resolution on a longer interval
         prob_long, guess_long = extended_problem(result, acc.T_factor)
-        long = _plain(prob_long, guess_long, settings, method)
+        long = _plain(prob_long, guess_long, settings, method, store)
         if progress is not None:
             progress(long)
         if not long.success:
@@ -406,7 +450,10 @@ def _with_status(result: ConnectionResult, status: Status, message: str) -> Conn
 
 
 def _adapt_once(
-    result: ConnectionResult, settings: NewtonSettings, method: str = "newton"
+    result: ConnectionResult,
+    settings: NewtonSettings,
+    method: str = "newton",
+    store: dict[Any, JacobianCache] | None = None,
 ) -> ConnectionResult:
     prob: HeteroclinicProblem = result.problem
     pin = prob.layout.pin
@@ -425,7 +472,7 @@ def _adapt_once(
     new = _replace_fast(prob, **changes)
     parts = prob.unpack(result.z)
     z0 = new.pack(X, parts["x_from"], parts["x_to"], list(parts["params"].values()))
-    return _finish(new, _newton_solve(new, z0, settings, method), settings, method)
+    return _finish(new, _newton_solve(new, z0, settings, method, store), settings, method, store)
 
 
 @dataclass(frozen=True)

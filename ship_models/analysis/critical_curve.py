@@ -176,7 +176,11 @@ class _FoldStop:
 
 
 def _first_sheet(branch: Any, sign: float) -> tuple[FloatArray, FloatArray, Any]:
-    """Rows of the branch up to its first fold in ``chi_c`` (``P (k,)``, ``Z (k, N)``), fold."""
+    """Rows of the branch up to its first fold in ``chi_c`` (``P (k,)``, ``Z (k, N)``), fold.
+
+    A located fold is appended as the last row, so that courses between the last row
+    before the fold and the fold itself have a bracketing pair of rows.
+    """
     P = np.asarray(branch.p, dtype=float)
     Z = np.asarray(branch.x, dtype=float)
     folds = [sp for sp in branch.special_points if sp.kind is SpecialKind.FOLD]
@@ -187,7 +191,11 @@ def _first_sheet(branch: Any, sign: float) -> tuple[FloatArray, FloatArray, Any]
     back = np.nonzero(d < 0)[0]
     if back.size:
         k = int(back[0]) + 1
-    return P[:k], Z[:k], fold
+    P, Z = P[:k], Z[:k]
+    if fold is not None and fold.located and sign * (float(fold.p) - P[-1]) > 0:
+        P = np.append(P, float(fold.p))
+        Z = np.vstack([Z, np.asarray(fold.x, dtype=float)[None, :]])
+    return P, Z, fold
 
 
 def _crest_end(m: Any, params: Any, Fn: float, sign: float) -> float:
@@ -316,11 +324,24 @@ def critical_curve(
     folds: list[tuple[float, float]] = []
     fold_error = math.inf
     fold_offset = math.radians(0.5)
+    # the course solves share their factorised Jacobians (same mesh for all of them)
+    store: dict[Any, Any] = {}
+    sheets: list[tuple[Any, FloatArray, FloatArray]] = []  # (problem, P, Z) per branch
     pending = list(range(K))
     for k in range(K):
         if abs(chis[k] - start.chi_c) < 1e-12:  # the start is a checked solve there
             solved[k] = start
     pending = [k for k in pending if k not in solved]
+
+    def solve_courses(todo: Sequence[int]) -> None:
+        for k in todo:
+            r = _solve_from_sheets(m, params, sheets, float(chis[k]), store)
+            if r is None:
+                continue
+            if not r.success:
+                log.warning("course %.4g deg: %s", math.degrees(chis[k]), r.message)
+            solved[k] = r
+
     try:
         # courses between 0 and a start away from 0: a backward branch
         near = [k for k in pending if sign * chis[k] < sign * start.chi_c - 1e-12]
@@ -332,10 +353,12 @@ def critical_curve(
             if back.status is Status.INTERRUPTED:
                 raise KeyboardInterrupt
             P, Z, _ = _first_sheet(back, -sign)
-            _solve_courses(m, params, back.problem, P, Z, chis, near, solved, bvp_options)
+            sheets.append((back.problem, P, Z))
+            solve_courses(near)
+            sheets.clear()
             pending = [k for k in pending if k not in near]
         cur = start
-        for _ in range(max_relocations + 1):
+        for n_reloc in range(max_relocations + 1):
             hook = _FoldStop(sign, progress)
             settings = _settings(ds, ds_max, tol, sign, cur.chi_c, far, margin)
             branch = continue_connection(
@@ -344,6 +367,7 @@ def critical_curve(
             if branch.status is Status.INTERRUPTED and not hook.fired:
                 raise KeyboardInterrupt
             P, Z, fold = _first_sheet(branch, sign)
+            sheets.append((branch.problem, P, Z))
             sheet_end = float(P[-1]) if fold is None else float(fold.p)
             if fold is not None:
                 if math.isfinite(end_chi):
@@ -351,24 +375,44 @@ def critical_curve(
                 end_chi = float(fold.p)
                 end_Fn = float(branch.problem.unpack(np.asarray(fold.x))["params"]["Fn"])
                 folds = [(end_chi, end_Fn)]
-            todo = [k for k in pending if sign * chis[k] <= sign * sheet_end + 1e-12]
+            below = [k for k in pending if sign * chis[k] <= sign * sheet_end + 1e-12]
+            # courses near the fold wait for its last re-location (a branch from a
+            # solve near it): solved now, they may lie beyond the fold found later
+            defer = 2.0 * fold_offset if fold is not None else -1.0
+            todo = [k for k in below if sign * (sheet_end - chis[k]) > defer]
             todo.sort(key=lambda k: sign * chis[k])
-            if todo:
-                _solve_courses(m, params, branch.problem, P, Z, chis, todo, solved, bvp_options)
-                pending = [k for k in pending if k not in todo]
-            if fold is None or (not todo and fold_error <= fold_tol):
+            solve_courses(todo)
+            pending = [k for k in pending if k not in todo]
+            if fold is None or fold_error <= fold_tol or n_reloc == max_relocations:
                 break
-            # re-locate the fold from a solve near it (adapted mesh and T there)
+            # re-locate the fold from an adapted solve near it (its mesh and T there)
             c_aux = end_chi - sign * min(fold_offset, 0.5 * abs(end_chi - float(P[0])))
             near_fold = [
-                k for k in todo if solved[k].success and abs(chis[k] - c_aux) <= fold_offset
-            ]
-            if near_fold:
-                cur = solved[max(near_fold, key=lambda k: sign * chis[k])]
-            else:
-                cur = _solve_at(m, params, branch.problem, P, Z, c_aux, bvp_options)
-                if cur is None or not cur.success:
-                    break
+                k for k in pending
+                if abs(chis[k] - c_aux) <= fold_offset and sign * (end_chi - chis[k]) > 0
+            ]  # fmt: skip
+            k_aux = max(near_fold, key=lambda k: sign * chis[k]) if near_fold else None
+            if k_aux is not None:
+                c_aux = float(chis[k_aux])
+            nxt = _solve_from_sheets(m, params, sheets, c_aux, store, adapt=None)
+            if k_aux is not None and (nxt is None or not nxt.success):
+                # that course may lie beyond the better-located fold: from the offset
+                c_aux = end_chi - sign * min(fold_offset, 0.5 * abs(end_chi - float(P[0])))
+                k_aux = None
+                nxt = _solve_from_sheets(m, params, sheets, c_aux, store, adapt=None)
+            if nxt is None or not nxt.success:
+                break
+            if k_aux is not None:
+                solved[k_aux] = nxt
+                pending.remove(k_aux)
+            cur = nxt
+        if math.isfinite(end_chi):  # the deferred courses below the last fold
+            solve_courses(
+                sorted(
+                    (k for k in pending if sign * chis[k] <= sign * end_chi + 1e-12),
+                    key=lambda k: -sign * chis[k],
+                )
+            )
     except KeyboardInterrupt:
         status = Status.INTERRUPTED
     crest_end = math.nan
@@ -468,37 +512,43 @@ def _predict(P: FloatArray, Z: FloatArray, c: float) -> FloatArray | None:
     return None
 
 
-def _solve_courses(
+def _solve_from_sheets(
+    m: Any,
+    params: Any,
+    sheets: Sequence[tuple[Any, FloatArray, FloatArray]],
+    c: float,
+    store: dict[Any, Any],
+    adapt: int | None = 0,
+) -> CriticalFn | None:
+    """The connection at course ``c`` from the latest branch whose rows bracket it."""
+    for prob, P, Z in reversed(sheets):
+        r = _solve_at(m, params, prob, P, Z, c, store, adapt)
+        if r is not None:
+            return r
+    return None
+
+
+def _solve_at(
     m: Any,
     params: Any,
     prob: Any,
     P: FloatArray,
     Z: FloatArray,
-    chis: FloatArray,
-    todo: Sequence[int],
-    solved: dict[int, CriticalFn],
-    bvp_options: dict[str, Any],
-) -> None:
-    """Solve each course ``chis[k]``, ``k`` in ``todo``, from the branch rows; into ``solved``."""
-    for k in todo:
-        r = _solve_at(m, params, prob, P, Z, float(chis[k]), bvp_options)
-        if r is None:
-            continue
-        if not r.success:
-            log.warning("course %.4g deg: %s", math.degrees(chis[k]), r.message)
-        solved[k] = r
-
-
-def _solve_at(
-    m: Any, params: Any, prob: Any, P: FloatArray, Z: FloatArray, c: float,
-    bvp_options: dict[str, Any],
-) -> CriticalFn | None:  # fmt: skip
+    c: float,
+    store: dict[Any, Any] | None = None,
+    adapt: int | None = 0,
+) -> CriticalFn | None:
     """The connection at course ``c`` from the branch orbit interpolated there.
 
-    Solved by :func:`continuation.bvp.solve_connection` (adapted mesh, error
-    estimates) on the branch's problem at fixed ``chi_c = c``, which keeps its compiled
-    functions (a new problem, as :func:`critical_fn_bvp` builds, costs several times
-    the solve); then the capsizing-boundary check.
+    Solved by :func:`continuation.bvp.solve_connection` (error estimates: the mesh
+    halved, ``T`` lengthened) on the branch's problem at fixed ``chi_c = c``, which
+    keeps its compiled functions (a new problem, as :func:`critical_fn_bvp` builds,
+    costs several times the solve); then the capsizing-boundary check. ``adapt=0``
+    (the courses): on the branch's own mesh, which the start solve adapted, with the
+    Jacobians shared through ``store`` (all courses have the same mesh); ``None``
+    (the re-locations of the fold): adapted to the orbit at ``c``. Either way the
+    error estimate is that of the mesh used; a mesh that misses the tolerance is
+    refined by the solver.
     """
     t0 = time.perf_counter()
     z0 = _predict(P, Z, c)
@@ -509,7 +559,7 @@ def _solve_at(
         vary=None, reference=None, params=prob.params.replace(chi_c=c, **parts["params"])
     )
     guess = (np.asarray(prob.mesh.t, dtype=float), np.asarray(parts["X"], dtype=float))
-    res = solve_connection(fixed, guess, method="broyden")
+    res = solve_connection(fixed, guess, method="broyden", adapt=adapt, jacobians=store)
     status, message = res.status, res.message
     if res.success or res.status in (Status.DISCRETISATION_ERROR, Status.TRUNCATION_ERROR):
         why = boundary_refusal(m, res.x, res.x_from, fixed.params.replace(**res.params))
