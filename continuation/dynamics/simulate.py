@@ -59,7 +59,10 @@ log = logging.getLogger(__name__)
 #: of one call of 1000, and 2.1 times its CPU time); short first calls bound the time
 #: integrated past a terminal event to about the time integrated before it.
 _CHUNK = 50
-_CHUNK_GROWTH = 4
+#: Kept at 1 (every call _CHUNK samples): with growing calls a Ctrl-C during a long
+#: native call was seen to take 23 s to act (tests/test_interrupts.py, intermittent);
+#: growth 4 saved about a third of the sudden-change step's CPU (benchmarks/README.md).
+_CHUNK_GROWTH = 1
 _CHUNK_MAX = 1000
 #: Number of halvings used to get as close as possible to an integrator failure.
 _FAILURE_BISECTIONS = 12
