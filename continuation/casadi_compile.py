@@ -11,6 +11,14 @@ command, and loads it (``casadi.external``); the next process finds the library 
 loads it at once. The compiled function computes the same expression graph
 (checked on one random input against the original before it is used).
 
+Compiling costs some 5-9 s per function, which pays off only when the function is
+evaluated many times (a critical curve: hundreds of Newton steps) and is wasted on a
+one-off solve, above all of a perturbed model whose code differs in its constants (a
+sensitivity study builds dozens). So :func:`compiled` compiles a function that is not
+yet in the cache only inside an :func:`allow_compilation` block, opened by drivers of
+long computations; elsewhere it returns the cached library when there is one and the
+original function otherwise.
+
 Whenever anything is missing or fails (no compiler, an unwritable cache directory,
 a compile error or timeout, a mismatch), the original function is returned and the
 reason is logged once: the result is the same, only slower.
@@ -25,13 +33,18 @@ Environment
 
 from __future__ import annotations
 
+import contextvars
+import functools
 import hashlib
 import logging
 import os
 import shutil
 import subprocess
 import tempfile
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import ParamSpec, TypeVar
 
 import casadi as ca
 import numpy as np
@@ -49,6 +62,50 @@ _MEMO: dict[tuple[str, str], ca.Function] = {}
 _WARNED: set[str] = set()
 # per function object (the original is kept alive with it, so ids stay unique)
 _BY_ID: dict[int, tuple[ca.Function, ca.Function]] = {}
+
+
+P = ParamSpec("P")
+R = TypeVar("R")
+
+_ALLOWED: contextvars.ContextVar[bool] = contextvars.ContextVar(
+    "broachkit_allow_compilation", default=False
+)
+
+
+@contextmanager
+def allow_compilation(allowed: bool = True) -> Iterator[None]:
+    """Let :func:`compiled` compile functions missing from the cache inside the block.
+
+    Open it around computations that evaluate the same functions many times (a
+    critical curve, a long continuation); outside, only libraries already in the cache
+    are used. Nested blocks restore the outer setting on exit.
+
+    Parameters
+    ----------
+    allowed : bool
+        ``False`` forbids new compilations inside an outer allowing block.
+    """
+    token = _ALLOWED.set(bool(allowed))
+    try:
+        yield
+    finally:
+        _ALLOWED.reset(token)
+
+
+def compiling(func: Callable[P, R]) -> Callable[P, R]:
+    """Decorator: ``func`` runs inside :func:`allow_compilation` (a long driver)."""
+
+    @functools.wraps(func)
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        with allow_compilation():
+            return func(*args, **kwargs)
+
+    return wrapper
+
+
+def compilation_allowed() -> bool:
+    """True inside an :func:`allow_compilation` block."""
+    return _ALLOWED.get()
 
 
 def cache_dir() -> Path:
@@ -101,20 +158,22 @@ def compiled(fn: ca.Function) -> ca.Function:
     -------
     casadi.Function
         Same inputs and outputs as ``fn``; an external function loaded from the cache
-        when compilation is possible, else ``fn``. Derivatives of the external function
-        are not available: use it for evaluations only.
+        when compilation is possible (already cached, or compiled now inside an
+        :func:`allow_compilation` block), else ``fn``. Derivatives of the external
+        function are not available: use it for evaluations only.
     """
     if os.environ.get("BROACHKIT_COMPILE", "1") == "0":
         return fn
+    allowed = compilation_allowed()
     known = _BY_ID.get(id(fn))
-    if known is not None and known[0] is fn:
+    if known is not None and known[0] is fn and (known[1] is not fn or not allowed):
         return known[1]
-    out = _compiled(fn)
+    out = _compiled(fn, allowed)
     _BY_ID[id(fn)] = (fn, out)
     return out
 
 
-def _compiled(fn: ca.Function) -> ca.Function:
+def _compiled(fn: ca.Function, allowed: bool = True) -> ca.Function:
     cc = _compiler()
     if cc is None:
         return _fallback(fn, "no C compiler found")
@@ -133,6 +192,8 @@ def _compiled(fn: ca.Function) -> ca.Function:
         return memo
     folder = cache_dir()
     lib = folder / f"{name}_{key}.so"
+    if not allowed and not lib.exists():
+        return fn  # not cached, and compiling is not worth it here (module docstring)
     try:
         if not lib.exists():
             folder.mkdir(parents=True, exist_ok=True)
@@ -155,4 +216,5 @@ def _compiled(fn: ca.Function) -> ca.Function:
     return ext
 
 
-__all__ = ["FLAGS", "TIMEOUT", "cache_dir", "compiled"]
+__all__ = ["FLAGS", "TIMEOUT", "allow_compilation", "cache_dir", "compilation_allowed", "compiled",
+           "compiling"]

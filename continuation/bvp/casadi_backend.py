@@ -50,7 +50,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from ..casadi_compile import compiled
+from ..casadi_compile import compilation_allowed, compiled
 from ..linalg import csc_with_data
 from ..typing import FloatArray
 from .collocation import CollocationMesh
@@ -539,10 +539,14 @@ def build_connection_functions(system: Any, layout: ConnectionLayout) -> Connect
         Sizes of the discretisation; the cache key together with ``system``.
     """
     per_system = _CACHE.setdefault(system, {})
-    fn = per_system.get(layout)
+    # functions built with the virtual machine are rebuilt once compilation is allowed
+    key = (layout, compilation_allowed())
+    fn = per_system.get(key)
+    if fn is None and not key[1]:
+        fn = per_system.get((layout, True))  # compiled ones serve everywhere
     if fn is None:
         fn = ConnectionFunctions(system, layout)
-        per_system[layout] = fn
+        per_system[key] = fn
     return fn
 
 

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ..casadi_compile import compiling
 from ..errors import ConvergenceError
 from ..newton import NewtonResult, newton
 from ..settings import ContinuationSettings, NewtonSettings
@@ -598,6 +599,7 @@ class ContinuedConnection:
         return getattr(self.problem, name)
 
 
+@compiling
 def continue_connection(
     result: ConnectionResult,
     vary: str,

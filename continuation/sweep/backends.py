@@ -68,11 +68,29 @@ class Backend:
         *,
         rebuild: Callable[[], cf.Executor] | None = None,
         owned: tuple[Any, ...] = (),
+        alive: Callable[[], int] | None = None,
     ) -> None:
         self.name, self.executor, self.slots = name, executor, max(int(slots), 1)
-        self._rebuild, self._owned = rebuild, owned
+        self._rebuild, self._owned, self._alive = rebuild, owned, alive
         #: Incremented each time the executor is replaced.
         self.generation = 0
+
+    def capacity(self) -> int:
+        """Tasks that can run at once now: ``slots``, or fewer while workers are down.
+
+        For a Dask cluster this is the number of worker threads the scheduler has now.
+        While a dead worker is being replaced, a task submitted beyond that number would
+        wait on a surviving worker and be charged if that one dies too; keeping no more
+        in flight than can run means a worker's death is charged only to the task it was
+        running.
+        """
+        if self._alive is None:
+            return self.slots
+        try:
+            return max(min(int(self._alive()), self.slots), 0)
+        except Exception as exc:  # the scheduler is unreachable: let submit report it
+            log.debug("could not ask for the live workers: %s", exc)
+            return self.slots
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> cf.Future:
         """Submit ``fn(*args)``; a broken process pool is replaced first."""
@@ -130,9 +148,15 @@ def _process_pool(workers: int, start_method: str) -> cf.ProcessPoolExecutor:
     return cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_ignore_sigint)
 
 
-def _client_backend(client: Any, name: str, owned: tuple[Any, ...]) -> Backend:
-    slots = sum(client.nthreads().values()) or 1
-    return Backend(name, client.get_executor(pure=False), slots, owned=owned)
+def _client_backend(
+    client: Any, name: str, owned: tuple[Any, ...], slots: int | None = None
+) -> Backend:
+    def alive() -> int:
+        return sum(client.nthreads().values())
+
+    return Backend(
+        name, client.get_executor(pure=False), slots or alive() or 1, owned=owned, alive=alive
+    )
 
 
 def _is_client(obj: Any) -> bool:
@@ -210,7 +234,7 @@ def open_backend(
                 silence_logs=logging.ERROR,
             )
         client = Client(cluster)
-        return _client_backend(client, "dask", (client, cluster))
+        return _client_backend(client, "dask", (client, cluster), slots=k)
     raise ValueError(
         f"`backend` must be one of {', '.join(BACKENDS)}, a concurrent.futures.Executor or a "
         f"distributed.Client, got {backend!r}"

@@ -369,7 +369,10 @@ def _drive(
     n_exec = 0
     try:
         while queue or flight:
-            while queue and len(flight) < be.slots:
+            # no more in flight than can run now (fewer while a dead worker is replaced;
+            # one when none is up, which then waits in the executor as before)
+            room = max(be.capacity(), 0 if flight else 1) if queue else 0
+            while queue and len(flight) < room:
                 tid = queue.pop()
                 fut = be.submit(execute_task, fn, keys[tid])
                 flight[fut] = (tid, be.generation)

@@ -27,6 +27,7 @@ import numpy as np
 
 from continuation.branch import SpecialKind
 from continuation.bvp import continue_connection, solve_connection
+from continuation.casadi_compile import compiling
 from continuation.errors import ContinuationError
 from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
@@ -211,6 +212,7 @@ def _crest_end(m: Any, params: Any, Fn: float, sign: float) -> float:
     return float(folds[0].p) if folds else math.nan
 
 
+@compiling
 def critical_curve(
     chi_c_values: Sequence[float] | FloatArray | None = None,
     *,
