@@ -9,7 +9,7 @@ parts). Writes
 ``benchmarks/results/ship_cycles.json``.
 
 Also reported: CPU time (user + system of this process; a background compilation of the
-stage function runs in a child process, see ``continuation.periodic.compiled``), the
+stage function runs in a child process, see ``continuation.casadi_compile.compiled_soon``), the
 load average, and whether the branch ran on the compiled stage function (``compiled``:
 false on the first run on a machine, while it compiles; ``BROACHKIT_COMPILE=0`` forces
 CasADi's virtual machine).

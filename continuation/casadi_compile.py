@@ -1,5 +1,15 @@
 r"""Compiled copies of CasADi functions, cached on disk, with a clean fall-back.
 
+Two ways to ask, one cache:
+
+- :func:`compiled` (synchronous): the compiled copy now, compiling it first when that
+  is allowed (:func:`allow_compilation`; the connection solver's drivers);
+- :func:`compiled_soon` (background): the compiled copy if its library is ready, else
+  ``None`` after starting one low-priority compiler process for it (the periodic-orbit
+  stage functions, the simulator's right-hand side); callers keep using the virtual
+  machine and ask again. A library another process is already compiling is waited for,
+  not compiled twice.
+
 A system's right-hand side and its Jacobians are CasADi ``SX`` functions run by
 CasADi's virtual machine. The collocation residual evaluates them at every
 collocation point (a few hundred per evaluation), so for a large model (the ship:
@@ -26,8 +36,8 @@ reason is logged once: the result is the same, only slower.
 Environment
 -----------
 ``BROACHKIT_COMPILE=0`` turns compilation off (the original functions are used).
-``BROACHKIT_CACHE_DIR`` sets the cache directory (default
-``$XDG_CACHE_HOME/broachkit/casadi`` or ``~/.cache/broachkit/casadi``).
+``BROACHKIT_CACHE_DIR`` sets the cache directory (else ``$BROACHKIT_CACHE/casadi``,
+else ``$XDG_CACHE_HOME/broachkit/casadi`` or ``~/.cache/broachkit/casadi``).
 ``CC`` names the compiler (default the first of ``cc``, ``gcc``, ``clang`` found).
 """
 
@@ -38,13 +48,17 @@ import functools
 import hashlib
 import logging
 import os
+import platform
+import shlex
 import shutil
 import subprocess
+import sys
 import tempfile
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import ParamSpec, TypeVar
+from typing import Any, ParamSpec, TypeVar
 
 import casadi as ca
 import numpy as np
@@ -113,11 +127,16 @@ def cache_dir() -> Path:
     env = os.environ.get("BROACHKIT_CACHE_DIR")
     if env:
         return Path(env)
+    root = os.environ.get("BROACHKIT_CACHE")
+    if root:
+        return Path(root) / "casadi"
     base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
     return Path(base) / "broachkit" / "casadi"
 
 
 def _compiler() -> str | None:
+    if os.environ.get("BROACHKIT_COMPILE", "1").strip().lower() in ("0", "false", "no", "off"):
+        return None
     cc = os.environ.get("CC")
     if cc:
         return shutil.which(cc)
@@ -162,7 +181,7 @@ def compiled(fn: ca.Function) -> ca.Function:
         :func:`allow_compilation` block), else ``fn``. Derivatives of the external
         function are not available: use it for evaluations only.
     """
-    if os.environ.get("BROACHKIT_COMPILE", "1") == "0":
+    if _compiler() is None:
         return fn
     allowed = compilation_allowed()
     known = _BY_ID.get(id(fn))
@@ -216,5 +235,185 @@ def _compiled(fn: ca.Function, allowed: bool = True) -> ca.Function:
     return ext
 
 
-__all__ = ["FLAGS", "TIMEOUT", "allow_compilation", "cache_dir", "compilation_allowed", "compiled",
-           "compiling"]
+# ---- background compilation (compiled_soon)
+
+#: Smallest function (CasADi instructions) :func:`compiled_soon` compiles (smaller
+#: ones gain little from it).
+MIN_INSTRUCTIONS = 5000
+
+#: A work directory older than this (s) is a compilation that died: it is redone.
+STALE_S = 2 * TIMEOUT
+
+# id(fn) -> [fn, state ("queued" | "pending" | "elsewhere" | "ready" | "off"), library, loaded]
+_STATE: dict[int, list[Any]] = {}
+# id(fn) -> (compiler process, its work directory)
+_PENDING: dict[int, tuple[Any, Path]] = {}
+
+
+def _source(fns: list[ca.Function]) -> str:
+    gen = ca.CodeGenerator("fn.c", {"with_header": False})
+    for f in fns:
+        gen.add(f)
+    return gen.dump()
+
+
+def _load(name: str, lib: Path) -> ca.Function | None:
+    try:
+        return ca.external(name, str(lib))
+    except RuntimeError as exc:  # a broken library: the virtual machine
+        log.warning("compiled CasADi function %s not loadable (%s); using the VM", lib, exc)
+        return None
+
+
+def _ready(key: int, lib: Path) -> ca.Function | None:
+    entry = _STATE[key]
+    loaded = _load(entry[0].name(), lib)
+    if loaded is not None and not _same(entry[0], loaded):
+        log.warning("compiled %s disagrees with the original; using the VM", lib)
+        loaded = None
+    entry[1:] = ["ready" if loaded is not None else "off", lib, loaded]
+    return loaded
+
+
+def compiled_soon(fn: ca.Function, jacobian: bool = False) -> ca.Function | None:
+    """The compiled copy of ``fn`` if its library is ready now, else ``None``.
+
+    The first call for a function missing from the cache starts one compiler process
+    for it in the background (``nice``, at most one per process at a time; a library
+    that another process is compiling is waited for instead) and returns ``None``: the
+    caller keeps using ``fn`` and asks again (cheap) until it gets the compiled copy,
+    or until :func:`settled` says there will be none (too small, no compiler, failure).
+
+    Parameters
+    ----------
+    fn : casadi.Function
+        A function of at least :data:`MIN_INSTRUCTIONS` instructions.
+    jacobian : bool
+        Put ``fn.jacobian()`` in the same library, where CasADi finds it as the
+        derivative of the external function (``jac_<name>``): for a right-hand side
+        handed to an integrator, which needs its Jacobian.
+
+    Returns
+    -------
+    casadi.Function or None
+    """
+    key = id(fn)
+    entry = _STATE.get(key)
+    if entry is not None and entry[0] is fn:
+        if entry[1] == "pending":
+            return _poll(key)
+        if entry[1] == "elsewhere":
+            return _poll_elsewhere(key)
+        if entry[1] != "queued":
+            return entry[3]
+    cc = _compiler()
+    if cc is None or fn.n_instructions() < MIN_INSTRUCTIONS:
+        _STATE[key] = [fn, "off", None, None]
+        return None
+    for other in list(_PENDING):
+        _poll(other)
+    if _PENDING:  # one background compilation per process at a time: ask again later
+        _STATE[key] = [fn, "queued", None, None]
+        return None
+    fns = [fn, fn.jacobian()] if jacobian else [fn]
+    try:
+        src = _source(fns)
+    except RuntimeError as exc:
+        log.info("no C code for %s (%s): using the VM", fn.name(), exc)
+        _STATE[key] = [fn, "off", None, None]
+        return None
+    digest = hashlib.sha256(
+        "\0".join([src, cc, *FLAGS, ca.__version__, platform.machine(), sys.platform]).encode()
+    ).hexdigest()[:24]
+    folder = cache_dir()
+    lib = folder / f"{fn.name()}_{digest}.so"
+    _STATE[key] = [fn, "off", lib, None]
+    if lib.exists():
+        return _ready(key, lib)
+    work = folder / f"{fn.name()}_{digest}.building"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        try:
+            work.mkdir()
+        except FileExistsError:
+            if time.time() - work.stat().st_mtime < STALE_S:  # another process compiles it
+                _STATE[key][1] = "elsewhere"
+                return _poll_elsewhere(key)
+            shutil.rmtree(work, ignore_errors=True)
+            work.mkdir()
+        (work / "fn.c").write_text(src)
+        # the shell moves the library into place (an atomic rename) and removes the
+        # work directory even if this process has ended by then
+        script = (f'{shlex.quote(cc)} {" ".join(FLAGS)} fn.c -o fn.so && '
+                  f'mv -f fn.so {shlex.quote(str(lib))}; rc=$?; cd .. && '
+                  f'rm -rf {shlex.quote(str(work))}; exit $rc')  # fmt: skip
+        nice = ["nice", "-n", "10"] if shutil.which("nice") else []
+        proc = subprocess.Popen([*nice, "sh", "-c", script], cwd=work,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)  # fmt: skip
+    except OSError as exc:
+        log.info("no compiled CasADi functions (%s): using the VM", exc)
+        return None
+    log.info("compiling %s (%d instructions) in the background", fn.name(), fn.n_instructions())
+    _STATE[key][1] = "pending"
+    _PENDING[key] = (proc, work)
+    return None
+
+
+def settled(fn: ca.Function) -> bool:
+    """True once :func:`compiled_soon` has given its final answer for ``fn``."""
+    entry = _STATE.get(id(fn))
+    return entry is not None and entry[0] is fn and entry[1] in ("ready", "off")
+
+
+def _poll_elsewhere(key: int) -> ca.Function | None:
+    entry = _STATE[key]
+    lib: Path = entry[2]
+    if lib.exists():
+        return _ready(key, lib)
+    work = lib.with_suffix(".building")
+    if not work.exists():  # the other process gave up (or failed): no library
+        entry[1] = "off"
+    return None
+
+
+def _poll(key: int) -> ca.Function | None:
+    proc, work = _PENDING[key]
+    rc = proc.poll()
+    if rc is None:
+        return None
+    del _PENDING[key]
+    entry = _STATE[key]
+    lib = entry[2]
+    err = proc.stderr.read().decode(errors="replace")[-500:] if proc.stderr else ""
+    if proc.stderr:
+        proc.stderr.close()
+    shutil.rmtree(work, ignore_errors=True)
+    if rc != 0 or not lib.exists():
+        log.warning("compiling %s failed (exit %s): %s; using the VM", entry[0].name(), rc, err)
+        entry[1] = "off"
+        return None
+    return _ready(key, lib)
+
+
+def wait(timeout: float | None = None) -> None:
+    """Wait for this process's background compilations (tests and benchmarks)."""
+    for proc, _ in list(_PENDING.values()):
+        try:
+            proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            pass
+
+
+__all__ = [
+    "FLAGS",
+    "MIN_INSTRUCTIONS",
+    "TIMEOUT",
+    "allow_compilation",
+    "cache_dir",
+    "compilation_allowed",
+    "compiled",
+    "compiled_soon",
+    "compiling",
+    "settled",
+    "wait",
+]

@@ -135,7 +135,8 @@ class SurgeModel(System):
         n_grid: int = 400,
         settings: NewtonSettings | None = None,
     ) -> list[SurgeFixedPoint]:
-        """All fixed points in one wavelength: brentq on the surge force at u = c, then Newton.
+        """All fixed points in one wavelength: brentq on the surge acceleration at u = c
+        (zero where the surge force ``T - R + X_w`` is), then Newton.
 
         Returns
         -------
@@ -145,14 +146,20 @@ class SurgeModel(System):
         pv = self.check_params(params)
         c = self.celerity(pv)
         grid = np.linspace(0.0, 1.0, n_grid + 1)
-        f = self.surge_force(grid, c, pv)
+        # du/dt at u = c: the surge force over the (positive) surge mass, so the same
+        # sign changes and roots; evaluated by the CasADi trace, all grid points at once
+        f_fun = self.casadi_functions()["f"]
+        on_grid = f_fun.map(n_grid + 1)
+        f = np.asarray(on_grid(np.vstack([grid, np.full_like(grid, c)]), pv))[1]
         out: list[SurgeFixedPoint] = []
         s = settings or NewtonSettings(tol=1e-10, max_iter=30)
+
+        def acc(t: float) -> float:
+            return float(f_fun(np.array([t, c]), pv)[1])
+
         for i in range(n_grid):
             if f[i] == 0.0 or f[i] * f[i + 1] < 0:
-                xi0 = so.brentq(
-                    lambda t: float(self.surge_force(t, c, pv)), grid[i], grid[i + 1], xtol=1e-14
-                )
+                xi0 = so.brentq(acc, grid[i], grid[i + 1], xtol=1e-14)
                 res = newton(
                     lambda z: self.f(z, pv), lambda z: self.jacobian(z, pv), np.array([xi0, c]), s
                 )

@@ -1,4 +1,5 @@
-"""Ctrl-C (SIGINT) stops a simulation quickly, inside CVODES's long native calls too.
+"""Ctrl-C (SIGINT) stops a simulation quickly, inside CVODES's long native calls too
+(with the right-hand side in the virtual machine and compiled, ``compiled``).
 
 Each test runs a long simulation in a child process, waits until the child has finished
 its first block of output samples, sends it SIGINT and checks that the child ends within
@@ -51,7 +52,18 @@ t_start = time.perf_counter()
 def progress(t, x):
     print(json.dumps({"block": t, "seconds": time.perf_counter() - t_start}), flush=True)
 
-if sys.argv[1] == "simulate":
+if sys.argv[1] == "compiled":  # the same with the compiled right-hand side in CVODES
+    import os, tempfile
+    import continuation.casadi_compile as cc
+    from continuation.dynamics.simulate import Simulator
+    os.environ["BROACHKIT_CACHE_DIR"] = tempfile.mkdtemp(prefix="bk_sigint_")
+    cc.MIN_INSTRUCTIONS = 0
+    be = Simulator(S, [])._backend
+    be.uses_compiled()  # starts the compilation
+    cc.wait(300)
+    assert be.uses_compiled(), "the right-hand side was not compiled"
+    t_start = time.perf_counter()
+if sys.argv[1] in ("simulate", "compiled"):
     tr = simulate(S, [1.0, 0.0], [], (0.0, 1000.0), dt=1.0, progress=progress)
     status = tr.status
 else:  # no equilibria, no section: undecided after t_max, 20 segments of one call each
@@ -89,7 +101,7 @@ def _run_and_interrupt(kind: str) -> tuple[float, dict, dict, subprocess.Complet
     return delay, first, last, subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
-@pytest.mark.parametrize("kind", ["simulate", "classify"])
+@pytest.mark.parametrize("kind", ["simulate", "classify", "compiled"])
 def test_sigint_stops_a_long_cvodes_call_and_keeps_the_finished_samples(kind):
     delay, first, last, proc = _run_and_interrupt(kind)
     assert delay < 3.0, f"took {delay:.2f} s to stop"

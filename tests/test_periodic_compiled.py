@@ -1,4 +1,4 @@
-"""Compiled stage functions (continuation.periodic.compiled): the same values as
+"""Compiled stage functions (continuation.casadi_compile): the same values as
 CasADi's virtual machine, cached on disk, and a clean fallback without compilation."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pytest
 from continuation import System
 from continuation.periodic.collocation import _BUFFERS, StageEvaluator
 
-compiled_mod = importlib.import_module("continuation.periodic.compiled")
+compiled_mod = importlib.import_module("continuation.casadi_compile")
 
 
 def _rhs(x, p, ops):

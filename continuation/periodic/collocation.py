@@ -44,9 +44,9 @@ import scipy.sparse as sp
 
 from ..bvp.collocation import CollocationMesh
 from ..bvp.condense import StageCondenser
+from ..casadi_compile import compiled_soon, settled
 from ..linalg import csc_with_data
 from ..typing import FloatArray
-from .compiled import compiled, settled
 
 #: CasADi functions per system, outside the system object (so that pickling a system,
 #: e.g. for sweep workers, does not carry them; they are rebuilt where needed).
@@ -126,10 +126,10 @@ class StageEvaluator:
 
     def _upgrade(self) -> None:
         """Switch ``f, f_x, f_p`` to the compiled function once it is available
-        (:mod:`continuation.periodic.compiled`; a large model only)."""
+        (:func:`continuation.casadi_compile.compiled_soon`; a large model only)."""
         buf = _BUFFERS[self]
         point = _point_functions(self.system, self.free)[1]
-        fn = compiled(point)
+        fn = compiled_soon(point)
         if fn is None:
             if settled(point):
                 buf[2] = None  # the virtual machine for good: stop asking
