@@ -25,8 +25,9 @@ resuming its sweep from the checkpoints in ``<step>/sweep`` (``--force`` deletes
 On ``--workers N`` local processes (default one per core): the sudden-change step
 (:data:`SWEEP_STEP`) runs its bisections and map rows on ``N`` worker processes
 (:mod:`continuation.sweep`, the environment variable ``BROACHKIT_WORKERS`` passes
-``N`` on), and, with ``N > 1``, the other steps run one after another in one
-background process at the same time. Every step computes exactly what it computes
+``N`` on), and, with ``N > 1``, the other steps run at the same time in ``N``
+background processes, shared out by their usual cost (:data:`STEP_WEIGHTS`), each
+running its steps one after another. Every step computes exactly what it computes
 alone, so the outputs do not depend on ``N``.
 ``--only`` runs a subset. The studies are the package :mod:`studies`, installed with
 broachkit (``--studies DIR`` loads the scripts of another folder instead).
@@ -195,32 +196,68 @@ def _background(
         results.put(("done", key, value, round(time.perf_counter() - t0, 1)))
 
 
-class _Background:
-    """Steps running in one child process while this one runs the sweep step."""
+#: Rough CPU seconds of each step on this 2-core machine (warm compile cache), used
+#: only to share the side steps out evenly between the background processes.
+STEP_WEIGHTS = {
+    "demo": 2.0, "fig02_05": 3.0, "fig06_09": 1.0, "fig10_15": 15.0, "fig21_23": 20.0,
+    "sensitivity": 13.0, "cycles": 10.0,
+}  # fmt: skip
 
-    def __init__(self, todo: list[tuple[str, str | None]], out: Path, studies: Path | None):
+
+def _groups(todo: list[tuple[str, str | None]], n: int) -> list[list[tuple[str, str | None]]]:
+    """``todo`` in at most ``n`` groups of about equal weight (longest first), in step order."""
+    n = max(1, min(n, len(todo)))
+    load: list[float] = [0.0] * n
+    groups: list[list[int]] = [[] for _ in range(n)]
+    order = sorted(range(len(todo)), key=lambda i: -STEP_WEIGHTS.get(todo[i][0], 5.0))
+    for i in order:
+        g = min(range(n), key=load.__getitem__)
+        groups[g].append(i)
+        load[g] += STEP_WEIGHTS.get(todo[i][0], 5.0)
+    return [[todo[i] for i in sorted(g)] for g in groups if g]
+
+
+class _Background:
+    """Steps running in child processes (one per group) while this one runs the sweep step."""
+
+    def __init__(
+        self, groups: list[list[tuple[str, str | None]]], out: Path, studies: Path | None
+    ) -> None:
         ctx = multiprocessing.get_context("spawn")
         self.results: Any = ctx.Queue()
-        self.pending = [k for k, _ in todo]
-        self.proc = ctx.Process(
-            target=_background,
-            args=(todo, str(out), str(studies) if studies else None, self.results),
-            name="broachkit-reproduce-steps",
-        )
-        self.proc.start()
+        self.pending = [k for g in groups for k, _ in g]
+        self.procs = []
+        for i, todo in enumerate(groups):
+            proc = ctx.Process(
+                target=_background,
+                args=(todo, str(out), str(studies) if studies else None, self.results),
+                name=f"broachkit-reproduce-steps-{i}",
+            )
+            proc.start()
+            self.procs.append((proc, [k for k, _ in todo]))
 
     def poll(self, timeout: float) -> tuple[Any, ...] | None:
-        """One message of the child, or ``None`` after ``timeout`` s."""
+        """One message of a child, or ``None`` after ``timeout`` s."""
         try:
             return self.results.get(timeout=timeout)
         except queue.Empty:
             return None
 
+    def dead(self) -> tuple[list[str], int | None] | None:
+        """Pending steps of a child that ended without reporting them, and its exit code."""
+        for proc, keys in self.procs:
+            left = [k for k in keys if k in self.pending]
+            if left and not proc.is_alive():
+                return left, proc.exitcode
+        return None
+
     def stop(self) -> None:
-        """End the child (finished steps were reported already)."""
-        if self.proc.is_alive():
-            self.proc.terminate()
-        self.proc.join(5.0)
+        """End the children (finished steps were reported already)."""
+        for proc, _ in self.procs:
+            if proc.is_alive():
+                proc.terminate()
+        for proc, _ in self.procs:
+            proc.join(5.0)
 
 
 def _workers(args: argparse.Namespace) -> int:
@@ -403,13 +440,14 @@ def _run(args: argparse.Namespace) -> int:
         if args.force:  # a forced rerun starts its sweeps afresh
             shutil.rmtree(folder / SWEEP_DIR, ignore_errors=True)
         todo.append((i, key, title, fn))
-    # with several workers, the other steps run in one child process beside the sweep step
+    # with several workers, the other steps run in child processes (one per worker,
+    # balanced by STEP_WEIGHTS) beside the sweep step
     side = None
     if workers > 1 and len(todo) > 1 and any(k == SWEEP_STEP for _, k, _, _ in todo):
         others = [(k, modules.get(k)) for _, k, _, _ in todo if k != SWEEP_STEP]
         for k, _ in others:
             mark_incomplete(out / k)
-        side = _Background(others, out, args.studies)
+        side = _Background(_groups(others, workers), out, args.studies)
         todo = [t for t in todo if t[1] == SWEEP_STEP]
         log.info("steps %s run in a background process", ", ".join(k for k, _ in others))
     try:
@@ -436,14 +474,15 @@ def _run(args: argparse.Namespace) -> int:
             bar.message(f"waiting for {', '.join(side.pending)} (background process)")
             msg = side.poll(1.0)
             if msg is None:
-                if not side.proc.is_alive():
+                if side.dead() is not None:
                     msg = side.poll(1.0)  # a message sent just before it ended
-                    if msg is None:
+                    gone = side.dead()
+                    if msg is None and gone is not None:
                         raise RuntimeError(
-                            f"the background process running {', '.join(side.pending)} died "
-                            f"(exit code {side.proc.exitcode})"
+                            f"the background process running {', '.join(gone[0])} died "
+                            f"(exit code {gone[1]})"
                         )
-                else:
+                if msg is None:
                     continue
             if msg[0] == "error":
                 raise RuntimeError(f"step {msg[1]} failed: {msg[2]}")
