@@ -75,7 +75,8 @@ def _fake_studies(folder: Path) -> Path:
 def test_reproduce_runs_other_steps_beside_the_sweep_step(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """--workers 2: the sweep step here, the others in one other process; same results."""
+    """--workers 2: the sweep step here, the others in two other processes (balanced by
+    their usual cost: fig10_15 and fig21_23, the two longest, apart); same results."""
     studies = _fake_studies(tmp_path / "studies")
     out = tmp_path / "out"
     args = ["reproduce", "--out", str(out), "--studies", str(studies), "--no-report", "--json"]
@@ -86,7 +87,8 @@ def test_reproduce_runs_other_steps_beside_the_sweep_step(
     assert doc["workers"] == 2
     pids = {k: json.loads((out / k / "summary.json").read_text())["pid"] for k in doc["steps"]}
     assert pids["fig16_22"] == os.getpid()
-    assert pids["fig10_15"] == pids["fig21_23"] != os.getpid()
+    assert os.getpid() not in (pids["fig10_15"], pids["fig21_23"])
+    assert pids["fig10_15"] != pids["fig21_23"]
     for k in doc["steps"]:
         assert not (out / k / ".incomplete").exists()
         assert json.loads((out / k / "summary.json").read_text())["workers_env"] == "2"
@@ -100,6 +102,21 @@ def test_reproduce_runs_other_steps_beside_the_sweep_step(
     assert main([*args, *steps, "--workers", "2", "--force"]) != 0
     assert "fig21_23" in capsys.readouterr().err
     assert (out / "fig21_23" / ".incomplete").exists()
+
+
+def test_side_steps_are_shared_out_by_weight_in_step_order() -> None:
+    from broachkit_cli.commands.reproduce import STEP_WEIGHTS, _groups
+
+    todo = [(k, None) for k in STEP_WEIGHTS]
+    groups = _groups(todo, 2)
+    assert sorted(k for g in groups for k, _ in g) == sorted(STEP_WEIGHTS)  # each once
+    loads = [sum(STEP_WEIGHTS[k] for k, _ in g) for g in groups]
+    # longest-first greedy: within half the heaviest step of each other
+    assert abs(loads[0] - loads[1]) <= max(STEP_WEIGHTS.values()) / 2
+    order = list(STEP_WEIGHTS)
+    for g in groups:  # in step order within a group
+        assert [order.index(k) for k, _ in g] == sorted(order.index(k) for k, _ in g)
+    assert _groups(todo[:1], 4) == [todo[:1]]  # never more groups than steps
 
 
 def test_reproduce_bad_workers_is_refused(
