@@ -216,16 +216,27 @@ def _compiled(fn: ca.Function, allowed: bool = True) -> ca.Function:
     try:
         if not lib.exists():
             folder.mkdir(parents=True, exist_ok=True)
-            with tempfile.TemporaryDirectory(dir=folder) as tmp:
-                c_file = Path(tmp) / f"{name}.c"
-                c_file.write_text(src)
-                out = Path(tmp) / "lib.so"
-                log.info("compiling CasADi function %r (once; cached in %s)", name, folder)
-                subprocess.run(
-                    [cc, *FLAGS, "-o", str(out), str(c_file)],
-                    check=True, capture_output=True, timeout=TIMEOUT,
-                )  # fmt: skip
-                os.replace(out, lib)  # atomic: a concurrent process sees all or nothing
+            marker = folder / f"{name}_{key}.building"
+            try:
+                marker.mkdir()
+            except FileExistsError:
+                if time.time() - marker.stat().st_mtime < STALE_S:
+                    # another process is compiling it: the VM now, the library next time
+                    log.info("CasADi function %r is being compiled by another process", name)
+                    return fn
+            try:
+                with tempfile.TemporaryDirectory(dir=folder) as tmp:
+                    c_file = Path(tmp) / f"{name}.c"
+                    c_file.write_text(src)
+                    out = Path(tmp) / "lib.so"
+                    log.info("compiling CasADi function %r (once; cached in %s)", name, folder)
+                    subprocess.run(
+                        [cc, *FLAGS, "-o", str(out), str(c_file)],
+                        check=True, capture_output=True, timeout=TIMEOUT,
+                    )  # fmt: skip
+                    os.replace(out, lib)  # atomic: a concurrent process sees all or nothing
+            finally:
+                shutil.rmtree(marker, ignore_errors=True)
         ext = ca.external(name, str(lib))
     except (OSError, subprocess.SubprocessError, RuntimeError) as exc:
         return _fallback(fn, f"{type(exc).__name__}: {str(exc)[:200]}")

@@ -73,3 +73,19 @@ def test_compile_switched_off_returns_the_original(cache, monkeypatch):
     f = _fn(0.1)
     with cc.allow_compilation():
         assert cc.compiled(f) is f
+
+
+@pytest.mark.skipif(cc._compiler() is None, reason="no C compiler")
+def test_a_function_another_process_compiles_is_not_compiled_twice(cache, monkeypatch):
+    f = _fn(0.75)
+    calls = []
+    monkeypatch.setattr(cc.subprocess, "run", lambda *a, **k: calls.append(a))
+    gen = cc.ca.CodeGenerator("f.c", {"with_header": False})
+    gen.add(f)
+    key = cc.hashlib.sha256(
+        "\0".join([gen.dump(), cc._compiler(), *cc.FLAGS, cc.ca.__version__]).encode()
+    ).hexdigest()[:24]
+    (cache / f"f_{key}.building").mkdir()  # another process's compilation is running
+    with cc.allow_compilation():
+        assert cc.compiled(f) is f  # the virtual machine meanwhile
+    assert not calls
