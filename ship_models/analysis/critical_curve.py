@@ -236,18 +236,27 @@ def critical_curve(
     2. Continue it in ``chi_c`` (:func:`continuation.bvp.continue_connection`, away
        from 0) and stop one row past the first fold of the branch in ``chi_c``.
     3. Every requested course on the sheet (between the start and the fold) is solved
-       by :func:`critical_fn_bvp` from the branch's orbit interpolated there: adapted
-       mesh, error estimates (``error``), the capsizing-boundary check
-       (:func:`~ship_models.analysis.boundary_check.boundary_refusal`).
+       by :func:`continuation.bvp.solve_connection` at fixed ``chi_c`` from the branch's
+       orbit interpolated there, on the branch's own mesh (which the start solve
+       adapted; refined by the solver where it misses the tolerance), the Jacobians
+       shared between courses: error estimates (``error``) and the capsizing-boundary
+       check (:func:`~ship_models.analysis.boundary_check.boundary_refusal`). The row
+       located at the fold is appended to the sheet, so that courses between the last
+       row and the fold are interpolated, not extrapolated; courses within 1 deg
+       of the fold wait for its last re-location.
     4. The fold located on the start mesh is only as good as that mesh: the branch is
        continued again from a solve 0.5 deg before the fold (or half-way from the
-       branch's start to it, if nearer) (its adapted mesh and
-       ``T``), and steps 3-4 repeat (at most ``max_relocations`` times) until the fold
-       moves by less than ``fold_tol`` and no course remains below it.
+       branch's start to it, if nearer), on a mesh adapted to the orbit there, and
+       steps 3-4 repeat (at most ``max_relocations`` times) until the fold moves by
+       less than ``fold_tol`` and no course remains below it.
     5. The end: the first fold is reported in ``folds`` and as ``end_chi_c``,
        ``end_Fn``; the crest saddle's own branch is followed in ``chi_c`` at ``end_Fn``
        (``crest_end_chi_c``). Courses beyond the fold have ``exists = False`` with the
        reason (the curve folds back there / the crest saddle does not exist).
+
+    It runs inside :func:`continuation.casadi_compile.allow_compilation`: the model's
+    collocation functions are compiled to C once per machine (cached), which pays
+    off over the hundreds of Newton steps of a curve.
 
     Parameters
     ----------
