@@ -198,25 +198,19 @@ def _compiled(fn: ca.Function, allowed: bool = True) -> ca.Function:
         return _fallback(fn, "no C compiler found")
     name = fn.name()
     try:
-        gen = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-        gen.add(fn)
-        src = gen.dump()
+        src, lib = _library([fn], cc)
     except RuntimeError as exc:
         return _fallback(fn, f"no C code: {exc}")
-    key = hashlib.sha256(
-        "\0".join([src, cc, *FLAGS, ca.__version__]).encode()
-    ).hexdigest()[:24]
-    memo = _MEMO.get((name, key))
+    memo = _MEMO.get((name, lib.stem))
     if memo is not None:
         return memo
-    folder = cache_dir()
-    lib = folder / f"{name}_{key}.so"
+    folder = lib.parent
     if not allowed and not lib.exists():
         return fn  # not cached, and compiling is not worth it here (module docstring)
     try:
         if not lib.exists():
             folder.mkdir(parents=True, exist_ok=True)
-            marker = folder / f"{name}_{key}.building"
+            marker = lib.with_suffix(".building")
             try:
                 marker.mkdir()
             except FileExistsError:
@@ -242,7 +236,7 @@ def _compiled(fn: ca.Function, allowed: bool = True) -> ca.Function:
         return _fallback(fn, f"{type(exc).__name__}: {str(exc)[:200]}")
     if not _same(fn, ext):
         return _fallback(fn, "the compiled function disagrees with the original")
-    _MEMO[(name, key)] = ext
+    _MEMO[(name, lib.stem)] = ext
     return ext
 
 
@@ -261,11 +255,16 @@ _STATE: dict[int, list[Any]] = {}
 _PENDING: dict[int, tuple[Any, Path]] = {}
 
 
-def _source(fns: list[ca.Function]) -> str:
+def _library(fns: list[ca.Function], cc: str) -> tuple[str, Path]:
+    """The C source of ``fns`` and the cache path of its library (named after ``fns[0]``
+    and the SHA-256 of the source, the compiler command, CasADi and the platform)."""
     gen = ca.CodeGenerator("fn.c", {"with_header": False})
     for f in fns:
         gen.add(f)
-    return gen.dump()
+    src = gen.dump()
+    parts = [src, cc, *FLAGS, ca.__version__, platform.machine(), sys.platform]
+    digest = hashlib.sha256("\0".join(parts).encode()).hexdigest()[:24]
+    return src, cache_dir() / f"{fns[0].name()}_{digest}.so"
 
 
 def _load(name: str, lib: Path) -> ca.Function | None:
@@ -328,20 +327,16 @@ def compiled_soon(fn: ca.Function, jacobian: bool = False) -> ca.Function | None
         return None
     fns = [fn, fn.jacobian()] if jacobian else [fn]
     try:
-        src = _source(fns)
+        src, lib = _library(fns, cc)
     except RuntimeError as exc:
         log.info("no C code for %s (%s): using the VM", fn.name(), exc)
         _STATE[key] = [fn, "off", None, None]
         return None
-    digest = hashlib.sha256(
-        "\0".join([src, cc, *FLAGS, ca.__version__, platform.machine(), sys.platform]).encode()
-    ).hexdigest()[:24]
-    folder = cache_dir()
-    lib = folder / f"{fn.name()}_{digest}.so"
+    folder = lib.parent
     _STATE[key] = [fn, "off", lib, None]
     if lib.exists():
         return _ready(key, lib)
-    work = folder / f"{fn.name()}_{digest}.building"
+    work = lib.with_suffix(".building")
     try:
         folder.mkdir(parents=True, exist_ok=True)
         try:

@@ -80,12 +80,9 @@ def test_a_function_another_process_compiles_is_not_compiled_twice(cache, monkey
     f = _fn(0.75)
     calls = []
     monkeypatch.setattr(cc.subprocess, "run", lambda *a, **k: calls.append(a))
-    gen = cc.ca.CodeGenerator("f.c", {"with_header": False})
-    gen.add(f)
-    key = cc.hashlib.sha256(
-        "\0".join([gen.dump(), cc._compiler(), *cc.FLAGS, cc.ca.__version__]).encode()
-    ).hexdigest()[:24]
-    (cache / f"f_{key}.building").mkdir()  # another process's compilation is running
+    lib = cc._library([f], cc._compiler())[1]
+    assert lib.parent == cache
+    lib.with_suffix(".building").mkdir()  # another process's compilation is running
     with cc.allow_compilation():
         assert cc.compiled(f) is f  # the virtual machine meanwhile
     assert not calls
