@@ -28,6 +28,9 @@ CHI_C_MAX_DEG = 85.0
 LAMBDA_OVER_L_RANGE = (0.2, 5.0)
 #: Largest vessel file read (bytes): a vessel file is a few kB.
 MAX_VESSEL_FILE_BYTES = 1_000_000
+#: Most values a list option (``--chi-c 0:30:5``) may give; a range with a tiny step
+#: is refused before anything is allocated.
+MAX_LIST_VALUES = 1000
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -158,6 +161,65 @@ def finite(name: str, value: float, *, low: float = -math.inf, high: float = mat
             f"{name} must be finite and in {rng}{' ' + unit if unit else ''}, got {value}"
         )
     return v
+
+
+def parse_list(
+    text: str, flag: str, *, default_step: float | None = None, max_count: int = MAX_LIST_VALUES
+) -> Any:
+    """Values of a list option: ``"start:stop:step"`` (inclusive), ``"a,b,c"`` or ``"a"``.
+
+    Parameters
+    ----------
+    text : str
+        What the user typed.
+    flag : str
+        The option as typed (``"--chi-c"``), named in every error.
+    default_step : float, optional
+        Allows ``"start:stop"`` with this step.
+    max_count : int
+        Most values allowed (checked before the values are built).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(k,)``, finite, ``1 <= k <= max_count``.
+
+    Raises
+    ------
+    ValueError
+        One line naming ``flag``: unreadable, an empty or reversed range, a step that is
+        not positive, non-finite values, or more than ``max_count`` values.
+    """
+    import numpy as np
+
+    form = "'start:stop[:step]'" if default_step is not None else "'start:stop:step'"
+    try:
+        if ":" in text:
+            parts = [float(s) for s in text.split(":")]
+            if len(parts) == 2 and default_step is not None:
+                parts.append(default_step)
+            if len(parts) != 3:
+                raise ValueError
+            a, b, step = parts
+            if not all(math.isfinite(v) for v in parts) or step <= 0 or b < a:
+                raise ValueError
+            q = (b - a) / step
+            if not q + 1 <= max_count:  # also an infinite count
+                raise OverflowError(
+                    math.floor(q + 1e-9) + 1 if math.isfinite(q) else "infinitely many"
+                )
+            vals = a + step * np.arange(math.floor(q + 1e-9) + 1)
+        else:
+            vals = np.array([float(s) for s in text.split(",")])
+    except OverflowError as exc:
+        raise ValueError(f"{flag} gives {exc.args[0]} values; at most {max_count}") from None
+    except ValueError:
+        raise ValueError(f"{flag} must be {form} or a comma list 'a,b,c', got {text!r}") from None
+    if vals.size == 0 or not np.all(np.isfinite(vals)):
+        raise ValueError(f"{flag} must give finite numbers, got {text!r}")
+    if vals.size > max_count:
+        raise ValueError(f"{flag} gives {vals.size} values; at most {max_count}")
+    return vals
 
 
 def prepare_out(out: Path | str | None, name: str = "--out") -> Path | None:

@@ -182,9 +182,19 @@ def test_every_command_refuses_or_accepts_sanely(argv, capsys, probes):
         (["fixed-points", "--vessel", "nope"], "--vessel"),
         (["fixed-points", "--fn", "nan"], "--fn"),
         (["critical", "--fn-min", "0.35", "--fn-max", "0.3"], "--fn-min"),
+        # a range of 1e18 values is refused before it is built (found by hypothesis:
+        # it was a MemoryError, exit 1)
+        (["critical-curve", "--chi-c=0:1e9:1e-9"], "--chi-c"),
+        (["critical-curve", "--chi-c=0:1e308:1e-308"], "--chi-c"),
+        (["sweep", "courses", "--chi-c", "0:1:1e-12", "--out", "OUT"], "--chi-c"),
+        (["sweep", "surface", "--h-over-lambda", "0.02:0.1:99999999999", "--out", "OUT"],
+         "--h-over-lambda"),
+        (["sweep", "boundary", "--positions", "99999999999", "--out", "OUT"], "--positions"),
+        (["sensitivity", "--curve", "0:30:1e-15"], "--curve"),
     ],
 )
-def test_known_mistakes_name_the_option(argv, names, capsys, probes):
+def test_known_mistakes_name_the_option(argv, names, capsys, probes, tmp_path):
+    argv = [str(tmp_path / "out") if a == "OUT" else a for a in argv]
     code, err = _outcome(argv, capsys)
     assert code == 2 and names in err and len(err.strip().splitlines()) == 1, err
 

@@ -34,6 +34,7 @@ from ..options import (
     add_vessel,
     add_wave,
     json_safe,
+    parse_list,
     prepare_out,
     ship_from_args,
 )
@@ -51,29 +52,11 @@ def parse_courses(text: str) -> np.ndarray:
     ValueError
         Naming ``--chi-c`` for an unreadable, empty or out-of-range list.
     """
-    try:
-        if ":" in text:
-            parts = [float(s) for s in text.split(":")]
-            if len(parts) not in (2, 3):
-                raise ValueError
-            a, b = parts[0], parts[1]
-            step = parts[2] if len(parts) == 3 else 1.0
-            if not (math.isfinite(step) and step > 0 and b >= a):
-                raise ValueError
-            n = int(math.floor((b - a) / step + 1e-9)) + 1
-            deg = a + step * np.arange(n)
-        else:
-            deg = np.array([float(s) for s in text.split(",")])
-    except ValueError:
-        raise ValueError(
-            f"--chi-c must be 'start:stop[:step]' or a comma list of degrees, got {text!r}"
-        ) from None
-    if deg.size == 0 or not np.all(np.isfinite(deg)) or np.any(np.abs(deg) >= CHI_C_MAX_DEG):
+    deg = parse_list(text, "--chi-c", default_step=1.0)
+    if np.any(np.abs(deg) >= CHI_C_MAX_DEG):
         raise ValueError(
             f"--chi-c courses must be finite and within +-{CHI_C_MAX_DEG:g} deg, got {text!r}"
         )
-    if deg.size > 1000:
-        raise ValueError(f"--chi-c gives {deg.size} courses; at most 1000")
     return deg
 
 

@@ -26,6 +26,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ..options import parse_list
+
 NAME = "sensitivity"
 HELP = "sensitivity of the critical Fn to every vessel coefficient, and its uncertainty band"
 
@@ -179,21 +181,8 @@ def add_calibrate_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _courses(text: str) -> list[float]:
-    try:
-        if ":" in text:
-            a, b, s = (float(t) for t in text.split(":"))
-            if s <= 0:
-                raise ValueError
-            vals = [a + i * s for i in range(int(math.floor((b - a) / s + 1e-9)) + 1)]
-        else:
-            vals = [float(t) for t in text.split(",") if t.strip()]
-    except ValueError:
-        raise ValueError(
-            f"`--curve` must be START:STOP:STEP or a comma list, got {text!r}"
-        ) from None
-    if not vals:
-        raise ValueError("`--curve` names no course")
-    return [_chi(v, "--curve") for v in vals]
+    vals = parse_list(text, "--curve")
+    return [_chi(float(v), "--curve") for v in vals]
 
 
 def run_calibrate(args: argparse.Namespace) -> int:

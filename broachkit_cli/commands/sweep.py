@@ -25,6 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from ..options import MAX_LIST_VALUES, parse_list
+
 NAME = "sweep"
 HELP = "parallel, resumable sweeps: sudden-change boundary, Fig. 23 squares, critical surface"
 
@@ -37,34 +39,28 @@ PAPER_WAVE = (1 / 9.2, 1.5)
 # ----------------------------------------------------------------------- parsing
 def parse_steps(text: str, flag: str) -> np.ndarray:
     """``"a:b:step"`` (inclusive), ``"a,b,c"`` or ``"a"`` -> values (courses in degrees)."""
-    try:
-        if ":" in text:
-            a, b, step = (float(s) for s in text.split(":"))
-            if not (math.isfinite(step) and step > 0 and b >= a):
-                raise ValueError
-            vals = a + step * np.arange(int(math.floor((b - a) / step + 1e-9)) + 1)
-        else:
-            vals = np.array([float(s) for s in text.split(",")])
-    except ValueError:
-        raise ValueError(f"{flag} must be 'start:stop:step' or 'a,b,c', got {text!r}") from None
-    if vals.size == 0 or not np.all(np.isfinite(vals)):
-        raise ValueError(f"{flag} must give finite numbers, got {text!r}")
-    return vals
+    return parse_list(text, flag)
 
 
 def parse_count(text: str, flag: str) -> np.ndarray:
     """``"a:b:n"`` (``n`` equally spaced values), ``"a,b,c"`` or ``"a"`` -> positive values."""
+    grid = None
     try:
         if ":" in text:
             a, b, n = text.split(":")
-            k = int(n)
-            if k < 1 or float(b) < float(a):
+            grid = (float(a), float(b), int(n))
+            if grid[2] < 1 or grid[1] < grid[0]:
                 raise ValueError
-            vals = np.linspace(float(a), float(b), k)
+            count = grid[2]
         else:
             vals = np.array([float(s) for s in text.split(",")])
+            count = vals.size
     except ValueError:
         raise ValueError(f"{flag} must be 'start:stop:count' or 'a,b,c', got {text!r}") from None
+    if count > MAX_LIST_VALUES:  # checked before a grid is allocated
+        raise ValueError(f"{flag} gives {count} values; at most {MAX_LIST_VALUES}")
+    if grid is not None:
+        vals = np.linspace(*grid)
     if vals.size == 0 or not np.all(np.isfinite(vals)) or np.any(vals <= 0):
         raise ValueError(f"{flag} must give positive numbers, got {text!r}")
     return vals
@@ -204,8 +200,10 @@ def _boundary(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
                 raise ValueError
         except ValueError:
             raise ValueError(f"--fn-bracket must be 'lo,hi', got {args.Fn_bracket!r}") from None
-    if args.positions < 1:
-        raise ValueError(f"--positions must be a positive integer, got {args.positions}")
+    if not 1 <= args.positions <= MAX_LIST_VALUES:
+        raise ValueError(
+            f"--positions must be an integer in [1, {MAX_LIST_VALUES}], got {args.positions}"
+        )
     r = boundary_sweep(
         args.vessel, args.chi_c, initial=parse_initial(args.initial), positions=args.positions,
         tol=args.tol, Fn_bracket=bracket, map_offsets=None if args.no_map else MAP_OFFSETS,
