@@ -19,7 +19,7 @@ from ._common import check_scale, param_vector, periodic_difference, positive, s
 from .events import PoincareSection, SimEvent
 from .fate_scan import _ScanState
 from .fates import Fate, KnownEquilibrium
-from .integrators import DEFAULT_ATOL, DEFAULT_RTOL
+from .integrators import DEFAULT_ATOL, DEFAULT_RTOL, sigint_recorded, sigints_counted
 from .saddles import left_unstable_vector, refine_equilibrium
 from .simulate import Simulator
 from .trajectory import Trajectory
@@ -231,38 +231,42 @@ class FateClassifier:
         st = _ScanState(self, x, t_start, exclude_visit)
         t_end = t_start + self.t_max
         events = [*self.events, *([self.section] if self.section is not None else [])]
-        try:
-            if traj is not None:
-                fate = st.scan(traj, traj, first=True)
-                if fate is not None:
-                    return st.truncated(fate, traj)
-                if traj.status is not Status.SUCCESS and traj.status is not Status.EVENT:
-                    return st.finish(traj, traj.status)
-            while True:
-                t_now = t_start if traj is None else traj.t_final
-                if t_now >= t_end - 1e-12 * max(1.0, abs(t_end)):
-                    break
-                x_now = x if traj is None else np.array(traj.x_final)
-                t1 = min(t_now + self.segment, t_end)
-                n_s = max(1, round((t1 - t_now) / self.dt))
-                seg = self.sim.run(x_now, (t_now, t1), events=events, dt=(t1 - t_now) / n_s)
-                first = traj is None
-                traj = seg if traj is None else traj.append(seg)
-                fate = st.scan(seg, traj, first=first)
-                if fate is not None:
-                    return st.truncated(fate, traj)
-                if seg.status is Status.INTERRUPTED:
-                    return st.finish(traj, Status.INTERRUPTED)
-                if seg.status is Status.INTEGRATION_FAILED:
-                    return st.finish(traj, Status.INTEGRATION_FAILED, seg.message)
-                if progress is not None:
-                    progress(traj.t_final, np.array(traj.x_final))
-        except KeyboardInterrupt:
-            if traj is None:
-                traj = Trajectory(
-                    np.array([t_start]), x[None, :], state_names=self.system.state_names
-                )
-            return st.finish(traj, Status.INTERRUPTED)
+        with sigint_recorded():  # one count for all segments (a SIGINT lost in a
+            n_sigint = sigints_counted()  # CasADi call between them still stops)
+            try:
+                if traj is not None:
+                    fate = st.scan(traj, traj, first=True)
+                    if fate is not None:
+                        return st.truncated(fate, traj)
+                    if traj.status is not Status.SUCCESS and traj.status is not Status.EVENT:
+                        return st.finish(traj, traj.status)
+                while True:
+                    t_now = t_start if traj is None else traj.t_final
+                    if t_now >= t_end - 1e-12 * max(1.0, abs(t_end)):
+                        break
+                    x_now = x if traj is None else np.array(traj.x_final)
+                    t1 = min(t_now + self.segment, t_end)
+                    n_s = max(1, round((t1 - t_now) / self.dt))
+                    seg = self.sim.run(x_now, (t_now, t1), events=events, dt=(t1 - t_now) / n_s)
+                    first = traj is None
+                    traj = seg if traj is None else traj.append(seg)
+                    fate = st.scan(seg, traj, first=first)
+                    if fate is not None:
+                        return st.truncated(fate, traj)
+                    if seg.status is Status.INTERRUPTED:
+                        return st.finish(traj, Status.INTERRUPTED)
+                    if seg.status is Status.INTEGRATION_FAILED:
+                        return st.finish(traj, Status.INTEGRATION_FAILED, seg.message)
+                    if sigints_counted() != n_sigint:
+                        raise KeyboardInterrupt
+                    if progress is not None:
+                        progress(traj.t_final, np.array(traj.x_final))
+            except KeyboardInterrupt:
+                if traj is None:
+                    traj = Trajectory(
+                        np.array([t_start]), x[None, :], state_names=self.system.state_names
+                    )
+                return st.finish(traj, Status.INTERRUPTED)
         if traj is None:  # pragma: no cover - t_max > 0 means at least one segment
             raise ContinuationError("no segment was integrated")
         return st.finish(traj, Status.SUCCESS)
@@ -328,7 +332,6 @@ def classify_fate(
         **options,
     )
     return clf.classify(traj_or_x0, progress=progress)
-
 
 
 __all__ = ["FateClassifier", "classify_fate"]

@@ -35,6 +35,18 @@ whose message, with CasADi's warnings off, does not say why. :func:`sigint_recor
 counts the SIGINTs that arrive while a simulation runs, so that :class:`_CvodesBackend`
 raises ``KeyboardInterrupt`` for such a failure instead of reporting an integration
 failure (which would be misread as a blow-up, and retried).
+
+A SIGINT can also be *lost* in a CasADi call from Python: CasADi converts a NumPy
+argument with a Python helper (``DM_from_array``) called from its SWIG type check,
+and a ``KeyboardInterrupt`` raised in that helper (Python runs the handler at the
+next bytecode, often there, since a call follows each progress report) is cleared
+as a failed check; the call then runs to its end and nothing is raised (seen in
+``tests/test_interrupts.py``: 20 s instead of 0.2 s to stop, about one run in eight).
+So :class:`_CvodesBackend` converts the arguments to ``DM`` itself and checks the
+count before and after the native call, and
+:meth:`~continuation.dynamics.simulate.Simulator.run` and the fate classifier check
+:func:`sigints_counted` after every block: a counted SIGINT always stops the
+simulation, at worst one call late.
 """
 
 from __future__ import annotations
@@ -112,6 +124,12 @@ def sigint_recorded() -> Iterator[None]:
         _Sigints.depth = 0
         signal.signal(signal.SIGINT, previous)
         _Sigints.previous = None
+
+
+def sigints_counted() -> int:
+    """SIGINTs counted by :func:`sigint_recorded` so far (compare two readings taken
+    inside one block: a difference is an interrupt, even one a CasADi call lost)."""
+    return _Sigints.count
 
 
 class _IntegrationFailure(Exception):
@@ -209,13 +227,20 @@ class _CvodesBackend:
         integ = self._integrator(n_out, span_hint)
         self.n_calls += 1
         n_sigint = _Sigints.count
+        # DM arguments, converted first: a NumPy argument is converted inside the call by
+        # Python code whose KeyboardInterrupt CasADi discards (module notes)
+        args = {"x0": ca.DM(np.asarray(x0, dtype=float)), "p": ca.DM(np.append(self.p, T))}
+        if _Sigints.count != n_sigint:  # handled in the conversion, and discarded there
+            raise KeyboardInterrupt
         try:
-            out = integ(x0=x0, p=np.concatenate([self.p, [T]]))
+            out = integ.call(args)
         except RuntimeError as exc:
             if _Sigints.count != n_sigint or "KeyboardInterrupt" in str(exc):
                 raise KeyboardInterrupt from None  # Ctrl-C inside CVODES (module notes)
             msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else "CVODES failed"
             raise _IntegrationFailure(msg) from None
+        if _Sigints.count != n_sigint:  # handled during the call, but lost (module notes)
+            raise KeyboardInterrupt
         xs = np.asarray(out["xf"], dtype=float).reshape(self.n, n_out).T
         if not np.all(np.isfinite(xs)):
             raise _IntegrationFailure("non-finite state")

@@ -46,6 +46,7 @@ from .integrators import (
     _IntegrationFailure,
     _ScipyBackend,
     sigint_recorded,
+    sigints_counted,
 )
 from .trajectory import EventHits, Trajectory
 
@@ -346,6 +347,7 @@ class Simulator:
             for w in watches
         ]
         scipy_backend = isinstance(self._backend, _ScipyBackend)
+        n_sigint = sigints_counted()
         try:
             for tt, xs, interp, is_out in self._intervals(x0, t0, t1, n_samples):
                 stop = None
@@ -393,6 +395,8 @@ class Simulator:
                         x_out.append(np.asarray(xb, dtype=float))
                 if stop is not None:
                     break
+                if sigints_counted() != n_sigint:  # a SIGINT some CasADi call lost
+                    raise KeyboardInterrupt
                 if progress is not None:
                     progress(float(t_out[-1]), x_out[-1])
         except _IntegrationFailure as exc:
