@@ -60,10 +60,11 @@ log = logging.getLogger(__name__)
 #: of one call of 1000, and 2.1 times its CPU time); short first calls bound the time
 #: integrated past a terminal event to about the time integrated before it.
 _CHUNK = 50
-#: Kept at 1 (every call _CHUNK samples): with growing calls a Ctrl-C during a long
-#: native call was seen to take 23 s to act (tests/test_interrupts.py, intermittent);
-#: growth 4 saved about a third of the sudden-change step's CPU (benchmarks/README.md).
-_CHUNK_GROWTH = 1
+#: Growth 4 takes about a fifth of the sudden-change step's CPU off (benchmarks/README.md).
+#: (It was off for a while: a Ctrl-C was seen to take 23 s to act. The cause was a
+#: SIGINT lost in CasADi's argument conversion, not the long calls; see
+#: :mod:`continuation.dynamics.integrators`.)
+_CHUNK_GROWTH = 4
 _CHUNK_MAX = 1000
 #: Number of halvings used to get as close as possible to an integrator failure.
 _FAILURE_BISECTIONS = 12
