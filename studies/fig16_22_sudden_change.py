@@ -164,6 +164,7 @@ def compute(
     *,
     full: bool = False,
     bvp: bool = False,
+    backend: Any = None,
 ) -> dict[str, Any]:
     """Run the experiments; write figures and data; return the summary.
 
@@ -174,7 +175,9 @@ def compute(
 
     The bisections and map rows run on :func:`~studies._sudden_tasks.sweep_workers`
     local processes (``BROACHKIT_WORKERS=1``: all in this process), checkpointed in
-    ``out/sweep`` (a rerun after an interruption redoes no finished task).
+    ``out/sweep`` (a rerun after an interruption redoes no finished task). ``backend``
+    (a :class:`continuation.sweep.Backend`, left open) runs them on a pool that is
+    already there instead: the main job's, which runs its other steps too.
     """
     from ship_models import purse_seiner
 
@@ -188,11 +191,13 @@ def compute(
     orbits_path = str(sweep_dir / "orbits.pkl")
     # one pool for the whole step: the old orbits are computed in a worker while this
     # process solves the connecting orbit; then every bisection and map row is a task
-    be = open_backend("processes", workers=workers) if workers > 1 else None
+    be = backend
+    if be is None and workers > 1:
+        be = open_backend("processes", workers=workers)
     try:
         return _compute(out, say, full, model, orbits_path, be, t_all, bvp)
     finally:
-        if be is not None:
+        if be is not None and be is not backend:
             be.close()
 
 

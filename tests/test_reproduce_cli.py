@@ -75,8 +75,8 @@ def _fake_studies(folder: Path) -> Path:
 def test_reproduce_runs_other_steps_beside_the_sweep_step(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """--workers 2: the sweep step here, the others in two other processes (balanced by
-    their usual cost: fig10_15 and fig21_23, the two longest, apart); same results."""
+    """--workers 2: the sweep step here, the others as tasks of the job's worker pool;
+    same results."""
     studies = _fake_studies(tmp_path / "studies")
     out = tmp_path / "out"
     args = ["reproduce", "--out", str(out), "--studies", str(studies), "--no-report", "--json"]
@@ -88,7 +88,6 @@ def test_reproduce_runs_other_steps_beside_the_sweep_step(
     pids = {k: json.loads((out / k / "summary.json").read_text())["pid"] for k in doc["steps"]}
     assert pids["fig16_22"] == os.getpid()
     assert os.getpid() not in (pids["fig10_15"], pids["fig21_23"])
-    assert pids["fig10_15"] != pids["fig21_23"]
     for k in doc["steps"]:
         assert not (out / k / ".incomplete").exists()
         assert json.loads((out / k / "summary.json").read_text())["workers_env"] == "2"
@@ -104,19 +103,15 @@ def test_reproduce_runs_other_steps_beside_the_sweep_step(
     assert (out / "fig21_23" / ".incomplete").exists()
 
 
-def test_side_steps_are_shared_out_by_weight_in_step_order() -> None:
-    from broachkit_cli.commands.reproduce import STEP_WEIGHTS, _groups
+def test_side_steps_are_submitted_heaviest_first() -> None:
+    from broachkit_cli.commands.reproduce import STEP_WEIGHTS, _heaviest_first
 
-    todo = [(k, None) for k in STEP_WEIGHTS]
-    groups = _groups(todo, 2)
-    assert sorted(k for g in groups for k, _ in g) == sorted(STEP_WEIGHTS)  # each once
-    loads = [sum(STEP_WEIGHTS[k] for k, _ in g) for g in groups]
-    # longest-first greedy: within half the heaviest step of each other
-    assert abs(loads[0] - loads[1]) <= max(STEP_WEIGHTS.values()) / 2
-    order = list(STEP_WEIGHTS)
-    for g in groups:  # in step order within a group
-        assert [order.index(k) for k, _ in g] == sorted(order.index(k) for k, _ in g)
-    assert _groups(todo[:1], 4) == [todo[:1]]  # never more groups than steps
+    todo = [(k, None) for k in STEP_WEIGHTS] + [("other", None)]
+    order = [k for k, _ in _heaviest_first(todo)]
+    assert sorted(order) == sorted(k for k, _ in todo)  # each once
+    weights = [STEP_WEIGHTS.get(k, 5.0) for k in order]
+    assert weights == sorted(weights, reverse=True)
+    assert order[0] == max(STEP_WEIGHTS, key=STEP_WEIGHTS.__getitem__)
 
 
 def test_reproduce_bad_workers_is_refused(

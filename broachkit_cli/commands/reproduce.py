@@ -22,13 +22,14 @@ A step whose folder holds ``summary.json`` and no ``.incomplete`` marker is skip
 unless ``--force``; a step that was interrupted (the marker is still there) is redone,
 resuming its sweep from the checkpoints in ``<step>/sweep`` (``--force`` deletes them).
 
-On ``--workers N`` local processes (default one per core): the sudden-change step
-(:data:`SWEEP_STEP`) runs its bisections and map rows on ``N`` worker processes
-(:mod:`continuation.sweep`, the environment variable ``BROACHKIT_WORKERS`` passes
-``N`` on), and, with ``N > 1``, the other steps run at the same time in ``N``
-background processes, shared out by their usual cost (:data:`STEP_WEIGHTS`), each
-running its steps one after another. Every step computes exactly what it computes
-alone, so the outputs do not depend on ``N``.
+On ``--workers N`` local processes (default one per core; ``N = 1``: everything in
+this process): one pool of ``N`` worker processes (:mod:`continuation.sweep`) serves
+the whole job. The other steps are its tasks, submitted heaviest first
+(:data:`STEP_WEIGHTS`); the sudden-change step (:data:`SWEEP_STEP`) runs in this
+process and puts its bisections and map rows on the same pool (the environment
+variable ``BROACHKIT_WORKERS`` passes ``N`` on), so a worker that finishes a step
+takes the next task, whichever step it belongs to. Every step computes exactly what
+it computes alone, so the outputs do not depend on ``N``.
 ``--only`` runs a subset. The studies are the package :mod:`studies`, installed with
 broachkit (``--studies DIR`` loads the scripts of another folder instead).
 """
@@ -36,18 +37,17 @@ broachkit (``--studies DIR`` loads the scripts of another folder instead).
 from __future__ import annotations
 
 import argparse
+import concurrent.futures as cf
 import datetime
 import importlib
 import importlib.util
+import inspect
 import json
 import logging
-import multiprocessing
 import os
 import platform
-import queue
 import resource
 import shutil
-import signal
 import sys
 import time
 from collections.abc import Callable
@@ -176,88 +176,71 @@ def _compute_step(key: str, module: str | None, folder: Path, studies: Path | No
     return study_module(module, studies).compute(folder, progress=lambda msg: None)
 
 
-def _background(
-    todo: list[tuple[str, str | None]], out: str, studies: str | None, results: Any
-) -> None:
-    """Child process: run ``todo`` one after another; put each result on ``results``.
-
-    Puts ``("done", key, summary, seconds)`` per step, ``("error", key, message)``
-    and stops at the first failure. Ignores Ctrl-C (the parent stops it).
-    """
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    folder = Path(studies) if studies else None
-    for key, module in todo:
-        t0 = time.perf_counter()
-        try:
-            value = _compute_step(key, module, Path(out) / key, folder)
-        except Exception as exc:  # noqa: BLE001 - reported by the parent
-            results.put(("error", key, f"{type(exc).__name__}: {exc}"))
-            return
-        results.put(("done", key, value, round(time.perf_counter() - t0, 1)))
+def _step_task(key: str, module: str | None, out: str, studies: str | None) -> tuple[Any, float]:
+    """Pool task: run one step by name; its summary and its seconds."""
+    t0 = time.perf_counter()
+    value = _compute_step(key, module, Path(out) / key, Path(studies) if studies else None)
+    return value, round(time.perf_counter() - t0, 1)
 
 
 #: Rough CPU seconds of each step on this 2-core machine (warm compile cache), used
-#: only to share the side steps out evenly between the background processes.
+#: only to submit the side steps heaviest first (the pool then balances them).
 STEP_WEIGHTS = {
-    "demo": 2.0, "fig02_05": 3.0, "fig06_09": 1.0, "fig10_15": 15.0, "fig21_23": 20.0,
-    "sensitivity": 13.0, "cycles": 10.0,
+    "demo": 2.0, "fig02_05": 2.5, "fig06_09": 1.0, "fig10_15": 8.0, "fig21_23": 12.0,
+    "sensitivity": 11.0, "cycles": 7.5,
 }  # fmt: skip
 
 
-def _groups(todo: list[tuple[str, str | None]], n: int) -> list[list[tuple[str, str | None]]]:
-    """``todo`` in at most ``n`` groups of about equal weight (longest first), in step order."""
-    n = max(1, min(n, len(todo)))
-    load: list[float] = [0.0] * n
-    groups: list[list[int]] = [[] for _ in range(n)]
-    order = sorted(range(len(todo)), key=lambda i: -STEP_WEIGHTS.get(todo[i][0], 5.0))
-    for i in order:
-        g = min(range(n), key=load.__getitem__)
-        groups[g].append(i)
-        load[g] += STEP_WEIGHTS.get(todo[i][0], 5.0)
-    return [[todo[i] for i in sorted(g)] for g in groups if g]
+def _heaviest_first(todo: list[tuple[str, str | None]]) -> list[tuple[str, str | None]]:
+    """``todo`` by decreasing :data:`STEP_WEIGHTS` (unknown steps: 5), ties in step order."""
+    return sorted(todo, key=lambda kv: -STEP_WEIGHTS.get(kv[0], 5.0))
 
 
-class _Background:
-    """Steps running in child processes (one per group) while this one runs the sweep step."""
+class _SideSteps:
+    """The steps other than the sweep step, as tasks of the job's process pool.
+
+    The sweep step's own tasks go to the same pool (one pool of ``--workers``
+    processes for the whole job: nothing starts twice, and a worker that finishes a
+    step takes the next task, whichever step it belongs to).
+    """
 
     def __init__(
-        self, groups: list[list[tuple[str, str | None]]], out: Path, studies: Path | None
+        self, pool: Any, todo: list[tuple[str, str | None]], out: Path, studies: Path | None
     ) -> None:
-        ctx = multiprocessing.get_context("spawn")
-        self.results: Any = ctx.Queue()
-        self.pending = [k for g in groups for k, _ in g]
-        self.procs = []
-        for i, todo in enumerate(groups):
-            proc = ctx.Process(
-                target=_background,
-                args=(todo, str(out), str(studies) if studies else None, self.results),
-                name=f"broachkit-reproduce-steps-{i}",
+        self.pending = [k for k, _ in todo]
+        self.futures: dict[Any, str] = {}
+        for key, module in _heaviest_first(todo):
+            fut = pool.executor.submit(
+                _step_task, key, module, str(out), str(studies) if studies else None
             )
-            proc.start()
-            self.procs.append((proc, [k for k, _ in todo]))
+            self.futures[fut] = key
 
-    def poll(self, timeout: float) -> tuple[Any, ...] | None:
-        """One message of a child, or ``None`` after ``timeout`` s."""
-        try:
-            return self.results.get(timeout=timeout)
-        except queue.Empty:
-            return None
+    def finished(self, timeout: float) -> list[tuple[str, Any, float]]:
+        """Steps finished within ``timeout`` s: ``(key, summary, seconds)``.
 
-    def dead(self) -> tuple[list[str], int | None] | None:
-        """Pending steps of a child that ended without reporting them, and its exit code."""
-        for proc, keys in self.procs:
-            left = [k for k in keys if k in self.pending]
-            if left and not proc.is_alive():
-                return left, proc.exitcode
-        return None
+        Raises
+        ------
+        RuntimeError
+            Naming the step, if one failed or its worker died.
+        """
+        done, _ = cf.wait(list(self.futures), timeout=timeout, return_when=cf.FIRST_COMPLETED)
+        out = []
+        for fut in done:
+            key = self.futures.pop(fut)
+            try:
+                value, seconds = fut.result()
+            except cf.BrokenExecutor as exc:
+                raise RuntimeError(f"the worker process running {key} died ({exc})") from None
+            except Exception as exc:  # noqa: BLE001 - reported with the step's name
+                raise RuntimeError(f"step {key} failed: {type(exc).__name__}: {exc}") from None
+            self.pending.remove(key)
+            out.append((key, value, seconds))
+        return out
 
-    def stop(self) -> None:
-        """End the children (finished steps were reported already)."""
-        for proc, _ in self.procs:
-            if proc.is_alive():
-                proc.terminate()
-        for proc, _ in self.procs:
-            proc.join(5.0)
+    def cancel(self) -> None:
+        """Drop the steps not started yet (the pool's close stops the running ones)."""
+        for fut in self.futures:
+            fut.cancel()
 
 
 def _workers(args: argparse.Namespace) -> int:
@@ -405,6 +388,22 @@ def _summary_text(doc: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _run_step(
+    key: str,
+    fn: Callable[[Path, Callable[[str], None]], Any],
+    folder: Path,
+    say: Callable[[str], None],
+    pool: Any,
+    studies: Path | None,
+) -> Any:
+    """Run a step here; the sweep step on ``pool`` when its ``compute`` takes a backend."""
+    if pool is not None and key == SWEEP_STEP:
+        mod = study_module(dict((k, m) for k, _, m in STUDY_STEPS)[key], studies)
+        if "backend" in inspect.signature(mod.compute).parameters:
+            return mod.compute(folder, progress=say, backend=pool)
+    return fn(folder, say)
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the steps; 0 when every step ran, 130 when interrupted."""
     before = os.environ.get(WORKERS_ENV)
@@ -440,16 +439,26 @@ def _run(args: argparse.Namespace) -> int:
         if args.force:  # a forced rerun starts its sweeps afresh
             shutil.rmtree(folder / SWEEP_DIR, ignore_errors=True)
         todo.append((i, key, title, fn))
-    # with several workers, the other steps run in child processes (one per worker,
-    # balanced by STEP_WEIGHTS) beside the sweep step
-    side = None
-    if workers > 1 and len(todo) > 1 and any(k == SWEEP_STEP for _, k, _, _ in todo):
+    # with several workers: one process pool for the job; the other steps are its tasks
+    # (heaviest first), the sweep step runs here and puts its tasks on the same pool
+    pool = side = None
+    if workers > 1 and len(todo) > 1:
+        from continuation.sweep import open_backend
+
         others = [(k, modules.get(k)) for _, k, _, _ in todo if k != SWEEP_STEP]
         for k, _ in others:
             mark_incomplete(out / k)
-        side = _Background(_groups(others, workers), out, args.studies)
+        pool = open_backend("processes", workers=workers)
+        side = _SideSteps(pool, others, out, args.studies)
         todo = [t for t in todo if t[1] == SWEEP_STEP]
-        log.info("steps %s run in a background process", ", ".join(k for k, _ in others))
+        log.info("steps %s run on %d worker processes", ", ".join(k for k, _ in others), workers)
+
+    def collect(timeout: float) -> None:
+        for key, value, seconds in side.finished(timeout) if side is not None else []:
+            results[key], timing[key] = value, seconds
+            mark_complete(out / key)
+            log.info("%s: done in %.1f s (worker process)", key, seconds)
+
     try:
         for i, key, title, fn in todo:
             folder = out / key
@@ -457,7 +466,7 @@ def _run(args: argparse.Namespace) -> int:
             mark_incomplete(folder)
             t0 = time.perf_counter()
             try:
-                results[key] = fn(folder, bar.message)
+                results[key] = _run_step(key, fn, folder, bar.message, pool, args.studies)
             except KeyboardInterrupt:
                 acknowledge()
                 bar.close()
@@ -471,26 +480,8 @@ def _run(args: argparse.Namespace) -> int:
             log.info("%s: done in %.1f s", key, timing[key])
             bar.finish()
         while side is not None and side.pending:
-            bar.message(f"waiting for {', '.join(side.pending)} (background process)")
-            msg = side.poll(1.0)
-            if msg is None:
-                if side.dead() is not None:
-                    msg = side.poll(1.0)  # a message sent just before it ended
-                    gone = side.dead()
-                    if msg is None and gone is not None:
-                        raise RuntimeError(
-                            f"the background process running {', '.join(gone[0])} died "
-                            f"(exit code {gone[1]})"
-                        )
-                if msg is None:
-                    continue
-            if msg[0] == "error":
-                raise RuntimeError(f"step {msg[1]} failed: {msg[2]}")
-            _, key, value, seconds = msg
-            results[key], timing[key] = value, seconds
-            mark_complete(out / key)
-            side.pending.remove(key)
-            log.info("%s: done in %.1f s (background)", key, seconds)
+            bar.message(f"waiting for {', '.join(side.pending)} (worker processes)")
+            collect(1.0)
     except KeyboardInterrupt:
         acknowledge()
         bar.close()
@@ -501,11 +492,13 @@ def _run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
         if side is not None:
-            while side.pending and (msg := side.poll(0.05)) is not None:  # keep what finished
-                if msg[0] == "done":
-                    mark_complete(out / msg[1])
-                    side.pending.remove(msg[1])
-            side.stop()
+            try:
+                collect(0.0)  # keep what finished
+            except RuntimeError:
+                pass  # the failure is being reported already
+            side.cancel()
+        if pool is not None:
+            pool.close(cancel=bool(side and side.pending))
     results = {k: results[k] for k, _, _ in steps if k in results}  # in step order
     timing = {k: timing[k] for k, _, _ in steps if k in timing}
     total = round(time.perf_counter() - t_all, 1)
