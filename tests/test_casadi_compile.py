@@ -86,3 +86,19 @@ def test_a_function_another_process_compiles_is_not_compiled_twice(cache, monkey
     with cc.allow_compilation():
         assert cc.compiled(f) is f  # the virtual machine meanwhile
     assert not calls
+
+
+def test_uncompiled_neither_compiles_nor_generates_code(cache, monkeypatch):
+    """Inside ``uncompiled()`` (one-off models) a function is neither compiled nor looked
+    up in the cache (no C code generated to find its library), even inside an
+    ``allow_compilation`` block; outside, it is looked up as before."""
+    fn = _fn(0.25)
+    generated = []
+    real = cc._library
+    monkeypatch.setattr(cc, "_library", lambda fns, c: generated.append(1) or real(fns, c))
+    with cc.uncompiled(), cc.allow_compilation():
+        assert cc.compiled(fn) is fn
+    assert generated == [] and not list(cache.iterdir())
+    if cc._compiler() is not None:
+        assert cc.compiled(fn) is fn  # not allowed, not cached: the original, but ...
+        assert generated == [1]  # ... its code was generated to look for the library

@@ -41,6 +41,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from continuation.casadi_compile import uncompiled
 from continuation.typing import FloatArray
 
 from ..estimation import build_vessel_model
@@ -294,8 +295,9 @@ def calibrate(
     check = conn
     cal_vessel = raw
     for rnd in range(1, max_rounds + 1):
-        theta, it, _ = _bordered_solve(conn, raw, resolved, coefficient, theta, target_Fn,
-                                       opts, tol, max_iter, rel_step)  # fmt: skip
+        with uncompiled():  # one-off rebuilt models (see continuation.casadi_compile)
+            theta, it, _ = _bordered_solve(conn, raw, resolved, coefficient, theta, target_Fn,
+                                           opts, tol, max_iter, rel_step)  # fmt: skip
         iters += it
         cal_vessel = _calibrated_vessel(raw, c0, coefficient, theta, target_Fn,
                                         conn.chi_c, target_source)  # fmt: skip

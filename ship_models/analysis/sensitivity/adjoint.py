@@ -16,6 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from continuation.casadi_compile import uncompiled
 from continuation.newton import newton
 from continuation.settings import NewtonSettings
 from continuation.typing import FloatArray
@@ -78,7 +79,8 @@ class _Residuals:
 
     def at(self, changes: Mapping[str, float], factors: Mapping[str, float]) -> FloatArray:
         m = model_at(self.vessel, changes, factors, resolved=self.resolved, options=self.options)
-        return np.asarray(self.problem_for(m).residual(self.z), dtype=float)
+        with uncompiled():  # a one-off model: nothing of it is in the compile cache
+            return np.asarray(self.problem_for(m).residual(self.z), dtype=float)
 
     def exact_param(self, name: str) -> FloatArray:
         pv = self.prob.params

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from continuation.casadi_compile import uncompiled
 from continuation.typing import FloatArray
 
 from ...estimation import build_vessel_model
@@ -150,7 +151,8 @@ def uncertainty_band(
             sys_p = {SYSTEM_PARAMS[k]: changes.pop(k) for k in list(changes) if k in SYSTEM_PARAMS}
             try:
                 m = model_at(raw, changes, resolved=resolved, options=opts)
-                fn = resolve_at(sens.connection, m, same_discretisation=False, params=sys_p)
+                with uncompiled():  # a one-off model (see continuation.casadi_compile)
+                    fn = resolve_at(sens.connection, m, same_discretisation=False, params=sys_p)
             except (ValueError, ArithmeticError) as exc:
                 log.warning("sample failed: %s", exc)
                 failed += 1
