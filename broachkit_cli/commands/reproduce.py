@@ -394,14 +394,15 @@ def _run_step(
     folder: Path,
     say: Callable[[str], None],
     pool: Any,
+    module: str | None,
     studies: Path | None,
 ) -> Any:
     """Run a step here; the sweep step on ``pool`` when its ``compute`` takes a backend."""
-    if pool is not None and key == SWEEP_STEP:
-        mod = study_module(dict((k, m) for k, _, m in STUDY_STEPS)[key], studies)
-        if "backend" in inspect.signature(mod.compute).parameters:
-            return mod.compute(folder, progress=say, backend=pool)
-    return fn(folder, say)
+    if pool is None or key != SWEEP_STEP or module is None:
+        return fn(folder, say)
+    mod = study_module(module, studies)  # loaded once (a --studies script runs on load)
+    kw = {"backend": pool} if "backend" in inspect.signature(mod.compute).parameters else {}
+    return mod.compute(folder, progress=say, **kw)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -466,7 +467,9 @@ def _run(args: argparse.Namespace) -> int:
             mark_incomplete(folder)
             t0 = time.perf_counter()
             try:
-                results[key] = _run_step(key, fn, folder, bar.message, pool, args.studies)
+                results[key] = _run_step(
+                    key, fn, folder, bar.message, pool, modules.get(key), args.studies
+                )
             except KeyboardInterrupt:
                 acknowledge()
                 bar.close()
