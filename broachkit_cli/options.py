@@ -193,6 +193,7 @@ def parse_list(
     import numpy as np
 
     form = "'start:stop[:step]'" if default_step is not None else "'start:stop:step'"
+    grid = None
     try:
         if ":" in text:
             parts = [float(s) for s in text.split(":")]
@@ -203,18 +204,17 @@ def parse_list(
             a, b, step = parts
             if not all(math.isfinite(v) for v in parts) or step <= 0 or b < a:
                 raise ValueError
-            q = (b - a) / step
-            if not q + 1 <= max_count:  # also an infinite count
-                raise OverflowError(
-                    math.floor(q + 1e-9) + 1 if math.isfinite(q) else "infinitely many"
-                )
-            vals = a + step * np.arange(math.floor(q + 1e-9) + 1)
+            grid = (a, step, (b - a) / step)
         else:
             vals = np.array([float(s) for s in text.split(",")])
-    except OverflowError as exc:
-        raise ValueError(f"{flag} gives {exc.args[0]} values; at most {max_count}") from None
     except ValueError:
         raise ValueError(f"{flag} must be {form} or a comma list 'a,b,c', got {text!r}") from None
+    if grid is not None:
+        a, step, q = grid
+        if not q + 1 <= max_count:  # before anything is allocated; also an infinite count
+            n = math.floor(q + 1e-9) + 1 if math.isfinite(q) else "infinitely many"
+            raise ValueError(f"{flag} gives {n} values; at most {max_count}")
+        vals = a + step * np.arange(math.floor(q + 1e-9) + 1)
     if vals.size == 0 or not np.all(np.isfinite(vals)):
         raise ValueError(f"{flag} must give finite numbers, got {text!r}")
     if vals.size > max_count:
