@@ -46,14 +46,19 @@ def sticky_interrupt(repeat: float = 0.5) -> Iterator[None]:
         return
     _state["requested"], _state["done"] = threading.Event(), threading.Event()
 
+    # the watcher thread starts with the first Ctrl-C: until then the process has one
+    # thread, so library code may fork workers (continuation.sweep.forked.can_fork)
+    watcher: list[threading.Thread] = []
+
     def handler(signum: int, frame: Any) -> None:
         if not _state["done"].is_set():
             _state["requested"].set()
+            if not watcher:
+                watcher.append(threading.Thread(target=_repeat, args=(repeat,), daemon=True))
+                watcher[0].start()
             raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGINT, handler)
-    watcher = threading.Thread(target=_repeat, args=(repeat,), daemon=True)
-    watcher.start()
     try:
         yield
     finally:

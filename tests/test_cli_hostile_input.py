@@ -113,7 +113,7 @@ COMMANDS: dict[str, dict[str, Any]] = {
     "critical-curve": {"--chi-c": st.one_of(NUMBERS, st.sampled_from(
         ["0:30", "30:0", "0:1e9:1e-9", "0:10:0", "a,b", "1,,2", "0:84", "0:85", "-5:5:2.5"])),
         "--h-over-lambda": NUMBERS, "--lambda-over-l": NUMBERS, "--fn-guess": NUMBERS,
-        "--out": PATHS},
+        "--out": PATHS, "--workers": st.sampled_from(["0", "-1", "1", "2", "x", "1.5"])},
     "demo": {"--out": PATHS},
     "reproduce": {"--out": PATHS, "--only": st.sampled_from(["demo", "fig99", "fig06_09"])},
 }  # fmt: skip
@@ -186,6 +186,7 @@ def test_every_command_refuses_or_accepts_sanely(argv, capsys, probes):
         # it was a MemoryError, exit 1)
         (["critical-curve", "--chi-c=0:1e9:1e-9"], "--chi-c"),
         (["critical-curve", "--chi-c=0:1e308:1e-308"], "--chi-c"),
+        (["critical-curve", "--workers", "0"], "--workers"),
         (["sweep", "courses", "--chi-c", "0:1:1e-12", "--out", "OUT"], "--chi-c"),
         (["sweep", "surface", "--h-over-lambda", "0.02:0.1:99999999999", "--out", "OUT"],
          "--h-over-lambda"),

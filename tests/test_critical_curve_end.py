@@ -98,6 +98,35 @@ def test_error_estimates_bound_fresh_solves(model, curve):
         assert abs(curve.Fn[k] - fresh.Fn) <= curve.error[k] + fresh.error + 1e-12
 
 
+def test_forked_workers_give_the_same_curve(model, curve, monkeypatch):
+    """Courses solved on a forked process and here: the same curve as all here, exactly.
+
+    Each task of consecutive courses has its own Jacobian store, so its results depend
+    on the task only, not on the process or the number of workers.
+    """
+    from continuation.sweep import forked
+
+    children: list[int] = []
+    init = forked.ForkedTasks.__init__
+
+    def spy(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        children.append(self.n_children)
+
+    monkeypatch.setattr(forked.ForkedTasks, "__init__", spy)
+    courses = np.arange(0.0, 40.0, 2.0) * DEG  # 19 courses on the sheet: 3 tasks
+    one = critical_curve(courses, model=model, start=curve.start, workers=1)
+    n_one = len(children)
+    two = critical_curve(courses, model=model, start=curve.start, workers=2, keep_orbits=True)
+    assert max(children[:n_one]) == 0
+    assert max(children[n_one:]) == 1, "the courses were not solved on a forked process"
+    assert one.status is two.status is Status.SUCCESS, (one.message, two.message)
+    for name in ("Fn", "error", "residual_norm", "converged", "exists"):
+        assert np.array_equal(getattr(one, name), getattr(two, name), equal_nan=True), name
+    assert one.reasons == two.reasons and one.folds == two.folds
+    assert len(two.orbits) == int(two.converged.sum())
+
+
 def test_boundary_refusal_roll_and_saddle(model, curve):
     o = curve.start.orbit
     p = o.problem.params.replace(Fn=float(o.params["Fn"]))

@@ -18,6 +18,7 @@ import argparse
 import json
 import logging
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -72,6 +73,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_wave(parser)
     add_fn_guess(parser)
     add_out(parser, None, "the CSV, JSON and PNG (optional)")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="processes solving the courses (default: one per core; 1: all in this process)",
+    )
     add_json(parser)
 
 
@@ -133,6 +141,9 @@ def _run(args: argparse.Namespace) -> int:
     from ship_models.analysis.critical_curve import critical_curve
 
     deg = parse_courses(str(args.chi_c))
+    workers = (os.cpu_count() or 1) if args.workers is None else args.workers
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"--workers must be a positive integer, got {workers!r}")
     out = prepare_out(args.out)
     model, params = _ship(args)
     t0 = time.perf_counter()
@@ -141,6 +152,7 @@ def _run(args: argparse.Namespace) -> int:
             np.radians(deg),
             model=model,
             params=params,
+            workers=workers,
             progress=lambda pt: status.show(
                 f"continuing the connection: chi_c = {math.degrees(float(pt.p)):.2f} deg"
             ),

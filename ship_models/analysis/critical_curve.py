@@ -15,6 +15,7 @@ as such with the reason, not as failures.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import time
@@ -31,6 +32,7 @@ from continuation.casadi_compile import compiling
 from continuation.errors import ContinuationError
 from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
+from continuation.sweep.forked import ForkedTasks
 from continuation.typing import FloatArray
 
 from .boundary_check import boundary_refusal
@@ -39,6 +41,10 @@ from .critical_result import CriticalFn
 from .params import course, ship_model, ship_params
 
 log = logging.getLogger(__name__)
+
+#: Courses per task of :func:`critical_curve`: a task's solves share one store of
+#: factorised Jacobians, and a task is the unit of work of a forked process.
+COURSES_PER_TASK = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -227,6 +233,7 @@ def critical_curve(
     progress: Callable[[Any], None] | None = None,
     max_relocations: int = 3,
     fold_tol: float = math.radians(0.02),
+    workers: int = 1,
     **bvp_options: Any,
 ) -> CriticalCurve:
     r"""Critical ``Fn`` over a range of courses along the first sheet of the curve.
@@ -253,6 +260,13 @@ def critical_curve(
        ``end_Fn``; the crest saddle's own branch is followed in ``chi_c`` at ``end_Fn``
        (``crest_end_chi_c``). Courses beyond the fold have ``exists = False`` with the
        reason (the curve folds back there / the crest saddle does not exist).
+
+    The courses of step 3 are solved in tasks of :data:`COURSES_PER_TASK` consecutive
+    courses, each with its own store of Jacobians, so a course's result does not depend
+    on which process solved it or on ``workers``. With ``workers > 1`` the tasks of a
+    sheet run on ``workers - 1`` forked copies of this process
+    (:class:`continuation.sweep.forked.ForkedTasks`; they inherit the branch and the
+    compiled functions) while this one re-locates the fold, and then on this one too.
 
     It runs inside :func:`continuation.casadi_compile.allow_compilation`: the model's
     collocation functions are compiled to C once per machine (cached), which pays
@@ -281,6 +295,9 @@ def critical_curve(
     fold_tol : float
         Stop re-locating when the fold moves by less than this (rad); the last move
         is ``fold_error``.
+    workers : int
+        Processes solving the courses, this one included (``1``: all here; more:
+        forked copies where :func:`continuation.sweep.forked.can_fork`, else here).
     **bvp_options
         Passed to :func:`critical_fn_bvp` for the start solve.
 
@@ -301,6 +318,8 @@ def critical_curve(
             course(c, "chi_c_values")
     if np.any(chis > 0) and np.any(chis < 0):
         raise ValueError("`chi_c_values` must all have one sign (the curve starts at 0)")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"`workers` must be a positive integer, got {workers!r}")
     if not (math.isfinite(ds) and ds > 0 and math.isfinite(ds_max) and ds_max >= ds):
         raise ValueError(f"`ds` and `ds_max` must satisfy 0 < ds <= ds_max, got {ds}, {ds_max}")
     sign = -1.0 if np.any(chis < 0) else 1.0
@@ -344,14 +363,36 @@ def critical_curve(
             solved[k] = start
     pending = [k for k in pending if k not in solved]
 
+    batches: list[ForkedTasks[list[int], list[_Solved]]] = []
+
     def solve_courses(todo: Sequence[int]) -> None:
-        for k in todo:
-            r = _solve_from_sheets(m, params, sheets, float(chis[k]), store)
-            if r is None:
-                continue
-            if not r.success:
-                log.warning("course %.4g deg: %s", math.degrees(chis[k]), r.message)
-            solved[k] = r
+        # tasks of consecutive courses from the sheets as they are now; with workers,
+        # forked copies start on them at once and this process goes on
+        tasks = [
+            list(todo[i : i + COURSES_PER_TASK]) for i in range(0, len(todo), COURSES_PER_TASK)
+        ]
+        if not tasks:
+            return
+        snapshot = tuple(sheets)
+        batch: ForkedTasks[list[int], list[_Solved]] = ForkedTasks(
+            lambda ks: _solve_task(m, params, snapshot, chis, ks, keep_orbits),
+            tasks,
+            children=min(workers - 1, len(tasks)) if len(tasks) > 1 else 0,
+        )
+        batches.append(batch)
+        if batch.n_children == 0:
+            batch.run_rest()
+
+    def collect(cancel: bool = False) -> None:
+        while batches:  # a batch leaves the list only once collected
+            batch = batches[0]
+            done = batch.cancel() if cancel else batch.results()
+            batches.pop(0)
+            for rows in done.values():
+                for k, r, x in rows:
+                    solved[k] = r
+                    if x is not None:
+                        orbit_of[k] = x
 
     try:
         # courses between 0 and a start away from 0: a backward branch
@@ -398,9 +439,12 @@ def critical_curve(
                 break
             # re-locate the fold from an adapted solve near it (its mesh and T there)
             c_aux = end_chi - sign * min(fold_offset, 0.5 * abs(end_chi - float(P[0])))
+            # a pending course may serve as that solve, but only one at least as far
+            # from the fold as the offset: one nearer may lie beyond the re-located fold
+            # (its solve then fails, after a costly Newton fallback)
             near_fold = [
                 k for k in pending
-                if abs(chis[k] - c_aux) <= fold_offset and sign * (end_chi - chis[k]) > 0
+                if -1e-12 <= sign * (c_aux - chis[k]) <= fold_offset
             ]  # fmt: skip
             k_aux = max(near_fold, key=lambda k: sign * chis[k]) if near_fold else None
             if k_aux is not None:
@@ -424,8 +468,10 @@ def critical_curve(
                     key=lambda k: -sign * chis[k],
                 )
             )
+        collect()
     except KeyboardInterrupt:
         status = Status.INTERRUPTED
+        collect(cancel=True)
     crest_end = math.nan
     if math.isfinite(end_Fn) and status is not Status.INTERRUPTED:
         crest_end = _crest_end(m, params, end_Fn, sign)
@@ -454,15 +500,15 @@ def critical_curve(
                     f"{math.degrees(end_chi):.2f} deg (Fn {end_Fn:.4f})"
                 )
             continue
-        if r.orbit is not None:
-            res_n[k] = r.residual_norm
+        res_n[k] = r.residual_norm
         if r.success:
             Fn[k], ok[k] = r.Fn, True
             err[k] = math.nan if r.error is None else r.error
             n_unst[k] = 1
-            if keep_orbits:
+            if keep_orbits and k not in orbit_of and r.orbit is not None:
                 orbit_of[k] = np.asarray(r.orbit.x, dtype=float)
         else:
+            orbit_of.pop(k, None)
             reasons[k] = r.message
             first_bad = first_bad or r.status
     n_ok = int(ok.sum())
@@ -484,7 +530,7 @@ def critical_curve(
         message += f"; {K - n_exist} course(s) beyond the end do not exist"
     if throw and status is not Status.SUCCESS and status is not Status.INTERRUPTED:
         raise ContinuationError(f"critical curve incomplete: {message}")
-    orbits = tuple(orbit_of[k] for k in sorted(orbit_of))
+    orbits = tuple(orbit_of[k] for k in sorted(orbit_of) if ok[k])
     return CriticalCurve(
         chis, Fn, res_n, ok, n_unst, branch, start, status, message,
         time.perf_counter() - t_start, orbits, exists=exists, reasons=tuple(reasons),
@@ -521,6 +567,36 @@ def _predict(P: FloatArray, Z: FloatArray, c: float) -> FloatArray | None:
     if abs(P[j] - c) < 1e-6:
         return Z[j].copy()
     return None
+
+
+#: One solved course of a task: index, result without its orbit, orbit samples or None.
+_Solved = tuple[int, CriticalFn, FloatArray | None]
+
+
+def _solve_task(
+    m: Any,
+    params: Any,
+    sheets: Sequence[tuple[Any, FloatArray, FloatArray]],
+    chis: FloatArray,
+    ks: Sequence[int],
+    keep_orbits: bool,
+) -> list[_Solved]:
+    """Solve the courses ``chis[ks]`` in order, sharing one store of Jacobians.
+
+    Returns picklable rows (the result's ``orbit``, whose problem holds CasADi
+    functions, is replaced by its samples ``x (M, 8)`` when ``keep_orbits``).
+    """
+    store: dict[Any, Any] = {}
+    rows: list[_Solved] = []
+    for k in ks:
+        r = _solve_from_sheets(m, params, sheets, float(chis[k]), store)
+        if r is None:
+            continue
+        if not r.success:
+            log.warning("course %.4g deg: %s", math.degrees(chis[k]), r.message)
+        x = np.asarray(r.orbit.x, dtype=float) if keep_orbits and r.orbit is not None else None
+        rows.append((k, dataclasses.replace(r, orbit=None), x))
+    return rows
 
 
 def _solve_from_sheets(
