@@ -9,6 +9,7 @@ side of its fold.
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -98,6 +99,7 @@ def test_error_estimates_bound_fresh_solves(model, curve):
         assert abs(curve.Fn[k] - fresh.Fn) <= curve.error[k] + fresh.error + 1e-12
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forks only on Linux")
 def test_forked_workers_give_the_same_curve(model, curve, monkeypatch):
     """Courses solved on a forked process and here: the same curve as all here, exactly.
 

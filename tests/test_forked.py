@@ -6,6 +6,7 @@ References: the tasks run one after another in this process (``children=0``).
 from __future__ import annotations
 
 import os
+import sys
 import threading
 import time
 
@@ -13,7 +14,9 @@ import pytest
 
 from continuation.sweep.forked import ForkedTasks, can_fork
 
-pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="needs os.fork (POSIX)")
+pytestmark = pytest.mark.skipif(
+    not sys.platform.startswith("linux"), reason="forks only on Linux (can_fork)"
+)
 
 PARENT = os.getpid()
 

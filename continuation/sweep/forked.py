@@ -19,7 +19,7 @@ then takes the tasks still queued itself (:meth:`ForkedTasks.run_rest`) and coll
 * **Ctrl-C**: children ignore SIGINT; the parent's ``KeyboardInterrupt`` reaches the
   caller, and :meth:`ForkedTasks.cancel` (or leaving the ``with`` block) stops the
   children and keeps the results they had finished (:attr:`ForkedTasks.finished`).
-* **Forks only where safe**: POSIX ``os.fork``, a single thread in the process (a fork
+* **Forks only where safe**: Linux's ``os.fork``, a single thread in the process (a fork
   of a multi-threaded process can deadlock in a lock another thread held), not inside
   a forked child, at most :data:`MAX_TASKS` tasks; otherwise nothing is forked and
   every task runs in the parent.
@@ -54,8 +54,18 @@ _IN_CHILD = False
 
 
 def can_fork() -> bool:
-    """True when this process may fork workers (POSIX, one thread, not a forked child)."""
-    return hasattr(os, "fork") and not _IN_CHILD and threading.active_count() == 1
+    """True when this process may fork workers (Linux, one thread, not a forked child).
+
+    Only Linux: on macOS a forked child of a process that loaded system frameworks
+    (Accelerate, the GUI libraries) may crash, which is why Python's multiprocessing
+    spawns there; other systems are untested.
+    """
+    return (
+        sys.platform.startswith("linux")
+        and hasattr(os, "fork")
+        and not _IN_CHILD
+        and threading.active_count() == 1
+    )
 
 
 class ForkedTasks(Generic[T, R]):
