@@ -141,7 +141,7 @@ def surface_cost(n: int) -> dict:
     t0 = time.perf_counter()
     b = critical_fn_bisection(
         chi, model=m, params=m.default_params().replace(H_over_lambda=float(hs[-1])),
-        bracket=(fn - 2e-3, fn + 2e-3), tol=1e-6,
+        Fn_bracket=(fn - 2e-3, fn + 2e-3), tol=1e-6,
     )  # fmt: skip
     t_bis = time.perf_counter() - t0
     return {
