@@ -38,3 +38,21 @@ def pitchfork_system() -> System:
 @pytest.fixture
 def brusselator_system() -> System:
     return brusselator()
+
+
+@pytest.fixture
+def single_threaded() -> None:
+    """Wait (up to 10 s) until this process runs one thread, as forking needs.
+
+    Threads that earlier tests left winding down (a process pool's manager thread
+    after its shutdown, a Ctrl-C watcher) end within that; one still alive then
+    fails the test with its name.
+    """
+    import threading
+    import time
+
+    end = time.monotonic() + 10.0
+    while threading.active_count() > 1 and time.monotonic() < end:
+        time.sleep(0.05)
+    others = [t.name for t in threading.enumerate() if t is not threading.main_thread()]
+    assert not others, f"threads still alive: {others}"

@@ -100,6 +100,7 @@ def test_error_estimates_bound_fresh_solves(model, curve):
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forks only on Linux")
+@pytest.mark.usefixtures("single_threaded")
 def test_forked_workers_give_the_same_curve(model, curve, monkeypatch):
     """Courses solved on a forked process and here: the same curve as all here, exactly.
 

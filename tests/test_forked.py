@@ -12,17 +12,20 @@ import time
 
 import pytest
 
+from continuation.sweep import forked
 from continuation.sweep.forked import ForkedTasks, can_fork
 
-pytestmark = pytest.mark.skipif(
-    not sys.platform.startswith("linux"), reason="forks only on Linux (can_fork)"
-)
+pytestmark = [
+    pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forks only on Linux"),
+    pytest.mark.usefixtures("single_threaded"),
+]
 
 PARENT = os.getpid()
 
 
 def _square(k: int) -> tuple[int, int]:
-    time.sleep(0.01)
+    # slower here than in the children, so that children started late still get tasks
+    time.sleep(0.05 if os.getpid() == PARENT else 0.01)
     return k * k, os.getpid()
 
 
@@ -39,23 +42,27 @@ def test_can_fork_here():
 
 @pytest.mark.parametrize("children", [0, 1, 2, 5])
 def test_results_by_index_whoever_ran_them(children):
-    with ForkedTasks(_square, range(12), children=children) as run:
-        assert run.n_children == min(children, 12)
+    with ForkedTasks(_square, range(40), children=children) as run:
+        assert run.n_children == min(children, 40)
         pids = [pid for pid, _ in run._kids]
         out = run.results()
-    assert {k: v[0] for k, v in out.items()} == {k: k * k for k in range(12)}
+    assert {k: v[0] for k, v in out.items()} == {k: k * k for k in range(40)}
     if children:  # the children took some of the tasks
         assert {v[1] for v in out.values()} - {PARENT}
     _no_zombies(pids)
 
 
 def test_parent_works_meanwhile_and_takes_the_rest():
-    with ForkedTasks(_square, range(40), children=1) as run:
+    def task(k: int) -> tuple[int, int]:
+        time.sleep(0.02)
+        return k * k, os.getpid()
+
+    with ForkedTasks(task, range(100), children=1) as run:
         time.sleep(0.05)  # the parent's own work; the child has started meanwhile
         out = run.results()
-    owners = [out[k][1] for k in range(40)]
+    owners = [out[k][1] for k in range(100)]
     assert PARENT in owners and len(set(owners)) == 2
-    assert [out[k][0] for k in range(40)] == [k * k for k in range(40)]
+    assert [out[k][0] for k in range(100)] == [k * k for k in range(100)]
 
 
 def test_a_child_that_dies_loses_nothing():
@@ -95,7 +102,9 @@ def test_cancel_stops_children_and_keeps_finished():
     t0 = time.perf_counter()
     run = ForkedTasks(task, range(10), children=2)
     pids = [pid for pid, _ in run._kids]
-    time.sleep(0.5)
+    files = [path for _, path in run._kids]
+    while sum(len(forked._read_records(f)) for f in files) < 4 and time.perf_counter() - t0 < 20:
+        time.sleep(0.02)  # until the children have finished the 4 quick tasks
     done = run.cancel()
     assert time.perf_counter() - t0 < 30.0
     assert set(range(4)) <= set(done) and set(done) < set(range(10))
