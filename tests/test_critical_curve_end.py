@@ -9,7 +9,9 @@ side of its fold.
 from __future__ import annotations
 
 import math
+import os
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -128,6 +130,27 @@ def test_forked_workers_give_the_same_curve(model, curve, monkeypatch):
         assert np.array_equal(getattr(one, name), getattr(two, name), equal_nan=True), name
     assert one.reasons == two.reasons and one.folds == two.folds
     assert len(two.orbits) == int(two.converged.sum())
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forks only on Linux")
+@pytest.mark.usefixtures("single_threaded")
+def test_an_error_in_the_courses_leaves_no_forked_process(model, curve, monkeypatch):
+    import psutil
+
+    from ship_models.analysis import critical_curve as cc
+
+    parent = os.getpid()
+
+    def broken(*args, **kwargs):
+        if os.getpid() != parent:
+            time.sleep(30.0)  # the forked process is still busy when this one fails
+        raise ArithmeticError("a course failed")
+
+    monkeypatch.setattr(cc, "_solve_task", broken)
+    before = {p.pid for p in psutil.Process().children()}
+    with pytest.raises(ArithmeticError, match="a course failed"):
+        critical_curve(np.arange(0.0, 40.0, 2.0) * DEG, model=model, start=curve.start, workers=2)
+    assert {p.pid for p in psutil.Process().children()} <= before
 
 
 def test_boundary_refusal_roll_and_saddle(model, curve):

@@ -354,7 +354,8 @@ def critical_curve(
     folds: list[tuple[float, float]] = []
     fold_error = math.inf
     fold_offset = math.radians(0.5)
-    # the course solves share their factorised Jacobians (same mesh for all of them)
+    # the fold's re-location solves share their factorised Jacobians (the courses'
+    # tasks have stores of their own, _solve_task)
     store: dict[Any, Any] = {}
     sheets: list[tuple[Any, FloatArray, FloatArray]] = []  # (problem, P, Z) per branch
     pending = list(range(K))
@@ -472,6 +473,9 @@ def critical_curve(
     except KeyboardInterrupt:
         status = Status.INTERRUPTED
         collect(cancel=True)
+    finally:  # any other exception: no forked process outlives the call
+        for batch in batches:
+            batch.cancel()
     crest_end = math.nan
     if math.isfinite(end_Fn) and status is not Status.INTERRUPTED:
         crest_end = _crest_end(m, params, end_Fn, sign)
@@ -508,7 +512,6 @@ def critical_curve(
             if keep_orbits and k not in orbit_of and r.orbit is not None:
                 orbit_of[k] = np.asarray(r.orbit.x, dtype=float)
         else:
-            orbit_of.pop(k, None)
             reasons[k] = r.message
             first_bad = first_bad or r.status
     n_ok = int(ok.sum())
