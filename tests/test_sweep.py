@@ -251,3 +251,24 @@ def test_ctrl_c_cancels_pending_and_a_resume_redoes_nothing(tmp_path):
     for x in finished:  # zero finished tasks redone
         assert T.runs(log, x) == 1
     assert [row["y"] for row in resumed.rows()] == [x * x for x in range(12)]
+
+
+@pytest.mark.usefixtures("single_threaded")
+def test_a_cancelled_process_pool_leaves_no_thread_behind():
+    """``close(cancel=True)`` returns with its processes and threads gone, so this
+    process can fork right after (``ForkedTasks`` refuses with other threads alive)."""
+    import threading
+
+    from continuation.sweep import open_backend
+    from continuation.sweep.forked import can_fork
+
+    be = open_backend("processes", workers=2)
+    futures = [be.submit(time.sleep, 30.0) for _ in range(5)]
+    time.sleep(0.5)
+    t0 = time.monotonic()
+    be.close(cancel=True)
+    assert time.monotonic() - t0 < 20.0
+    others = [t.name for t in threading.enumerate() if t is not threading.main_thread()]
+    assert not others, others
+    assert can_fork()
+    assert all(f.done() for f in futures)

@@ -18,6 +18,7 @@ resubmissions before ``KilledWorker``), then the sweep retries once more.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import logging
 import multiprocessing
 import os
@@ -112,13 +113,10 @@ class Backend:
     def _stop_executor(self, cancel: bool) -> None:
         ex = self.executor
         if isinstance(ex, cf.ProcessPoolExecutor):
-            procs = list(getattr(ex, "_processes", {}).values()) if cancel else []
-            ex.shutdown(wait=not cancel, cancel_futures=cancel)
-            for p in procs:  # running tasks are abandoned: stop their processes now
-                if p.is_alive():
-                    p.terminate()
-            for p in procs:
-                p.join(timeout=5)
+            if not cancel:
+                ex.shutdown(wait=True)
+            else:
+                _stop_process_pool(ex)
         elif self._rebuild is not None or self.name == "serial":
             ex.shutdown(wait=not cancel, cancel_futures=cancel)
 
@@ -133,6 +131,42 @@ class Backend:
                 obj.close()
             except Exception as exc:  # pragma: no cover - best effort at shutdown
                 log.warning("closing %s failed: %s", type(obj).__name__, exc)
+
+
+def _stop_process_pool(ex: cf.ProcessPoolExecutor, timeout: float = 10.0) -> None:
+    """Cancel a process pool's tasks, stop its processes, and wait for its threads.
+
+    ``shutdown(wait=False)`` alone returns while the pool's manager thread and its
+    call queue's feeder thread still run; they normally end soon after, but a feeder
+    left behind (seen on a loaded 2-core machine) keeps the process multi-threaded for
+    good, and a multi-threaded process must not fork. So the stop is synchronous: the
+    processes are terminated, the manager thread joined, and the call queue closed
+    (its feeder ends once its buffer is written or, with the reading end closed, fails).
+    """
+    procs = list((getattr(ex, "_processes", None) or {}).values())
+    manager = getattr(ex, "_executor_manager_thread", None)
+    calls = getattr(ex, "_call_queue", None)
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in procs:  # running tasks are abandoned: stop their processes now
+        if p.is_alive():
+            p.terminate()
+    for p in procs:
+        p.join(timeout=timeout)
+    if manager is not None:
+        manager.join(timeout=timeout)
+    if calls is None:
+        return
+    calls.close()  # idempotent: the feeder ends after what it holds
+    feeder = getattr(calls, "_thread", None)
+    if feeder is None:
+        return
+    feeder.join(timeout=timeout / 2)
+    if feeder.is_alive():  # blocked writing to a pipe no process reads any more
+        with contextlib.suppress(OSError):
+            calls._reader.close()
+        feeder.join(timeout=timeout / 2)
+    if feeder.is_alive():
+        log.warning("a process pool's queue thread did not end; this process cannot fork")
 
 
 def _check_workers(workers: Any) -> int | None:
