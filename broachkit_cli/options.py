@@ -313,6 +313,14 @@ def check_chi_c_deg(name: str, value: float) -> float:
     return v
 
 
+def check_workers(value: Any, name: str = "--workers") -> int:
+    """A count of worker processes: a positive integer, or None for one per core."""
+    n = (os.cpu_count() or 1) if value is None else value
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise ValueError(f"{name} must be a positive integer, got {n!r}")
+    return n
+
+
 def wave_changes(args: argparse.Namespace) -> dict[str, float]:
     """Checked ``H_over_lambda`` / ``lambda_over_L`` from the options that were given."""
     from ship_models.vessel import BREAKING_STEEPNESS
@@ -391,6 +399,7 @@ __all__ = [
     "add_wave",
     "check_chi_c_deg",
     "check_fn",
+    "check_workers",
     "finite",
     "fn_limit",
     "json_safe",

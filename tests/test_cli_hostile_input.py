@@ -332,3 +332,15 @@ def test_fn_range_without_an_answer_says_so(capsys):
     assert main([*argv, "--json"]) == 1
     doc = json.loads(capsys.readouterr().out)  # strict JSON: no NaN
     assert doc["Fn"] is None and doc["status"] == "NO_BRACKET"
+
+
+@pytest.mark.parametrize("value", ["0", "-3", "x", "1.5"])
+def test_a_bad_workers_variable_is_named(value, capsys, probes, monkeypatch):
+    """``$BROACHKIT_WORKERS`` (the worker count when ``--workers`` is not given) is
+    checked like the option and named in the one-line error."""
+    monkeypatch.setenv("BROACHKIT_WORKERS", value)
+    code, err = _outcome(["reproduce", "--only", "demo"], capsys)
+    assert code == 2 and "BROACHKIT_WORKERS" in err and len(err.strip().splitlines()) == 1, err
+    monkeypatch.setenv("BROACHKIT_WORKERS", "2")
+    code, err = _outcome(["reproduce", "--only", "demo", "--workers", "0"], capsys)
+    assert code == 2 and "--workers" in err, err

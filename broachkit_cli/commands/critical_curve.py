@@ -18,7 +18,6 @@ import argparse
 import json
 import logging
 import math
-import os
 import sys
 import time
 from pathlib import Path
@@ -34,6 +33,7 @@ from ..options import (
     add_out,
     add_vessel,
     add_wave,
+    check_workers,
     json_safe,
     parse_list,
     prepare_out,
@@ -141,9 +141,7 @@ def _run(args: argparse.Namespace) -> int:
     from ship_models.analysis.critical_curve import critical_curve
 
     deg = parse_courses(str(args.chi_c))
-    workers = (os.cpu_count() or 1) if args.workers is None else args.workers
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"--workers must be a positive integer, got {workers!r}")
+    workers = check_workers(args.workers)
     out = prepare_out(args.out)
     model, params = _ship(args)
     t0 = time.perf_counter()

@@ -57,7 +57,7 @@ from typing import Any
 
 from ..files import is_complete, mark_complete, mark_incomplete, write_json
 from ..interrupt import acknowledge
-from ..options import add_json, add_out, json_safe, prepare_out
+from ..options import add_json, add_out, check_workers, json_safe, prepare_out
 from . import demo
 
 NAME = "reproduce"
@@ -244,13 +244,17 @@ class _SideSteps:
 
 
 def _workers(args: argparse.Namespace) -> int:
-    n = args.workers
-    if n is None:
-        env = os.environ.get(WORKERS_ENV, "").strip()
-        n = int(env) if env.isdigit() else (os.cpu_count() or 1)
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise ValueError(f"--workers must be a positive integer, got {n!r}")
-    return n
+    """``--workers``, else ``$BROACHKIT_WORKERS`` when set, else one per core."""
+    if args.workers is not None:
+        return check_workers(args.workers)
+    env = os.environ.get(WORKERS_ENV, "").strip()
+    if not env:
+        return check_workers(None)
+    try:
+        n = int(env)
+    except ValueError:
+        raise ValueError(f"{WORKERS_ENV} must be a positive integer, got {env!r}") from None
+    return check_workers(n, WORKERS_ENV)
 
 
 def _cpu_seconds() -> float:
