@@ -179,6 +179,53 @@ def test_adapted_mesh_resolves_a_relaxation_oscillation():
     assert error_estimate(ada.mesh, ada.X) < error_estimate(uni.mesh, uni.X)
 
 
+def _vdp_period_by_simulation(mu: float) -> float:
+    """Independent reference: the time between upward zero crossings of x, by scipy's
+    DOP853 at rtol = atol = 1e-12, after the transient from (2, 0)."""
+    f = lambda t, x: [x[1], mu * (1 - x[0] ** 2) * x[1] - x[0]]  # noqa: E731
+    up = lambda t, x: x[0]  # noqa: E731
+    up.direction = 1
+    r = solve_ivp(f, (0.0, 6 * (3 + 1.7 * mu)), [2.0, 0.0], method="DOP853", rtol=1e-12,
+                  atol=1e-12, events=up)  # fmt: skip
+    return float(np.diff(r.t_events[0])[-1])
+
+
+def test_a_branch_on_too_coarse_a_mesh_says_so_and_error_tol_fixes_it():
+    """van der Pol from mu = 1 to 10 (the jumps sharpen as mu grows). At the defaults
+    (40 uniform intervals, no error_tol) the period at mu = 10 is off by more than 1 %,
+    and the message must say that the collocation error estimate is large there. With
+    ``error_tol`` the mesh grows: the start cycle is refined before the first step
+    (its estimate within the tolerance) and the periods at mu = 5 and 10 agree with a
+    simulation to 1e-6 (relative)."""
+    from continuation import Event
+
+    s, orb = _vdp_orbit(1.0, CollocationMesh(40, 4, 1.0))
+    uz = [Event("UZ5", lambda z, p: p - 5.0), Event("UZ10", lambda z, p: p - 10.0)]
+    st = ContinuationSettings(p_max=10.0)
+    ref = {"UZ5": _vdp_period_by_simulation(5.0), "UZ10": _vdp_period_by_simulation(10.0)}
+    assert ref["UZ10"] == pytest.approx(19.0784, abs=1e-4)  # tabulated: T(10) = 19.0784
+
+    def periods(br):
+        return {sp.label: float(sp.x[-1]) for sp in br.special_points
+                if sp.label in ref and sp.located}  # fmt: skip
+
+    coarse = continue_periodic(s, orb, {"mu": 1.0}, "mu", st, events=uz)
+    assert coarse.status == Status.PARAM_BOUND
+    assert abs(periods(coarse)["UZ10"] - ref["UZ10"]) > 1e-2 * ref["UZ10"]
+    assert "Collocation error estimate above" in coarse.message
+    assert "pass error_tol" in coarse.message
+
+    tol = 1e-6
+    fine = continue_periodic(s, orb, {"mu": 1.0}, "mu", st, events=uz, error_tol=tol)
+    assert fine.status == Status.PARAM_BOUND
+    assert fine.records["error"][0] <= tol
+    got = periods(fine)
+    assert set(got) == set(ref)
+    for k in ref:
+        assert got[k] == pytest.approx(ref[k], rel=1e-6), (k, got[k], ref[k])
+    assert "of the cycle's range" not in fine.message  # (only without error_tol)
+
+
 # ------------------------------------------------------------------ Floquet
 def _variational_monodromy(f, jac, x0, T):
     n = x0.size

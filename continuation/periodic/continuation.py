@@ -48,7 +48,7 @@ from ..status import Status
 from ..typing import FloatArray
 from .floquet import is_neimark_sacker
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
-from .problem import PeriodicOrbitProblem
+from .problem import PeriodicOrbitProblem, error_estimate
 
 log = logging.getLogger(__name__)
 
@@ -56,6 +56,13 @@ log = logging.getLogger(__name__)
 #: multipliers (the discretisation error, amplified by the cycle's sensitivity); the
 #: branch message says so.
 TRIVIAL_TOL = 1e-3
+
+
+#: Without ``error_tol``, rows whose collocation error estimate exceeds this fraction of
+#: the cycle's range (largest ``max - min`` of a state) are named in the branch's
+#: message: a cycle drawn on too coarse a mesh (e.g. a relaxation oscillation whose
+#: fast jumps outgrow the mesh as a parameter grows) is not reported silently.
+ERROR_NOTE_REL = 1e-4
 
 
 def _as_orbit(system: Any, start: Any, params: Any, mesh: CollocationMesh | None,
@@ -283,6 +290,8 @@ def continue_periodic(
     ):
         raise ValueError(f"`max_intervals` must be an integer >= 2, got {max_intervals!r}")
     orb = _as_orbit(system, orbit_start, params, mesh, winding)
+    if error_tol is not None:
+        orb = _refine_start(orb, free, error_tol, max_intervals)
     settings = settings if settings is not None else ContinuationSettings()
     settings = dataclasses.replace(
         settings, detect=dataclasses.replace(settings.detect, hopf=False)
@@ -525,6 +534,26 @@ def _refined_intervals(
     return n_new
 
 
+def _refine_start(
+    orb: PeriodicOrbit, free: str, error_tol: float, max_intervals: int, rounds: int = 4
+) -> PeriodicOrbit:
+    """The start cycle on a mesh whose error estimate is within ``error_tol`` (at most
+    ``max_intervals`` intervals, ``rounds`` refinements by :func:`_refined_intervals`),
+    so that the first segment's rows are not left above the tolerance; a refinement
+    that does not converge keeps the cycle as it was (the driver's start correction
+    and the message report what follows)."""
+    for _ in range(rounds):
+        n_new = _refined_intervals(orb, error_estimate(orb.mesh, orb.X), error_tol, max_intervals)
+        if n_new is None:
+            break
+        try:
+            orb = adapt_mesh(orb, n_new, rounds=1, free=free)
+        except ConvergenceError as exc:
+            log.info("start cycle kept on %d intervals: %s", orb.mesh.n_intervals, exc)
+            break
+    return orb
+
+
 def _merge_segments(segs: list[Branch]) -> Branch:
     """One branch from consecutive segments (the first row of each later segment, the
     previous segment's last cycle on the new mesh, is dropped)."""
@@ -627,6 +656,19 @@ def _finish(
             )
             log.warning(note.strip())
             message = message + note
+    if len(br) and error_tol is None and "error" in br.records:
+        rel = br.records["error"] / _state_ranges(br)
+        over = np.flatnonzero(rel > ERROR_NOTE_REL)
+        if over.size:
+            k = int(over[np.argmax(rel[over])])
+            note = (
+                f" Collocation error estimate above {ERROR_NOTE_REL:g} of the cycle's range "
+                f"at {over.size} of {len(br)} rows (from {free}={br.p[over[0]]:.8g}; up to "
+                f"{float(br.records['error'][k]):.3g}, {float(rel[k]):.2g} of the range, at "
+                f"{free}={br.p[k]:.8g}): pass error_tol to refine the mesh."
+            )
+            log.warning(note.strip())
+            message = message + note
     if len(br) and error_tol is not None and "error" in br.records:
         over = np.flatnonzero(br.records["error"] > error_tol)
         if over.size:
@@ -639,6 +681,18 @@ def _finish(
             log.warning(note.strip())
             message = message + note
     return dataclasses.replace(br, special_points=specials, status=status, message=message)
+
+
+def _state_ranges(br: Branch) -> FloatArray:
+    """Largest ``max - min`` of a state over the cycle at each row, shape ``(len(br),)``
+    (1 where no state moves, so that the ratio stays the absolute estimate)."""
+    rec = br.records
+    spans = [rec[k] - rec["min_" + k[4:]] for k in rec
+             if k.startswith("max_") and "min_" + k[4:] in rec]  # fmt: skip
+    if not spans:
+        return np.ones(len(br))
+    r = np.max(np.vstack(spans), axis=0)
+    return np.where(r > 0.0, r, 1.0)
 
 
 def _row(branch: Branch, k: int) -> FloatArray:
