@@ -248,9 +248,12 @@ def continue_periodic(
         Where a segment ends above it, the next mesh gets more intervals,
         :math:`N' = \lceil 1.2 N (e/\text{tol})^{1/(m+1)} \rceil` (at most
         ``max_intervals``); rows left above it are named in the branch's message.
-        Implies ``adapt_every = 10`` when ``adapt_every`` is 0. Without it the number
+        Implies ``adapt_every = 10`` when ``adapt_every`` is 0; the start cycle is
+        refined first where its estimate exceeds the tolerance. Without it the number
         of intervals never changes, and the error of a cycle whose period grows (near
-        a homoclinic orbit) grows with it: watch ``records["error"]``.
+        a homoclinic orbit) or whose jumps sharpen grows with it: rows whose estimate
+        exceeds :data:`ERROR_NOTE_REL` of the cycle's range are named in the branch's
+        message (``records["error"]`` holds every row's estimate).
     max_intervals : int
         Cap on the number of intervals for ``error_tol``.
 
