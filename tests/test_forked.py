@@ -5,6 +5,7 @@ References: the tasks run one after another in this process (``children=0``).
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 import threading
@@ -126,16 +127,19 @@ def test_keyboard_interrupt_in_the_parent_leaves_no_children():
     _no_zombies(pids)
 
 
-def test_no_fork_with_other_threads():
+def test_no_fork_with_other_threads(caplog):
     stop = threading.Event()
-    t = threading.Thread(target=stop.wait, daemon=True)
+    t = threading.Thread(target=stop.wait, daemon=True, name="a-stray-thread")
     t.start()
     try:
         assert not can_fork()
-        with ForkedTasks(_square, range(5), children=2) as run:
-            assert run.n_children == 0
-            out = run.results()
+        with caplog.at_level(logging.INFO, logger="continuation.sweep.forked"):
+            with ForkedTasks(_square, range(5), children=2) as run:
+                assert run.n_children == 0
+                out = run.results()
         assert {v[1] for v in out.values()} == {PARENT}
+        # the fallback is logged with the thread that caused it
+        assert any("a-stray-thread" in r.getMessage() for r in caplog.records)
     finally:
         stop.set()
         t.join()

@@ -28,6 +28,7 @@ then takes the tasks still queued itself (:meth:`ForkedTasks.run_rest`) and coll
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import pickle
 import shutil
@@ -51,6 +52,8 @@ MAX_TASKS = 8192
 _INDEX = struct.Struct("<I")
 _LENGTH = struct.Struct("<Q")
 _IN_CHILD = False
+
+log = logging.getLogger(__name__)
 
 
 def can_fork() -> bool:
@@ -101,6 +104,11 @@ class ForkedTasks(Generic[T, R]):
         n = len(self._tasks)
         children = min(children, n)
         if children == 0 or n > MAX_TASKS or not can_fork():
+            if children and n > 1:
+                others = [t.name for t in threading.enumerate() if t is not threading.main_thread()]
+                log.info("%d tasks run in this process, not on %d forked children (%s)", n,
+                         children, f"other threads alive: {others}" if others
+                         else "forking is not possible here")  # fmt: skip
             self._queue.extend(range(n))
             return
         read, write = os.pipe()
