@@ -276,7 +276,8 @@ def test_the_manifold_stopped_at_the_window_end_gives_the_cut_of_the_full_run(na
         x_p = x_m.copy()
     lam_u = float(np.max(np.linalg.eigvals(s.jacobian(x_m, p)).real))
     t_max = 200.0 + 40.0 / lam_u
-    t, x = _manifold_to_return(s, p, x_m, x_p, case.branch, 1e-4, t_max)
+    t, x, complete = _manifold_to_return(s, p, x_m, x_p, case.branch, 1e-4, t_max)
+    assert complete
     k, d = cut_at_closest_approach(t, x, x_m, x_p)
     wu = unstable_manifold(s, p, x_m, eps=1e-4, t_max=t_max, dt=t_max / 1000.0,
                            branches=(case.branch,), refine=False)  # fmt: skip
@@ -308,3 +309,65 @@ def test_expanded_functions_equal_the_mx_graph(monkeypatch):
         b = b.toarray() if hasattr(b, "toarray") else b
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(sx.residual(args), mx.residual(args), rtol=1e-12, atol=1e-12)
+
+
+def _nagumo_with_a_fast_direction():
+    """The Nagumo front (u, v) with a slaved direction y' = -k (y - u^2): the front's
+    speed is the closed form c = sqrt(2) (1/2 - a) whatever k, and k sets the
+    stiffness of the flow (eigenvalue -k at both saddles)."""
+    from continuation import System
+
+    def rhs(x, p, ops):
+        a, c, k = p[0], p[1], p[2]
+        return ops.stack(
+            [x[1], -c * x[1] - x[0] * (1 - x[0]) * (x[0] - a), -k * (x[2] - x[0] ** 2)]
+        )
+
+    return System(rhs, ("u", "v", "y"), ("a", "c", "k"))
+
+
+@pytest.mark.parametrize(("k", "integrator"), [(2.0, "cvodes_adams"), (1e5, None)])
+def test_the_manifold_integrator_follows_the_stiffness(k, integrator):
+    """find_connection integrates W^u by CVODES's Adams method where the saddles'
+    spectra are non-stiff and by BDF where they are stiff; both give the closed form
+    within the result's own estimate."""
+    import math
+
+    from continuation.bvp import find as F
+
+    s = _nagumo_with_a_fast_direction()
+    a = 0.3
+    p = s.params(a=a, c=0.2, k=k)
+    pv = np.array(p.values, dtype=float)
+    src, dst = np.array([1.0, 0.0, 1.0]), np.zeros(3)
+    assert F._manifold_method(s, np.asarray(s.jacobian(src, pv)),
+                              np.asarray(s.jacobian(dst, pv))) == integrator  # fmt: skip
+    res = find_connection(s, p, "c", source=src, target=dst, branch=-1)
+    assert res.status == Status.SUCCESS, res.message
+    exact = math.sqrt(2.0) * (0.5 - a)
+    assert abs(res.value("c") - exact) <= res.error("c") + 1e-12, (
+        res.value("c") - exact,
+        res.errors,
+    )
+
+
+def test_an_adams_run_that_fails_early_is_redone_with_bdf(monkeypatch):
+    """Where the Adams integration of the manifold stops before the return (here made
+    to), the manifold is integrated again by BDF, and the connection is found."""
+    from continuation.bvp import find as F
+
+    real = F._manifold_to_return
+    used: list[str | None] = []
+
+    def flaky(*args, **kw):
+        t, x, complete = real(*args, **kw)
+        ode = args[7] if len(args) > 7 else kw.get("method")
+        used.append(ode)
+        return (t[:3], x[:3], False) if ode is not None else (t, x, complete)
+
+    monkeypatch.setattr(F, "_manifold_to_return", flaky)
+    case = CASES["san"]
+    res = _find(case)
+    assert used == ["cvodes_adams", None]
+    assert res.status == Status.SUCCESS, res.message
+    assert abs(res.value(case.free) - case.reference) <= res.error(case.free) + 1e-12
