@@ -163,13 +163,14 @@ _MANIFOLD_TOL = (1e-10, 1e-12)
 _ADAMS_MAX_STIFFNESS = 1e3
 
 
-def _manifold_method(system: Any, A_m: FloatArray, A_p: FloatArray) -> str | None:
-    """``"cvodes_adams"`` where both saddles' spectra are non-stiff (ratio at most
-    :data:`_ADAMS_MAX_STIFFNESS`), else None (the simulator's default: BDF, or SciPy's
-    DOP853 without a CasADi trace)."""
+def _manifold_method(system: Any, lam_m: Any, lam_p: Any) -> str | None:
+    """``"cvodes_adams"`` where both saddles' spectra ``lam_m``, ``lam_p`` (eigenvalues
+    of the Jacobians there) are non-stiff (ratio at most :data:`_ADAMS_MAX_STIFFNESS`),
+    else None (the simulator's default: BDF, or SciPy's DOP853 without a CasADi
+    trace)."""
     if not getattr(system, "has_casadi", False):
         return None
-    lam = np.concatenate((np.linalg.eigvals(A_m), np.linalg.eigvals(A_p)))
+    lam = np.concatenate((np.asarray(lam_m), np.asarray(lam_p)))
     re = np.abs(lam.real)
     if not np.all(np.isfinite(lam)) or not np.any(re > 0):
         return None
@@ -347,10 +348,10 @@ def find_connection(
     if t_max is None:
         t_max = 200.0 + 40.0 / lam_u
     A_p = np.asarray(system.jacobian(x_p, pvec), dtype=float)
-    ode = _manifold_method(system, np.asarray(system.jacobian(x_m, pvec), dtype=float), A_p)
+    integrator = _manifold_method(system, lam_m, np.linalg.eigvals(A_p))
     t, x, complete = _manifold_to_return(system, pvec, x_m, x_p, branch, end_distance, t_max,
-                                         ode)  # fmt: skip
-    if not complete and ode is not None:  # Adams failed before the return: BDF
+                                         integrator)  # fmt: skip
+    if not complete and integrator is not None:  # Adams failed before the return: BDF
         log.info("the Adams integration of the manifold failed early; again with BDF")
         t, x, _ = _manifold_to_return(system, pvec, x_m, x_p, branch, end_distance, t_max)
     k, d_min = cut_at_closest_approach(t, x, x_m, x_p)

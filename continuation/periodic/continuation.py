@@ -690,11 +690,8 @@ def _state_ranges(br: Branch) -> FloatArray:
     """Largest ``max - min`` of a state over the cycle at each row, shape ``(len(br),)``
     (1 where no state moves, so that the ratio stays the absolute estimate)."""
     rec = br.records
-    spans = [rec[k] - rec["min_" + k[4:]] for k in rec
-             if k.startswith("max_") and "min_" + k[4:] in rec]  # fmt: skip
-    if not spans:
-        return np.ones(len(br))
-    r = np.max(np.vstack(spans), axis=0)
+    names = problem_at(br, 0).system.state_names
+    r = np.max(np.vstack([rec[f"max_{s}"] - rec[f"min_{s}"] for s in names]), axis=0)
     return np.where(r > 0.0, r, 1.0)
 
 
