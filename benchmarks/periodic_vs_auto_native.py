@@ -304,7 +304,7 @@ def bk_periodic(demo: Demo, eq: Any, ntst: int | None = None, adapt: int | None 
                                tol=float(demo.periodic["EPSS"]))  # fmt: skip
     st = ContinuationSettings(newton=NewtonSettings(tol=demo.tol), detect=detect,
                               **demo.bk_settings)  # fmt: skip
-    events = [Event(f"UZ{k + 1}", lambda z, p, c=c: p - c) for k, c in enumerate(demo.checks)]
+    events = [Event(f"UZ{k + 1}", param_value=c) for k, c in enumerate(demo.checks)]
     return continue_from_hopf(
         eq, "H1", st, mesh=CollocationMesh(ntst or demo.ntst, 4, 1.0), events=events,
         period_max=demo.period_max, adapt_every=demo.adapt_every if adapt is None else adapt,

@@ -262,7 +262,20 @@ class RunContext:
         self, a: Row, b: Row, sigma_b: float, w: FloatArray, e: Event, lo: Any, hi: Any
     ) -> LocateResult:
         """Locate the zero of event ``e`` in the sub-bracket ``(lo, hi)`` of the step
-        (ends ``(sigma, point, g)`` from :meth:`event_brackets`)."""
+        (ends ``(sigma, point, g)`` from :meth:`event_brackets`).
+
+        An event at a parameter value whose bracket is the whole step is solved
+        directly at that value (:meth:`bound_direct`) where ``p`` is monotone along the
+        step; otherwise, and if that solve fails, its zero is located as any other."""
+        if (
+            e.param_value is not None
+            and self.settings.detect.locate
+            and lo[0] == 0.0
+            and hi[0] == sigma_b
+        ):
+            r = self.bound_direct(a, b, sigma_b, e.param_value, w)
+            if r is not None:
+                return r
         return self.locate(
             a,
             b,

@@ -88,6 +88,13 @@ class Event:
         (:func:`~continuation.locate.locate_zero`). A sign change across a jump of
         ``fn`` is then reported as bracketed, not located. ``None`` (default): only the
         loose rule ``|fn| <= 1e-3 max(|fn_a|, |fn_b|)``.
+    param_value : float, optional
+        A point at this value of the continuation parameter (AUTO-07p's ``UZR``): give
+        it instead of ``fn``, which is then ``p - param_value``. Its slope along the
+        branch is the tangent's ``dp/ds`` (no extra evaluation), and a crossing inside
+        a step along which ``p`` is monotone is found by one Newton solve at fixed
+        ``p = param_value`` (as a parameter bound), exactly on the value, instead of
+        the secant search of a general event.
 
     Notes
     -----
@@ -102,16 +109,32 @@ class Event:
     """
 
     name: str
-    fn: Callable[[FloatArray, float], float]
+    fn: Callable[[FloatArray, float], float] | None = None
     direction: Direction = "both"
     terminal: bool = False
     continuity: float | None = None
+    param_value: float | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name):
             raise ValueError(f"`name` must be a non-empty string, got {self.name!r}")
+        if self.param_value is not None:
+            if self.fn is not None:
+                raise ValueError(f"event {self.name!r}: give `fn` or `param_value`, not both")
+            if isinstance(self.param_value, bool) or not (
+                isinstance(self.param_value, int | float | np.floating | np.integer)
+                and math.isfinite(float(self.param_value))
+            ):
+                raise ValueError(
+                    f"`param_value` of event {self.name!r} must be a finite number, "
+                    f"got {self.param_value!r}"
+                )
+            object.__setattr__(self, "param_value", float(self.param_value))
+            object.__setattr__(self, "fn", _ParamOffset(float(self.param_value)))
         if not callable(self.fn):
-            raise ValueError(f"`fn` of event {self.name!r} must be callable")
+            raise ValueError(
+                f"`fn` of event {self.name!r} must be callable (or give `param_value`)"
+            )
         if self.direction not in ("both", "up", "down"):
             raise ValueError(
                 f"`direction` of event {self.name!r} must be 'both', 'up' or 'down', "
@@ -127,7 +150,17 @@ class Event:
 
     def value(self, x: FloatArray, p: float) -> float:
         """``fn(x, p)`` as a float."""
-        return float(self.fn(x, p))
+        return float(self.fn(x, p))  # type: ignore[misc]
+
+
+@dataclass(frozen=True)
+class _ParamOffset:
+    """``fn(x, p) = p - value``: the test function of an event at a parameter value."""
+
+    value: float
+
+    def __call__(self, x: FloatArray, p: float) -> float:
+        return float(p) - self.value
 
 
 def crossed(g_a: float, g_b: float, direction: Direction = "both") -> bool:
@@ -174,6 +207,8 @@ def event_slope(event: Event, z: FloatArray, p: float, tau: FloatArray, g: float
     """
     if not math.isfinite(g):
         return math.nan
+    if event.param_value is not None:
+        return float(tau[-1])  # g = p - value: dg/ds = dp/ds exactly
     h = SLOPE_STEP * (1.0 + max(abs(p), _inf_norm(z)))
     try:
         g_h = event.value(z + h * tau[:-1], p + h * float(tau[-1]))

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import inspect
 import logging
+import threading
 import warnings
+import weakref
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol, runtime_checkable
 
@@ -104,6 +106,25 @@ class _BufferedFunction:
             a[:] = v
         self._eval()
         return tuple(r.copy() for r in self._res)
+
+
+def _exact_args(fn: ca.Function, args: tuple[Any, ...]) -> list[FloatArray] | None:
+    """The arguments as flat float arrays of the function's input sizes, or None."""
+    out = []
+    for i, v in enumerate(args):
+        a = np.asarray(v, dtype=float).reshape(-1)
+        if a.size != fn.nnz_in(i):
+            return None
+        out.append(a)
+    return out
+
+
+#: Buffered point evaluators of ``f``, ``df/dx``, ``df/dp`` per system and per thread
+#: (a buffer is bound memory: one per thread), kept outside the instance so that the
+#: system's own state is unchanged.
+_POINT_FNS: weakref.WeakKeyDictionary[Any, dict[int, dict[str, _BufferedFunction]]] = (
+    weakref.WeakKeyDictionary()
+)
 
 
 class BorderedEvaluator:
@@ -554,9 +575,33 @@ class System:
             raise ValueError(f"system {self.name!r} has no CasADi trace")
         return self._ca
 
+    def _point(self, name: str, x: Any, p: Any) -> tuple[FloatArray, ...] | None:
+        """``name`` in ``{"f", "jac", "dfdp"}`` at one point through a buffered evaluator
+        of this thread (dense outputs, column-major), or None when ``x`` or ``p`` do not
+        have the function's sizes (the caller then lets CasADi report the error)."""
+        assert self._ca is not None
+        per = _POINT_FNS.get(self)
+        if per is None:
+            per = _POINT_FNS.setdefault(self, {})
+        tid = threading.get_ident()
+        fns = per.get(tid)
+        if fns is None:
+            X = ca.SX.sym("x", self.n_states)
+            P = ca.SX.sym("p", max(self.n_params, 0))
+            fns = per[tid] = {
+                k: _BufferedFunction(ca.Function(f"{k}_dense", [X, P], [ca.densify(fn(X, P))]))
+                for k, fn in self._ca.items()
+            }
+        fn = fns[name]
+        args = _exact_args(self._ca[name], (x, p))
+        return None if args is None else fn(*args)
+
     def f(self, x: FloatArray, p: FloatArray) -> FloatArray:
         """Evaluate ``f(x, p)``; returns shape ``(n,)``."""
         if self._ca is not None:
+            ev = self._point("f", x, p)
+            if ev is not None:
+                return ev[0]
             return np.asarray(self._ca["f"](x, p)).reshape(-1)
         out = np.asarray(self.rhs(np.asarray(x, float), np.asarray(p, float)), dtype=float)
         return out.reshape(-1)
@@ -564,6 +609,10 @@ class System:
     def jacobian(self, x: FloatArray, p: FloatArray) -> FloatArray:
         """State Jacobian ``df/dx`` at ``(x, p)``, dense, shape ``(n, n)``."""
         if self._ca is not None:
+            ev = self._point("jac", x, p)
+            if ev is not None:
+                n = self.n_states
+                return ev[0].reshape(n, n, order="F")
             return np.asarray(self._ca["jac"](x, p))
         return fd_jacobian(lambda y: self.f(y, p), np.asarray(x, float))
 
@@ -576,6 +625,9 @@ class System:
     def dfdp(self, x: FloatArray, p: FloatArray) -> FloatArray:
         """Parameter Jacobian ``df/dp`` at ``(x, p)``, shape ``(n, m)``."""
         if self._ca is not None:
+            ev = self._point("dfdp", x, p)
+            if ev is not None:
+                return ev[0].reshape(self.n_states, self.n_params, order="F")
             return np.asarray(self._ca["dfdp"](x, p)).reshape(self.n_states, self.n_params)
         return fd_jacobian(lambda q: self.f(np.asarray(x, float), q), np.asarray(p, float))
 

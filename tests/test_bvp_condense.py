@@ -83,3 +83,33 @@ def test_singular_block_falls_back():
     assert cond.factor(A) is None
     x = spla.splu(A).solve(np.ones(3))
     assert np.allclose(A @ x, 1.0)
+
+
+@pytest.mark.parametrize("sparse_min", [0, 10**9], ids=["sparse Schur", "dense Schur"])
+def test_both_factorisations_of_the_schur_complement_match_superlu(
+    linearised, sparse_min, monkeypatch
+):
+    # the Schur complement is factorised by SuperLU (band, natural order) from
+    # SPARSE_SCHUR_MIN unknowns on, else by LAPACK: each against SuperLU of the whole matrix
+    import continuation.bvp.condense as cd
+
+    J, gp = linearised
+    monkeypatch.setattr(cd, "SPARSE_SCHUR_MIN", sparse_min)
+    owner = J.condensed_lu.__self__
+    fresh = StageCondenser(owner.rows_s, owner.cols_s)  # no cached structure
+    rng = np.random.default_rng(7)
+    c = rng.standard_normal(J.shape[0] + 1)
+    M = assemble_bordered_csc(J, gp, c)
+    fac = fresh.factor(M)
+    assert isinstance(fac, CondensedLU)
+    assert (fac._piv is None) == (sparse_min == 0)  # the path asked for was taken
+    ref = spla.splu(M)
+    B = rng.standard_normal((M.shape[0], 2))
+    for t in ("N", "T"):
+        X, X_ref = fac.solve(B, trans=t), ref.solve(B, trans=t)
+        assert np.max(np.abs(X - X_ref)) <= 1e-10 * np.max(np.abs(X_ref))
+    d, parity = fac.diag_parity()
+    sign = -parity if np.count_nonzero(d < 0) % 2 else parity
+    ref_sign, ref_log = _det_sign_log(ref)
+    assert sign == ref_sign
+    assert float(np.log(np.abs(d)).sum()) == pytest.approx(ref_log, rel=1e-12)

@@ -321,3 +321,40 @@ def test_pitchfork_met_along_its_nontrivial_branch_fold_is_the_branch_point(ds):
         assert abs(q.p) < 1e-12
         assert abs(float(q.x[0])) < 1e-6  # x = sqrt(mu): mu to 1e-14 gives x to 1e-7
     assert bp.data["rcond_ratio"] <= 0.1
+
+
+def test_an_event_at_a_parameter_value_is_solved_exactly_on_it():
+    # x' = mu - x^2 from x = 1: down the upper branch x = sqrt(mu), round the fold at
+    # mu = 0, up the lower one x = -sqrt(mu). mu = 0.25 is met twice, at x = +-0.5; mu =
+    # 3e-5 twice at x = -+sqrt(3e-5), within the step across the fold at these settings
+    # (rows at mu = 4.1e-3 and 5.0e-5: no sign change, found by the dip test on the end
+    # slopes dmu/ds, then located by the general search).
+    evs = [Event("quarter", param_value=0.25), Event("near_fold", param_value=3e-5),
+           Event("quarter_up", param_value=0.25, direction="up")]  # fmt: skip
+    br = continue_equilibria(
+        fold_normal_form(), [1.0], {"mu": 1.0}, "mu", p_min=-1.0, p_max=2.0, events=evs,
+        direction="forward", ds=-0.05, ds_max=0.05,
+    )  # fmt: skip
+    q = sorted(br.find("quarter"), key=lambda sp: sp.x[0])
+    assert [sp.located for sp in q] == [True, True]
+    assert [sp.p for sp in q] == [0.25, 0.25]  # on the value itself, not within a tolerance
+    np.testing.assert_allclose([sp.x[0] for sp in q], [-0.5, 0.5], atol=1e-10)
+    (up,) = br.find("quarter_up")  # mu increases on the lower branch only
+    assert up.x[0] == pytest.approx(-0.5, abs=1e-10)
+    nf = sorted(br.find("near_fold"), key=lambda sp: sp.x[0])
+    assert len(nf) == 2 and all(sp.located for sp in nf)
+    np.testing.assert_allclose([sp.p for sp in nf], [3e-5, 3e-5], atol=TOL)
+    r = math.sqrt(3e-5)
+    np.testing.assert_allclose([sp.x[0] for sp in nf], [-r, r], rtol=1e-3)
+    assert_invariants(br)
+
+
+def test_an_event_at_a_parameter_value_refuses_bad_input():
+    with pytest.raises(ValueError, match="`fn` or `param_value`, not both"):
+        Event("a", lambda x, p: p, param_value=1.0)
+    with pytest.raises(ValueError, match="`param_value` of event 'a' must be a finite"):
+        Event("a", param_value=math.inf)
+    with pytest.raises(ValueError, match="`fn` of event 'a' must be callable"):
+        Event("a")
+    e = Event("a", param_value=2)
+    assert e.value(np.zeros(1), 3.5) == 1.5 and e.param_value == 2.0

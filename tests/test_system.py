@@ -136,3 +136,42 @@ def test_fast_evaluators_absent_without_casadi():
     sparse = EquilibriumProblem(bratu(120), bratu(120).params(lam=1.0), "lam")
     assert sparse.bordered_evaluator() is None  # sparse problems: linearizer + SuperLU
     assert sparse.linearizer()(np.zeros(120), 1.0)[1].format == "csc"
+
+
+def test_point_evaluations_agree_with_the_closed_form_in_concurrent_threads():
+    # f, df/dx, df/dp at one point go through per-thread buffered evaluators: each
+    # thread must get its own point's values (closed form), whatever the others do
+    import threading
+
+    def rhs(x, p, ops):
+        return [p[0] * x[0] - x[0] ** 3 + x[1], ops.sin(x[0]) - p[1] * x[1]]
+
+    s = System(rhs, ["x", "y"], ["a", "b"])
+    errors: list[str] = []
+
+    def work(seed: int) -> None:
+        rng = np.random.default_rng(seed)
+        for _ in range(300):
+            x, p = rng.standard_normal(2), rng.standard_normal(2)
+            f = [p[0] * x[0] - x[0] ** 3 + x[1], np.sin(x[0]) - p[1] * x[1]]
+            J = [[p[0] - 3 * x[0] ** 2, 1.0], [np.cos(x[0]), -p[1]]]
+            Jp = [[x[0], 0.0], [0.0, -x[1]]]
+            for got, want in ((s.f(x, p), f), (s.jacobian(x, p), J), (s.dfdp(x, p), Jp)):
+                if not np.allclose(got, want, rtol=1e-14, atol=1e-14):
+                    errors.append(f"thread {seed}: {got} != {want}")
+
+    import sys
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)  # switch threads as often as possible
+    try:
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        sys.setswitchinterval(old)
+    assert not errors, errors[:3]
+    with pytest.raises(RuntimeError):  # a wrong size is still CasADi's error
+        s.f(np.zeros(3), np.zeros(2))

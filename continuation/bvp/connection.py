@@ -55,6 +55,7 @@ Alternatively :class:`PinPhase` fixes one state at one mesh node.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import logging
 from collections.abc import Mapping, Sequence
@@ -620,11 +621,11 @@ class HeteroclinicProblem:
         prob = self
         if self.layout.pin is None:
             if self.reference is None:
-                prob = self.replace(reference=X0)
+                prob = _with_phase_data(self, reference=X0)
         elif self.phase.value is None:  # type: ignore[union-attr]
             i_state, i_node = self.layout.pin
             value = float(X0[i_node * (mesh.degree + 1), i_state])
-            prob = self.replace(phase=dataclasses.replace(self.phase, value=value))  # type: ignore[type-var]
+            prob = _with_phase_data(self, phase=dataclasses.replace(self.phase, value=value))  # type: ignore[type-var]
         z0 = prob.pack(X0, x_from=x_from, x_to=x_to, unknown_values=unknown_values)
         return prob, z0
 
@@ -720,6 +721,37 @@ def _csc_column(A: sp.csc_matrix, j: int) -> FloatArray:
     a, b = A.indptr[j], A.indptr[j + 1]
     out[A.indices[a:b]] = A.data[a:b]
     return out
+
+
+def _with_phase_data(prob: HeteroclinicProblem, **changes: Any) -> HeteroclinicProblem:
+    """A copy with a new ``reference`` or pinned ``phase`` value only, not re-validated.
+
+    Neither enters the checks of ``__post_init__`` (saddles, spectra, counts, layout),
+    which are not repeated; the reference's shape is checked, as there. The compiled
+    functions are shared (same layout).
+    """
+    if not set(changes) <= {"reference", "phase"}:
+        raise ValueError(f"only `reference` and `phase` may change here, got {sorted(changes)}")
+    new = copy.copy(prob)
+    if "phase" in changes:
+        phase = changes["phase"]
+        if not (isinstance(phase, PinPhase) and isinstance(prob.phase, PinPhase)
+                and phase.state == prob.phase.state and phase.at == prob.phase.at):  # fmt: skip
+            return prob.replace(**changes)  # a new pin moves the pinned node: re-validate
+        object.__setattr__(new, "phase", phase)
+    if "reference" in changes:
+        ref = changes["reference"]
+        if ref is not None:
+            ref = np.array(ref, dtype=float)
+            if ref.shape != (prob.mesh.n_points, prob.n_states):
+                raise ValueError(
+                    f"`reference` must have shape ({prob.mesh.n_points}, {prob.n_states}), "
+                    f"got {ref.shape}"
+                )
+            ref.setflags(write=False)
+        object.__setattr__(new, "reference", ref)
+    object.__setattr__(new, "_fns", prob._fns if prob._fns else [])
+    return new
 
 
 def _replace_fast(prob: HeteroclinicProblem, **changes: Any) -> HeteroclinicProblem:
