@@ -88,6 +88,12 @@ class Event:
         (:func:`~continuation.locate.locate_zero`). A sign change across a jump of
         ``fn`` is then reported as bracketed, not located. ``None`` (default): only the
         loose rule ``|fn| <= 1e-3 max(|fn_a|, |fn_b|)``.
+    slope : bool
+        Evaluate ``dg/ds`` at every row for the detection of zeros between rows of the
+        same sign (default). ``False``: the sign test at the rows only, as for the
+        built-in tests (fold, branch point, Hopf), which saves one evaluation of
+        ``fn`` off the branch per row: for test functions as costly as a point
+        (e.g. the Floquet tests of cycles).
     param_value : float, optional
         A point at this value of the continuation parameter (AUTO-07p's ``UZR``): give
         it instead of ``fn``, which is then ``p - param_value``. Its slope along the
@@ -114,6 +120,7 @@ class Event:
     terminal: bool = False
     continuity: float | None = None
     param_value: float | None = None
+    slope: bool = True
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name):
@@ -209,6 +216,8 @@ def event_slope(event: Event, z: FloatArray, p: float, tau: FloatArray, g: float
         return math.nan
     if event.param_value is not None:
         return float(tau[-1])  # g = p - value: dg/ds = dp/ds exactly
+    if not event.slope:
+        return math.nan  # (no dip test: the sign test at the rows only)
     h = SLOPE_STEP * (1.0 + max(abs(p), _inf_norm(z)))
     try:
         g_h = event.value(z + h * tau[:-1], p + h * float(tau[-1]))

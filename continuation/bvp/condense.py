@@ -108,6 +108,12 @@ class _Structure:
         self.wc, self.wr = wc, wr
         self.sr = (k_sr, br[k_sr] * b * wc + loc_r[r[k_sr]] * wc + sr_pos)
         self.rs = (k_rs, bc[k_rs] * wr * b + rs_pos * b + loc_c[c[k_rs]])
+        # one gather of the block entries: A_ss, A_sr and A_rs side by side in a buffer
+        n_ss, n_sr = N * b * b, N * b * wc
+        self.gather_src = np.concatenate((self.ss[0], self.sr[0], self.rs[0]))
+        self.gather_dst = np.concatenate((self.ss[1], n_ss + self.sr[1], n_ss + n_sr + self.rs[1]))
+        self.gather_len = n_ss + n_sr + N * wr * b
+        self.gather_cut = (n_ss, n_ss + n_sr)
         # flat positions of the Schur updates in the padded (nr + 1)^2 matrix
         self.upd = (self.rs_rows[:, :, None] * (nr + 1) + self.sr_cols[:, None, :]).ravel()
         # the sparsity pattern of S (CSC): the A_rr entries and the block updates, and
@@ -293,9 +299,12 @@ class StageCondenser:
         if nr > MAX_SCHUR:
             return None
         data = M.data
-        A = np.zeros(N * b * b)
-        A[st.ss[1]] = data[st.ss[0]]
-        A = A.reshape(N, b, b)
+        buf = np.zeros(st.gather_len)
+        buf[st.gather_dst] = data[st.gather_src]
+        c1, c2 = st.gather_cut
+        A = buf[:c1].reshape(N, b, b)
+        Asr = buf[c1:c2].reshape(N, b, st.wc)
+        Ars = buf[c2:].reshape(N, st.wr, b)
         try:
             Ainv = np.linalg.inv(A)
         except np.linalg.LinAlgError:
@@ -303,12 +312,6 @@ class StageCondenser:
         cond = np.abs(A).sum(axis=1).max(axis=1) * np.abs(Ainv).sum(axis=1).max(axis=1)
         if not np.all(cond <= MAX_BLOCK_COND):
             return None
-        Asr = np.zeros(N * b * st.wc)
-        Asr[st.sr[1]] = data[st.sr[0]]
-        Asr = Asr.reshape(N, b, st.wc)
-        Ars = np.zeros(N * st.wr * b)
-        Ars[st.rs[1]] = data[st.rs[0]]
-        Ars = Ars.reshape(N, st.wr, b)
         W = Ainv @ Asr  # (N, b, wc)
         if st.sparse_schur:
             vals = np.concatenate((data[st.rr[0]], -(Ars @ W).ravel()))

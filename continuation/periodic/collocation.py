@@ -356,9 +356,9 @@ class CollocationLayout:
         m1 = m + 1
         D, e, h = self.mesh.D, self.mesh.e, self.mesh.h
         Xb = X[: N * m1].reshape(N, m1, n)
-        coll = np.einsum("kl,jln->jkn", D, Xb) / h[:, None, None] - T * F.reshape(N, m, n)
+        coll = (D @ Xb) / h[:, None, None] - T * F.reshape(N, m, n)  # (N, m, n)
         Xnext = X[m1::m1]  # x_{j+1}, (N, n)
-        cont = np.einsum("l,jln->jn", e, Xb) - Xnext
+        cont = e @ Xb - Xnext  # (N, n)
         out = np.empty(n * self.M + 1)
         body = np.concatenate([coll, cont[:, None, :]], axis=1)  # (N, m+1, n)
         out[: N * m1 * n] = body.ravel()
@@ -395,7 +395,8 @@ def monodromy_factors(layout: CollocationLayout, B: FloatArray, stages: bool = F
     K = B[:, :, 1:].transpose(0, 1, 3, 2, 4).reshape(N, m * n, m * n)
     R = B[:, :, 0].reshape(N, m * n, n)
     S = -np.linalg.solve(K, R).reshape(N, m, n, n)  # stage responses
-    Phi = e[0] * np.eye(n)[None] + np.einsum("l,jlab->jab", e[1:], S)
+    Phi = (e[1:] @ S.reshape(N, m, n * n)).reshape(N, n, n)  # sum_l e_l S_l
+    Phi += e[0] * np.eye(n)
     return (Phi, S) if stages else Phi
 
 

@@ -13,7 +13,10 @@ cycles (see :mod:`continuation.periodic.floquet`):
   with a complex pair on the unit circle (named ``"NS"``; neutral saddles dropped).
 
 All carry the driver's ``located`` flag and ``bracket``. The driver's Hopf test is
-switched off on cycle branches (its eigenvalues are Floquet exponents).
+switched off on cycle branches (its eigenvalues are Floquet exponents). PD and NS, like
+the driver's built-in tests, are detected by a sign change between rows only (events
+with ``slope=False``: no evaluation of the multipliers off the branch); two such points
+inside one step cancel and are not seen.
 
 *Period without bound.* With ``period_max``, a terminal event stops the branch where
 ``T`` reaches it; the branch then ends with ``Status.PERIOD_UNBOUNDED`` and a message
@@ -393,10 +396,12 @@ def _continue_once(
     prob = PeriodicOrbitProblem.from_orbit(orb, free)
     T_col = prob.layout.T_col
     evs: list[Event] = []
+    # the Floquet tests cost a condensation each: the sign test at the rows only
+    # (no slopes off the branch), as the driver's built-in tests
     if detect_pd:
-        evs.append(Event("PD", prob.pd_test))
+        evs.append(Event("PD", prob.pd_test, slope=False))
     if detect_ns:
-        evs.append(Event("NS", prob.ns_test))
+        evs.append(Event("NS", prob.ns_test, slope=False))
     if period_max is not None:
         evs.append(Event("T_max", lambda z, p: period_max - z[T_col], terminal=True))
     evs.extend(events)

@@ -246,7 +246,7 @@ def floquet(
         return FloquetResult(np.zeros(0, dtype=complex), mu1, float(abs(mu1 - 1)))
     Qf = _frames(f[:N])
     Qn = np.concatenate([Qf[1:], Qf[:1]])  # Q_{j+1}, with Q_N = Q_0
-    A = np.einsum("jba,jbc,jcd->jad", Qn, factors, Qf)  # Q_{j+1}^T Phi_j Q_j
+    A = np.swapaxes(Qn, 1, 2) @ factors @ Qf  # Q_{j+1}^T Phi_j Q_j
     C = A[:, 1:, 1:]
     r = A[:, 0, 0]
     log_r = float(np.sum(np.log(np.maximum(np.abs(r), 5e-324))))
