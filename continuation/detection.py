@@ -67,6 +67,45 @@ def _plain_difference(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.asarray(a) - np.asarray(b)
 
 
+def _hermite_at_p(
+    ua: FloatArray, ub: FloatArray, ta: FloatArray, tb: FloatArray, h: float, p: float
+) -> FloatArray:
+    r"""The point at parameter ``p`` of the cubic Hermite interpolant of a step.
+
+    :math:`u(s) = h_{00} u_a + h_{10} h \tau_a + h_{01} u_b + h_{11} h \tau_b` (``h``
+    the chord's length, ``tau`` the unit tangents at the rows, the parameter last),
+    error :math:`O(h^4)` against the chord's :math:`O(h^2)`; ``s`` solves
+    :math:`p(s) = p` by Newton's method on the cubic from the chord's value. Where the
+    cubic is not monotone in ``p`` on ``[0, 1]`` or Newton leaves it, the chord's point.
+    """
+    pa, pb = float(ua[-1]), float(ub[-1])
+    s_lin = (p - pa) / (pb - pa)
+    chord_pt = ua + s_lin * (ub - ua)
+    ma, mb = h * float(ta[-1]), h * float(tb[-1])
+    # p(s) = c3 s^3 + c2 s^2 + c1 s + pa
+    c3 = 2 * pa + ma - 2 * pb + mb
+    c2 = -3 * pa - 2 * ma + 3 * pb - mb
+    c1 = ma
+    monotone_ends = ma * (pb - pa) > 0 and mb * (pb - pa) > 0
+    if not (monotone_ends and all(math.isfinite(c) for c in (c3, c2, c1))):
+        return chord_pt
+    sv = s_lin
+    for _ in range(8):
+        g = ((c3 * sv + c2) * sv + c1) * sv + pa - p
+        dg = (3 * c3 * sv + 2 * c2) * sv + c1
+        if not dg * (pb - pa) > 0:
+            return chord_pt
+        step = g / dg
+        sv -= step
+        if not 0.0 < sv < 1.0:
+            return chord_pt
+        if abs(step) <= 1e-14:
+            break
+    h00, h10 = 2 * sv**3 - 3 * sv**2 + 1, sv**3 - 2 * sv**2 + sv
+    h01, h11 = -2 * sv**3 + 3 * sv**2, sv**3 - sv**2
+    return h00 * ua + h10 * h * ta + h01 * ub + h11 * h * tb
+
+
 @dataclass(eq=False, slots=True)
 class Row:
     z: FloatArray
@@ -565,9 +604,8 @@ class RunContext:
         if pa.tau[-1] * pb.tau[-1] <= 0 or not (pa.p - bound) * (pb.p - bound) < 0:
             return None
         ua, ub = pa.u, pb.u
-        t = (bound - pa.p) / (pb.p - pa.p)
         chord = ub - ua
-        guess = ua + t * chord
+        guess = _hermite_at_p(ua, ub, pa.tau, pb.tau, theta_norm(chord, w), bound)
         guess[-1] = bound
         c = w * pa.tau
         solved = self.point_on_bound(guess, bound, c, w)

@@ -358,3 +358,52 @@ def test_an_event_at_a_parameter_value_refuses_bad_input():
         Event("a")
     e = Event("a", param_value=2)
     assert e.value(np.zeros(1), 3.5) == 1.5 and e.param_value == 2.0
+
+
+def test_an_event_without_slopes_is_evaluated_on_the_rows_only():
+    # the pair of zeros of mu - 3e-5 inside the step across the fold (see above) is
+    # found with slopes and, as documented, not without; fn is then called once per row
+    calls = {"with": 0, "without": 0}
+
+    def fn(key):
+        def g(x, p):
+            calls[key] += 1
+            return p - 3e-5
+
+        return g
+
+    kw = dict(p_min=-1.0, p_max=2.0, direction="forward", ds=-0.05, ds_max=0.05)
+    with_s = continue_equilibria(
+        fold_normal_form(), [1.0], {"mu": 1.0}, "mu", events=[Event("e", fn("with"))], **kw
+    )
+    without = continue_equilibria(
+        fold_normal_form(), [1.0], {"mu": 1.0}, "mu",
+        events=[Event("e", fn("without"), slope=False)], **kw,
+    )  # fmt: skip
+    assert len(with_s.find("e")) == 2
+    assert len(without.find("e")) == 0
+    assert len(without) == len(with_s)
+    # about one call per row (the row that meets the bound is evaluated twice), none off
+    # the branch; with slopes two per row and more inside the fold's step
+    assert len(without) <= calls["without"] <= len(without) + 2
+    assert calls["with"] >= 2 * len(with_s)
+
+
+def test_the_hermite_guess_at_a_parameter_value_is_fourth_order():
+    # on the unit circle (x, p) = (sin th, cos th) between th = 0.3 and 0.3 + h, the
+    # point at p = cos(0.3 + h/2): the chord's error is O(h^2), the cubic's O(h^4)
+    from continuation.detection import _hermite_at_p
+
+    def errors(h):
+        th0, th1, thm = 0.3, 0.3 + h, 0.3 + h / 2
+        ua, ub = (np.array([math.sin(t), math.cos(t)]) for t in (th0, th1))
+        ta, tb = (np.array([math.cos(t), -math.sin(t)]) for t in (th0, th1))
+        p = math.cos(thm)
+        g = _hermite_at_p(ua, ub, ta, tb, float(np.linalg.norm(ub - ua)), p)
+        s_lin = (p - ua[1]) / (ub[1] - ua[1])
+        chord = ua + s_lin * (ub - ua)
+        return abs(g[0] - math.sin(thm)), abs(chord[0] - math.sin(thm))
+
+    (e1, c1), (e2, c2) = errors(0.05), errors(0.025)
+    assert c1 / c2 == pytest.approx(4.0, rel=0.1)  # the chord: second order
+    assert e1 / e2 > 12.0 and e1 < 1e-3 * c1  # the cubic: fourth order (16), far smaller
