@@ -289,8 +289,8 @@ class CollocationMesh:
         """``dx/dtau`` of the piecewise polynomial at the collocation points, shape (N m, n)."""
         X = np.asarray(X, dtype=float)
         m1 = self.degree + 1
-        blocks = np.stack([X[j * m1 : j * m1 + m1] for j in range(self.n_intervals)])  # (N,m+1,n)
-        dX = np.einsum("kl,jln->jkn", self.D, blocks) / self.h[:, None, None]
+        blocks = X[: self.n_intervals * m1].reshape(self.n_intervals, m1, -1)  # (N, m+1, n)
+        dX = (self.D @ blocks) / self.h[:, None, None]
         return dX.reshape(-1, X.shape[1])
 
     def highest_derivative(self, X: FloatArray) -> FloatArray:
@@ -306,8 +306,8 @@ class CollocationMesh:
             ]
         ) * float(np.prod(np.arange(1, m + 1)))
         m1 = m + 1
-        blocks = np.stack([X[j * m1 : j * m1 + m1] for j in range(self.n_intervals)])
-        return np.einsum("l,jln->jn", lead, blocks) / self.h[:, None] ** m
+        blocks = X[: self.n_intervals * m1].reshape(self.n_intervals, m1, -1)  # (N, m+1, n)
+        return (lead @ blocks) / self.h[:, None] ** m
 
     def equidistributed(
         self,

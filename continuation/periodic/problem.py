@@ -76,7 +76,7 @@ class _ErrorWeights:
         if N < 3:
             return float("nan")
         Xb = np.asarray(X, dtype=float)[: N * m1].reshape(N, m1, -1)
-        dm = np.einsum("jl,jln->jn", self.w, Xb)
+        dm = (self.w[:, None, :] @ Xb)[:, 0]  # (N, n)
         dmp = np.vstack([dm[-1:], dm, dm[:1]])
         return float(np.max(self.scale * np.abs(dmp[2:] - dmp[:-2])))
 
@@ -302,9 +302,10 @@ class PeriodicOrbitProblem:
         X, T = lay.split(np.asarray(z, dtype=float))
         Xs = X[lay.stage_points]
         out: dict[str, float] = {"T": T}
+        hi, lo = X.max(axis=0).tolist(), X.min(axis=0).tolist()
         for i, name in enumerate(self.system.state_names):
-            out[f"max_{name}"] = float(np.max(X[:, i]))
-            out[f"min_{name}"] = float(np.min(X[:, i]))
+            out[f"max_{name}"] = hi[i]
+            out[f"min_{name}"] = lo[i]
         out["L2"] = float(np.sqrt(np.sum(lay.weights[:, None] * Xs**2)))
         fl = self.floquet(z, p)
         out["mu_max"] = float(np.max(np.abs(fl.multipliers))) if fl.multipliers.size else 0.0
