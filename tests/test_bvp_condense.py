@@ -113,3 +113,63 @@ def test_both_factorisations_of_the_schur_complement_match_superlu(
     ref_sign, ref_log = _det_sign_log(ref)
     assert sign == ref_sign
     assert float(np.log(np.abs(d)).sum()) == pytest.approx(ref_log, rel=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled blocks", "NumPy blocks"])
+def test_both_block_paths_match_superlu(linearised, compiled, monkeypatch):
+    # the stage blocks are factorised by the compiled kernel (block LU, Hager's condition
+    # estimate, determinants from the pivots) or by NumPy (inverses): both against
+    # SuperLU of the whole matrix, solves, transposed solves and the determinant
+    import continuation.bvp.condense as cd
+
+    J, gp = linearised
+    kern = cd._compiled()
+    assert kern is not None  # Numba is a dependency: the compiled path is the default
+    monkeypatch.setattr(cd, "_KERNEL", [kern if compiled else None])
+    owner = J.condensed_lu.__self__
+    fresh = StageCondenser(owner.rows_s, owner.cols_s)
+    rng = np.random.default_rng(11)
+    c = rng.standard_normal(J.shape[0] + 1)
+    M = assemble_bordered_csc(J, gp, c)
+    fac = fresh.factor(M)
+    assert isinstance(fac, CondensedLU) and (fac._Ainv is None) == compiled
+    ref = spla.splu(M)
+    B = rng.standard_normal((M.shape[0], 3))
+    for t in ("N", "T"):
+        X, X_ref = fac.solve(B, trans=t), ref.solve(B, trans=t)
+        assert np.max(np.abs(X - X_ref)) <= 1e-10 * np.max(np.abs(X_ref))
+    d, parity = fac.diag_parity()
+    sign = -parity if np.count_nonzero(d < 0) % 2 else parity
+    ref_sign, ref_log = _det_sign_log(ref)
+    assert sign == ref_sign
+    assert float(np.log(np.abs(d)).sum()) == pytest.approx(ref_log, rel=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled blocks", "NumPy blocks"])
+def test_an_ill_conditioned_block_falls_back(compiled, monkeypatch):
+    # two 3 x 3 stage blocks coupled through one rest unknown; block 1 has condition
+    # number about 1e13 > MAX_BLOCK_COND: no condensation (the caller's general LU)
+    import continuation.bvp.condense as cd
+
+    monkeypatch.setattr(cd, "_KERNEL", [cd._compiled() if compiled else None])
+    rng = np.random.default_rng(5)
+    Q1, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+    Q2, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+    D = np.zeros((7, 7))
+    D[0:3, 0:3] = np.eye(3) + 0.1 * rng.standard_normal((3, 3))
+    D[3:6, 3:6] = Q1 @ np.diag([1.0, 1.0, 1e-13]) @ Q2
+    D[0:6, 6] = 1.0
+    D[6, 0:6] = 1.0
+    D[6, 6] = 2.0
+    A = sp.csc_matrix(D)
+    A.sum_duplicates()
+    cond = StageCondenser(np.array([[0, 1, 2], [3, 4, 5]]), np.array([[0, 1, 2], [3, 4, 5]]))
+    assert cond.factor(A) is None
+    D[3:6, 3:6] = Q1 @ np.diag([1.0, 1.0, 1e-3]) @ Q2  # well conditioned: condensed
+    A = sp.csc_matrix(D)
+    A.sum_duplicates()
+    fac = StageCondenser(np.array([[0, 1, 2], [3, 4, 5]]), np.array([[0, 1, 2], [3, 4, 5]]))
+    lu = fac.factor(A)
+    assert lu is not None
+    b = rng.standard_normal(7)
+    assert np.allclose(D @ lu.solve(b), b, rtol=0, atol=1e-12)

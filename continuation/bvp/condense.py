@@ -22,14 +22,17 @@ the Schur complement :math:`S = A_{rr} - A_{rs} A_{ss}^{-1} A_{sr}` on the
     x_s = A_{ss}^{-1} (b_s - A_{sr} x_r), \qquad
     \det M = \pm \det A_{ss} \det S .
 
-The block inverses are computed in one batched LAPACK call, the Schur complement by
-batched products on the few rest columns (rows) each block touches. ``S`` couples each
+The stage blocks are factorised in one compiled call (:mod:`continuation.bvp._condense_jit`:
+block LU with partial pivoting, a condition estimate, the determinants from the pivots,
+and the products with the few rest columns (rows) each block touches); without Numba
+by batched NumPy calls on their explicit inverses. ``S`` couples each
 mesh point only with its neighbours and the few global unknowns, so it is sparse (2 %
 non-zeros for 3 states on 55 intervals); from ``SPARSE_SCHUR_MIN`` unknowns on, with at
 most ``SPARSE_SCHUR_DENSITY`` of its entries structurally non-zero, it is factorised
 by SuperLU in its natural (mesh) order with partial pivoting, as a band, instead of by
 the dense LU whose ``O(n_r^3)`` cost then dominates. Where a block is
-singular or badly conditioned (``cond_1 > 1e10``) the factorisation returns None and
+singular or badly conditioned (``cond_1 > 1e10``: Hager's estimate on the compiled
+path, the exact value from the inverse on NumPy's) the factorisation returns None and
 the caller uses a general sparse LU instead.
 """
 
@@ -59,6 +62,22 @@ MAX_SCHUR = 256
 #: against 264 us per factorisation, at 176 (3 states, 55 intervals) 300 against 250 us.
 SPARSE_SCHUR_MIN = 160
 SPARSE_SCHUR_DENSITY = 0.1
+
+
+_KERNEL: list[Any] = []  # [the compiled kernels' module or None], decided once
+
+
+def _compiled() -> Any:
+    """:mod:`continuation.bvp._condense_jit` when Numba is installed, else None (the
+    NumPy path); imported at the first factorisation only."""
+    if not _KERNEL:
+        try:
+            from . import _condense_jit
+
+            _KERNEL.append(_condense_jit)
+        except ImportError:  # pragma: no cover - Numba missing: NumPy
+            _KERNEL.append(None)
+    return _KERNEL[0]
 
 
 class _Structure:
@@ -177,13 +196,24 @@ class CondensedLU:
     """
 
     def __init__(
-        self, st: _Structure, Ainv: FloatArray, W: FloatArray, Ars: FloatArray,
+        self, st: _Structure, Ainv: FloatArray | None, W: FloatArray, Ars: FloatArray,
         lu: Any, piv: np.ndarray | None, blocks: FloatArray,
+        block_lu: tuple[Any, ...] | None = None,
     ) -> None:  # fmt: skip
-        # lu, piv: LAPACK getrf factors of S, or (piv None) SciPy's SuperLU of S
+        # lu, piv: LAPACK getrf factors of S, or (piv None) SciPy's SuperLU of S.
+        # The stage blocks: their inverses Ainv (NumPy path), or block_lu = (kernels,
+        # LU factors, pivots, log|det|, sign) of the compiled path (Ainv None)
         self._st, self._Ainv, self._W, self._Ars = st, Ainv, W, Ars
         self._lu, self._piv, self._blocks = lu, piv, blocks
+        self._block_lu = block_lu
         self.shape = (st.size, st.size)
+
+    def _blocks_solve(self, B: FloatArray, trans: bool) -> FloatArray:
+        """``A_j^{-1} B[j]`` (``A_j^{-T}`` with ``trans``) for ``B`` of shape (N, b, k)."""
+        if self._Ainv is not None:
+            return (np.swapaxes(self._Ainv, 1, 2) if trans else self._Ainv) @ B
+        kern, LU, bpiv = self._block_lu[:3]  # type: ignore[index]
+        return kern.solve_blocks(LU, bpiv, np.ascontiguousarray(B), trans)  # type: ignore[no-any-return]
 
     def _solve_schur(self, b: FloatArray, trans: int) -> FloatArray:
         """``S^{-1} b`` (``S^{-T} b`` for ``trans=1``), ``b`` of shape (n_r, k)."""
@@ -203,7 +233,7 @@ class CondensedLU:
         br = np.zeros((st.nr + 1, k))
         br[:-1] = B[st.rest_r if trans == "N" else st.rest_c]
         if trans == "N":
-            ys = self._Ainv @ bs
+            ys = self._blocks_solve(bs, False)
             np.subtract.at(br, st.rs_rows, self._Ars @ ys)
             xr = self._solve_schur(br[:-1], 0)
             xr_pad = np.vstack((xr, np.zeros((1, k))))
@@ -212,14 +242,12 @@ class CondensedLU:
             out[st.cols_s] = xs
             out[st.rest_c] = xr
         else:
-            ys = np.swapaxes(self._Ainv, 1, 2) @ bs
             # A_sr^T y_s = (A_ss W)^T y_s = W^T A_ss^T y_s = W^T bs (block by block)
             np.subtract.at(br, st.sr_cols, np.swapaxes(self._W, 1, 2) @ bs)
             xr = self._solve_schur(br[:-1], 1)
             xr_pad = np.vstack((xr, np.zeros((1, k))))
-            xs = ys - np.swapaxes(self._Ainv, 1, 2) @ (
-                np.swapaxes(self._Ars, 1, 2) @ xr_pad[st.rs_rows]
-            )
+            # x_s = A_ss^{-T} (b_s - A_rs^T x_r)
+            xs = self._blocks_solve(bs - np.swapaxes(self._Ars, 1, 2) @ xr_pad[st.rs_rows], True)
             out = np.empty_like(B)
             out[st.rows_s] = xs
             out[st.rest_r] = xr
@@ -233,7 +261,10 @@ class CondensedLU:
         block's sign folded into ``parity`` (the engine's convention for SuperLU).
         """
         st = self._st
-        sgn, logabs = np.linalg.slogdet(self._blocks)
+        if self._block_lu is not None:
+            logabs, sgn = self._block_lu[3], self._block_lu[4]
+        else:
+            sgn, logabs = np.linalg.slogdet(self._blocks)
         if self._piv is None:
             dS = self._lu.U.diagonal().copy()
             parity = st.perm_sign * _parity(self._lu.perm_r) * _parity(self._lu.perm_c)
@@ -307,6 +338,14 @@ class StageCondenser:
         A = buf[:c1].reshape(N, b, b)
         Asr = buf[c1:c2].reshape(N, b, st.wc)
         Ars = buf[c2:].reshape(N, st.wr, b)
+        kern = _compiled()
+        block_lu = None
+        if kern is not None:  # block LU, conditions, determinants, W and A_rs W: one call
+            bpiv, W, U, cond, logdet, bsign = kern.factor(A, Asr, Ars)  # (A: now its LU)
+            if not np.all(cond <= MAX_BLOCK_COND):
+                return None
+            block_lu = (kern, A, bpiv, logdet, bsign)
+            return self._finish(M, st, None, W, U, Ars, A, block_lu)
         try:
             Ainv = np.linalg.inv(A)
         except np.linalg.LinAlgError:
@@ -315,23 +354,31 @@ class StageCondenser:
         if not np.all(cond <= MAX_BLOCK_COND):
             return None
         W = Ainv @ Asr  # (N, b, wc)
+        return self._finish(M, st, Ainv, W, Ars @ W, Ars, A, None)
+
+    def _finish(
+        self, M: Any, st: _Structure, Ainv: FloatArray | None, W: FloatArray, U: FloatArray,
+        Ars: FloatArray, A: FloatArray, block_lu: tuple[Any, ...] | None,
+    ) -> CondensedLU:  # fmt: skip
+        """Form and factorise the Schur complement ``S = A_rr - sum_j U_j`` (scattered)."""
+        data, nr = M.data, st.nr
         if st.sparse_schur:
-            vals = np.concatenate((data[st.rr[0]], -(Ars @ W).ravel()))
+            vals = np.concatenate((data[st.rr[0]], -U.ravel()))
             s_data = np.bincount(st.s_slot, weights=vals, minlength=st.s_nnz + 1)[: st.s_nnz]
             S = sp.csc_matrix((s_data, st.s_indices, st.s_indptr), shape=(nr, nr))
             try:
                 slu = spla.splu(S, permc_spec="NATURAL")
             except RuntimeError as exc:
                 raise np.linalg.LinAlgError(f"singular condensed matrix ({exc})") from exc
-            return CondensedLU(st, Ainv, W, Ars, slu, None, A)
+            return CondensedLU(st, Ainv, W, Ars, slu, None, A, block_lu)
         # S = A_rr - A_rs W, the updates summed by bincount (no ufunc.at), padded
-        Sp = -np.bincount(st.upd, weights=(Ars @ W).ravel(), minlength=(nr + 1) * (nr + 1))
+        Sp = -np.bincount(st.upd, weights=U.ravel(), minlength=(nr + 1) * (nr + 1))
         Sp[st.rr_pad] += data[st.rr[0]]
         Sp = Sp.reshape(nr + 1, nr + 1)
         lu, piv, info = lapack.dgetrf(np.asfortranarray(Sp[:nr, :nr]), overwrite_a=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"singular condensed matrix (getrf info={info})")
-        return CondensedLU(st, Ainv, W, Ars, lu, piv, A)
+        return CondensedLU(st, Ainv, W, Ars, lu, piv, A, block_lu)
 
 
 __all__ = ["CondensedLU", "StageCondenser"]
