@@ -342,6 +342,13 @@ def jacobian_is_stability(problem: Any) -> bool:
     return bool(getattr(problem, "jacobian_is_stability", False))
 
 
+def exact_jacobian(problem: Any) -> bool:
+    """``problem.exact_jacobian`` (default False): ``G_z`` and ``G_p`` are exact
+    derivatives (automatic differentiation, not finite differences), so that Newton's
+    method converges quadratically next to a regular solution."""
+    return bool(getattr(problem, "exact_jacobian", False))
+
+
 def is_sparse(problem: Any) -> bool:
     """``problem.sparse`` (default False)."""
     return bool(getattr(problem, "sparse", False))

@@ -240,3 +240,57 @@ def test_bordered_rcond_against_exact_condition_number():
             assert exact <= est * (1 + 1e-9) and est <= 3 * exact
             pt_s = make_point(np.zeros(n), 0.0, (np.zeros(n), sp.csc_matrix(Gz), Gp), c, w)
             assert bordered_rcond(pt_s) == pytest.approx(est, rel=1e-6)
+
+
+class _CubicSparse:
+    """G_i(z, p) = z_i^3 + z_i - p (i < 6), sparse Jacobian, not a stability matrix;
+    counts its linearisations and residuals."""
+
+    n_unknowns = 6
+    jacobian_is_stability = False
+
+    def __init__(self) -> None:
+        self.calls = {"linearize": 0, "residual": 0}
+
+    def residual(self, z, p):
+        self.calls["residual"] += 1
+        return z**3 + z - p
+
+    def linearize(self, z, p):
+        self.calls["linearize"] += 1
+        return z**3 + z - p, sp.csc_matrix(sp.diags(3 * z**2 + 1)), -np.ones(z.size)
+
+
+@pytest.mark.parametrize("offset, early", [(1e-2, True), (3e-3, False), (1e-3, True)])
+def test_predict_final_stops_one_linearisation_early_on_a_verified_residual(offset, early):
+    # the point with z_i^3 + z_i = p on the border c . u = h: predict_final accepts it
+    # one linearisation earlier than the plain iteration, on a residual it evaluated
+    # itself, within the step tolerance of the exactly converged point
+    newton_s = NewtonSettings(tol=1e-10, step_tol=1e-10)
+    z_true = np.full(6, 0.8)  # the root of z^3 + z = p at p = 0.8^3 + 0.8
+    p_true = 0.8**3 + 0.8
+    u_true = np.append(z_true, p_true)
+    c = np.zeros(7)
+    c[-1] = 1.0  # natural parameter: p fixed
+    rng = np.random.default_rng(1)
+    u_pred = u_true + offset * rng.standard_normal(7)
+    u_pred[-1] = p_true
+    runs, points = {}, {}
+    for pf in (False, True):
+        prob = _CubicSparse()
+        res = correct(prob, u_pred, np.zeros(7), c, p_true, newton_s, exact=False,
+                      predict_final=pf)  # fmt: skip
+        assert res.converged
+        G = res.z**3 + res.z - res.p
+        assert np.max(np.abs(G)) <= newton_s.tol  # the returned point solves G = 0
+        if pf and early:  # lin's G and the residual norm are those of the returned point
+            np.testing.assert_array_equal(res.lin[0], G)
+            assert res.residual_norm == np.max(np.abs(G))
+        np.testing.assert_allclose(res.u, u_true, rtol=0, atol=10 * newton_s.step_tol)
+        runs[pf], points[pf] = prob.calls, res.u
+    if early:  # the predicted correction is small enough here: one linearisation saved
+        assert runs[True]["linearize"] == runs[False]["linearize"] - 1
+        assert runs[True]["residual"] == 1
+    else:  # it is not (3e-3: just above the bound): the plain iteration, unchanged
+        assert runs[True] == runs[False]
+        np.testing.assert_array_equal(points[True], points[False])

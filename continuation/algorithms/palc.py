@@ -70,7 +70,7 @@ from typing import Any
 
 import numpy as np
 
-from ..problem import jacobian_is_stability, step_kernel
+from ..problem import exact_jacobian, jacobian_is_stability, step_kernel
 from ..settings import ContinuationSettings
 from .base import ContinuationAlgorithm, StepOutcome, StepState
 from .corrector import NOISE_SLACK, ROUNDOFF_FLOOR, correct
@@ -192,6 +192,10 @@ class PALC(ContinuationAlgorithm):
             settings.newton,
             max_contraction=self.max_contraction if guarded else None,
             exact=False,
+            # (with exact derivatives Newton's rate is quadratic, and a Jacobian one
+            # iterate from the row is harmless where it is not the row's stability
+            # matrix: the last linearisation may be skipped)
+            predict_final=exact_jacobian(problem) and not jacobian_is_stability(problem),
         )
         if not res.converged or res.lin is None:
             state.retries += 1

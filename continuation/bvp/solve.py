@@ -559,6 +559,10 @@ class ContinuedConnection:
             raise ValueError("`problem.vary` is None: no continuation parameter")
         self.problem = problem
 
+    #: The connection's derivatives come from its CasADi trace (automatic
+    #: differentiation): see :func:`~continuation.problem.exact_jacobian`.
+    exact_jacobian = True
+
     @property
     def free(self) -> str:
         """The continuation parameter (``problem.vary``)."""

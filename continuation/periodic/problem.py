@@ -165,6 +165,12 @@ class PeriodicOrbitProblem:
         return int(self.layout.n_unknowns)
 
     @property
+    def exact_jacobian(self) -> bool:
+        """The derivatives are exact where the system has a CasADi trace (else the
+        system's finite differences): :func:`~continuation.problem.exact_jacobian`."""
+        return bool(getattr(self.system, "has_casadi", False))
+
+    @property
     def state_names(self) -> tuple[str, ...]:
         """Names of the unknowns: ``<state>@<point>`` and ``T``."""
         names = self.system.state_names
