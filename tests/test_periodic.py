@@ -560,3 +560,38 @@ def test_numpy_only_system():
     assert orb.T == pytest.approx(VDP_T_MU1, abs=1e-7)
     br = continue_periodic(s, orb, {"mu": 1.0}, "mu", ContinuationSettings(max_steps=3))
     assert br.status == Status.MAX_STEPS and len(br) == 4
+
+
+@pytest.mark.parametrize("n", [2, 3, 4])
+def test_compiled_floquet_kernels_match_numpy(n, monkeypatch):
+    # the deflation of the trivial multiplier and the stage solves of the transfer
+    # matrices, compiled, against the NumPy code on the same data (a rotation-like
+    # product with f along the flow, perturbed, so that every block is exercised)
+    import importlib
+
+    import continuation.bvp.condense as cd
+    from continuation.bvp import _condense_jit
+
+    fq = importlib.import_module("continuation.periodic.floquet")  # (the package exports
+    # a function of the same name)
+
+    rng = np.random.default_rng(n)
+    N = 12
+    Phi = np.eye(n)[None] + 0.1 * rng.standard_normal((N, n, n))
+    f_nodes = rng.standard_normal((N + 1, n))
+    assert fq._compiled() is not None  # Numba is a dependency: the compiled path
+    got = fq.floquet(Phi, f_nodes)
+    monkeypatch.setattr(fq, "_KERNEL", [None])
+    ref = fq.floquet(Phi, f_nodes)
+    np.testing.assert_allclose(np.sort_complex(got.multipliers), np.sort_complex(ref.multipliers),
+                               rtol=1e-12, atol=1e-14)  # fmt: skip
+    assert got.trivial == pytest.approx(ref.trivial, rel=1e-12)
+    assert got.trivial_error == pytest.approx(ref.trivial_error, rel=1e-10)
+    K = rng.standard_normal((N, 4 * n, 4 * n)) + 4 * np.eye(4 * n)
+    R = rng.standard_normal((N, 4 * n, n))
+    X = np.empty_like(R)
+    assert cd._compiled() is _condense_jit
+    assert _condense_jit.solve_many(K.copy(), R, X)
+    np.testing.assert_allclose(X, np.linalg.solve(K, R), rtol=1e-12, atol=1e-13)
+    K[3, :, 2] = 0.0  # a singular block is reported, not solved
+    assert not _condense_jit.solve_many(K.copy(), R, X)

@@ -80,6 +80,64 @@ def _lu_solve(lu: Any, piv: Any, x: Any, trans: bool) -> None:  # pragma: no cov
 
 
 @_jit
+def _lu_inplace(lu: Any, piv: Any) -> tuple[float, float, bool]:  # pragma: no cover
+    """LU with partial pivoting of ``lu`` (b, b) in place, interchanges in ``piv``;
+    returns ``(log|det|, sign of det, singular)``."""
+    b = lu.shape[0]
+    lg = 0.0
+    sg = 1.0
+    for k in range(b):
+        p = k
+        big = abs(lu[k, k])
+        for r in range(k + 1, b):
+            v = abs(lu[r, k])
+            if v > big:
+                big = v
+                p = r
+        piv[k] = p
+        if big == 0.0 or not math.isfinite(big):
+            return -math.inf, 0.0, True
+        if p != k:
+            sg = -sg
+            for c in range(b):
+                t = lu[k, c]
+                lu[k, c] = lu[p, c]
+                lu[p, c] = t
+        d = lu[k, k]
+        if d < 0.0:
+            sg = -sg
+        lg += math.log(abs(d))
+        inv_d = 1.0 / d
+        for r in range(k + 1, b):
+            f = lu[r, k] * inv_d
+            lu[r, k] = f
+            if f != 0.0:
+                for c in range(k + 1, b):
+                    lu[r, c] -= f * lu[k, c]
+    return lg, sg, False
+
+
+@_jit
+def solve_many(K: Any, R: Any, X: Any) -> bool:  # pragma: no cover - compiled
+    """``X[j] = K_j^{-1} R[j]`` for ``K (N, b, b)`` (overwritten by its LU factors),
+    ``R, X (N, b, k)``; False if a block is singular."""
+    N, b, k = R.shape
+    piv = np.empty(b, dtype=np.int64)
+    col = np.empty(b)
+    for j in range(N):
+        lg, sg, singular = _lu_inplace(K[j], piv)
+        if singular:
+            return False
+        for c in range(k):
+            for r in range(b):
+                col[r] = R[j, r, c]
+            _lu_solve(K[j], piv, col, False)
+            for r in range(b):
+                X[j, r, c] = col[r]
+    return True
+
+
+@_jit
 def _inv_norm1(lu: Any, piv: Any, x: Any, y: Any) -> float:  # pragma: no cover - compiled
     """Hager's estimate of ``||A^{-1}||_1`` from the factors (module doc)."""
     b = lu.shape[0]
@@ -139,38 +197,7 @@ def factor_blocks(
             for r in range(b):
                 s += abs(lu[r, c])
             norm1 = max(norm1, s)
-        lg = 0.0
-        sg = 1.0
-        singular = False
-        for k in range(b):
-            p = k
-            big = abs(lu[k, k])
-            for r in range(k + 1, b):
-                v = abs(lu[r, k])
-                if v > big:
-                    big = v
-                    p = r
-            piv[j, k] = p
-            if big == 0.0 or not math.isfinite(big):
-                singular = True
-                break
-            if p != k:
-                sg = -sg
-                for c in range(b):
-                    t = lu[k, c]
-                    lu[k, c] = lu[p, c]
-                    lu[p, c] = t
-            d = lu[k, k]
-            if d < 0.0:
-                sg = -sg
-            lg += math.log(abs(d))
-            inv_d = 1.0 / d
-            for r in range(k + 1, b):
-                f = lu[r, k] * inv_d
-                lu[r, k] = f
-                if f != 0.0:
-                    for c in range(k + 1, b):
-                        lu[r, c] -= f * lu[k, c]
+        lg, sg, singular = _lu_inplace(lu, piv[j])
         if singular:
             cond[j] = math.inf
             logdet[j] = -math.inf
@@ -224,4 +251,4 @@ def factor(
     return piv, W, U, cond, logdet, sign
 
 
-__all__ = ["factor", "solve_blocks"]
+__all__ = ["factor", "solve_blocks", "solve_many"]

@@ -44,6 +44,7 @@ import scipy.sparse as sp
 
 from ..bvp.collocation import CollocationMesh
 from ..bvp.condense import StageCondenser
+from ..bvp.condense import _compiled as _condense_kernel
 from ..casadi_compile import compiled_soon, settled
 from ..linalg import csc_with_data
 from ..typing import FloatArray
@@ -394,7 +395,15 @@ def monodromy_factors(layout: CollocationLayout, B: FloatArray, stages: bool = F
     e = layout.mesh.e
     K = B[:, :, 1:].transpose(0, 1, 3, 2, 4).reshape(N, m * n, m * n)
     R = B[:, :, 0].reshape(N, m * n, n)
-    S = -np.linalg.solve(K, R).reshape(N, m, n, n)  # stage responses
+    kern = _condense_kernel()
+    X = None
+    if kern is not None:  # block LU and solves in one compiled call
+        X = np.empty((N, m * n, n))
+        if not kern.solve_many(np.array(K), np.ascontiguousarray(R), X):
+            X = None  # a singular block: NumPy raises as before
+    if X is None:
+        X = np.linalg.solve(K, R)
+    S = -X.reshape(N, m, n, n)  # stage responses
     Phi = (e[1:] @ S.reshape(N, m, n * n)).reshape(N, n, n)  # sum_l e_l S_l
     Phi += e[0] * np.eye(n)
     return (Phi, S) if stages else Phi

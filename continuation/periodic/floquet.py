@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -197,6 +198,21 @@ def periodic_eigenvalues(
     return mu, False, Q
 
 
+_KERNEL: list[object] = []  # [the compiled deflation's module or None], decided once
+
+
+def _compiled() -> Any:
+    """:mod:`continuation.periodic._floquet_jit` when Numba is installed, else None."""
+    if not _KERNEL:
+        try:
+            from . import _floquet_jit
+
+            _KERNEL.append(_floquet_jit)
+        except ImportError:  # pragma: no cover - Numba missing: NumPy
+            _KERNEL.append(None)
+    return _KERNEL[0]
+
+
 def _frames(F: FloatArray) -> FloatArray:
     """Orthonormal bases whose first columns are ``F[j] / |F[j]|``, ``(K, n, n)``.
 
@@ -244,15 +260,19 @@ def floquet(
     if n == 1:
         mu1 = complex(np.prod(factors[:, 0, 0]))
         return FloquetResult(np.zeros(0, dtype=complex), mu1, float(abs(mu1 - 1)))
-    Qf = _frames(f[:N])
-    Qn = np.concatenate([Qf[1:], Qf[:1]])  # Q_{j+1}, with Q_N = Q_0
-    A = np.swapaxes(Qn, 1, 2) @ factors @ Qf  # Q_{j+1}^T Phi_j Q_j
-    C = A[:, 1:, 1:]
-    r = A[:, 0, 0]
-    log_r = float(np.sum(np.log(np.maximum(np.abs(r), 5e-324))))
-    sign_r = float(np.prod(np.where(r >= 0, 1.0, -1.0)))
-    eps = float(np.max(np.max(np.abs(A[:, 1:, 0]), axis=1)
-                       / np.maximum(np.linalg.norm(A, axis=(1, 2)), 1e-300)))  # fmt: skip
+    kern = _compiled()
+    if kern is not None:  # the same in one compiled call
+        C, log_r, sign_r, eps = kern.deflate(factors, f[:N])
+    else:
+        Qf = _frames(f[:N])
+        Qn = np.concatenate([Qf[1:], Qf[:1]])  # Q_{j+1}, with Q_N = Q_0
+        A = np.swapaxes(Qn, 1, 2) @ factors @ Qf  # Q_{j+1}^T Phi_j Q_j
+        C = A[:, 1:, 1:]
+        r = A[:, 0, 0]
+        log_r = float(np.sum(np.log(np.maximum(np.abs(r), 5e-324))))
+        sign_r = float(np.prod(np.where(r >= 0, 1.0, -1.0)))
+        eps = float(np.max(np.max(np.abs(A[:, 1:, 0]), axis=1)
+                           / np.maximum(np.linalg.norm(A, axis=(1, 2)), 1e-300)))  # fmt: skip
     trivial = sign_r * math.exp(min(log_r, 709.0))
     if n == 2:  # one nontrivial multiplier: the product of the 1x1 blocks
         c = C[:, 0, 0]
