@@ -579,7 +579,8 @@ class RunContext:
         guess[-1] = bound
         e_p = np.zeros(guess.size)
         e_p[-1] = 1.0
-        res = correct(self.problem, guess, np.zeros(guess.size), e_p, bound, self.settings.newton)
+        res = correct(self.problem, guess, np.zeros(guess.size), e_p, bound,
+                      self.settings.newton, final_lu=False)  # (make_point factorises)  # fmt: skip
         if not res.converged or res.lin is None:
             return None
         try:

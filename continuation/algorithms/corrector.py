@@ -379,6 +379,7 @@ def correct(
     max_contraction: float | None = None,
     exact: bool = True,
     predict_final: bool = False,
+    final_lu: bool = True,
 ) -> CorrectorResult:
     r"""Newton's method on the bordered system.
 
@@ -442,7 +443,10 @@ def correct(
     *evaluated* residual has ``max |r| <= newton.tol``. ``lin``'s Jacobians and ``lu``
     are then those of the previous iterate (``d_k`` away, not ``step_tol``; its ``G``
     is the point's), which perturbs the tangent by that distance; otherwise the
-    iteration goes on as usual. Stops early (not converged) when the residual becomes
+    iteration goes on as usual. ``final_lu=False`` (with ``exact``): the bordered matrix
+    at the returned point is not factorised (``lu`` None; ``lin`` is evaluated there),
+    for a caller that factorises it with another border (a located point's tangent).
+    Stops early (not converged) when the residual becomes
     non-finite, grows by a factor ``1e4`` over its initial value, or the bordered
     matrix is singular.
 
@@ -524,10 +528,12 @@ def correct(
                     r[:n] = lin[0]
                     r[n] = float(c.dot(u)) - h
                     rn = _inf_norm(r) if _finite(r) else math.inf
-                    try:
-                        lu = BorderedLU(lin[1], lin[2], c)
-                    except np.linalg.LinAlgError:
-                        lu = None  # type: ignore[assignment]
+                    lu = None  # type: ignore[assignment]
+                    if final_lu:
+                        try:
+                            lu = BorderedLU(lin[1], lin[2], c)
+                        except np.linalg.LinAlgError:
+                            pass
             return CorrectorResult(True, u[:n].copy(), float(u[n]), lin, it, rn, "", lu, u)
         msg = _give_up(it, max_iter, rn, rn0, tol)
         if msg:
