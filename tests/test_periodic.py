@@ -595,3 +595,41 @@ def test_compiled_floquet_kernels_match_numpy(n, monkeypatch):
     np.testing.assert_allclose(X, np.linalg.solve(K, R), rtol=1e-12, atol=1e-13)
     K[3, :, 2] = 0.0  # a singular block is reported, not solved
     assert not _condense_jit.solve_many(K.copy(), R, X)
+
+
+@pytest.mark.parametrize("case", ["rotation", "rossler"])
+def test_compiled_collocation_matches_numpy(case, monkeypatch):
+    # residual, Jacobian values, dG/dp and the blocks of the compiled collocation
+    # kernel against the layout's NumPy code, at a point off the cycle (every term
+    # nonzero): a rotation orbit (periodicity shift 2 pi) and the 3-state Rossler cycle
+    import continuation.periodic.problem as pp
+
+    if case == "rotation":
+        s = System(_pendulum, ("theta", "v"), ("I", "gamma"), periodic={"theta": 2 * math.pi})
+        P = {"I": 1.2, "gamma": 0.5}
+        tr = simulate(s, [0.0, 2.0], P, (0.0, 60.0), dt=0.01)
+        orb = orbit_from_trajectory(s, P, tr, mesh=CollocationMesh(17, 3, 1.0),
+                                    winding={"theta": 1})  # fmt: skip
+        free = "I"
+    else:
+        s = System(_rossler, ("x", "y", "z"), ("a", "b", "c"))
+        P = {"a": 0.2, "b": 0.2, "c": 2.5}
+        tr = simulate(s, [1.0, 1.0, 0.0], P, (0.0, 200.0), dt=0.01)
+        orb = orbit_from_trajectory(s, P, tr, mesh=CollocationMesh(23, 4, 1.0))
+        free = "c"
+    prob = pp.PeriodicOrbitProblem.from_orbit(orb, free)
+    z = prob.reference * (1 + 1e-3 * np.sin(np.arange(prob.n_unknowns)))
+    p = orb.param(free) + 0.01
+    assert pp._collocation_kernel() is not None
+    G1, J1, Gp1 = prob.linearize(z, p)
+    B1, r1 = prob._slot["cache"][2].copy(), prob.residual(z, p)
+    monkeypatch.setattr(pp, "_KERNEL", [None])
+    G0, J0, Gp0 = prob.linearize(z, p)
+    B0, r0 = prob._slot["cache"][2].copy(), prob.residual(z, p)
+    scale = np.max(np.abs(G0))
+    assert np.max(np.abs(G1 - G0)) <= 1e-12 * scale and np.max(np.abs(r1 - r0)) <= 1e-12 * scale
+    assert (J1.indices is J0.indices) and np.max(np.abs(J1.data - J0.data)) <= 1e-14 * np.max(
+        np.abs(J0.data)
+    )
+    np.testing.assert_allclose(Gp1, Gp0, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(B1, B0, rtol=1e-14, atol=0)

@@ -334,6 +334,25 @@ class CollocationLayout:
             B[:, k, k + 1] -= T * Js[:, k]
         return B
 
+    def kernel_args(self) -> tuple[Any, ...]:
+        """The layout's constant arrays in the order of the compiled kernel
+        (:mod:`continuation.periodic._collocation_jit`): ``D, e, h, weights,
+        stage_points, B_const (flat), const_vals, order, slot_of (empty: none)``."""
+        args = self.__dict__.get("_kernel_args")
+        if args is None:
+            mesh = self.mesh
+            f64 = np.ascontiguousarray
+            args = (
+                f64(mesh.D, dtype=float), f64(mesh.e, dtype=float), f64(mesh.h, dtype=float),
+                f64(self.weights, dtype=float), f64(self.stage_points, dtype=np.int64),
+                f64(self._B_const, dtype=float).ravel(), f64(self._const_vals, dtype=float),
+                f64(self._order, dtype=np.int64),
+                np.zeros(0, dtype=np.int64) if self._slot_of is None
+                else f64(self._slot_of, dtype=np.int64),
+            )  # fmt: skip
+            self.__dict__["_kernel_args"] = args
+        return args  # type: ignore[no-any-return]
+
     def assemble(self, B: FloatArray, F: FloatArray, dref: FloatArray) -> sp.csc_matrix:
         """The sparse ``dG/dz`` from the blocks, ``f`` at the stages and the phase row."""
         ph_vals = (self.weights[:, None] * dref).ravel()

@@ -22,6 +22,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..bvp.collocation import CollocationMesh
+from ..linalg import csc_with_data
 from ..params import Params
 from ..typing import ComplexArray, FloatArray
 from .collocation import CollocationLayout, StageEvaluator, monodromy_factors
@@ -79,6 +80,22 @@ class _ErrorWeights:
         dm = (self.w[:, None, :] @ Xb)[:, 0]  # (N, n)
         dmp = np.vstack([dm[-1:], dm, dm[:1]])
         return float(np.max(self.scale * np.abs(dmp[2:] - dmp[:-2])))
+
+
+_KERNEL: list[Any] = []  # [the compiled collocation kernel's module or None]
+
+
+def _collocation_kernel() -> Any:
+    """:mod:`continuation.periodic._collocation_jit` when Numba is installed, else
+    None (the NumPy code of the layout); imported at the first evaluation."""
+    if not _KERNEL:
+        try:
+            from . import _collocation_jit
+
+            _KERNEL.append(_collocation_jit)
+        except ImportError:  # pragma: no cover - Numba missing: NumPy
+            _KERNEL.append(None)
+    return _KERNEL[0]
 
 
 @dataclass(frozen=True, eq=False)
@@ -217,6 +234,12 @@ class PeriodicOrbitProblem:
         """``G(z, p)``, shape ``(n M + 1,)``."""
         X, T, _, F, _, _ = self._stages(np.asarray(z, float), p, False)
         s = self._slot
+        kern = _collocation_kernel()
+        if kern is not None:
+            D, e, h, w, sp_ = self.layout.kernel_args()[:5]
+            G = np.empty(self.layout.n_unknowns)
+            kern.residual(X, T, F, D, e, h, self._shift, s["ref"], s["dref"], w, sp_, G)
+            return G
         return self.layout.residual(X, T, F, self._shift, s["ref"], s["dref"])  # type: ignore[attr-defined]
 
     def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
@@ -225,6 +248,19 @@ class PeriodicOrbitProblem:
         lay = self.layout
         X, T, _, F, J, Jp = self._stages(z, p, True)
         s = self._slot
+        kern = _collocation_kernel()
+        if kern is not None:  # residual, Jacobian values and dG/dp in one compiled call
+            args = lay.kernel_args()
+            G = np.empty(lay.n_unknowns)
+            Gp = np.empty(lay.n_unknowns)
+            vals = np.empty(lay._order.size)
+            data = np.empty(lay._template.nnz)
+            Jp0 = np.ascontiguousarray(Jp[:, :, 0])
+            kern.linearize(X, T, F, J, Jp0, *args[:3], self._shift, s["ref"], s["dref"],
+                           *args[3:], G, vals, data, Gp)  # fmt: skip
+            B = vals[: args[5].size].reshape(lay.N, lay.m, lay.m + 1, lay.n, lay.n)
+            self._slot["cache"] = (z.copy(), float(p), B, F)
+            return G, csc_with_data(lay._template, data), Gp
         G = lay.residual(X, T, F, self._shift, s["ref"], s["dref"])  # type: ignore[attr-defined]
         B = lay.blocks(X, T, J)
         Gz = lay.assemble(B, F, s["dref"])
