@@ -236,6 +236,70 @@ def solve_blocks(LU: Any, piv: Any, B: Any, trans: bool) -> Any:  # pragma: no c
     return X
 
 
+@_jit
+def gather(data: Any, src: Any, dst: Any, buf: Any) -> None:  # pragma: no cover
+    """``buf[:] = 0; buf[dst] = data[src]`` (the block entries of a CSC matrix)."""
+    for q in range(buf.size):
+        buf[q] = 0.0
+    for q in range(src.size):
+        buf[dst[q]] = data[src[q]]
+
+
+@_jit
+def solve_pre(
+    Bm: Any, rows_s: Any, rest_r: Any, LU: Any, piv: Any, Ars: Any, rs_rows: Any,
+    ys: Any, br: Any,
+) -> None:  # pragma: no cover - compiled  # fmt: skip
+    """The forward half of a condensed solve (``trans="N"``): ``ys[j] = A_j^{-1}
+    b_s[j]`` and the reduced right-hand side ``br = b_r - sum_j A_rs,j ys[j]`` (``br``
+    has ``n_r + 1`` rows, the last one the padding slot), for ``Bm (size, k)``."""
+    N, b = rows_s.shape
+    k = Bm.shape[1]
+    nr = rest_r.size
+    wr = Ars.shape[1]
+    col = np.empty(b)
+    for q in range(nr):
+        for c in range(k):
+            br[q, c] = Bm[rest_r[q], c]
+    for c in range(k):
+        br[nr, c] = 0.0
+    for j in range(N):
+        for c in range(k):
+            for r in range(b):
+                col[r] = Bm[rows_s[j, r], c]
+            _lu_solve(LU[j], piv[j], col, False)
+            for r in range(b):
+                ys[j, r, c] = col[r]
+            for r in range(wr):
+                acc = 0.0
+                for q in range(b):
+                    acc += Ars[j, r, q] * col[q]
+                br[rs_rows[j, r], c] -= acc
+
+
+@_jit
+def solve_post(
+    ys: Any, W: Any, xr: Any, sr_cols: Any, cols_s: Any, rest_c: Any, out: Any
+) -> None:  # pragma: no cover - compiled
+    """The backward half: ``x_s[j] = ys[j] - W_j x_r[sr_cols[j]]`` (padding column
+    ``n_r``: zero) scattered with ``x_r`` into ``out (size, k)``."""
+    N, b, k = ys.shape
+    nr = rest_c.size
+    wc = W.shape[2]
+    for q in range(nr):
+        for c in range(k):
+            out[rest_c[q], c] = xr[q, c]
+    for j in range(N):
+        for r in range(b):
+            for c in range(k):
+                acc = ys[j, r, c]
+                for t in range(wc):
+                    i = sr_cols[j, t]
+                    if i < nr:
+                        acc -= W[j, r, t] * xr[i, c]
+                out[cols_s[j, r], c] = acc
+
+
 def factor(
     A: np.ndarray, Asr: np.ndarray, Ars: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -251,4 +315,4 @@ def factor(
     return piv, W, U, cond, logdet, sign
 
 
-__all__ = ["factor", "solve_blocks", "solve_many"]
+__all__ = ["factor", "gather", "solve_blocks", "solve_many", "solve_post", "solve_pre"]

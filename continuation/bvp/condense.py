@@ -229,6 +229,16 @@ class CondensedLU:
         one = rhs.ndim == 1
         B = rhs.reshape(st.size, -1)
         k = B.shape[1]
+        if trans == "N" and self._block_lu is not None:  # two compiled halves
+            kern, LU, bpiv = self._block_lu[:3]
+            Bc = np.ascontiguousarray(B)
+            ys = np.empty((st.N, st.b, k))
+            brp = np.empty((st.nr + 1, k))
+            kern.solve_pre(Bc, st.rows_s, st.rest_r, LU, bpiv, self._Ars, st.rs_rows, ys, brp)
+            xr = np.ascontiguousarray(self._solve_schur(brp[:-1], 0))
+            out = np.empty((st.size, k))
+            kern.solve_post(ys, self._W, xr, st.sr_cols, st.cols_s, st.rest_c, out)
+            return out.ravel() if one else out
         bs = B[st.rows_s if trans == "N" else st.cols_s]  # (N, b, k)
         br = np.zeros((st.nr + 1, k))
         br[:-1] = B[st.rest_r if trans == "N" else st.rest_c]
@@ -332,13 +342,17 @@ class StageCondenser:
         if nr > MAX_SCHUR:
             return None
         data = M.data
-        buf = np.zeros(st.gather_len)
-        buf[st.gather_dst] = data[st.gather_src]
+        kern = _compiled()
+        if kern is not None:
+            buf = np.empty(st.gather_len)
+            kern.gather(data, st.gather_src, st.gather_dst, buf)
+        else:
+            buf = np.zeros(st.gather_len)
+            buf[st.gather_dst] = data[st.gather_src]
         c1, c2 = st.gather_cut
         A = buf[:c1].reshape(N, b, b)
         Asr = buf[c1:c2].reshape(N, b, st.wc)
         Ars = buf[c2:].reshape(N, st.wr, b)
-        kern = _compiled()
         block_lu = None
         if kern is not None:  # block LU, conditions, determinants, W and A_rs W: one call
             bpiv, W, U, cond, logdet, bsign = kern.factor(A, Asr, Ars)  # (A: now its LU)
