@@ -233,7 +233,8 @@ class CorrectorResult:
 
     ``lu`` is the factorisation of the bordered matrix at the last Newton iterate (the
     returned point, or the iterate one step before it: within the step tolerance, or,
-    with ``predict_final``, one quadratically converging step away), or None; ``u_full`` is ``(z, p)`` when known; ``t_raw`` is the solution of
+    with ``predict_final``, one quadratically converging step away), or None;
+    ``u_full`` is ``(z, p)`` when known; ``t_raw`` is the solution of
     ``M t = e_{N+1}`` with that factorisation when the corrector already has it (fused
     evaluator), else None; ``g_norm`` is ``max |G|`` of ``lin`` when known and
     ``jac_finite`` is True when ``lin``'s Jacobian is known to be finite.

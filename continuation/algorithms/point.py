@@ -173,9 +173,10 @@ def make_point(
         A factorisation of ``[[Gz, Gp], [border^T]]`` to reuse instead of factorising:
         that of the last corrector iterate, whose distance to the point is below the
         corrector's step tolerance (with the corrector's ``predict_final``: the last
-        step, taken in the quadratic regime, e.g. 1e-6 relative). This is AUTO's practice (Doedel et al., AUTO-07p
-        manual, Sec. "pseudo-arclength continuation": the new direction vector comes
-        from the Jacobian of the last Newton iteration); it perturbs the tangent by
+        step, taken in the quadratic regime, e.g. 1e-6 relative). This is AUTO's
+        practice (Doedel et al., AUTO-07p manual, Sec. "pseudo-arclength continuation":
+        the new direction vector comes from the Jacobian of the last Newton iteration);
+        it perturbs the tangent by
         that distance, which only affects the next predictor and the sign of the test
         functions within that distance of a zero (located special points are always
         computed with a fresh factorisation).
