@@ -75,7 +75,7 @@ def test_cli_bad_input_is_one_line_and_nonzero(tmp_path, capsys, argv, flag):
 
 @pytest.mark.slow
 def test_critical_line_against_one_shot_solves_and_bisection(ship):
-    from ship_models.analysis.critical_bisection import critical_fn_bvp
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
     from ship_models.analysis.critical_bisection import upslope_bisection as critical_fn_bisection
 
     chi = math.radians(10.0)
@@ -97,7 +97,7 @@ def test_critical_line_against_one_shot_solves_and_bisection(ship):
     h = 0.08
     b = critical_fn_bisection(
         chi, model=ship, params=p.replace(H_over_lambda=h),
-        bracket=(line.Fn[1] - 2e-3, line.Fn[1] + 2e-3), tol=1e-6,
+        Fn_bracket=(line.Fn[1] - 2e-3, line.Fn[1] + 2e-3), tol=1e-6,
     )  # fmt: skip
     assert b.success, b.message
     assert b.bracket[0] - 1e-6 <= line.Fn[1] <= b.bracket[1] + 1e-6
