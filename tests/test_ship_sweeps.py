@@ -75,8 +75,8 @@ def test_cli_bad_input_is_one_line_and_nonzero(tmp_path, capsys, argv, flag):
 
 @pytest.mark.slow
 def test_critical_line_against_one_shot_solves_and_bisection(ship):
-    from ship_models.analysis.critical_bvp import critical_fn_bvp
     from ship_models.analysis.critical_bisection import upslope_bisection as critical_fn_bisection
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
 
     chi = math.radians(10.0)
     line = S.critical_line(ship, chi, 1.5, [0.02, 0.08, 0.1])
