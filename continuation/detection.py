@@ -28,6 +28,7 @@ from .algorithms.base import ContinuationAlgorithm, theta_norm
 from .algorithms.corrector import CorrectorResult, correct
 from .algorithms.point import PointInfo, make_point
 from .branch import BranchPoint, SpecialKind, SpecialPoint
+from .dynamics.trajectory import hermite
 from .events import MAX_DIP_POINTS, Event, HopfTest, bp_test, crossed, event_slope, hermite_dip
 from .linalg import bordered_column_max, bordered_rcond
 from .locate import LocateResult, fold_guess, locate_beyond, locate_zero, point_at
@@ -101,9 +102,7 @@ def _hermite_at_p(
             return chord_pt
         if abs(step) <= 1e-14:
             break
-    h00, h10 = 2 * sv**3 - 3 * sv**2 + 1, sv**3 - 2 * sv**2 + sv
-    h01, h11 = -2 * sv**3 + 3 * sv**2, sv**3 - sv**2
-    return h00 * ua + h10 * h * ta + h01 * ub + h11 * h * tb
+    return np.asarray(hermite(sv, h, ua, ta, ub, tb))
 
 
 @dataclass(eq=False, slots=True)

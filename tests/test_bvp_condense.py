@@ -12,6 +12,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from continuation import _jit
 from continuation.bvp import find_connection
 from continuation.bvp.condense import CondensedLU, StageCondenser
 from continuation.linalg import BorderedLU, _perm_parity, assemble_bordered_csc
@@ -85,6 +86,19 @@ def test_singular_block_falls_back():
     assert np.allclose(A @ x, 1.0)
 
 
+def _assert_matches_superlu(fac, M, B):
+    """Solves, transposed solves and the determinant of ``fac`` against SuperLU of ``M``."""
+    ref = spla.splu(M)
+    for t in ("N", "T"):
+        X, X_ref = fac.solve(B, trans=t), ref.solve(B, trans=t)
+        assert np.max(np.abs(X - X_ref)) <= 1e-10 * np.max(np.abs(X_ref))
+    d, parity = fac.diag_parity()
+    sign = -parity if np.count_nonzero(d < 0) % 2 else parity
+    ref_sign, ref_log = _det_sign_log(ref)
+    assert sign == ref_sign
+    assert float(np.log(np.abs(d)).sum()) == pytest.approx(ref_log, rel=1e-12)
+
+
 @pytest.mark.parametrize("sparse_min", [0, 10**9], ids=["sparse Schur", "dense Schur"])
 def test_both_factorisations_of_the_schur_complement_match_superlu(
     linearised, sparse_min, monkeypatch
@@ -103,16 +117,7 @@ def test_both_factorisations_of_the_schur_complement_match_superlu(
     fac = fresh.factor(M)
     assert isinstance(fac, CondensedLU)
     assert (fac._piv is None) == (sparse_min == 0)  # the path asked for was taken
-    ref = spla.splu(M)
-    B = rng.standard_normal((M.shape[0], 2))
-    for t in ("N", "T"):
-        X, X_ref = fac.solve(B, trans=t), ref.solve(B, trans=t)
-        assert np.max(np.abs(X - X_ref)) <= 1e-10 * np.max(np.abs(X_ref))
-    d, parity = fac.diag_parity()
-    sign = -parity if np.count_nonzero(d < 0) % 2 else parity
-    ref_sign, ref_log = _det_sign_log(ref)
-    assert sign == ref_sign
-    assert float(np.log(np.abs(d)).sum()) == pytest.approx(ref_log, rel=1e-12)
+    _assert_matches_superlu(fac, M, rng.standard_normal((M.shape[0], 2)))
 
 
 @pytest.mark.parametrize("compiled", [True, False], ids=["compiled blocks", "NumPy blocks"])
@@ -123,9 +128,9 @@ def test_both_block_paths_match_superlu(linearised, compiled, monkeypatch):
     import continuation.bvp.condense as cd
 
     J, gp = linearised
-    kern = cd._compiled()
-    assert kern is not None  # Numba is a dependency: the compiled path is the default
-    monkeypatch.setattr(cd, "_KERNEL", [kern if compiled else None])
+    assert _jit.compiled(cd.KERNELS) is not None  # Numba is a dependency: the default
+    if not compiled:
+        monkeypatch.setitem(_jit.LOADED, cd.KERNELS, None)
     owner = J.condensed_lu.__self__
     fresh = StageCondenser(owner.rows_s, owner.cols_s)
     rng = np.random.default_rng(11)
@@ -133,16 +138,7 @@ def test_both_block_paths_match_superlu(linearised, compiled, monkeypatch):
     M = assemble_bordered_csc(J, gp, c)
     fac = fresh.factor(M)
     assert isinstance(fac, CondensedLU) and (fac._Ainv is None) == compiled
-    ref = spla.splu(M)
-    B = rng.standard_normal((M.shape[0], 3))
-    for t in ("N", "T"):
-        X, X_ref = fac.solve(B, trans=t), ref.solve(B, trans=t)
-        assert np.max(np.abs(X - X_ref)) <= 1e-10 * np.max(np.abs(X_ref))
-    d, parity = fac.diag_parity()
-    sign = -parity if np.count_nonzero(d < 0) % 2 else parity
-    ref_sign, ref_log = _det_sign_log(ref)
-    assert sign == ref_sign
-    assert float(np.log(np.abs(d)).sum()) == pytest.approx(ref_log, rel=1e-12)
+    _assert_matches_superlu(fac, M, rng.standard_normal((M.shape[0], 3)))
 
 
 @pytest.mark.parametrize("compiled", [True, False], ids=["compiled blocks", "NumPy blocks"])
@@ -151,7 +147,8 @@ def test_an_ill_conditioned_block_falls_back(compiled, monkeypatch):
     # number about 1e13 > MAX_BLOCK_COND: no condensation (the caller's general LU)
     import continuation.bvp.condense as cd
 
-    monkeypatch.setattr(cd, "_KERNEL", [cd._compiled() if compiled else None])
+    if not compiled:
+        monkeypatch.setitem(_jit.LOADED, cd.KERNELS, None)
     rng = np.random.default_rng(5)
     Q1, _ = np.linalg.qr(rng.standard_normal((3, 3)))
     Q2, _ = np.linalg.qr(rng.standard_normal((3, 3)))

@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from continuation import ContinuationSettings, Status, System, continue_equilibria, simulate
+from continuation import ContinuationSettings, Status, System, _jit, continue_equilibria, simulate
 from continuation.bvp import CollocationMesh, solve_connection
 from continuation.periodic import (
     PeriodicOrbitProblem,
@@ -579,9 +579,9 @@ def test_compiled_floquet_kernels_match_numpy(n, monkeypatch):
     N = 12
     Phi = np.eye(n)[None] + 0.1 * rng.standard_normal((N, n, n))
     f_nodes = rng.standard_normal((N + 1, n))
-    assert fq._compiled() is not None  # Numba is a dependency: the compiled path
+    assert _jit.compiled(fq.KERNELS) is not None  # Numba is a dependency: compiled
     got = fq.floquet(Phi, f_nodes)
-    monkeypatch.setattr(fq, "_KERNEL", [None])
+    monkeypatch.setitem(_jit.LOADED, fq.KERNELS, None)
     ref = fq.floquet(Phi, f_nodes)
     np.testing.assert_allclose(np.sort_complex(got.multipliers), np.sort_complex(ref.multipliers),
                                rtol=1e-12, atol=1e-14)  # fmt: skip
@@ -590,7 +590,7 @@ def test_compiled_floquet_kernels_match_numpy(n, monkeypatch):
     K = rng.standard_normal((N, 4 * n, 4 * n)) + 4 * np.eye(4 * n)
     R = rng.standard_normal((N, 4 * n, n))
     X = np.empty_like(R)
-    assert cd._compiled() is _condense_jit
+    assert _jit.compiled(cd.KERNELS) is _condense_jit
     assert _condense_jit.solve_many(K.copy(), R, X)
     np.testing.assert_allclose(X, np.linalg.solve(K, R), rtol=1e-12, atol=1e-13)
     K[3, :, 2] = 0.0  # a singular block is reported, not solved
@@ -620,10 +620,10 @@ def test_compiled_collocation_matches_numpy(case, monkeypatch):
     prob = pp.PeriodicOrbitProblem.from_orbit(orb, free)
     z = prob.reference * (1 + 1e-3 * np.sin(np.arange(prob.n_unknowns)))
     p = orb.param(free) + 0.01
-    assert pp._collocation_kernel() is not None
+    assert _jit.compiled(pp.KERNELS) is not None
     G1, J1, Gp1 = prob.linearize(z, p)
     B1, r1 = prob._slot["cache"][2].copy(), prob.residual(z, p)
-    monkeypatch.setattr(pp, "_KERNEL", [None])
+    monkeypatch.setitem(_jit.LOADED, pp.KERNELS, None)
     G0, J0, Gp0 = prob.linearize(z, p)
     B0, r0 = prob._slot["cache"][2].copy(), prob.residual(z, p)
     scale = np.max(np.abs(G0))

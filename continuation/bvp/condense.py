@@ -45,6 +45,7 @@ import scipy.linalg.lapack as lapack
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .._jit import compiled
 from ..typing import FloatArray
 
 #: Largest accepted 1-norm condition estimate of a stage block (else: general LU).
@@ -64,20 +65,8 @@ SPARSE_SCHUR_MIN = 160
 SPARSE_SCHUR_DENSITY = 0.1
 
 
-_KERNEL: list[Any] = []  # [the compiled kernels' module or None], decided once
-
-
-def _compiled() -> Any:
-    """:mod:`continuation.bvp._condense_jit` when Numba is installed, else None (the
-    NumPy path); imported at the first factorisation only."""
-    if not _KERNEL:
-        try:
-            from . import _condense_jit
-
-            _KERNEL.append(_condense_jit)
-        except ImportError:  # pragma: no cover - Numba missing: NumPy
-            _KERNEL.append(None)
-    return _KERNEL[0]
+#: The compiled kernels of the condensation (:func:`continuation._jit.compiled`).
+KERNELS = "continuation.bvp._condense_jit"
 
 
 class _Structure:
@@ -342,7 +331,7 @@ class StageCondenser:
         if nr > MAX_SCHUR:
             return None
         data = M.data
-        kern = _compiled()
+        kern = compiled(KERNELS)
         if kern is not None:
             buf = np.empty(st.gather_len)
             kern.gather(data, st.gather_src, st.gather_dst, buf)

@@ -42,9 +42,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from .._jit import compiled
 from ..bvp.collocation import CollocationMesh
+from ..bvp.condense import KERNELS as _CONDENSE_KERNELS
 from ..bvp.condense import StageCondenser
-from ..bvp.condense import _compiled as _condense_kernel
 from ..casadi_compile import compiled_soon, settled
 from ..linalg import csc_with_data
 from ..typing import FloatArray
@@ -414,7 +415,7 @@ def monodromy_factors(layout: CollocationLayout, B: FloatArray, stages: bool = F
     e = layout.mesh.e
     K = B[:, :, 1:].transpose(0, 1, 3, 2, 4).reshape(N, m * n, m * n)
     R = B[:, :, 0].reshape(N, m * n, n)
-    kern = _condense_kernel()
+    kern = compiled(_CONDENSE_KERNELS)
     X = None
     if kern is not None:  # block LU and solves in one compiled call
         X = np.empty((N, m * n, n))

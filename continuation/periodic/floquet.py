@@ -29,10 +29,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
+from .._jit import compiled
 from ..typing import ComplexArray, FloatArray
 
 
@@ -198,19 +198,8 @@ def periodic_eigenvalues(
     return mu, False, Q
 
 
-_KERNEL: list[object] = []  # [the compiled deflation's module or None], decided once
-
-
-def _compiled() -> Any:
-    """:mod:`continuation.periodic._floquet_jit` when Numba is installed, else None."""
-    if not _KERNEL:
-        try:
-            from . import _floquet_jit
-
-            _KERNEL.append(_floquet_jit)
-        except ImportError:  # pragma: no cover - Numba missing: NumPy
-            _KERNEL.append(None)
-    return _KERNEL[0]
+#: The compiled deflation (:func:`continuation._jit.compiled`).
+KERNELS = "continuation.periodic._floquet_jit"
 
 
 def _frames(F: FloatArray) -> FloatArray:
@@ -260,7 +249,7 @@ def floquet(
     if n == 1:
         mu1 = complex(np.prod(factors[:, 0, 0]))
         return FloquetResult(np.zeros(0, dtype=complex), mu1, float(abs(mu1 - 1)))
-    kern = _compiled()
+    kern = compiled(KERNELS)
     if kern is not None:  # the same in one compiled call
         C, log_r, sign_r, eps = kern.deflate(factors, f[:N])
     else:

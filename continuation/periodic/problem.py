@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .._jit import compiled
 from ..bvp.collocation import CollocationMesh
 from ..linalg import csc_with_data
 from ..params import Params
@@ -82,20 +83,8 @@ class _ErrorWeights:
         return float(np.max(self.scale * np.abs(dmp[2:] - dmp[:-2])))
 
 
-_KERNEL: list[Any] = []  # [the compiled collocation kernel's module or None]
-
-
-def _collocation_kernel() -> Any:
-    """:mod:`continuation.periodic._collocation_jit` when Numba is installed, else
-    None (the NumPy code of the layout); imported at the first evaluation."""
-    if not _KERNEL:
-        try:
-            from . import _collocation_jit
-
-            _KERNEL.append(_collocation_jit)
-        except ImportError:  # pragma: no cover - Numba missing: NumPy
-            _KERNEL.append(None)
-    return _KERNEL[0]
+#: The compiled collocation system (:func:`continuation._jit.compiled`).
+KERNELS = "continuation.periodic._collocation_jit"
 
 
 @dataclass(frozen=True, eq=False)
@@ -234,7 +223,7 @@ class PeriodicOrbitProblem:
         """``G(z, p)``, shape ``(n M + 1,)``."""
         X, T, _, F, _, _ = self._stages(np.asarray(z, float), p, False)
         s = self._slot
-        kern = _collocation_kernel()
+        kern = compiled(KERNELS)
         if kern is not None:
             D, e, h, w, sp_ = self.layout.kernel_args()[:5]
             G = np.empty(self.layout.n_unknowns)
@@ -248,7 +237,7 @@ class PeriodicOrbitProblem:
         lay = self.layout
         X, T, _, F, J, Jp = self._stages(z, p, True)
         s = self._slot
-        kern = _collocation_kernel()
+        kern = compiled(KERNELS)
         if kern is not None:  # residual, Jacobian values and dG/dp in one compiled call
             args = lay.kernel_args()
             G = np.empty(lay.n_unknowns)
