@@ -1,10 +1,21 @@
-"""``broachkit critical``: critical Fn of the heteroclinic bifurcation at one autopilot course.
+"""``broachkit critical``: the capsizing threshold at one autopilot course, and its mechanism.
 
-The Fn where the upslope branch of the crest saddle's unstable manifold switches from
-periodic motion to capsize (Umeda 1999, Figs. 10-15 and 23). ``--method bisection``
-bisects Fn on that fate (:func:`ship_models.analysis.critical.critical_fn`) and
-prints the critical Fn and its bracket; other methods (e.g. a boundary-value
-solution of the connection) plug in as further ``--method`` choices.
+``"Fn"`` is always the capsizing threshold: the lowest Fn at which the upslope branch of
+the crest saddle's unstable manifold capsizes (Umeda 1999's criterion, Figs. 10-15).
+
+``--method threshold`` (default) computes it by a scan and bisection of the branch's
+fates (:func:`ship_models.analysis.threshold.capsizing_threshold`) and names what sets
+it: ``"heteroclinic"`` where it is the heteroclinic connection (the paper's finding at
+chi_c = 10 deg), otherwise the loss of the overtaken cycle (period doubling, fold,
+crisis), with the cycle's bifurcations. The JSON has ``"Fn"``, ``"error"``,
+``"mechanism"``, ``"Fn_heteroclinic"``, ``"Fn_heteroclinic_error"``,
+``"is_heteroclinic"`` and the evidence (the fates at ``Fn -+ 0.002``).
+
+``--method bvp`` (the connection by collocation), ``--method bisection`` (bisection of
+the first passage of the neighbouring saddle) and ``--method both`` compute the
+**heteroclinic** Fn only (``"Fn_heteroclinic"``) and check it against the ship's own
+fates just below and above it: ``"is_threshold"`` says whether it passes, and ``"Fn"``
+is that value only if it does (otherwise null, exit status 1).
 Degrees on the command line, radians inside.
 """
 
@@ -29,7 +40,7 @@ from ..options import (
 from ..progress import StatusLine
 
 NAME = "critical"
-HELP = "critical Fn of capsizing due to broaching (heteroclinic bifurcation) at one course"
+HELP = "capsizing threshold Fn at one course, its mechanism and the heteroclinic Fn"
 
 
 def _bisection(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
@@ -41,20 +52,95 @@ def _bisection(model: Any, params: Any, args: argparse.Namespace) -> dict[str, A
             params,
             method="bisection",
             Fn_bracket=(args.Fn_min, args.Fn_max),
-            tol=args.tol,
+            tol=1e-5 if args.tol is None else args.tol,
             progress=lambda ev: status.show(
                 f"bisection: Fn = {ev.Fn:.8f}: {ev.outcome or 'undecided'}"
             ),
             t_max=args.t_max,
             criterion=args.criterion,
         )
-    return _with_fn(res.to_json(), res.Fn)
+    doc = _heteroclinic(model, params, res.to_json(), res.Fn, res.error)
+    doc["not_a_connection"] = _not_a_connection(res)
+    if doc["not_a_connection"]:
+        doc["is_threshold"] = False
+        doc["Fn"] = None
+        doc["Fn_heteroclinic"] = None
+        doc["message"] = doc["not_a_connection"] + "; " + doc["message"]
+    return doc
 
 
-def _with_fn(doc: dict[str, Any], Fn: float) -> dict[str, Any]:
-    """The result's JSON with the critical value under its one name, ``"Fn"``."""
+def _not_a_connection(res: Any) -> str:
+    """Why a bisection's switch is not the heteroclinic connection ('' if it may be)."""
+    if not res.bracket or not res.evaluations:
+        return ""
+    hi = min(res.evaluations, key=lambda ev: abs(ev.Fn - res.bracket[1]))
+    visits = getattr(hi.fate, "visits", ())
+    if any(v.label == "crest" and v.shift == -1 for v in visits):
+        return ""
+    return (
+        f"the bisection's switch at Fn = {res.Fn:.6f} is not the connection: at its upper end "
+        "the upslope branch capsizes without reaching the neighbouring crest saddle"
+    )
+
+
+def _evidence(model: Any, params: Any, Fn: float, d: float, t_max: float) -> dict[str, Any]:
+    """The upslope branch's fates at ``Fn -+ d`` (one fate each)."""
+    from ship_models.analysis.critical_bisection import _FateAt
+    from ship_models.analysis.fixed_points import find_fixed_point
+    from ship_models.analysis.threshold import CAPSIZE, SURVIVE, sample_of
+
+    start = find_fixed_point(model, params.replace(Fn=Fn - d), "crest")
+    fate_at = _FateAt(model, params.replace(Fn=Fn - d), start, "upslope", {"t_max": t_max},
+                      "final")  # fmt: skip
+    below = sample_of(Fn - d, fate_at(Fn - d))
+    above = sample_of(Fn + d, fate_at(Fn + d))
+    return {
+        "distance": d,
+        "below": below.to_json(),
+        "above": above.to_json(),
+        "passed": below.outcome == SURVIVE and above.outcome == CAPSIZE,
+    }
+
+
+def _heteroclinic(
+    model: Any, params: Any, doc: dict[str, Any], Fn: float, error: float | None
+) -> dict[str, Any]:
+    """A heteroclinic method's JSON: its value checked against the fates at ``-+ 0.002``."""
     doc = {k: v for k, v in doc.items() if k != "fn_critical"}
-    doc["Fn"] = Fn
+    doc["quantity"] = "heteroclinic connection"
+    doc["Fn_heteroclinic"] = Fn
+    doc["Fn_heteroclinic_error"] = error
+    ok = doc.get("status") == "SUCCESS" and math.isfinite(Fn)
+    check = _evidence(model, params, Fn, CHECK_DISTANCE, 1200.0) if ok else None
+    doc["threshold_check"] = check
+    doc["is_threshold"] = bool(check and check["passed"])
+    doc["Fn"] = Fn if doc["is_threshold"] else None
+    if ok and not doc["is_threshold"]:
+        doc["message"] = (
+            f"the heteroclinic Fn {Fn:.6f} is not the capsizing threshold here: the upslope "
+            f"branch {check['below']['fate']} at Fn - {CHECK_DISTANCE:g} and "
+            f"{check['above']['fate']} at Fn + {CHECK_DISTANCE:g} (run --method threshold); "
+            + str(doc.get("message", ""))
+        )
+    return doc
+
+
+#: Distance in Fn of the fates that check a heteroclinic value (the issue's 0.002).
+CHECK_DISTANCE = 0.002
+
+
+def _threshold(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
+    from ship_models.analysis.threshold import capsizing_threshold
+
+    with StatusLine(enabled=not args.json) as status:
+        res = capsizing_threshold(
+            model,
+            params,
+            t_max=args.t_max,
+            tol=2e-4 if args.tol is None else args.tol,
+            progress=lambda s: status.show(f"threshold: Fn = {s.Fn:.6f}: {s.label}"),
+        )
+    doc = {"method": "threshold", **res.to_json()}
     return doc
 
 
@@ -69,21 +155,41 @@ def _bvp(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
         guess_bracket=(args.Fn_min, args.Fn_max),
         check=True,
     )
-    return _with_fn({"method": "bvp", **res.to_json()}, res.Fn)
+    return _heteroclinic(model, params, {"method": "bvp", **res.to_json()}, res.Fn, res.error)
 
 
 def _both(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
     bvp = _bvp(model, params, args)
     bis = _bisection(model, params, args)
     ok = bvp["status"] == "SUCCESS" and bis["status"] == "SUCCESS"
+    f_b, f_s = bvp["Fn_heteroclinic"], bis["Fn_heteroclinic"]
+    diff = f_b - f_s if f_b is not None and f_s is not None else None
+    bound = (bvp.get("Fn_heteroclinic_error") or 0.0) + (bis.get("error") or 0.0)
+    agree = diff is not None and abs(diff) <= bound
+    if agree:
+        why = f"the two agree within their error bounds ({bound:.1e})"
+    elif bis.get("not_a_connection"):
+        why = bis["not_a_connection"]
+    elif diff is None:
+        why = "one of the two found no connection"
+    else:
+        why = (f"they differ by {diff:.1e}, more than their error bounds ({bound:.1e}): "
+               "the fates switch more than once in the bracket")  # fmt: skip
+    status = ("SUCCESS" if ok and agree else
+              (bvp["status"] if bvp["status"] != "SUCCESS" else
+               bis["status"] if bis["status"] != "SUCCESS" else "REJECTED"))  # fmt: skip
     return {
         "method": "both",
-        "Fn": bvp["Fn"],
+        "quantity": "heteroclinic connection",
+        "Fn": bvp["Fn"] if agree else None,
+        "Fn_heteroclinic": f_b,
+        "is_threshold": bool(agree and bvp["is_threshold"]),
         "bracket": bis["bracket"],
-        "difference": bvp["Fn"] - bis["Fn"],
-        "status": "SUCCESS"
-        if ok
-        else (bvp["status"] if bis["status"] == "SUCCESS" else bis["status"]),
+        "difference": diff,
+        "agree": agree,
+        "why": why,
+        "status": status,
+        "message": why,
         "bvp": bvp,
         "bisection": bis,
     }
@@ -91,6 +197,7 @@ def _both(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
 
 #: ``--method`` choices: name -> function(model, params, args) -> JSON-ready dict.
 METHODS: dict[str, Callable[[Any, Any, argparse.Namespace], dict[str, Any]]] = {
+    "threshold": _threshold,
     "bisection": _bisection,
     "bvp": _bvp,
     "both": _both,
@@ -101,16 +208,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``broachkit critical``."""
     add_ship(parser, fn=False)
     parser.add_argument(
-        "--method", choices=sorted(METHODS), default="bisection", help="how to locate it"
+        "--method",
+        choices=sorted(METHODS),
+        default="threshold",
+        help=(
+            "threshold (default): the lowest capsizing Fn and its mechanism; bvp, bisection, "
+            "both: the heteroclinic Fn, checked against the fates just below and above it"
+        ),
     )
     add_fn_guess(parser)
     parser.add_argument(
-        "--fn-min", dest="Fn_min", type=float, default=0.25, help="lower end of the Fn search"
-    )
+        "--fn-min", dest="Fn_min", type=float, default=None,
+        help="lower end of the Fn search (default: the surf-riding window of this wave)",
+    )  # fmt: skip
     parser.add_argument(
-        "--fn-max", dest="Fn_max", type=float, default=0.40, help="upper end of the Fn search"
-    )
-    parser.add_argument("--tol", type=float, default=1e-5, help="bracket width in Fn (1e-5)")
+        "--fn-max", dest="Fn_max", type=float, default=None,
+        help="upper end of the Fn search (default: the surf-riding window of this wave)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--tol", type=float, default=None,
+        help="final bracket width in Fn (threshold 2e-4, bisection 1e-5)",
+    )  # fmt: skip
     parser.add_argument(
         "--criterion",
         choices=("first_passage", "final"),
@@ -138,52 +256,105 @@ def run(args: argparse.Namespace) -> int:
         return 1
 
 
+def _window(model: Any, params: Any, args: argparse.Namespace) -> None:
+    """``--fn-min``/``--fn-max`` default to the surf-riding window of the sea state at hand
+    (:func:`ship_models.analysis.fn_window.surf_riding_window`), within the resistance fit."""
+    from ship_models.analysis.fn_window import surf_riding_window
+
+    from ..options import fn_limit
+
+    if args.Fn_min is None or args.Fn_max is None:
+        w = surf_riding_window(model, params)
+        lo, hi = (w.Fn_lo, w.Fn_hi) if w.exists else (0.05, fn_limit(model))
+        if args.Fn_min is None:
+            args.Fn_min = max(lo, 0.1)
+        if args.Fn_max is None:
+            args.Fn_max = min(hi, fn_limit(model))
+    if not args.Fn_min < args.Fn_max:
+        raise ValueError(
+            f"--fn-min must be below --fn-max, got {args.Fn_min:g}, {args.Fn_max:g} (without "
+            "them: the Fn range with surf-riding equilibria in this wave)"
+        )
+
+
 def _run(args: argparse.Namespace) -> int:
     """Locate the critical Fn; returns 0 on success, 1 otherwise."""
-    finite("--fn-min", args.Fn_min, low=0.0)
-    finite("--fn-max", args.Fn_max, low=0.0)
-    if not args.Fn_min < args.Fn_max:
-        raise ValueError(f"--fn-min must be below --fn-max, got {args.Fn_min}, {args.Fn_max}")
-    finite("--tol", args.tol, low=0.0, high=args.Fn_max - args.Fn_min)
+    for name, value in (("--fn-min", args.Fn_min), ("--fn-max", args.Fn_max)):
+        if value is not None:
+            finite(name, value, low=0.0)
+    if args.tol is not None:
+        finite("--tol", args.tol, low=0.0, high=0.1)
     finite("--t-max", args.t_max, low=0.0, high=1e5, unit="s")
     model, params = ship_from_args(args)
-    check_fn(model, "--fn-min", args.Fn_min)
-    check_fn(model, "--fn-max", args.Fn_max)
+    for name, value in (("--fn-min", args.Fn_min), ("--fn-max", args.Fn_max)):
+        if value is not None:
+            check_fn(model, name, value)
     if args.Fn_guess is not None:
         check_fn(model, "--fn-guess", args.Fn_guess)
+    _window(model, params, args)
     result = {"vessel": model.vessel.name, **METHODS[args.method](model, params, args)}
+    ok = result["status"] == "SUCCESS" and result.get("Fn") is not None
     if args.json:
         sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
-    elif result["status"] != "SUCCESS" and not math.isfinite(result.get("Fn") or math.nan):
+    elif args.method == "threshold":
+        sys.stdout.write(_threshold_text(model, args, result) + "\n")
+    elif result.get("Fn_heteroclinic") is None:
         sys.stderr.write(
-            f"broachkit critical: no critical Fn in --fn-min/--fn-max = [{args.Fn_min:g}, "
-            f"{args.Fn_max:g}] at chi_c = {args.chi_c:g} deg ({args.method}, "
-            f"{result['status']}): {_reason(result)}\n"
+            f"broachkit critical: no heteroclinic Fn in --fn-min/--fn-max = "
+            f"[{args.Fn_min:.4g}, {args.Fn_max:.4g}] at chi_c = {args.chi_c:g} deg "
+            f"({args.method}, {result['status']}): {_reason(result)}\n"
         )
     else:
         head = f"{model.vessel.name}, chi_c = {args.chi_c:g} deg ({args.method}): "
         if args.method == "bisection":
             lo, hi = result["bracket"]
             text = (
-                f"critical Fn = {result['Fn']:.7f} in [{lo:.7f}, {hi:.7f}] "
+                f"heteroclinic Fn = {result['Fn_heteroclinic']:.7f} in [{lo:.7f}, {hi:.7f}] "
                 f"({result['fate_lo']} below, {result['fate_hi']} above)"
             )
-        elif args.method == "bvp" and result["status"] != "SUCCESS":
-            text = f"no critical Fn: {result['message']}"
         elif args.method == "bvp":
             text = (
-                f"critical Fn = {result['Fn']:.8f} (connecting orbit, "
-                f"|G| = {result['residual_norm']:.1e}, error estimate {result.get('error')}, "
-                f"mesh change {result.get('delta_Fn_mesh')}, T change {result.get('delta_Fn_T')})"
+                f"heteroclinic Fn = {result['Fn_heteroclinic']:.8f} (connecting orbit, "
+                f"|G| = {result['residual_norm']:.1e}, error estimate "
+                f"{_num(result.get('error'))})"
             )
         else:
             lo, hi = result["bracket"]
             text = (
-                f"bvp Fn = {result['Fn']:.8f}; bisection bracket "
-                f"[{lo:.7f}, {hi:.7f}]; difference {result['difference']:.1e}"
+                f"bvp Fn = {result['Fn_heteroclinic']:.8f}; bisection bracket "
+                f"[{lo:.7f}, {hi:.7f}]; {result['why']}"
             )
-        sys.stdout.write(head + text + f"; {result['status']}\n")
-    return 0 if result["status"] == "SUCCESS" else 1
+        verdict = (
+            "it is the capsizing threshold (the fates at -+0.002 are survive/capsize)"
+            if result.get("is_threshold")
+            else "it is NOT the capsizing threshold here: " + _reason(result)
+        )
+        sys.stdout.write(head + text + f"; {verdict}; {result['status']}\n")
+    return 0 if ok else 1
+
+
+def _num(x: Any) -> str:
+    return "n/a" if x is None else f"{x:.1e}"
+
+
+def _threshold_text(model: Any, args: argparse.Namespace, r: dict[str, Any]) -> str:
+    """The threshold's summary line(s)."""
+    head = f"{model.vessel.name}, chi_c = {args.chi_c:g} deg: "
+    if r["Fn"] is None:
+        return head + f"no capsizing threshold ({r['status']}): {r['message']}"
+    het = r["Fn_heteroclinic"]
+    ev = r["evidence"]
+    lines = [
+        head + f"capsizing threshold Fn = {r['Fn']:.5f} +- {r['error']:.1e} "
+        f"(mechanism: {r['mechanism']}); {r['status']}",
+        "  heteroclinic Fn = "
+        + (f"{het:.7f}" if het is not None else "none on this course")
+        + (" (the same within their bounds)" if r["is_heteroclinic"] else ""),
+        f"  fates: Fn - 0.002 {ev['below']['attractor'] if ev['below'] else '?'}, "
+        f"Fn + 0.002 {ev['above']['attractor'] if ev['above'] else '?'}",
+        "  " + r["message"],
+    ]
+    return "\n".join(lines)
 
 
 def _reason(result: dict[str, Any]) -> str:

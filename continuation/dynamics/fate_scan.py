@@ -188,6 +188,8 @@ class _ScanState:
                 d = c.distance(self.hits_x[K], self.hits_x[K - m])
                 if d >= c.tol:
                     continue
+                if m > 1 and self._shorter_orbit(K, m):
+                    continue
                 t_a, t_b = self.hits_t[K - m], self.hits_t[K]
                 if not self._long_orbit(full, t_a, t_b, self.hits_x[K]):
                     continue
@@ -209,6 +211,30 @@ class _ScanState:
                     ),
                 )
         return None
+
+    def _shorter_orbit(self, K: int, m: int) -> bool:
+        r"""Are returns ``K`` and ``K - m`` close only because the map converges onto an
+        orbit of ``j | m`` returns (e.g. a 1-cycle with a negative multiplier)?
+
+        Near a 1-cycle with multiplier :math:`\mu \in (-1, 0)` the returns alternate,
+        :math:`x_k - x^* \propto \mu^k`, so :math:`|x_k - x_{k-2}|` falls below ``tol``
+        before :math:`|x_k - x_{k-1}|` does, by the factor :math:`|\mu| / |1 + \mu|`: a
+        2-cycle would be reported for a 1-cycle. A true ``m``-cycle keeps its ``j``-step
+        separations; converging onto a ``j``-cycle shrinks them by :math:`|\mu|^m` per
+        ``m`` returns. So ``m`` is refused while, for a proper divisor ``j`` of ``m``,
+        :math:`d(x_K, x_{K-j}) < 0.9\, d(x_{K-m}, x_{K-m-j})` (still contracting).
+        """
+        if K - m - 1 < 0:
+            return True  # too few returns to tell
+        dist, x = self.c.distance, self.hits_x
+        for j in range(1, m):
+            if m % j:
+                continue
+            if K - m - j < 0:
+                return True
+            if dist(x[K], x[K - j]) < 0.9 * dist(x[K - m], x[K - m - j]):
+                return True
+        return False
 
     def _long_orbit(self, full: Trajectory, t_a: float, t_b: float, x_ref: FloatArray) -> bool:
         """Does the arc between two returns extend beyond ``min_amplitude``?"""
