@@ -132,13 +132,25 @@ def key_number_rows(numbers: Mapping[str, Any]) -> list[tuple[str, str]]:
     rows = []
     chi = numbers.get("chi_c_deg")
     where = f" at chi_c = {chi:g} deg" if isinstance(chi, int | float) else ""
-    rows.append((f"critical Fn{where}, connecting orbit", _fmt(numbers.get("Fn_bvp"))))
-    rows.append((f"critical Fn{where}, bisection", _fmt(numbers.get("Fn_bisection"))))
+    th = numbers.get("threshold") or {}
+    for c, fn, err, mech in zip(th.get("chi_c_deg", []), th.get("Fn", []), th.get("error", []),
+                                th.get("mechanism", []), strict=False):  # fmt: skip
+        rows.append((f"capsizing threshold at chi_c = {c:g} deg ({mech})",
+                     f"{_fmt(fn)} +- {_fmt(err)}"))  # fmt: skip
+    if th.get("parting_chi_c_deg"):
+        a, b = th["parting_chi_c_deg"]
+        rows.append(("threshold parts from the heteroclinic Fn", f"between {a:g} and {b:g} deg"))
+    rows.append((f"heteroclinic Fn{where}, connecting orbit", _fmt(numbers.get("Fn_bvp"))))
+    rows.append((f"heteroclinic Fn{where}, bisection", _fmt(numbers.get("Fn_bisection"))))
     br = numbers.get("Fn_bisection_bracket")
     if br:
         rows.append(("bisection bracket", f"[{_fmt(br[0])}, {_fmt(br[1])}]"))
     for end in numbers.get("critical_curve_ends") or []:
-        rows.append((f"critical curve at chi_c = {end['chi_c_deg']:g} deg", _fmt(end["Fn"])))
+        rows.append((f"heteroclinic line at chi_c = {end['chi_c_deg']:g} deg", _fmt(end["Fn"])))
+    hend = numbers.get("heteroclinic_end")
+    if hend:
+        rows.append(("heteroclinic line ends (fold in chi_c)",
+                     f"chi_c = {hend['chi_c_deg']:.2f} deg, Fn = {_fmt(hend['Fn'])}"))  # fmt: skip
     return rows
 
 

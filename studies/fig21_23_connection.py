@@ -53,6 +53,8 @@ from studies._common import (
 CHI_C_DEG = 10.0
 PAPER_FN = PAPER_FN_BRACKET
 CHECK_COURSES_DEG = (0.0, 20.0, 30.0)
+#: Courses of the capsizing threshold (the lowest capsizing Fn and its mechanism).
+THRESHOLD_COURSES_DEG = (10.0, 20.0, 25.0, 30.0, 34.0, 38.0)
 
 
 def _planes(model: Any, c: float) -> list[tuple[str, str, Callable[[np.ndarray], tuple]]]:
@@ -180,8 +182,8 @@ def compute(
     save_figure(fig, out / "fig21_connection.png")
 
     # ---- Fig. 23: the critical curve
-    say("critical curve 0-30 deg by continuation of the connection")
-    courses = np.radians(np.arange(0.0, 31.0, 5.0 if quick else 1.0))
+    say("critical curve 0-40 deg by continuation of the connection (to its fold)")
+    courses = np.radians(np.arange(0.0, 41.0, 5.0 if quick else 1.0))
     curve = critical_curve(courses, model=model, start=conn)
     say(f"  {curve.message} ({curve.elapsed:.2f} s)")
     write_atomic(out / "critical_curve.csv", curve.to_csv)
@@ -190,7 +192,17 @@ def compute(
         "Fn": [float(v) for v in curve.Fn],
         "status": curve.status.name,
         "elapsed_s": curve.elapsed,
+        "end_chi_c_deg": math.degrees(curve.end_chi_c) if math.isfinite(curve.end_chi_c) else None,
+        "end_Fn": curve.end_Fn if math.isfinite(curve.end_Fn) else None,
     }
+    from ship_models.analysis.threshold_curve import threshold_curve
+
+    th_deg = (10.0, 30.0) if quick else THRESHOLD_COURSES_DEG
+    say(f"capsizing threshold at {', '.join(f'{d:g}' for d in th_deg)} deg (fates of the branch)")
+    tc = threshold_curve(np.radians(th_deg), model=model, heteroclinic=curve, workers=2)
+    say(f"  {tc.message} ({tc.elapsed:.1f} s)")
+    write_atomic(out / "threshold_curve.csv", tc.to_csv)
+    summary["threshold"] = tc.to_json()
     checks = [[CHI_C_DEG, bis.Fn, bis.bracket[0], bis.bracket[1], conn.Fn, bis.status.name]]
     for deg in CHECK_COURSES_DEG if not quick else (30.0,):
         say(f"  bisection check at {deg:g} deg")
@@ -210,12 +222,28 @@ def compute(
             label="continued heteroclinic connection (BVP)")  # fmt: skip
     ax.plot(
         [r[0] for r in checks], [r[1] for r in checks], "^", mfc="none", ms=8, color="tab:purple",
-        label="bisection on the unstable manifold's fate (simulation)",
+        label="bisection of the first passage (simulation)",
     )  # fmt: skip
+    het = np.array(tc.is_heteroclinic_mask())
+    ax.errorbar(tc.chi_c_deg, tc.Fn, yerr=tc.error, fmt="none", ecolor="tab:red", capsize=3)
+    ax.plot(tc.chi_c_deg[het], tc.Fn[het], "o", color="tab:red", ms=6,
+            label="capsizing threshold = heteroclinic")  # fmt: skip
+    ax.plot(tc.chi_c_deg[~het], tc.Fn[~het], "s", color="tab:red", mfc="white", ms=6,
+            label="capsizing threshold, another mechanism")  # fmt: skip
+    for c, t in zip(tc.chi_c_deg, tc.thresholds, strict=True):
+        if not t.is_heteroclinic and math.isfinite(t.Fn):
+            short = {"period-doubling cascade and crisis": "PD cascade + crisis",
+                     "subcritical period doubling": "subcritical PD"}.get(t.mechanism,
+                                                                          t.mechanism)  # fmt: skip
+            ax.annotate(short, (c, t.Fn), fontsize=7, rotation=90, xytext=(0, -8),
+                        textcoords="offset points", ha="center", va="top")  # fmt: skip
+    if math.isfinite(curve.end_chi_c):
+        ax.plot([math.degrees(curve.end_chi_c)], [curve.end_Fn], "k^", ms=5,
+                label="end of the heteroclinic line (fold)")  # fmt: skip
     ax.set_xlabel("autopilot course chi_c (deg)")
-    ax.set_ylabel("critical nominal Froude number")
+    ax.set_ylabel("nominal Froude number Fn")
     ax.ticklabel_format(axis="y", useOffset=False)
-    ax.set_title("Critical Fn by two methods (the combined Fig. 23 is in fig16_22)", fontsize=9)
+    ax.set_title("Heteroclinic Fn and capsizing threshold (Fig. 23)", fontsize=9)
     fig.legend(loc="outside lower center", ncol=1, fontsize=7, frameon=False)
     save_figure(fig, out / "critical_curve_methods.png")
     summary["figures"] = ["fig21_connection.png", "critical_curve_methods.png"]

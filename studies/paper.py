@@ -224,12 +224,30 @@ def _curve(r: Mapping[str, Any]) -> Finding:
     if not cv:
         return _not_run("fig21_23")
     deg, fn = cv["chi_c_deg"], cv["Fn"]
-    nums = tuple((f"chi_c = {d:g} deg", _fmt(f, ".5f")) for d, f in zip(deg, fn, strict=True)
-                 if float(d).is_integer() and int(d) % 10 == 0)  # fmt: skip
-    rising = all(b >= a for a, b in zip(fn, fn[1:], strict=False))
-    return Finding(nums, *_verdict(rising, "the critical Fn does not rise with the course",
-                                   "rising with the course, like the paper's filled circles; "
-                                   "lower in value (estimated coefficients)"))  # fmt: skip
+    nums = tuple((f"heteroclinic Fn, chi_c = {d:g} deg", _fmt(f, ".5f"))
+                 for d, f in zip(deg, fn, strict=True)
+                 if float(d).is_integer() and int(d) % 10 == 0 and f == f)  # fmt: skip
+    if cv.get("end_chi_c_deg") is not None:
+        nums += (("heteroclinic line ends (fold)", f"{cv['end_chi_c_deg']:.2f} deg"),)
+    th = (_get(r, "fig21_23", "threshold") or {}).get("threshold")
+    if not th:
+        return Finding(nums, *_verdict(False, "the capsizing threshold was not computed"))
+    nums += tuple(
+        (f"capsizing threshold, chi_c = {c:g} deg", f"{_fmt(f, '.5f')} ({m})")
+        for c, f, m in zip(th["chi_c_deg"], th["Fn"], th["mechanism"], strict=True)
+    )
+    het = [c for c, h in zip(th["chi_c_deg"], th["is_heteroclinic"], strict=True) if h]
+    other = [c for c, h in zip(th["chi_c_deg"], th["is_heteroclinic"], strict=True) if not h]
+    holds = not other
+    reason = (
+        "the paper's criterion (the heteroclinic Fn is the capsizing threshold) holds for this "
+        f"vessel at {', '.join(f'{c:g}' for c in het) or 'no'} deg but not at "
+        f"{', '.join(f'{c:g}' for c in other)} deg, where the ship capsizes below the "
+        "connection (the overtaken cycle is lost first); the heteroclinic line alone rises "
+        "with the course, the threshold does not"
+    )
+    ok_text = "the threshold is the heteroclinic Fn at every course checked"
+    return Finding(nums, *_verdict(holds, reason, ok_text))
 
 
 def _squares(r: Mapping[str, Any]) -> Finding:

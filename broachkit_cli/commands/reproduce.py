@@ -333,7 +333,10 @@ def key_numbers(results: dict[str, Any]) -> dict[str, Any]:
     curve = _get(results, "fig21_23", "curve") or {}
     ends = None
     if curve.get("chi_c_deg"):
-        ends = [{"chi_c_deg": curve["chi_c_deg"][i], "Fn": curve["Fn"][i]} for i in (0, -1)]
+        fin = [i for i, f in enumerate(curve["Fn"]) if f is not None and f == f]
+        if fin:
+            ends = [{"chi_c_deg": curve["chi_c_deg"][i], "Fn": curve["Fn"][i]}
+                    for i in (fin[0], fin[-1])]  # fmt: skip
     return {
         "chi_c_deg": _get(results, "fig21_23", "chi_c_deg")
         or _get(results, "fig10_15", "chi_c_deg"),
@@ -342,6 +345,29 @@ def key_numbers(results: dict[str, Any]) -> dict[str, Any]:
         "Fn_bisection_bracket": crit.get("bracket"),
         "Fn_bisection_fig21_23": _get(results, "fig21_23", "bisection", "Fn"),
         "critical_curve_ends": ends,
+        "heteroclinic_end": (
+            {"chi_c_deg": curve.get("end_chi_c_deg"), "Fn": curve.get("end_Fn")}
+            if curve.get("end_chi_c_deg") is not None
+            else None
+        ),
+        "threshold": _threshold_numbers(_get(results, "fig21_23", "threshold")),
+    }
+
+
+def _threshold_numbers(th: Any) -> dict[str, Any] | None:
+    """The capsizing threshold per course and where it parts from the heteroclinic Fn."""
+    if not th:
+        return None
+    t = th["threshold"]
+    return {
+        "chi_c_deg": t["chi_c_deg"],
+        "Fn": t["Fn"],
+        "error": t["error"],
+        "mechanism": t["mechanism"],
+        "Fn_heteroclinic": t["Fn_heteroclinic"],
+        "is_heteroclinic": t["is_heteroclinic"],
+        "confirmed": t["confirmed"],
+        "parting_chi_c_deg": th.get("parting_chi_c_deg"),
     }
 
 
@@ -376,14 +402,26 @@ def _summary_text(doc: dict[str, Any]) -> str:
     if k["Fn_bvp"] is not None or k["Fn_bisection"] is not None:
         lo_hi = k["Fn_bisection_bracket"] or [None, None]
         lines.append(
-            f"  critical Fn at chi_c = {f(k['chi_c_deg'], 'g')} deg: {f(k['Fn_bvp'], '.8f')} "
+            f"  heteroclinic Fn at chi_c = {f(k['chi_c_deg'], 'g')} deg: "
+            f"{f(k['Fn_bvp'], '.8f')} "
             f"(connecting orbit), {f(k['Fn_bisection'])} in [{f(lo_hi[0])}, {f(lo_hi[1])}] "
             f"(bisection); Umeda (1999): {PAPER_FN_10DEG[0]}-{PAPER_FN_10DEG[1]}"
         )
+    th = k.get("threshold")
+    if th:
+        for c, fn, mech in zip(th["chi_c_deg"], th["Fn"], th["mechanism"], strict=True):
+            lines.append(
+                f"  capsizing threshold at chi_c = {c:g} deg: Fn = {f(fn, '.5f')} ({mech})"
+            )
+        if th.get("parting_chi_c_deg"):
+            a, b = th["parting_chi_c_deg"]
+            lines.append(
+                f"  the threshold is the heteroclinic Fn up to {a:g} deg, below it from {b:g} deg"
+            )
     if k["critical_curve_ends"]:
         a, b = k["critical_curve_ends"]
         lines.append(
-            f"  critical curve: Fn = {f(a['Fn'], '.5f')} at {a['chi_c_deg']:g} deg "
+            f"  heteroclinic line: Fn = {f(a['Fn'], '.5f')} at {a['chi_c_deg']:g} deg "
             f"... {f(b['Fn'], '.5f')} at {b['chi_c_deg']:g} deg"
         )
     lines.append(f"  {len(doc['figures'])} figures; data in {doc['out']}")

@@ -501,6 +501,8 @@ def capsizing_threshold(
     *,
     chi_c: float | None = None,
     heteroclinic: CriticalFn | None = None,
+    Fn_heteroclinic: tuple[float, float] | None = None,
+    Fn_anchor: float | None = None,
     settings: ThresholdSettings | None = None,
     progress: Callable[[FateSample], None] | None = None,
     **options: Any,
@@ -519,6 +521,12 @@ def capsizing_threshold(
         The connection at this course if already solved (e.g. from the critical curve);
         otherwise solved here (:func:`~ship_models.analysis.critical_bvp.critical_fn_bvp`
         with its convergence check).
+    Fn_heteroclinic : (float, float), optional
+        Instead of ``heteroclinic``: its ``Fn`` and error estimate (NaN: no connection on
+        this course, e.g. beyond the critical curve's fold); nothing is solved.
+    Fn_anchor : float, optional
+        Where there is no connection: the scan covers ``Fn_anchor -+ depth`` (default
+        the surf-riding window).
     settings : ThresholdSettings, optional
     progress : callable, optional
         Called with each new :class:`FateSample`.
@@ -541,7 +549,7 @@ def capsizing_threshold(
     chi = course(base["chi_c"] if chi_c is None else chi_c)
     base = base.replace(chi_c=chi)
     window = surf_riding_window(m, base)
-    if heteroclinic is None:
+    if heteroclinic is None and Fn_heteroclinic is None:
         from .critical_bvp import critical_fn_bvp
 
         try:
@@ -554,11 +562,15 @@ def capsizing_threshold(
     if heteroclinic is not None and heteroclinic.success and math.isfinite(heteroclinic.Fn):
         Fn_h = float(heteroclinic.Fn)
         err_h = float(heteroclinic.error) if heteroclinic.error is not None else math.nan
+    elif Fn_heteroclinic is not None:
+        Fn_h, err_h = (float(v) for v in Fn_heteroclinic)
     lo_w = window.Fn_lo if window.exists else 0.05
     hi_w = window.Fn_hi if window.exists else 0.6
     if math.isfinite(Fn_h):
         lo = max(lo_w, Fn_h - cfg.depth)
         hi = min(hi_w, Fn_h + 2 * cfg.check_distance)
+    elif Fn_anchor is not None and math.isfinite(Fn_anchor):
+        lo, hi = max(lo_w, Fn_anchor - cfg.depth), min(hi_w, Fn_anchor + cfg.depth)
     else:
         lo, hi = lo_w, hi_w
     lo = max(lo, 0.05)
