@@ -20,11 +20,12 @@ with the fate of the branch decided by simulation
 (:func:`~ship_models.analysis.manifold.unstable_manifold`; capsize = the roll angle
 passes the angle of vanishing stability). The search:
 
-1. a grid of spacing ``coarse_step`` from ``Fn_h - depth`` (``Fn_h`` the heteroclinic
-   Fn, or the lower end of the surf-riding window :mod:`~ship_models.analysis.fn_window`
-   if there is no connection) upwards; every interval whose two ends are not both the
-   plain overtaken cycle (a periodic fate of one return, one wave per period) is
-   scanned again at ``step``; the first capsizing grid point ends the scan;
+1. by the engine's :func:`continuation.dynamics.lowest_fate.lowest_fate`: a grid of
+   spacing ``coarse_step`` from ``Fn_h - depth`` (``Fn_h`` the heteroclinic Fn; without
+   a connection, about ``Fn_anchor`` or over the surf-riding window
+   :mod:`~ship_models.analysis.fn_window`) upwards; every interval whose two ends are
+   not both the plain overtaken cycle (a periodic fate of one return, one wave per
+   period) is scanned again at ``step``; the first capsizing grid point ends the scan;
 2. bisection of the fates between the last surviving and the first capsizing grid
    point to ``tol`` (the error estimate is half the final bracket);
 3. evidence: the fates at ``Fn_c - check_distance`` and ``Fn_c + check_distance``;
@@ -55,6 +56,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from continuation.dynamics.lowest_fate import lowest_fate
 from continuation.status import Status
 
 from .critical_bisection import _FateAt
@@ -369,26 +371,6 @@ class _Fates:
         return tuple(self.samples[k] for k in sorted(self.samples))
 
 
-def _grid(lo: float, hi: float, h: float) -> list[float]:
-    n = max(1, int(math.ceil((hi - lo) / h - 1e-9)))
-    return [lo + (hi - lo) * k / n for k in range(n + 1)]
-
-
-def _first_capsize(fates: _Fates, lo: float, hi: float, s: ThresholdSettings) -> float | None:
-    """The lowest capsizing grid point in ``[lo, hi]`` (module notes, step 1)."""
-    prev: float | None = None
-    for g in _grid(lo, hi, s.coarse_step):
-        cur = fates(g)
-        if prev is not None and not (fates(prev).plain_cycle and cur.plain_cycle):
-            for f in _grid(prev, g, s.step)[1:-1]:
-                if fates(f).outcome == CAPSIZE:
-                    return f
-        if cur.outcome == CAPSIZE:
-            return g
-        prev = g
-    return None
-
-
 def cycle_bifurcations(
     model: Any, params: Any, *, Fn_min: float = 0.0, Fn_max: float
 ) -> CycleBifurcations:
@@ -605,31 +587,29 @@ def capsizing_threshold(
                               "so it has no course-dependent threshold")  # fmt: skip
     fate_at = _FateAt(m, base.replace(Fn=lo), start, "upslope", {"t_max": cfg.t_max}, "final")
     fates = _Fates(fate_at, progress)
+
+    def decided(Fn: float) -> FateSample | None:
+        smp = fates(Fn)
+        return smp if smp.outcome in (CAPSIZE, SURVIVE) else None
+
     try:
-        first = _first_capsize(fates, lo, hi, cfg)
-        if first is None:
+        found = lowest_fate(
+            decided, lo, hi, is_target=lambda smp: smp.outcome == CAPSIZE,
+            is_plain=lambda smp: smp.plain_cycle, step=cfg.step, coarse_step=cfg.coarse_step,
+            tol=cfg.tol,
+        )  # fmt: skip
+        if found.bracket is None:
+            above_h = [smp for smp in fates.sorted() if smp.outcome == SURVIVE]
+            why = ""
+            if above_h and all(smp.label.startswith("equilibrium") for smp in above_h[-2:]):
+                why = (" (above the connection the branch reaches a stable equilibrium: "
+                       "surf-riding, the threshold of the surge model, not capsizing)")  # fmt: skip
             return result(samples=fates.sorted(), status=Status.NO_BRACKET,
-                          message=f"the upslope branch does not capsize anywhere in Fn "
-                                  f"[{lo:.4f}, {hi:.4f}] (chi_c = {math.degrees(chi):.4g} "
-                                  "deg)")  # fmt: skip
-        below_pts = [s for s in fates.sorted() if s.Fn < first]
-        survive = [s for s in below_pts if s.outcome == SURVIVE]
-        if not survive:
-            return result(samples=fates.sorted(), status=Status.NO_BRACKET,
-                          message=f"the upslope branch already capsizes at the start of the "
-                                  f"scan, Fn = {lo:.4f}")  # fmt: skip
-        a, b = survive[-1].Fn, first
-        while b - a > cfg.tol:
-            mid = 0.5 * (a + b)
-            s = fates(mid)
-            if s.outcome == CAPSIZE:
-                b = mid
-            elif s.outcome == SURVIVE:
-                a = mid
-            else:  # undecided or lost saddle in the bracket: stop here
-                break
-        Fn_c = 0.5 * (a + b)
-        err_c = 0.5 * (b - a)
+                          message=f"no capsize of the upslope branch found in Fn "
+                                  f"[{lo:.4f}, {hi:.4f}] at chi_c = {math.degrees(chi):.4g} "
+                                  f"deg: {found.message}{why}")  # fmt: skip
+        a, b = found.bracket
+        Fn_c, err_c = found.p, found.error
         d = cfg.check_distance
         below = fates(Fn_c - d)
         above = fates(Fn_c + d)
@@ -674,6 +654,13 @@ def capsizing_threshold(
         )
     if below.outcome != SURVIVE:
         notes.append(f"the fate at Fn_c - {d:g} is {below.label}")
+    chaotic = [smp.Fn for smp in samples if smp.label == ShipOutcome.RECURRENT and smp.Fn < Fn_c]
+    if chaotic:
+        notes.append(
+            "bounded irregular motion without a settled period (a chaotic attractor, or a "
+            f"transient longer than {cfg.t_max:g} s) below Fn_c at Fn = "
+            + ", ".join(f"{f:.5f}" for f in chaotic)
+        )  # fmt: skip
     if undecided:
         status = Status.UNDECIDED
         notes.append(
