@@ -108,9 +108,9 @@ def _heteroclinic(
     """A heteroclinic method's JSON: its value checked against the fates at ``-+ 0.002``."""
     doc = {k: v for k, v in doc.items() if k != "fn_critical"}
     doc["quantity"] = "heteroclinic connection"
-    doc["Fn_heteroclinic"] = Fn
+    doc["Fn_heteroclinic"] = Fn if Fn is not None and math.isfinite(Fn) else None
     doc["Fn_heteroclinic_error"] = error
-    ok = doc.get("status") == "SUCCESS" and math.isfinite(Fn)
+    ok = doc.get("status") == "SUCCESS" and doc["Fn_heteroclinic"] is not None
     check = _evidence(model, params, Fn, CHECK_DISTANCE, 1200.0) if ok else None
     doc["threshold_check"] = check
     doc["is_threshold"] = bool(check and check["passed"])
@@ -132,12 +132,17 @@ CHECK_DISTANCE = 0.002
 def _threshold(model: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
     from ship_models.analysis.threshold import capsizing_threshold
 
+    tol = 2e-4 if args.tol is None else args.tol
+    step = max(0.002, 2 * tol)
     with StatusLine(enabled=not args.json) as status:
         res = capsizing_threshold(
             model,
             params,
             t_max=args.t_max,
-            tol=2e-4 if args.tol is None else args.tol,
+            tol=tol,
+            step=step,
+            coarse_step=max(0.01, step),
+            Fn_range=(args.Fn_min, args.Fn_max) if args.fn_range_given else None,
             progress=lambda s: status.show(f"threshold: Fn = {s.Fn:.6f}: {s.label}"),
         )
     doc = {"method": "threshold", **res.to_json()}
@@ -263,6 +268,7 @@ def _window(model: Any, params: Any, args: argparse.Namespace) -> None:
 
     from ..options import fn_limit
 
+    args.fn_range_given = args.Fn_min is not None or args.Fn_max is not None
     if args.Fn_min is None or args.Fn_max is None:
         w = surf_riding_window(model, params)
         lo, hi = (w.Fn_lo, w.Fn_hi) if w.exists else (0.05, fn_limit(model))
@@ -296,6 +302,12 @@ def _run(args: argparse.Namespace) -> int:
     ok = result["status"] == "SUCCESS" and result.get("Fn") is not None
     if args.json:
         sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
+    elif args.method == "threshold" and result["Fn"] is None:
+        sys.stderr.write(
+            f"broachkit critical: no capsizing threshold in --fn-min/--fn-max = "
+            f"[{result['scanned'][0]:.4g}, {result['scanned'][1]:.4g}] at chi_c = "
+            f"{args.chi_c:g} deg (threshold, {result['status']}): {_reason(result)}\n"
+        )
     elif args.method == "threshold":
         sys.stdout.write(_threshold_text(model, args, result) + "\n")
     elif result.get("Fn_heteroclinic") is None:

@@ -256,7 +256,9 @@ class CapsizingThreshold:
     status : Status
         ``SUCCESS`` when a threshold was bracketed to ``tol`` with every fate below it
         decided; ``UNDECIDED`` if a fate below it stayed undecided; ``NO_BRACKET`` if no
-        capsize was found in the scanned range; ``REJECTED`` when the ship cannot hold
+        capsize was found in the scanned range; ``NO_SOLUTION`` if there is none: above
+        the connection the branch surf-rides instead (``chi_c = 0``: no lateral motion,
+        no capsize), or there is no crest saddle; ``REJECTED`` when the ship cannot hold
         the course (rudder at its limit at the crest saddle).
     message : str
     elapsed : float
@@ -485,6 +487,7 @@ def capsizing_threshold(
     heteroclinic: CriticalFn | None = None,
     Fn_heteroclinic: tuple[float, float] | None = None,
     Fn_anchor: float | None = None,
+    Fn_range: tuple[float, float] | None = None,
     settings: ThresholdSettings | None = None,
     progress: Callable[[FateSample], None] | None = None,
     **options: Any,
@@ -509,6 +512,10 @@ def capsizing_threshold(
     Fn_anchor : float, optional
         Where there is no connection: the scan covers ``Fn_anchor -+ depth`` (default
         the surf-riding window).
+    Fn_range : (float, float), optional
+        The range scanned, instead of the one derived from the connection (the first
+        capsize in it is the answer; ``NO_BRACKET`` if the branch already capsizes at
+        its lower end).
     settings : ThresholdSettings, optional
     progress : callable, optional
         Called with each new :class:`FateSample`.
@@ -556,6 +563,10 @@ def capsizing_threshold(
     else:
         lo, hi = lo_w, hi_w
     lo = max(lo, 0.05)
+    if Fn_range is not None:
+        lo, hi = (float(v) for v in Fn_range)
+        if not (0 < lo < hi and math.isfinite(hi)):
+            raise ValueError(f"`Fn_range` must satisfy 0 < lo < hi, got {Fn_range!r}")
     resolution = (
         f"grid {cfg.coarse_step:g} where the branch reaches the plain overtaken cycle at both "
         f"ends, {cfg.step:g} elsewhere, from Fn = {lo:.4f}; bisection to {cfg.tol:g}; "
@@ -600,11 +611,14 @@ def capsizing_threshold(
         )  # fmt: skip
         if found.bracket is None:
             above_h = [smp for smp in fates.sorted() if smp.outcome == SURVIVE]
-            why = ""
-            if above_h and all(smp.label.startswith("equilibrium") for smp in above_h[-2:]):
+            why, st = "", Status.NO_BRACKET
+            riding = ("equilibrium", "saddle")  # on the surge plane at chi_c = 0: a saddle
+            if above_h and all(smp.label.startswith(riding) for smp in above_h[-2:]):
                 why = (" (above the connection the branch reaches a stable equilibrium: "
-                       "surf-riding, the threshold of the surge model, not capsizing)")  # fmt: skip
-            return result(samples=fates.sorted(), status=Status.NO_BRACKET,
+                       "surf-riding, the threshold of the surge model, not capsizing; "
+                       "there is no capsizing threshold on this course)")  # fmt: skip
+                st = Status.NO_SOLUTION
+            return result(samples=fates.sorted(), status=st,
                           message=f"no capsize of the upslope branch found in Fn "
                                   f"[{lo:.4f}, {hi:.4f}] at chi_c = {math.degrees(chi):.4g} "
                                   f"deg: {found.message}{why}")  # fmt: skip
@@ -633,7 +647,10 @@ def capsizing_threshold(
     else:
         if cfg.locate_bifurcations:
             try:
-                bif = cycle_bifurcations(m, base, Fn_min=lo, Fn_max=min(hi, Fn_c + 2 * d))
+                t_b = time.perf_counter()
+                bif = cycle_bifurcations(m, base, Fn_min=max(lo, Fn_c - 0.03),
+                                         Fn_max=min(hi, Fn_c + 2 * d))  # fmt: skip
+                log.debug("cycle bifurcations in %.1f s", time.perf_counter() - t_b)
             except (ValueError, ArithmeticError) as exc:
                 log.debug("cycle bifurcations not located: %s", exc)
         mech, why = _mechanism(Fn_c, Fn_h, attractor, bif, cfg.tol)
