@@ -177,6 +177,7 @@ class RunContext:
         continuity: float | None = None,
         bracket: tuple[tuple[float, PointInfo, float], tuple[float, PointInfo, float]]
         | None = None,
+        same_branch: bool = False,
     ) -> LocateResult:
         det = self.settings.detect
         if not det.locate:
@@ -199,6 +200,7 @@ class RunContext:
             first=first,
             continuity=continuity,
             bracket=bracket,
+            same_branch=same_branch,
         )
 
     def event_brackets(
@@ -324,6 +326,9 @@ class RunContext:
             hi[2],
             continuity=e.continuity,
             bracket=(lo, hi),
+            # a test smooth along the branch is evaluated on the branch only (not on a
+            # crossing branch next to a branch point, see locate.tangent_agrees)
+            same_branch=e.continuity is not None,
         )
 
     def detect(

@@ -86,8 +86,13 @@ class Event:
         only if ``|fn|`` at the returned point is at most ``continuity`` times the mean
         slope of ``fn`` over the step times the final bracket, plus round-off
         (:func:`~continuation.locate.locate_zero`). A sign change across a jump of
-        ``fn`` is then reported as bracketed, not located. ``None`` (default): only the
-        loose rule ``|fn| <= 1e-3 max(|fn_a|, |fn_b|)``.
+        ``fn`` is then reported as bracketed, not located. Trial points are also kept
+        on the branch (their tangent must be the branch's,
+        :func:`~continuation.locate.tangent_agrees`), so ``fn`` is never evaluated on
+        a crossing branch next to a branch point; where no trial point of the branch
+        can be corrected, the zero is interpolated through the points found on it,
+        located only within the tolerance by its error estimate. ``None`` (default):
+        only the loose rule ``|fn| <= 1e-3 max(|fn_a|, |fn_b|)``.
     slope : bool
         Evaluate ``dg/ds`` at every row for the detection of zeros between rows of the
         same sign (default). ``False``: the sign test at the rows only, as for the

@@ -12,6 +12,14 @@ bracket or the last secant correction is below ``tol`` (in ``sigma``). A point c
 as located only if ``|g|`` there is below ``1e-3 max(|g_a|, |g_b|)`` once the bracket
 has collapsed, so a sign change across a jump of ``g`` is reported as bracketed, never
 as a zero, while round-off noise in ``g`` near a genuine zero is tolerated.
+
+Next to a branch point of the branch the bordered matrix is singular: Newton's method
+determines a trial point only to ``tol / sigma_min`` and may converge onto the crossing
+branch, where ``g`` has other values. For test functions smooth along the branch
+(``same_branch``) a trial point is kept only if its tangent is the branch's
+(:func:`tangent_agrees`); where none can be corrected, the zero and the point there are
+interpolated through the points already on the branch (:func:`_interpolated_zero`),
+located only if the interpolation's error estimate is within ``tol``.
 """
 
 from __future__ import annotations
@@ -70,6 +78,7 @@ def point_at(
     w: Any,
     newton: NewtonSettings,
     near: tuple[float, PointInfo] | None = None,
+    same_branch: bool = False,
 ) -> PointInfo | None:
     """The branch point at pseudo-arclength ``sigma`` from ``a`` towards ``b``.
 
@@ -77,7 +86,8 @@ def point_at(
     gives a converged point closer to ``sigma``, the tangent of ``q`` scaled to meet the
     constraint; near a branch point (where the bordered matrix is almost singular and
     Newton converges slowly) this keeps the initial residual tiny. Returns None if the
-    corrector fails.
+    corrector fails, or, with ``same_branch``, if the corrected point's tangent is not
+    that of the branch through ``a`` and ``b`` (:func:`tangent_agrees`).
     """
     if sigma <= 0.0:
         return a
@@ -104,8 +114,10 @@ def point_at(
     if _inf_norm(res.u - u_pred) > max(_inf_norm(u_pred - u_base), noise):
         return None
     try:
-        return make_point(res.z, res.p, res.lin, c, w, iters=res.iters, lu=res.lu, u=res.u_full)
+        pt = make_point(res.z, res.p, res.lin, c, w, iters=res.iters, lu=res.lu, u=res.u_full)
     except np.linalg.LinAlgError:
+        if same_branch:
+            return None  # (no tangent to check: the caller interpolates instead)
         # exactly singular bordered matrix: an exact branch point; the tangent is not
         # unique there, so take the chord direction, and set the BP test to zero
         G, Gz, Gp = res.lin
@@ -125,6 +137,36 @@ def point_at(
             iters=res.iters,
             residual_norm=res.residual_norm,
         )
+    if same_branch and not tangent_agrees(pt, a, b, w):
+        return None
+    return pt
+
+
+#: Slack of :func:`tangent_agrees`: a trial point's tangent may turn this much
+#: (``1 - cos`` of the angle, about 18 degrees) beyond the turn between the two rows.
+TANGENT_SLACK = 0.05
+
+
+def tangent_agrees(pt: PointInfo, a: PointInfo, b: PointInfo, w: Any) -> bool:
+    r"""Whether the tangent at a trial point inside the step ``a -> b`` is the branch's.
+
+    Along a smooth arc the unit tangent turns continuously: at a point between the
+    rows it makes with ``tau_a`` and with ``tau_b`` angles no larger than the turn
+    ``phi_ab`` between them (for an arc turning one way). The point passes if
+    ``min(|<tau, tau_a>_theta|, |<tau, tau_b>_theta|) >= cos(phi_ab) - slack`` with
+    ``slack = max(TANGENT_SLACK, (1 - cos(phi_ab)) / 2)``. Next to a branch point of
+    the branch Newton's method may converge onto the crossing branch (a genuine
+    solution on the same constraint hyperplane, at a finite angle); its tangent is
+    the crossing branch's and fails this test, as does the ill-determined tangent of
+    a point within ``tol / sigma_min`` of the branch point itself (Allgower & Georg
+    1990, *Numerical Continuation Methods*, Sec. 8.1). Crossings at angles below
+    ~18 degrees are not told apart.
+    """
+    cab = abs(float((w * a.tau).dot(b.tau)))
+    floor = min(cab, 1.0) - max(TANGENT_SLACK, 0.5 * (1.0 - cab))
+    ca = abs(float((w * a.tau).dot(pt.tau)))
+    cb = abs(float((w * b.tau).dot(pt.tau)))
+    return min(ca, cb) >= floor
 
 
 def fold_guess(a: PointInfo, b: PointInfo, sigma_b: float) -> float | None:
@@ -165,29 +207,96 @@ def fold_guess(a: PointInfo, b: PointInfo, sigma_b: float) -> float | None:
     return inside[0] * h
 
 
+#: Most branch points :func:`_interpolated_zero` interpolates through (a cubic).
+INTERP_POINTS = 4
+
+
+def _poly_zero(x: np.ndarray, g: np.ndarray, lo: float, hi: float) -> float | None:
+    """The zero in ``[lo, hi]`` of the polynomial through ``(x_i, g_i)`` nearest its
+    secant zero; ``g`` changes sign between the samples at ``lo`` and ``hi``."""
+    scale = float(np.max(np.abs(g)))
+    if not (scale > 0 and math.isfinite(scale)):
+        return None
+    coef = np.polyfit(x, g / scale, x.size - 1)
+    roots = np.roots(coef) if x.size > 2 else np.array([-coef[1] / coef[0]])
+    tiny = 1e-9 * (hi - lo)
+    real = [float(r.real) for r in np.atleast_1d(roots)
+            if abs(r.imag) <= tiny and lo - tiny <= r.real <= hi + tiny]  # fmt: skip
+    if not real:
+        return None
+    return min(max(min(real, key=lambda r: abs(r - 0.5 * (lo + hi))), lo), hi)
+
+
+def _lagrange(x: np.ndarray, at: float) -> np.ndarray:
+    """Lagrange basis weights ``l_i(at)`` of the nodes ``x``, shape ``(len(x),)``."""
+    out = np.ones(x.size)
+    for i in range(x.size):
+        for j in range(x.size):
+            if j != i:
+                out[i] *= (at - x[j]) / (x[i] - x[j])
+    return out
+
+
 def _interpolated_zero(
     problem: Any,
     a: PointInfo,
+    samples: list[tuple[float, PointInfo, float]],
     end_lo: tuple[float, PointInfo, float],
     end_hi: tuple[float, PointInfo, float],
     w: Any,
     newton: NewtonSettings,
     test: Callable[[PointInfo, float], float],
     sigma_b: float,
-) -> tuple[float, PointInfo, float] | None:
-    """The point at the secant zero of ``g`` on the chord between two bracket ends.
+    tol: float,
+) -> LocateResult | None:
+    r"""The zero of ``g`` and the branch point there, interpolated from points on the branch.
 
-    ``end = (sigma, point, g)`` with ``g`` of opposite signs. The chord point deviates
-    from the branch by at most ``kappa width^2 / 8`` (``kappa`` the curvature), so for a
-    narrow bracket it is a solution to within the corrector's tolerance; it is accepted
-    only if ``max |G| <= newton.tol`` there. Returns ``(sigma, point, g)`` or None.
+    Used where Newton's method cannot produce a trial point next to the zero (at a
+    branch point of the branch the bordered matrix is singular and a corrected point
+    is only determined to ``tol / sigma_min``, or lands on the crossing branch). ``g``
+    and ``u`` are smooth functions of the pseudo-arclength ``sigma`` along the branch,
+    so both are interpolated by polynomials through the ``k <= INTERP_POINTS`` corrected
+    points of ``samples`` (``(sigma, point, g)`` on the branch, the bracket ends
+    ``end_lo``, ``end_hi`` with ``g`` of opposite signs among them) nearest the
+    bracket: ``sigma*`` is the zero of the ``g`` interpolant inside the bracket and
+    ``u* = sum_i l_i(sigma*) u_i`` (Lagrange weights ``l_i``). The error estimate is
+    the difference between the degree ``k - 1`` and ``k - 2`` results (the farthest
+    sample dropped), ``max(|sigma*_k - sigma*_{k-1}|, ||u*_k - u*_{k-1}||_theta)``;
+    with only the two bracket ends it is the bracket's width. The point is
+    ``located`` only if that estimate is at most ``tol`` and ``max |G(u*)|`` at most
+    ``newton.tol``; it is returned (not located) if only the residual test passes, and
+    None is returned otherwise.
     """
-    (s0, q0, g0), (s1, q1, g1) = end_lo, end_hi
-    if not (s1 > s0 and g0 * g1 < 0 and math.isfinite(g0) and math.isfinite(g1)):
+    lo, hi = end_lo[0], end_hi[0]
+    if not (hi > lo and end_lo[2] * end_hi[2] < 0):
         return None
-    lam = g0 / (g0 - g1)  # in (0, 1)
-    s = s0 + lam * (s1 - s0)
-    u = q0.u + lam * (q1.u - q0.u)
+    mid = 0.5 * (lo + hi)
+    others = sorted(
+        (q for q in samples if q[0] not in (lo, hi) and math.isfinite(q[2])),
+        key=lambda q: abs(q[0] - mid),
+    )
+    chosen = [end_lo, end_hi, *others[: INTERP_POINTS - 2]]
+    width = hi - lo
+
+    def estimate(pts: list[tuple[float, PointInfo, float]]) -> tuple[float, np.ndarray] | None:
+        x = np.array([(q[0] - lo) / width for q in pts])
+        gz = _poly_zero(x, np.array([q[2] for q in pts]), 0.0, 1.0)
+        if gz is None:
+            return None
+        lw = _lagrange(x, gz)
+        u = sum(li * q[1].u for li, q in zip(lw, pts, strict=True))
+        return lo + gz * width, np.asarray(u, dtype=float)
+
+    best = estimate(chosen)
+    if best is None:
+        return None
+    s, u = best
+    err = width
+    if len(chosen) > 2:
+        lower = estimate(chosen[:-1])
+        if lower is None:
+            return None
+        err = max(abs(s - lower[0]), theta_norm(u - lower[1], w))
     n = u.size - 1
     z, p = u[:n].copy(), float(u[n])
     try:
@@ -200,6 +309,7 @@ def _interpolated_zero(
     try:
         pt = make_point(z, p, lin, c, w, u=u)
     except np.linalg.LinAlgError:
+        q0, q1 = end_lo[1], end_hi[1]
         tau = (q1.u - q0.u) / max(theta_norm(q1.u - q0.u, w), 1e-300)
         G, Gz, Gp = lin
         pt = PointInfo(z=z, p=p, tau=tau, G=G, Gz=Gz, Gp=Gp, lu=None, border=c, t_raw=tau,
@@ -207,7 +317,11 @@ def _interpolated_zero(
     g = float(test(pt, s / sigma_b))
     if not math.isfinite(g):
         return None
-    return s, pt, g
+    msg = (
+        f"interpolated through {len(chosen)} points on the branch next to a point where "
+        f"the corrector fails (error estimate {err:.1e})"
+    )
+    return LocateResult(s, pt, g, err <= tol, 0, msg)
 
 
 def locate_beyond(
@@ -294,6 +408,7 @@ def locate_zero(
     first: float | None = None,
     continuity: float | None = None,
     bracket: tuple[tuple[float, PointInfo, float], tuple[float, PointInfo, float]] | None = None,
+    same_branch: bool = False,
 ) -> LocateResult:
     """Find ``sigma`` in ``[0, sigma_b]`` where ``test(point(sigma), t) = 0``.
 
@@ -332,6 +447,13 @@ def locate_zero(
         (including in the ``1e-3`` and ``continuity`` rules, whose mean slope is then
         taken over the sub-bracket). Default: the whole step, ``(0, a, g_a)`` and
         ``(sigma_b, b, g_b)``.
+    same_branch : bool
+        Accept a trial point only if its tangent is the branch's
+        (:func:`tangent_agrees`), so that next to a branch point ``g`` is never
+        evaluated on the crossing branch. Where no trial point of the branch can be
+        corrected, the zero is interpolated through the points already found on it
+        (:func:`_interpolated_zero`, located only within ``tol`` by its error
+        estimate).
 
     Returns
     -------
@@ -360,6 +482,18 @@ def locate_zero(
     # collapsed: a continuous g is far smaller there (it is bounded by its slope times the
     # tolerance, plus round-off noise), a jump of g is not
     g_jump = 1e-3
+    g_max = max(abs(g_a), abs(g_b))
+
+    def g_ok(d: float) -> float:
+        """Largest ``|g|`` at a zero known to within ``d``: with `continuity`, a zero
+        within ``d`` of the point leaves ``|g|`` there of about slope * d; allow
+        `continuity` times the mean slope over the bracket plus round-off noise."""
+        bound = g_jump * g_max
+        if continuity is not None:
+            bound = min(bound, continuity * abs(g_b - g_a) / width * d + 1e-6 * g_max)
+        return bound
+
+    samples = [end_lo, end_hi]  # points on the branch with their test values
     glo, ghi = g_a, g_b  # glo/ghi are Illinois-scaled values
     side = 0
     s_prev = math.nan
@@ -370,21 +504,26 @@ def locate_zero(
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
         near = min(end_lo, end_hi, key=lambda e: abs(e[0] - s))
-        pt = point_at(problem, a, b, s, sigma_b, w, newton, (near[0], near[1]))
+        pt = point_at(problem, a, b, s, sigma_b, w, newton, (near[0], near[1]), same_branch)
         if pt is None:
+            # Newton cannot produce a point of this branch here (e.g. next to a branch
+            # point, where the bordered matrix is singular and the corrected point is
+            # only determined to tol / sigma_min, or lies on the crossing branch):
+            # interpolate g and the branch through the points already on it
+            r_int = _interpolated_zero(
+                problem, a, samples, end_lo, end_hi, w, newton, test, sigma_b, tol
+            )
+            if r_int is not None and r_int.located:
+                r_int.iterations = it
+                return r_int
             s = 0.5 * (lo + hi)
-            pt = point_at(problem, a, b, s, sigma_b, w, newton, (near[0], near[1]))
+            near = min(end_lo, end_hi, key=lambda e: abs(e[0] - s))
+            pt = point_at(problem, a, b, s, sigma_b, w, newton, (near[0], near[1]), same_branch)
             if pt is None:
-                # Newton cannot converge this close to the point (e.g. at a branch point,
-                # where the bordered matrix is singular and the corrected point is only
-                # determined to tol / sigma_min along the near-null vector): interpolate
-                # the branch between the bracket ends at the secant zero of g, which is on
-                # the branch to O(width^2), and accept it if its residual meets the
-                # corrector's tolerance
                 msg = f"corrector failed in a bracket of width {hi - lo:.1e}"
-                r_int = _interpolated_zero(problem, a, end_lo, end_hi, w, newton, test, sigma_b)
                 if r_int is not None:
-                    return LocateResult(r_int[0], r_int[1], r_int[2], True, it, msg)
+                    msg = f"{msg}; {r_int.message}"
+                    return LocateResult(r_int.sigma, r_int.point, r_int.g, r_int.located, it, msg)
                 # otherwise accept the bracket if it is already narrow and g small at its
                 # better end
                 best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
@@ -397,6 +536,7 @@ def locate_zero(
             return LocateResult(best[0], best[1], best[2], False, it, "test not finite")
         if abs(g) <= g_small:
             return LocateResult(s, pt, g, True, it)
+        samples.append((s, pt, g))
         if (g > 0) == (ghi > 0):
             hi, ghi, end_hi = s, g, (s, pt, g)
             if side == 1:
@@ -413,17 +553,11 @@ def locate_zero(
         s_next = hi - ghi * (hi - lo) / (ghi - glo)
         if hi - lo <= tol or abs(s - s_prev) <= tol or abs(s_next - s) <= tol:
             best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
-            # with `continuity`: a zero within d of the best point leaves |g| there of
-            # about slope * d; allow `continuity` times the mean slope over the step
-            # plus round-off noise. A larger |g| means the bracket closed on a jump of g
-            # (e.g. trial points corrected onto a crossing branch next to a branch
-            # point), not on a zero
+            # a larger |g| than g_ok means the bracket closed on a jump of g (e.g. trial
+            # points corrected onto a crossing branch next to a branch point, or a Hopf
+            # test that switched between eigenvalue pairs), not on a zero
             d = min(hi - lo, max(abs(s_next - s), tol))
-            g_max = max(abs(g_a), abs(g_b))
-            g_ok = g_jump * g_max
-            if continuity is not None:
-                g_ok = min(g_ok, continuity * abs(g_b - g_a) / width * d + 1e-6 * g_max)
-            if abs(best[2]) > g_ok:
+            if abs(best[2]) > g_ok(d):
                 # converged onto a jump of g, not a zero (e.g. a Hopf test that switched
                 # between eigenvalue pairs): report the bracket only
                 return LocateResult(
@@ -435,4 +569,11 @@ def locate_zero(
     return LocateResult(best[0], best[1], best[2], False, max_iter, "max_iter reached")
 
 
-__all__ = ["LocateResult", "fold_guess", "locate_beyond", "locate_zero", "point_at"]
+__all__ = [
+    "LocateResult",
+    "fold_guess",
+    "locate_beyond",
+    "locate_zero",
+    "point_at",
+    "tangent_agrees",
+]

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import logging
+
 import pytest
 from helpers import (
     brusselator,
@@ -56,3 +58,25 @@ def single_threaded() -> None:
         time.sleep(0.05)
     others = [t.name for t in threading.enumerate() if t is not threading.main_thread()]
     assert not others, f"threads still alive: {others}"
+
+
+@pytest.fixture(autouse=True)
+def _cli_log_handler_removed():
+    """Remove the stderr handler an in-process ``broachkit_cli.main.main`` call installs
+    (``configure_logging``, marked ``_broachkit``) and restore the root level after
+    each test.
+
+    The handler holds the ``sys.stderr`` of the test that ran the command, which under
+    ``capsys``/``capfd`` is a capture stream closed when that test ends; left in place,
+    every later warning logged anywhere printed "--- Logging error --- ... I/O
+    operation on closed file" tracebacks, and a ``--verbose`` command left the root
+    logger at DEBUG for the rest of the session.
+    """
+    root = logging.getLogger()
+    level = root.level
+    yield
+    for h in list(root.handlers):
+        if getattr(h, "_broachkit", False):
+            root.removeHandler(h)
+            h.close()
+    root.setLevel(level)
