@@ -18,9 +18,14 @@ sensitivity dFn*/dtheta, uncertainty band, tornado     ``studies.sensitivity``
 cycles      the cycle in Fn and chi_c, period blow-up   ``studies.cycles_vs_fn``
 =========== ========================================== =====================================
 
-A step whose folder holds ``summary.json`` and no ``.incomplete`` marker is skipped
-unless ``--force``; a step that was interrupted (the marker is still there) is redone,
-resuming its sweep from the checkpoints in ``<step>/sweep`` (``--force`` deletes them).
+A step whose folder holds ``summary.json``, no ``.incomplete`` marker and a record of
+the inputs it was computed from (``inputs.json``: the vessel file's content, the
+settings, the code version; :mod:`broachkit_cli.step_inputs`) equal to this run's is
+reused unless ``--force``; any other step is computed (again), and the summary names
+the steps reused and the reason each other step was recomputed. A step that was
+interrupted (the marker is still there) is redone, resuming its sweep from the
+checkpoints in ``<step>/sweep`` (themselves keyed by their inputs and the code
+version, :mod:`continuation.sweep`; ``--force`` deletes them).
 
 On ``--workers N`` local processes (default one per core; ``N = 1``: everything in
 this process): one pool of ``N`` worker processes (:mod:`continuation.sweep`) serves
@@ -38,6 +43,7 @@ from __future__ import annotations
 
 import argparse
 import concurrent.futures as cf
+import contextlib
 import datetime
 import importlib
 import importlib.util
@@ -58,6 +64,7 @@ from typing import Any
 from ..files import is_complete, mark_complete, mark_incomplete, write_json
 from ..interrupt import acknowledge
 from ..options import add_json, add_out, check_workers, json_safe, prepare_out
+from ..step_inputs import INPUTS_FILE, compare, read_record, step_inputs, vessel_file
 from . import demo
 
 NAME = "reproduce"
@@ -257,6 +264,28 @@ def _workers(args: argparse.Namespace) -> int:
     return check_workers(n, WORKERS_ENV)
 
 
+def _inputs_of_steps(
+    steps: list[Step], modules: dict[str, str | None], studies: Path | None
+) -> dict[str, dict[str, Any]]:
+    """The inputs of each step (:func:`~broachkit_cli.step_inputs.step_inputs`)."""
+    settings = {"studies": str(studies.resolve()) if studies else "packaged"}
+    vessel = vessel_file()
+    inputs: dict[str, dict[str, Any]] = {}
+    for key, _, _ in steps:
+        module = modules.get(key)
+        script = None
+        if module is not None:
+            if studies is not None:
+                script = studies / f"{module}.py"
+            else:
+                spec = importlib.util.find_spec(f"studies.{module}")
+                script = Path(spec.origin) if spec and spec.origin else None
+        if module is not None and (script is None or not script.is_file()):
+            raise ValueError(f"--studies: study script not found: {script}")
+        inputs[key] = step_inputs(key, script, vessel=vessel, settings=settings)
+    return inputs
+
+
 def _cpu_seconds() -> float:
     """User + system CPU time of this process and its finished children (s)."""
     own = resource.getrusage(resource.RUSAGE_SELF)
@@ -287,7 +316,7 @@ class Progress:
 
     def start(self, i: int, key: str, title: str, skipped: bool = False) -> None:
         """Step ``i`` (1-based) begins (or is skipped because it is done)."""
-        tail = " (done earlier)" if skipped else ""
+        tail = " (done earlier with the same inputs)" if skipped else ""
         if self.live:
             self.head = f"[{i}/{self.n}] {title}{tail}"
             self._show(f" ({time.perf_counter() - self.t0:.0f} s)")
@@ -424,6 +453,22 @@ def _summary_text(doc: dict[str, Any]) -> str:
             f"  heteroclinic line: Fn = {f(a['Fn'], '.5f')} at {a['chi_c_deg']:g} deg "
             f"... {f(b['Fn'], '.5f')} at {b['chi_c_deg']:g} deg"
         )
+    reused = {k: v["reason"] for k, v in doc.get("reuse", {}).items() if v["reused"]}
+    redone = {k: v["reason"] for k, v in doc.get("reuse", {}).items() if not v["reused"]}
+    if reused:
+        why = sorted(set(reused.values()))
+        lines.append(
+            f"  reused from an earlier run: {', '.join(reused)} ({'; '.join(why)}: "
+            "the inputs they were computed from are this run's)"
+        )
+    if reused and redone:
+        groups: dict[str, list[str]] = {}
+        for k, reason in redone.items():
+            groups.setdefault(reason, []).append(k)
+        lines.append(
+            "  recomputed: "
+            + "; ".join(f"{', '.join(ks)} ({reason})" for reason, ks in groups.items())
+        )
     lines.append(f"  {len(doc['figures'])} figures; data in {doc['out']}")
     if doc.get("report"):
         lines.append(f"  report: {doc['report']}")
@@ -472,13 +517,24 @@ def _run(args: argparse.Namespace) -> int:
     started = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     bar = Progress(len(steps), enabled=not args.json)
     todo: list[tuple[int, str, str, Callable[[Path, Callable[[str], None]], Any]]] = []
+    inputs = _inputs_of_steps(steps, modules, args.studies)
+    reuse: dict[str, dict[str, Any]] = {}
     for i, (key, title, fn) in enumerate(steps, 1):
         folder = out / key
-        if is_complete(folder) and not args.force:
+        if args.force:
+            ok, why = False, "--force"
+        elif not is_complete(folder):
+            ok, why = False, "not finished earlier" if folder.exists() else "not run before"
+        else:
+            ok, why = compare(read_record(folder), inputs[key])
+        reuse[key] = {"reused": ok, "reason": why}
+        if ok:
             bar.start(i, key, title, skipped=True)
             results[key] = json.loads((folder / "summary.json").read_text())
             bar.finish()
             continue
+        with contextlib.suppress(FileNotFoundError):
+            (folder / INPUTS_FILE).unlink()  # the old results no longer match a record
         if args.force:  # a forced rerun starts its sweeps afresh
             shutil.rmtree(folder / SWEEP_DIR, ignore_errors=True)
         todo.append((i, key, title, fn))
@@ -499,6 +555,7 @@ def _run(args: argparse.Namespace) -> int:
     def collect(timeout: float) -> None:
         for key, value, seconds in side.finished(timeout) if side is not None else []:
             results[key], timing[key] = value, seconds
+            write_json(out / key / INPUTS_FILE, inputs[key])
             mark_complete(out / key)
             log.info("%s: done in %.1f s (worker process)", key, seconds)
 
@@ -520,6 +577,7 @@ def _run(args: argparse.Namespace) -> int:
                     "(a rerun redoes this one)\n"
                 )
                 return 130
+            write_json(folder / INPUTS_FILE, inputs[key])
             mark_complete(folder)
             timing[key] = round(time.perf_counter() - t0, 1)
             log.info("%s: done in %.1f s", key, timing[key])
@@ -556,6 +614,8 @@ def _run(args: argparse.Namespace) -> int:
         "workers": workers,
         "out": str(out),
         "key_numbers": key_numbers(results),
+        "reuse": {k: reuse[k] for k in keys if k in reuse},
+        "inputs": {k: inputs[k] for k in keys},
         "figures": _figures(out, keys),
         "versions": _versions(),
         "started": started,

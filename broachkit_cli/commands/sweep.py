@@ -20,6 +20,8 @@ import argparse
 import json
 import logging
 import math
+import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -258,7 +260,11 @@ def _boundary(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     fig.savefig(out / "boundary.png", dpi=120)
     plt.close(fig)
     parts = [r.boundaries] + ([r.outcomes] if r.outcomes is not None else [])
-    return data, all(p.success for p in parts)
+    if r.bvp is not None:
+        n_bvp = sum(p.success for p in r.bvp.points)
+        return data, _Outcome(parts, [f"{n_bvp} of {len(r.bvp.points)} landing BVPs converged"],
+                              failed_checks=len(r.bvp.points) - n_bvp)  # fmt: skip
+    return data, _Outcome(parts)
 
 
 def _courses(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
@@ -293,7 +299,7 @@ def _courses(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     fig.tight_layout()
     fig.savefig(out / "courses.png", dpi=120)
     plt.close(fig)
-    return data, r.boundaries.success
+    return data, _Outcome([r.boundaries])
 
 
 def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
@@ -353,22 +359,66 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
             {True: "agrees", False: "DISAGREES", None: "inconclusive"}[c["agrees"]],
             c["difference"], c["status"],
         )  # fmt: skip
-    ok = r.sweep.success and (r.check_sweep is None or r.check_sweep.success)
-    return data, ok
+    agree = sum(c["agrees"] is True for c in r.checks)
+    notes = [f"{agree} of {len(r.checks)} checks by bisection agree"] if r.checks else []
+    if args.check and not r.checks and r.sweep.status.name != "INTERRUPTED":
+        notes.append("no converged point to check")
+    parts = [r.sweep] + ([r.check_sweep] if r.check_sweep is not None else [])
+    return data, _Outcome(parts, notes, failed_checks=len(r.checks) - agree)
+
+
+@dataclass
+class _Outcome:
+    """What a sweep ran (its task sweeps), what its checks found, and its one status."""
+
+    parts: list[Any]
+    notes: list[str] = field(default_factory=list)
+    failed_checks: int = 0
+
+    @property
+    def status(self) -> str:
+        """``INTERRUPTED``, ``FAILED`` (a task failed), ``CHECK_FAILED`` or ``SUCCESS``.
+
+        ``SUCCESS`` is a claim: every task finished with a value *and* every check
+        agreed; a sweep whose checks failed never reports it.
+        """
+        if any(p.status.name == "INTERRUPTED" for p in self.parts):
+            return "INTERRUPTED"
+        if any(p.n_failed for p in self.parts):
+            return "FAILED"
+        if self.failed_checks:
+            return "CHECK_FAILED"
+        return "SUCCESS"
+
+    def summary(self, kind: str, out: Path) -> str:
+        """The sweep's one-line summary."""
+        n = sum(p.n_tasks for p in self.parts)
+        done = sum(len(p.records) - p.n_failed for p in self.parts)
+        failed = sum(p.n_failed for p in self.parts)
+        reused = sum(p.n_reused for p in self.parts)
+        secs = sum(p.elapsed_s for p in self.parts)
+        counts = f"{done} of {n} tasks done ({reused} from checkpoints), {failed} failed"
+        extra = "".join(f"; {t}" for t in self.notes)
+        return f"sweep {kind}: {self.status}: {counts}{extra}; {secs:.1f} s; results in {out}"
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run one sweep; 0 when every task succeeded, 1 if some failed, 130 if interrupted."""
+    """Run one sweep and print its one-line summary.
+
+    Returns 0 when every task succeeded and every check agreed, 1 if a task failed or a
+    check disagreed, 130 if interrupted (finished tasks are kept in the checkpoints).
+    """
     try:
         args.out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ValueError(f"--out cannot be created: {args.out} ({exc})") from None
+        raise ValueError(f"--out cannot be created: {args.out} ({exc.strerror})") from None
     fn = {"boundary": _boundary, "courses": _courses, "surface": _surface}[args.sweep]
-    data, ok = fn(args)
+    data, outcome = fn(args)
+    data = {"status": outcome.status, **data}
     _write_json(args.out / f"{args.sweep}.json", data)
-    statuses = [v["status"] for v in data.values() if isinstance(v, dict) and "status" in v]
     log.info("wrote %s/%s.{csv,json,png}", args.out, args.sweep)
-    if "INTERRUPTED" in statuses:
-        log.warning("interrupted: run the same command again to resume")
+    sys.stdout.write(outcome.summary(args.sweep, args.out) + "\n")
+    if outcome.status == "INTERRUPTED":
+        sys.stderr.write("interrupted: run the same command again to resume\n")
         return 130
-    return 0 if ok else 1
+    return 0 if outcome.status == "SUCCESS" else 1

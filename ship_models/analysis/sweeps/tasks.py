@@ -93,7 +93,7 @@ def _bisect(key: dict[str, Any]) -> dict[str, Any]:
     m = _model(key["vessel"])
     b = critical_fn_bisection(
         math.radians(float(key["chi_c_deg"])), model=m, params=_params(m, key),
-        bracket=(float(key["Fn_bracket"][0]), float(key["Fn_bracket"][1])),
+        Fn_bracket=(float(key["Fn_bracket"][0]), float(key["Fn_bracket"][1])),
         tol=float(key["tol"]), t_max=float(key.get("t_max", 600.0)),
     )  # fmt: skip
     if b.status is Status.INTERRUPTED:
