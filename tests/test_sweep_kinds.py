@@ -32,7 +32,7 @@ def _run(capsys, argv):
                       "--method", "bvp"]),
         ("courses", ["--chi-c", "10", "--tol", "1e-3"]),
         ("surface", ["--chi-c", "10", "--h-over-lambda", PAPER_H, "--lambda-over-l", "1.5",
-                     "--check", "1"]),
+                     "--check", "1", "--thresholds", "1"]),
     ],
     ids=["boundary", "boundary-bvp", "courses", "surface"],
 )  # fmt: skip
@@ -52,6 +52,10 @@ def test_every_sweep_kind_runs_end_to_end(tmp_path, capsys, kind, extra):
         assert check["Fn_lower"] - 1e-5 <= data["Fn"][0][0] <= check["Fn_upper"] + 1e-5
         # the paper's wave: the connection at 10 deg (README: 0.30161168, error 2.5e-8)
         assert data["Fn"][0][0] == pytest.approx(0.30161168, abs=1e-5)
+        # the capsizing threshold there: the surface is the threshold (mechanism heteroclinic)
+        (th,) = data["capsizing_thresholds"]
+        assert th["status"] == "SUCCESS" and th["is_heteroclinic"] is True
+        assert abs(th["Fn"] - data["Fn"][0][0]) <= th["error"] + 1e-3
     # run again: every task from its checkpoint, the same status
     rc2, lines2 = _run(capsys, ["sweep", kind, *extra, "--out", str(out)])
     assert rc2 == 0 and "from checkpoints" in lines2[0]

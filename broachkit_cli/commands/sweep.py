@@ -135,6 +135,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     s.add_argument(
         "--check", type=int, default=3, help="sample points re-checked by bisection (default 3)"
     )
+    s.add_argument(
+        "--thresholds", type=int, default=2,
+        help="sample points where the capsizing threshold is computed, to say whether the "
+             "surface of the connection is the threshold there (default 2)",
+    )  # fmt: skip
     _common(s)
 
 
@@ -309,9 +314,11 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     ls = parse_count(args.lambda_over_l, "--lambda-over-l")
     if args.check < 0:
         raise ValueError(f"--check must be a non-negative integer, got {args.check}")
+    if args.thresholds < 0:
+        raise ValueError(f"--thresholds must be a non-negative integer, got {args.thresholds}")
     r = surface_sweep(
         args.vessel, args.chi_c, H_over_lambda=hs, lambda_over_L=ls, check=args.check,
-        **_run_options(args),
+        thresholds=args.thresholds, **_run_options(args),
     )  # fmt: skip
     out = args.out
     lines = ["lambda_over_L,H_over_lambda,Fn,Fn_surge"]
@@ -328,13 +335,16 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
         "Fn_surge_chi_c_0": _clean(r.Fn_surge),
         "reasons": list(r.reasons),
         "checks_by_bisection": list(r.checks),
+        "quantity": "heteroclinic Fn (the connection); see capsizing_thresholds for where it "
+        "is the capsizing threshold",
+        "capsizing_thresholds": list(r.thresholds),
         "sweep": r.sweep.to_json(),
         "check_sweep": None if r.check_sweep is None else r.check_sweep.to_json(),
     }
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     for ax, z, title in (
-        (axes[0], r.Fn, f"Fn* of the connection, chi_c = {r.chi_c_deg:g} deg"),
+        (axes[0], r.Fn, f"heteroclinic Fn, chi_c = {r.chi_c_deg:g} deg"),
         (axes[1], r.Fn_surge, "surge-only threshold, chi_c = 0"),
     ):
         zm = np.ma.masked_invalid(z)
@@ -361,6 +371,15 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
         )  # fmt: skip
     agree = sum(c["agrees"] is True for c in r.checks)
     notes = [f"{agree} of {len(r.checks)} checks by bisection agree"] if r.checks else []
+    if r.thresholds:
+        het = sum(t["is_heteroclinic"] is True for t in r.thresholds)
+        notes.append(
+            f"the surface is the capsizing threshold at {het} of {len(r.thresholds)} sampled "
+            "sea states (" + "; ".join(
+                f"H/lambda {t['H_over_lambda']:.3g}, lambda/L {t['lambda_over_L']:.3g}: "
+                f"{t['Fn'] if t['Fn'] is None else format(t['Fn'], '.5f')} ({t['mechanism']})"
+                for t in r.thresholds) + ")"
+        )  # fmt: skip
     if args.check and not r.checks and r.sweep.status.name != "INTERRUPTED":
         notes.append("no converged point to check")
     parts = [r.sweep] + ([r.check_sweep] if r.check_sweep is not None else [])

@@ -44,6 +44,12 @@ class SurfaceSweep:
         Where it does not agree the connection exists but is not where the fate of the
         branch switches (found at gentle waves: see the module notes).
     check_sweep : SweepResult or None
+    thresholds : tuple of dict
+        Sample points where the capsizing threshold (the lowest capsizing Fn,
+        :func:`~ship_models.analysis.threshold.capsizing_threshold`) was computed:
+        ``H_over_lambda, lambda_over_L, Fn_heteroclinic`` (the surface), ``Fn`` (the
+        threshold), ``mechanism``, ``is_heteroclinic``: whether the surface *is* the
+        capsizing threshold there.
     """
 
     chi_c_deg: float
@@ -55,6 +61,7 @@ class SurfaceSweep:
     sweep: SweepResult
     checks: tuple[dict[str, Any], ...] = ()
     check_sweep: SweepResult | None = None
+    thresholds: tuple[dict[str, Any], ...] = ()
 
 
 def surface_sweep(
@@ -69,6 +76,7 @@ def surface_sweep(
     check_tol: float = 1e-6,
     agree_tol: float = 1e-5,
     check_t_max: float = 1800.0,
+    thresholds: int = 0,
     **run: Any,
 ) -> SurfaceSweep:
     r"""The critical surface: one continuation task in :math:`H/\lambda` per wavelength.
@@ -144,6 +152,27 @@ def surface_sweep(
                  "status": v.get("status", "FAILED"), "message": v.get("message", ""),
                  "difference": _finite(diff), "agrees": bool(diff <= agree_tol) if ok else None}
             )  # fmt: skip
+    ths: list[dict[str, Any]] = []
+    if isinstance(thresholds, bool) or not isinstance(thresholds, int) or thresholds < 0:
+        raise ValueError(f"`thresholds` must be a non-negative integer, got {thresholds!r}")
+    if thresholds and pts and res.status is not Status.INTERRUPTED:
+        pick = [pts[int(k)] for k in np.unique(np.linspace(0, len(pts) - 1, thresholds).round())]
+        tk = [
+            {"task": "threshold", "lambda_over_L": float(ls[i]), "H_over_lambda": float(hs[j]),
+             "chi_c_deg": float(chi_c_deg), "Fn_heteroclinic": float(Fn[i, j]), "vessel": vessel}
+            for i, j in pick
+        ]  # fmt: skip
+        th_res = _run(tk, vessel, "surface thresholds", run)
+        for r in th_res.records:
+            v = r.value if r.done else {}
+            ths.append({"lambda_over_L": r.key["lambda_over_L"],
+                        "H_over_lambda": r.key["H_over_lambda"],
+                        "Fn_heteroclinic": r.key["Fn_heteroclinic"], "Fn": v.get("Fn"),
+                        "error": v.get("error"), "mechanism": v.get("mechanism"),
+                        "is_heteroclinic": v.get("is_heteroclinic"),
+                        "status": v.get("status", "FAILED"),
+                        "message": v.get("message", "")})  # fmt: skip
     return SurfaceSweep(
-        float(chi_c_deg), hs, ls, Fn, Fs, tuple(reasons), res, tuple(checks), check_res
+        float(chi_c_deg), hs, ls, Fn, Fs, tuple(reasons), res, tuple(checks), check_res,
+        tuple(ths),
     )

@@ -108,7 +108,32 @@ def _bisect(key: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+def _threshold(key: dict[str, Any]) -> dict[str, Any]:
+    """The capsizing threshold at one sea state and course, seeded by the connection's Fn."""
+    from ..threshold import capsizing_threshold
+
+    m = _model(key["vessel"])
+    het = key.get("Fn_heteroclinic")
+    t = capsizing_threshold(
+        m, _params(m, key), chi_c=math.radians(float(key["chi_c_deg"])),
+        Fn_heteroclinic=(math.nan if het is None else float(het), math.nan),
+        locate_bifurcations=bool(key.get("locate_bifurcations", False)),
+    )  # fmt: skip
+    if t.status is Status.INTERRUPTED:
+        raise KeyboardInterrupt
+    return {
+        "Fn": _finite(t.Fn),
+        "error": _finite(t.error),
+        "mechanism": t.mechanism,
+        "is_heteroclinic": t.is_heteroclinic,
+        "confirmed": t.confirmed,
+        "status": t.status.name,
+        "message": t.message,
+    }
+
+
 _TASKS = {
+    "threshold": _threshold,
     "boundary": _boundary,
     "outcome": _outcome,
     "line": _line,
