@@ -405,7 +405,7 @@ CLAIMS: tuple[Claim, ...] = (
     Claim("fig23_curve", "Fig. 23",
           "Critical condition for capsizing due to broaching (filled circles: heteroclinic "
           "bifurcation) against the autopilot course 0-30 degrees.",
-          ("fig16_22/fig23_critical_condition.png", "fig21_23/critical_curve_methods.png"), _curve),
+          ("fig21_23/fig23_both_lines.png", "fig16_22/fig23_critical_condition.png"), _curve),
     Claim("fig23_squares", "Fig. 23",
           "The heteroclinic bifurcation is slightly larger than the boundary obtained by "
           "numerical experiments (squares, (xi_G/lambda)_0 = 0.5).",

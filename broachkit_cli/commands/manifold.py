@@ -11,6 +11,7 @@ each branch's time series as CSV.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -42,6 +43,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_out(parser, None, "the branches' time series as CSV")
 
 
+#: How often an undecided branch is recomputed with twice the time limit.
+UNDECIDED_RETRIES = 2
+
+
 def run(args: argparse.Namespace) -> int:
     """Compute the manifold and print the fates; returns 0 (1 if a fate is undecided)."""
     from ship_models.analysis.manifold import unstable_manifold
@@ -64,6 +69,20 @@ def run(args: argparse.Namespace) -> int:
             capsize_angle=angle,
             progress=lambda branch, t: status.show(f"{branch}: t = {t:8.1f} s"),
         )
+        # an undecided branch is not one side or the other: look longer, twice
+        t_max = float(args.t_max)
+        for _ in range(UNDECIDED_RETRIES):
+            open_ = [n for n, b in man.branches.items() if b.fate.kind == "undecided"
+                     and b.fate.status.name == "MAX_STEPS"]  # fmt: skip
+            if not open_:
+                break
+            t_max *= 2.0
+            more = unstable_manifold(
+                model, params, man.saddle, eps=args.eps, t_max=t_max, capsize_angle=angle,
+                branches=tuple(open_), points=man.points,
+                progress=lambda branch, t: status.show(f"{branch} (longer): t = {t:8.1f} s"),
+            )  # fmt: skip
+            man = dataclasses.replace(man, branches={**man.branches, **more.branches})
     result = {
         "vessel": model.vessel.name,
         "params": params.as_dict(),
@@ -87,6 +106,20 @@ def run(args: argparse.Namespace) -> int:
         for name, br in man.branches.items():
             via = " -> ".join(f"{v.label}@{v.shift:+d}" for v in br.fate.visits)
             via = f" via {via}" if via else ""
+            if len(br.fate.visits) > 6:
+                v = br.fate.visits
+                via = (f" via {v[0].label}@{v[0].shift:+d} -> ... -> {v[-1].label}@{v[-1].shift:+d}"
+                       f" ({len(v)} saddle passages)")  # fmt: skip
             sys.stdout.write(f"  {name:9s}: {br.fate.label}{via} (t = {br.fate.t:.1f} s)\n")
+            if br.fate.kind == "undecided":
+                sys.stdout.write(
+                    f"             undecided after {br.fate.t:.0f} s (the window was doubled "
+                    f"{UNDECIDED_RETRIES} times): neither side is claimed; --t-max longer\n"
+                )
+            elif br.fate.kind == "recurrent":
+                sys.stdout.write(
+                    "             bounded, no settled period: a chaotic attractor or a "
+                    f"transient longer than {br.fate.t:.0f} s (no capsize within it)\n"
+                )
     undecided = any(b.fate.kind == "undecided" for b in man.branches.values())
     return 1 if undecided else 0

@@ -604,6 +604,9 @@ def _run(args: argparse.Namespace) -> int:
             pool.close(cancel=bool(side and side.pending))
     results = {k: results[k] for k, _, _ in steps if k in results}  # in step order
     timing = {k: timing[k] for k, _, _ in steps if k in timing}
+    from studies.fig23_combined import draw as draw_fig23
+
+    draw_fig23(out, results)  # Fig. 23 with both lines and the squares, once both steps ran
     total = round(time.perf_counter() - t_all, 1)
     keys = list(results)
     doc: dict[str, Any] = {
