@@ -54,8 +54,8 @@ def draw(out: Path, results: Mapping[str, Any]) -> Path | None:
     for c, f, mech in zip(th["chi_c_deg"], th["Fn"], th["mechanism"], strict=True):
         rows.append(["threshold", c, f, mech])
         if _ok(f) and mech != "heteroclinic":
-            ax.annotate(SHORT.get(mech, mech), (c, f), fontsize=8, rotation=90, xytext=(0, -9),
-                        textcoords="offset points", ha="center", va="top")  # fmt: skip
+            ax.annotate(SHORT.get(mech, mech), (c, f), fontsize=8, rotation=90, xytext=(0, 9),
+                        textcoords="offset points", ha="center", va="bottom")  # fmt: skip
     if squares:
         ax.errorbar([q["chi_c_deg"] for q in squares], [q["Fn"] for q in squares],
                     yerr=[0.5 * (q["bracket"][1] - q["bracket"][0]) for q in squares],
@@ -65,9 +65,10 @@ def draw(out: Path, results: Mapping[str, Any]) -> Path | None:
     ax.errorbar([10.0], [0.5 * sum(PAPER_FN_BRACKET)], yerr=[0.5 * (PAPER_FN_BRACKET[1]
                 - PAPER_FN_BRACKET[0])], fmt="*", color="tab:blue", ms=10, capsize=3,
                 label="Umeda (1999), 10 deg (measured coefficients)")  # fmt: skip
-    ax.axvspan(30.0, 50.0, color="0.92", zorder=-1)
-    ax.text(31.0, min(c_fn) if c_fn else 0.3, "beyond the paper's Fig. 23 (0-30 deg)",
-            fontsize=8, color="0.4", va="bottom")  # fmt: skip
+    ax.axvspan(30.0, 45.0, color="0.92", zorder=-1)
+    ax.set_xlim(-1.0, 45.0)
+    ax.text(44.5, ax.get_ylim()[1], "beyond the paper's Fig. 23\n(it spans 0-30 deg)",
+            fontsize=8, color="0.4", va="top", ha="right")  # fmt: skip
     ax.set_xlabel("autopilot course chi_c (deg)")
     ax.set_ylabel("nominal Froude number Fn")
     ax.ticklabel_format(axis="y", useOffset=False)
