@@ -1,0 +1,154 @@
+"""``broachkit assess``: IMO second-generation surf-riding/broaching criteria, Level 1 and 2.
+
+Level 1 and Level 2 of MSC.1/Circ.1627 2.6 for one vessel at its service Froude
+number, Level 2 both with Melnikov's threshold (the criterion as written) and with the
+exact threshold of the same surge equation (a connecting orbit continued over the wave
+cases), the operational limit Fn where C reaches R_SR, and with ``--out DIR`` the
+figures and the JSON (:mod:`ship_models.assessment`). The scatter table ``W2`` (IACS
+Rec. 34, North Atlantic) is not shipped: give it with ``--scatter FILE``
+(``docs/imo_assessment.md``); without it, C is given per sea state.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from ..options import add_json, add_out, add_vessel, finite, json_safe, load_model, prepare_out
+from ..progress import StatusLine
+
+NAME = "assess"
+HELP = "IMO second-generation surf-riding/broaching criteria (Level 1 and 2)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``broachkit assess``."""
+    add_vessel(parser)
+    parser.add_argument(
+        "--fn-service", dest="Fn", type=float, required=True, help="service Froude number"
+    )
+    parser.add_argument(
+        "--scatter",
+        type=Path,
+        default=None,
+        help="wave scatter table CSV (Hs rows, Tz columns; e.g. IACS Rec. 34 North Atlantic)",
+    )
+    parser.add_argument(
+        "--standard",
+        type=Path,
+        default=None,
+        help="file of the criterion's numbers (default: the shipped one, see its sources)",
+    )
+    parser.add_argument(
+        "--no-exact",
+        dest="exact",
+        action="store_false",
+        help="skip the exact threshold (Melnikov's only; under a second)",
+    )
+    add_out(parser, None, "the figures and assessment.json")
+    add_json(parser)
+
+
+def _verdict(doc: dict[str, Any] | None) -> str:
+    if doc is None:
+        return "not computed"
+    if doc["C"] is None:
+        at = doc["C_sea_state_max_at"]
+        return (
+            f"C per sea state up to {doc['C_sea_state_max']:.3g} "
+            f"(Hs {at['Hs']:g} m, Tz {at['Tz']:g} s); no scatter table: no verdict"
+        )
+    lim = doc["Fn_limit"]
+    lim_txt = f"; C = R_SR at Fn = {lim:.4f}" if lim is not None else ""
+    return f"C = {doc['C']:.4g} (R_SR {doc['R_SR']:g}): {doc['verdict']}{lim_txt}"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the assessment; 0 when it completed."""
+    from ship_models.assessment import assess, load_standard, read_scatter_table
+
+    finite("--fn-service", args.Fn, low=0.0, high=1.0)
+    if not args.Fn > 0:
+        raise ValueError(f"--fn-service must be positive, got {args.Fn}")
+    out = prepare_out(args.out)
+    standard = load_standard(args.standard) if args.standard is not None else None
+    scatter = read_scatter_table(args.scatter) if args.scatter is not None else None
+    from ship_models.surge import SurgeModel
+
+    loaded = load_model(args.vessel)
+    model = loaded if isinstance(loaded, SurgeModel) else SurgeModel(loaded.data)
+    with StatusLine(enabled=not args.json) as status:
+        a = assess(
+            model, args.Fn, scatter=scatter, standard=standard, exact=args.exact,
+            progress=status.show,
+        )  # fmt: skip
+    doc = a.to_json()
+    if out is not None:
+        doc["files"] = _write(a, doc, out)
+    if args.json:
+        sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
+        return 0
+    lines = [
+        f"{doc['vessel']} (L = {doc['L']:g} m) at Fn = {doc['Fn_service']:g}",
+        f"  Level 1: {doc['level1']['verdict']} ({doc['level1']['reason']})",
+        f"  Level 2, Melnikov threshold: {_verdict(doc['level2']['melnikov'])}",
+        f"  Level 2, exact threshold:    {_verdict(doc['level2']['exact'])}",
+    ]
+    cmp_ = doc["threshold_comparison"]
+    if cmp_.get("cells_compared"):
+        lines.append(
+            f"  Melnikov vs exact Fn_cr over {cmp_['cells_compared']} wave cases: max "
+            f"{100 * cmp_['max_rel_difference']:.2f} % (at lambda/L "
+            f"{cmp_['at_lambda_over_L']:.3f}, H/lambda {cmp_['at_H_over_lambda']:.4f}), below "
+            f"exact in {100 * cmp_['fraction_melnikov_below_exact']:.0f} % of the cases"
+        )
+    if doc["validity"]["outside_resistance_fit"]:
+        lines.append(
+            f"  note: {doc['validity']['outside_resistance_fit']} of "
+            f"{doc['validity']['wave_cases']} {doc['validity']['note']}"
+        )
+    if out is not None:
+        lines.append(f"  written: {', '.join(doc['files'])}")
+    sys.stdout.write("\n".join(lines) + "\n")
+    return 0
+
+
+def _write(a: Any, doc: dict[str, Any], out: Path) -> list[str]:
+    """Figures and the JSON, each written atomically; returns their paths."""
+    import numpy as np
+
+    from ship_models.assessment.figures import sea_state_figure, threshold_figure
+
+    from ..files import write_atomic, write_json
+
+    files = []
+    for name, make in (
+        ("c_per_sea_state.png", sea_state_figure),
+        ("threshold.png", threshold_figure),
+    ):
+        fig = make(a)
+        files.append(str(write_atomic(out / name, lambda p, f=fig: f.savefig(p, dpi=120))))
+
+    def grids(p: Path) -> None:
+        arrays = {
+            "lambda_over_L": a.melnikov.lambda_over_L,
+            "H_over_lambda": a.melnikov.steepness,
+            "Fn_cr_melnikov": a.melnikov.Fn_cr,
+            "Hs": a.level2_melnikov.Hs,
+            "Tz": a.level2_melnikov.Tz,
+            "C_sea_state_melnikov": a.level2_melnikov.C_sea_state,
+        }
+        if a.exact is not None:
+            arrays["Fn_cr_exact"] = a.exact.Fn_cr
+            arrays["Fn_cr_exact_error"] = a.exact.error
+            arrays["C_sea_state_exact"] = a.level2_exact.C_sea_state
+        with open(p, "wb") as fh:
+            np.savez(fh, **arrays)
+
+    files.append(str(write_atomic(out / "assessment_grids.npz", grids)))
+    files.append(str(out / "assessment.json"))
+    write_json(out / "assessment.json", {**doc, "files": files})
+    return files
