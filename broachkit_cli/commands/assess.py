@@ -74,8 +74,14 @@ def run(args: argparse.Namespace) -> int:
     if not args.Fn > 0:
         raise ValueError(f"--fn-service must be positive, got {args.Fn}")
     out = prepare_out(args.out)
-    standard = load_standard(args.standard) if args.standard is not None else None
-    scatter = read_scatter_table(args.scatter) if args.scatter is not None else None
+    try:
+        standard = load_standard(args.standard) if args.standard is not None else None
+    except ValueError as exc:
+        raise ValueError(f"--standard: {exc}") from None
+    try:
+        scatter = read_scatter_table(args.scatter) if args.scatter is not None else None
+    except ValueError as exc:
+        raise ValueError(f"--scatter: {exc}") from None
     from ship_models.surge import SurgeModel
 
     loaded = load_model(args.vessel)

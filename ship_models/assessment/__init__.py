@@ -12,14 +12,14 @@ the operational limit ``Fn``. Modules:
 * :mod:`~ship_models.assessment.melnikov`: Melnikov's ``Fn_cr``;
 * :mod:`~ship_models.assessment.exact`: the exact ``Fn_cr`` by continuation of a
   connecting orbit over the wave cases;
-* :mod:`~ship_models.assessment.level2`: Level 1, ``C``, the operational limit;
+* :mod:`~ship_models.assessment.criteria`: Level 1, ``C``, the operational limit;
 * :mod:`~ship_models.assessment.assess`: all of it for one vessel;
 * :mod:`~ship_models.assessment.figures`: the report's figures.
 """
 
 from .assess import Assessment, assess
+from .criteria import Level1Result, Level2Result, level1, level2, operational_limit
 from .exact import ExactGrid, exact_threshold_grid, surf_riding_connection
-from .level2 import Level1Result, Level2Result, level1, level2, operational_limit
 from .melnikov import MelnikovGrid, melnikov_grid, pendulum_melnikov
 from .standard import ScatterTable, SurfRidingStandard, load_standard, read_scatter_table
 from .wave_weights import band_probability, wave_case_weights

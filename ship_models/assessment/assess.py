@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from ..surge import SurgeModel
+from .criteria import Level1Result, Level2Result, level1, level2, sea_state_weights
 from .exact import ExactGrid, exact_threshold_grid
-from .level2 import Level1Result, Level2Result, level1, level2, sea_state_weights
 from .melnikov import MelnikovGrid, melnikov_grid
 from .standard import ScatterTable, SurfRidingStandard, load_standard
 from .wave_weights import bretschneider_period_ratio, spectral_width

@@ -188,6 +188,10 @@ def band_probability(
     T01 = bretschneider_period_ratio() * Tz
 
     def q(lam: float) -> float:
+        if lam <= 0.0:
+            return -1.0
+        if math.isinf(lam):
+            return 1.0 / math.sqrt(1.0 + nu * nu)
         tau = math.sqrt(2.0 * math.pi * lam / g) / T01
         x = (1.0 - 1.0 / tau) / nu
         return x / math.sqrt(1.0 + x * x)
