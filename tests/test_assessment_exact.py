@@ -141,3 +141,24 @@ def test_cli_assess_bad_input(argv, word, capsys):
     assert main(["assess", "--no-exact", *argv]) == 2
     err = capsys.readouterr().err
     assert word in err and "Traceback" not in err
+
+
+def test_broaching_at_chi_zero_is_the_surf_riding_threshold_and_weights_are_kept():
+    """At chi_c = 0 the 4-DOF capsizing threshold (through the one adapter) is the surge
+    model's connection (lateral motions vanish); the coarse re-binning keeps every weight."""
+    from ship_models.assessment.broaching import broaching_level2
+    from ship_models.assessment.criteria import sea_state_weights
+    from ship_models.umeda_4dof import Umeda4DOF
+
+    st = load_standard()
+    m4 = Umeda4DOF("purse_seiner")
+    W = sea_state_weights(st, 34.5, np.array([4.5]), np.array([6.5]))
+    surge = SurgeModel(m4.data)
+    ref = surf_riding_connection(surge, 0.1, 1.5)
+    sc = ScatterTable(np.array([4.5]), np.array([6.5]), np.array([[1.0]]), "one sea state")
+    b = broaching_level2(m4, 0.33, [0.0], [1.5], [0.1], W, st, sc,
+                         Fn_guess=np.array([[ref.value("Fn")]]))  # fmt: skip
+    assert b.status[0][0][0] == "SUCCESS"
+    assert b.Fn_cap[0, 0, 0] == pytest.approx(ref.value("Fn"), abs=1e-6)
+    # one coarse case carries the whole grid's weight
+    assert b.C[0] == pytest.approx(W.sum() if 0.33 > ref.value("Fn") else 0.0, rel=1e-12)

@@ -48,6 +48,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_false",
         help="skip the exact threshold (Melnikov's only; under a second)",
     )
+    parser.add_argument(
+        "--broaching",
+        action="store_true",
+        help="beyond the standard: C from the 4-DOF capsizing threshold over courses (slow)",
+    )
+    parser.add_argument(
+        "--chi-c",
+        default="0,10,20",
+        help="--broaching: autopilot courses in deg, comma-separated (default 0,10,20)",
+    )
+    parser.add_argument(
+        "--broaching-lambda",
+        default="1.25,1.75,2.5",
+        help="--broaching: coarse wave cases, lambda/L values (default 1.25,1.75,2.5)",
+    )
+    parser.add_argument(
+        "--broaching-steepness",
+        default="0.05,0.09,0.13",
+        help="--broaching: coarse wave cases, H/lambda values (default 0.05,0.09,0.13)",
+    )
     add_out(parser, None, "the figures and assessment.json")
     add_json(parser)
 
@@ -64,6 +84,14 @@ def _verdict(doc: dict[str, Any] | None) -> str:
     lim = doc["Fn_limit"]
     lim_txt = f"; C = R_SR at Fn = {lim:.4f}" if lim is not None else ""
     return f"C = {doc['C']:.4g} (R_SR {doc['R_SR']:g}): {doc['verdict']}{lim_txt}"
+
+
+def _floats(name: str, text: str, low: float, high: float) -> list[float]:
+    """Comma-separated numbers in ``(low, high]``, else ValueError naming ``name``."""
+    parts = [t for t in str(text).split(",") if t.strip()]
+    if not parts:
+        raise ValueError(f"{name} needs at least one value")
+    return [finite(name, t, low=low, high=high) for t in parts]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -86,10 +114,17 @@ def run(args: argparse.Namespace) -> int:
 
     loaded = load_model(args.vessel)
     model = loaded if isinstance(loaded, SurgeModel) else SurgeModel(loaded.data)
+    broaching = None
+    if args.broaching:
+        broaching = {
+            "chi_c_deg": _floats("--chi-c", args.chi_c, -90.0, 90.0),
+            "lambda_over_L": _floats("--broaching-lambda", args.broaching_lambda, 0.2, 10.0),
+            "H_over_lambda": _floats("--broaching-steepness", args.broaching_steepness, 0.0, 1 / 7),
+        }
     with StatusLine(enabled=not args.json) as status:
         a = assess(
             model, args.Fn, scatter=scatter, standard=standard, exact=args.exact,
-            progress=status.show,
+            broaching=broaching, progress=status.show,
         )  # fmt: skip
     doc = a.to_json()
     if out is not None:
@@ -116,6 +151,20 @@ def run(args: argparse.Namespace) -> int:
             f"  note: {doc['validity']['outside_resistance_fit']} of "
             f"{doc['validity']['wave_cases']} {doc['validity']['note']}"
         )
+    b = doc.get("broaching")
+    if b is not None:
+        for k, chi in enumerate(b["chi_c_deg"]):
+            C = "no scatter table" if b["C"] is None else f"C = {b['C'][k]:.4g}"
+            lines.append(
+                f"  broaching (4-DOF, beyond the standard), chi_c = {chi:g} deg: {C} "
+                f"(coarse wave cases; per sea state up to {b['C_sea_state_max'][k]:.3g})"
+            )
+        chk = b["rebinning_check"]
+        if chk["C_surge_coarse"] is not None:
+            lines.append(
+                f"  coarse-case check: surf-riding C on the coarse cases "
+                f"{chk['C_surge_coarse']:.4g} against {chk['C_surge_fine']:.4g} on the full grid"
+            )
     if out is not None:
         lines.append(f"  written: {', '.join(doc['files'])}")
     sys.stdout.write("\n".join(lines) + "\n")

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..surge import SurgeModel
+from .broaching import BroachingLevel2, broaching_level2, rebin
 from .criteria import Level1Result, Level2Result, level1, level2, sea_state_weights
 from .exact import ExactGrid, exact_threshold_grid
 from .melnikov import MelnikovGrid, melnikov_grid
@@ -40,6 +41,7 @@ class Assessment:
     exact: ExactGrid | None
     level2_melnikov: Level2Result
     level2_exact: Level2Result | None
+    broaching: BroachingLevel2 | None = None
     timings: dict[str, float] = field(default_factory=dict)
 
     def comparison(self) -> dict[str, Any]:
@@ -63,6 +65,33 @@ class Assessment:
             "mean_rel_difference": float(np.nanmean(rel)),
             "fraction_melnikov_below_exact": float(np.mean(d[ok] < 0)),
             "exact_error_estimate_max": float(np.nanmax(self.exact.error)),
+        }
+
+    def _broaching_json(self) -> dict[str, Any] | None:
+        b = self.broaching
+        if b is None:
+            return None
+        return {
+            "note": (
+                "beyond the standard: C2 from the 4-DOF capsizing threshold at each "
+                "autopilot course, on a coarse set of wave cases (each fine case's weight "
+                "to the nearest coarse one)"
+            ),
+            "mechanism": b.mechanism,
+            "chi_c_deg": b.chi_c_deg,
+            "lambda_over_L": b.lambda_over_L,
+            "H_over_lambda": b.steepness,
+            "Fn_cap": b.Fn_cap,
+            "status": b.status,
+            "C": b.C,
+            "C_upper": b.C_upper,
+            "C_sea_state_max": b.C_sea_state.reshape(b.chi_c_deg.size, -1).max(axis=1),
+            "rebinning_check": {
+                "C_surge_coarse": b.C_surge_coarse,
+                "C_surge_fine": (self.level2_exact or self.level2_melnikov).C,
+                "note": "C of the surge thresholds on the coarse cases against the full grid: "
+                "the size of the coarse quadrature's error",
+            },
         }
 
     def to_json(self) -> dict[str, Any]:
@@ -149,6 +178,7 @@ class Assessment:
                 if self.exact is not None
                 else None
             ),
+            "broaching": self._broaching_json(),
             "standard": st.table(),
             "timings_s": self.timings,
         }
@@ -161,6 +191,7 @@ def assess(
     scatter: ScatterTable | None = None,
     standard: SurfRidingStandard | None = None,
     exact: bool = True,
+    broaching: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Assessment:
     """Level 1 and Level 2 (Melnikov and exact) for ``vessel`` at service ``Fn``.
@@ -177,6 +208,10 @@ def assess(
         Default :func:`load_standard`.
     exact : bool
         Also compute the exact threshold over the grid (the slower part).
+    broaching : dict, optional
+        ``{"chi_c_deg": [...], "lambda_over_L": [...], "H_over_lambda": [...]}``: also
+        the broaching version over these courses and coarse wave cases
+        (:mod:`~ship_models.assessment.broaching`; seconds per wave case and course).
     progress : callable, optional
         Called with one-line progress messages.
     """
@@ -211,6 +246,28 @@ def assess(
         )
         timings["exact"] = time.perf_counter() - t
         l2e = level2(Fn, ex.Fn_cr, W, Hs, Tz, st, scatter)
+    br = None
+    if broaching is not None:
+        from ..umeda_4dof import Umeda4DOF
+
+        t = time.perf_counter()
+        lc = np.asarray(broaching["lambda_over_L"], dtype=float)
+        sc = np.asarray(broaching["H_over_lambda"], dtype=float)
+        grid = ex.Fn_cr if ex is not None else mel.Fn_cr
+        i, j = rebin(lc, st.lambda_over_L), rebin(sc, st.steepness)
+        br = broaching_level2(
+            Umeda4DOF(model.data),
+            Fn,
+            broaching["chi_c_deg"],
+            lc,
+            sc,
+            W,
+            st,
+            scatter,
+            Fn_guess=grid[np.ix_(i, j)],
+            progress=say,
+        )
+        timings["broaching"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t0
     return Assessment(
         vessel=model.vessel.name,
@@ -223,6 +280,7 @@ def assess(
         exact=ex,
         level2_melnikov=l2m,
         level2_exact=l2e,
+        broaching=br,
         timings=timings,
     )
 
