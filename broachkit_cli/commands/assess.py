@@ -82,7 +82,9 @@ def _verdict(doc: dict[str, Any] | None) -> str:
             f"(Hs {at['Hs']:g} m, Tz {at['Tz']:g} s); no scatter table: no verdict"
         )
     lim = doc["Fn_limit"]
-    lim_txt = f"; C = R_SR at Fn = {lim:.4f}" if lim is not None else ""
+    lim_txt = (
+        f"; C <= R_SR up to Fn = {lim:.4f}" if lim is not None else f"; {doc['Fn_limit_note']}"
+    )
     return f"C = {doc['C']:.4g} (R_SR {doc['R_SR']:g}): {doc['verdict']}{lim_txt}"
 
 

@@ -27,6 +27,16 @@ from .standard import ScatterTable, SurfRidingStandard, load_standard
 from .wave_weights import bretschneider_period_ratio, spectral_width
 
 
+def _limit_note(lim: float | None) -> str:
+    if lim is None:
+        return "no scatter table"
+    if lim == np.inf:
+        return "C <= R_SR at every Fn: the weight of all wave cases together is within R_SR"
+    if lim == -np.inf:
+        return "C > R_SR at every Fn: the wave cases without a threshold alone exceed R_SR"
+    return "largest Fn with C <= R_SR"
+
+
 @dataclass(frozen=True)
 class Assessment:
     """Result of :func:`assess` (see the module doc)."""
@@ -114,7 +124,8 @@ class Assessment:
                 "C_upper": r.C_upper,
                 "R_SR": st.R_SR,
                 "verdict": verdict,
-                "Fn_limit": r.Fn_limit,
+                "Fn_limit": r.Fn_limit if r.Fn_limit is None or np.isfinite(r.Fn_limit) else None,
+                "Fn_limit_note": _limit_note(r.Fn_limit),
                 "C_sea_state_max": float(r.C_sea_state[k]),
                 "C_sea_state_max_at": {"Hs": float(r.Hs[k[0]]), "Tz": float(r.Tz[k[1]])},
                 "grid_probability_min": float(r.grid_mass.min()),

@@ -30,7 +30,8 @@ def _figure(ncols: int, width: float = 5.2, height: float = 4.3) -> tuple[Any, A
 
 
 def sea_state_figure(a: Assessment) -> Any:
-    """Heat maps of ``C(Hs, Tz)`` (log colour scale, white where 0)."""
+    """Heat maps of ``C(Hs, Tz)`` (log colour scale over six decades, white below)."""
+    import matplotlib
     from matplotlib.colors import LogNorm
 
     panels = [("Melnikov threshold (the criterion)", a.level2_melnikov)]
@@ -43,15 +44,16 @@ def sea_state_figure(a: Assessment) -> Any:
     im = None
     for ax, (title, r) in zip(axes, panels, strict=True):
         C = np.ma.masked_less_equal(r.C_sea_state, 0.0)
-        im = ax.pcolormesh(
-            r.Tz, r.Hs, C, norm=LogNorm(vmin, vmax), cmap="viridis", shading="nearest"
-        )
+        cmap = matplotlib.colormaps["viridis"].with_extremes(under="white", bad="white")
+        im = ax.pcolormesh(r.Tz, r.Hs, C, norm=LogNorm(vmin, vmax), cmap=cmap, shading="nearest")
         head = title if r.C is None else f"{title}\nC = {r.C:.3g} (R_SR = {a.standard.R_SR:g})"
         ax.set_title(head, fontsize=10)
         ax.set_xlabel("Tz (s)")
         ax.set_ylabel("Hs (m)")
     if im is not None:
-        fig.colorbar(im, ax=list(axes), label="C(Hs, Tz): probability of surf-riding waves")
+        fig.colorbar(
+            im, ax=list(axes), label="C(Hs, Tz): probability of surf-riding waves (white: below)"
+        )
     fig.suptitle(f"{a.vessel}, Fn = {a.Fn:g}: C per sea state", fontsize=11)
     return fig
 
