@@ -162,3 +162,35 @@ def test_broaching_at_chi_zero_is_the_surf_riding_threshold_and_weights_are_kept
     assert b.Fn_cap[0, 0, 0] == pytest.approx(ref.value("Fn"), abs=1e-6)
     # one coarse case carries the whole grid's weight
     assert b.C[0] == pytest.approx(W.sum() if 0.33 > ref.value("Fn") else 0.0, rel=1e-12)
+
+
+def test_cli_assess_broaching_json_from_a_vessel_file(tmp_path, capsys):
+    from ship_models.vessel import DATA_DIR
+
+    sc = tmp_path / "scatter.csv"
+    sc.write_text("Hs\\Tz, 8.5\n6.5, 1\n")
+    argv = ["assess", "--vessel", str(DATA_DIR / "kvlcc2.toml"), "--fn-service", "0.142",
+            "--no-exact", "--scatter", str(sc), "--broaching", "--chi-c", "0",
+            "--broaching-lambda", "1.5", "--broaching-steepness", "0.1", "--json"]  # fmt: skip
+    assert main(argv) == 0
+    doc = json.loads(capsys.readouterr().out)
+    b = doc["broaching"]
+    assert b["status"] == [[["SUCCESS"]]] and b["C"] == [0.0]
+    assert b["Fn_cap"][0][0][0] > 0.142  # the VLCC at its service speed does not broach
+
+
+@pytest.mark.slow
+def test_whole_grid_exact_threshold(surge):
+    """The 80 x 100 grid by continuation: every case, within its error estimates, and
+    against cold solves at cases spread over the grid."""
+    st = load_standard()
+    g = exact_threshold_grid(surge, st.lambda_over_L, st.steepness)
+    assert g.complete, [s for s in g.column_status if not s.startswith("ok")]
+    assert np.nanmax(g.error) < 2e-4
+    rng = np.random.default_rng(7)
+    for i, j in zip(rng.integers(0, 80, 6), rng.integers(0, 100, 6), strict=True):
+        cold = surf_riding_connection(surge, float(st.steepness[j]), float(st.lambda_over_L[i]))
+        if not g.column_status[i].startswith("ok; saddle-node") or st.steepness[j] > 0.032:
+            assert g.Fn_cr[i, j] == pytest.approx(
+                cold.value("Fn"), abs=g.error[i, j] + cold.error("Fn") + 1e-7
+            )
