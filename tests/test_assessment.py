@@ -245,3 +245,36 @@ def test_standard_file_sources_and_errors(tmp_path):
     bad.write_text("[level1]\nL_min = { value = 200.0, unit = 'm' }\n")
     with pytest.raises(ValueError, match="level1.L_min"):
         load_standard(bad)
+
+
+# -------------------------------------------------------------- dC/dtheta
+def test_contour_derivative_against_differences_of_the_continuous_C():
+    """Fn_cr = 0.5 - 2 s + theta (1 + lambda/10): dC/dtheta by the contour formula equals
+    central differences of C = sum_i dlam int_{s*(theta)} p_i(s) ds (quadrature)."""
+    from ship_models.assessment.sensitivity import contour_derivative, scatter_density
+
+    L, Fn = 50.0, 0.3
+    lam = np.linspace(1.0, 2.9, 20)
+    s = np.linspace(0.03, 0.15, 41)
+    sc = ScatterTable(np.array([4.0, 6.0]), np.array([6.0, 8.0]),
+                      np.array([[1.0, 2.0], [2.0, 1.0]]), "constructed")  # fmt: skip
+    p = scatter_density(L, sc)
+
+    def Fn_cr(theta):
+        return 0.5 - 2 * s[None, :] + theta * (1 + lam[:, None] / 10)
+
+    def C(theta):
+        tot = 0.0
+        for lm in lam:
+            s_star = (0.5 + theta * (1 + lm / 10) - Fn) / 2
+            lo = min(max(s_star, s[0]), s[-1])
+            tot += 0.1 * si.quad(lambda x, lm=lm: float(p(lm, np.array([x]))[0]), lo, s[-1],
+                                 epsabs=1e-13, epsrel=1e-12)[0]  # fmt: skip
+        return tot
+
+    dFn = np.broadcast_to(1 + lam[:, None] / 10, (lam.size, s.size))
+    dC = contour_derivative(Fn, Fn_cr(0.0), dFn, lam, s, 0.1, p)
+    h = 1e-4
+    fd = (C(h) - C(-h)) / (2 * h)
+    assert dC < 0  # raising every threshold lowers C
+    assert dC == pytest.approx(fd, rel=1e-5)

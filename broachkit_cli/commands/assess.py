@@ -68,6 +68,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="0.05,0.09,0.13",
         help="--broaching: coarse wave cases, H/lambda values (default 0.05,0.09,0.13)",
     )
+    parser.add_argument(
+        "--sensitivity",
+        action="store_true",
+        help="dC/dtheta of the coefficients with a stated uncertainty (needs --scatter)",
+    )
     add_out(parser, None, "the figures and assessment.json")
     add_json(parser)
 
@@ -116,6 +121,8 @@ def run(args: argparse.Namespace) -> int:
 
     loaded = load_model(args.vessel)
     model = loaded if isinstance(loaded, SurgeModel) else SurgeModel(loaded.data)
+    if args.sensitivity and scatter is None:
+        raise ValueError("--sensitivity needs --scatter (dC/dtheta is of the aggregate C)")
     broaching = None
     if args.broaching:
         broaching = {
@@ -126,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
     with StatusLine(enabled=not args.json) as status:
         a = assess(
             model, args.Fn, scatter=scatter, standard=standard, exact=args.exact,
-            broaching=broaching, progress=status.show,
+            broaching=broaching, sensitivity=args.sensitivity, progress=status.show,
         )  # fmt: skip
     doc = a.to_json()
     if out is not None:
@@ -166,6 +173,18 @@ def run(args: argparse.Namespace) -> int:
             lines.append(
                 f"  coarse-case check: surf-riding C on the coarse cases "
                 f"{chk['C_surge_coarse']:.4g} against {chk['C_surge_fine']:.4g} on the full grid"
+            )
+    sens = doc.get("sensitivity")
+    if sens is not None:
+        lines.append("  dC/dtheta (Melnikov's C), largest change per standard uncertainty first:")
+        for r in sens["rows"][:8]:
+            per = (
+                ""
+                if r["dC_sigma"] is None
+                else f", sigma {r['sigma']:.3g}: dC = {r['dC_sigma']:+.3g}"
+            )
+            lines.append(
+                f"    {r['key']} = {r['value']:.4g} {r['unit']}: {r['dC_dtheta']:+.3g}{per}"
             )
     if out is not None:
         lines.append(f"  written: {', '.join(doc['files'])}")

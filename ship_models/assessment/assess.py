@@ -19,10 +19,13 @@ from typing import Any
 import numpy as np
 
 from ..surge import SurgeModel
+from ..vessel import load_vessel
 from .broaching import BroachingLevel2, broaching_level2, rebin
 from .criteria import Level1Result, Level2Result, level1, level2, sea_state_weights
 from .exact import ExactGrid, exact_threshold_grid
 from .melnikov import MelnikovGrid, melnikov_grid
+from .sensitivity import criterion_sensitivity
+from .sensitivity import to_json as sensitivity_json
 from .standard import ScatterTable, SurfRidingStandard, load_standard
 from .wave_weights import bretschneider_period_ratio, spectral_width
 
@@ -52,6 +55,7 @@ class Assessment:
     level2_melnikov: Level2Result
     level2_exact: Level2Result | None
     broaching: BroachingLevel2 | None = None
+    sensitivity: list[Any] | None = None
     timings: dict[str, float] = field(default_factory=dict)
 
     def comparison(self) -> dict[str, Any]:
@@ -190,6 +194,17 @@ class Assessment:
                 else None
             ),
             "broaching": self._broaching_json(),
+            "sensitivity": (
+                None
+                if self.sensitivity is None
+                else {
+                    "note": (
+                        "dC/dtheta of Melnikov's C (the criterion) for the coefficients with "
+                        "a stated uncertainty; dC_sigma = sigma dC/dtheta"
+                    ),
+                    "rows": sensitivity_json(self.sensitivity),
+                }
+            ),
             "standard": st.table(),
             "timings_s": self.timings,
         }
@@ -203,6 +218,7 @@ def assess(
     standard: SurfRidingStandard | None = None,
     exact: bool = True,
     broaching: dict[str, Any] | None = None,
+    sensitivity: bool = False,
     progress: Callable[[str], None] | None = None,
 ) -> Assessment:
     """Level 1 and Level 2 (Melnikov and exact) for ``vessel`` at service ``Fn``.
@@ -223,6 +239,9 @@ def assess(
         ``{"chi_c_deg": [...], "lambda_over_L": [...], "H_over_lambda": [...]}``: also
         the broaching version over these courses and coarse wave cases
         (:mod:`~ship_models.assessment.broaching`; seconds per wave case and course).
+    sensitivity : bool
+        Also ``dC/dtheta`` (Melnikov's ``C``) for the coefficients with a stated
+        uncertainty (:mod:`~ship_models.assessment.sensitivity`; needs ``scatter``).
     progress : callable, optional
         Called with one-line progress messages.
     """
@@ -279,6 +298,16 @@ def assess(
             progress=say,
         )
         timings["broaching"] = time.perf_counter() - t
+    sens = None
+    if sensitivity:
+        if scatter is None:
+            raise ValueError("`sensitivity` needs a scatter table")
+        t = time.perf_counter()
+        # the file's values (estimates are recomputed around a changed coefficient)
+        path = getattr(model.vessel, "path", "")
+        raw = load_vessel(path) if path else model.vessel
+        sens = criterion_sensitivity(raw, Fn, st, scatter, progress=say)
+        timings["sensitivity"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t0
     return Assessment(
         vessel=model.vessel.name,
@@ -292,6 +321,7 @@ def assess(
         level2_melnikov=l2m,
         level2_exact=l2e,
         broaching=br,
+        sensitivity=sens,
         timings=timings,
     )
 
