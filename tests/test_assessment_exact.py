@@ -211,3 +211,26 @@ def test_criterion_sensitivity_signs_and_uncertainty_scaling():
     assert ws.dC_dtheta > 0 and mx.dC_dtheta < 0
     assert ws.sigma == pytest.approx(0.1 * ws.value)  # 10 % relative in the vessel file
     assert ws.dC_sigma == pytest.approx(ws.sigma * ws.dC_dtheta)
+
+
+def test_exact_grid_keeps_finished_columns_on_ctrl_c(surge, monkeypatch):
+    """The engine turns Ctrl-C into Status.INTERRUPTED; the grid stops there and returns
+    the columns finished before (here the first), the rest NaN and marked."""
+    import ship_models.assessment.exact as ex
+
+    real = ex.continue_connection
+    calls = {"n": 0}
+
+    def interrupted_after_one(*args, **kw):
+        calls["n"] += 1
+        br = real(*args, **kw)
+        if calls["n"] > 1:
+            return dataclasses.replace(br, status=ex.Status.INTERRUPTED)
+        return br
+
+    monkeypatch.setattr(ex, "continue_connection", interrupted_after_one)
+    st = load_standard()
+    g = ex.exact_threshold_grid(surge, np.array([1.5, 1.525, 1.55]), st.steepness)
+    assert g.column_status[1].startswith("ok")  # the start column (the middle one)
+    assert [s for i, s in enumerate(g.column_status) if i != 1] == ["interrupted"] * 2
+    assert np.isfinite(g.Fn_cr[1]).all() and np.isnan(g.Fn_cr[[0, 2]]).all()

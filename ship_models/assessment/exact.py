@@ -56,6 +56,7 @@ from continuation.bvp import (
 )
 from continuation.events import Event
 from continuation.settings import ContinuationSettings, NewtonSettings
+from continuation.status import Status
 from continuation.typing import FloatArray
 
 from ..forces import ShipForces
@@ -272,6 +273,8 @@ def _column(
         newton=NewtonSettings(tol=1e-10, max_iter=12),
     )
     br = continue_connection(start, "H_over_lambda", settings, direction="both", events=[near_fold])
+    if br.status is Status.INTERRUPTED:  # the engine keeps Ctrl-C as a status: stop here
+        raise KeyboardInterrupt
     s = np.asarray(br.p, dtype=float)
     Fn = np.asarray(br.records["Fn"], dtype=float)
     order = np.argsort(s)
@@ -353,6 +356,8 @@ def exact_threshold_grid(
             prev = start
             for i in order:
                 res = resolve_at(prev, lambda_over_L=float(lam[i]), H_over_lambda=s_mid)
+                if res.status is Status.INTERRUPTED:
+                    raise KeyboardInterrupt
                 if not res.success:
                     try:
                         res = surf_riding_connection(model, s_mid, float(lam[i]))
