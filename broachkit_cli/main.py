@@ -40,6 +40,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "broachkit_cli.commands.cycles",
     "broachkit_cli.commands.periodic",
     "broachkit_cli.commands.periodic_branch",
+    "broachkit_cli.commands.assess",
 )
 
 #: What ``broachkit`` runs without a sub-command.
