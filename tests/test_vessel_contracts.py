@@ -143,12 +143,14 @@ def test_rebuilds_keep_the_wave_force_model(toy):
 def test_sensitivity_sees_the_toy_forces(toy, reference, plain, connections):
     raw = load_vessel("purse_seiner")
     ref_raw = raw.with_overrides({"hydrodynamics.wave_surge_scale": KAPPA})
-    s_toy = critical_fn_sensitivity(CHI, vessel=raw, keys=KEYS, connection=connections["toy"],
-                                    model=toy)  # fmt: skip
-    s_ref = critical_fn_sensitivity(CHI, vessel=ref_raw, keys=KEYS,
-                                    connection=connections["reference"], model=reference)  # fmt: skip
-    s_plain = critical_fn_sensitivity(CHI, vessel=raw, keys=KEYS,
-                                      connection=connections["plain"], model=plain)  # fmt: skip
+    c = connections
+    s_toy = critical_fn_sensitivity(CHI, vessel=raw, keys=KEYS, connection=c["toy"], model=toy)
+    s_ref = critical_fn_sensitivity(
+        CHI, vessel=ref_raw, keys=KEYS, connection=c["reference"], model=reference
+    )
+    s_plain = critical_fn_sensitivity(
+        CHI, vessel=raw, keys=KEYS, connection=c["plain"], model=plain
+    )
     for k in KEYS:
         d_toy, d_ref = s_toy.entry(k).dFn_dtheta, s_ref.entry(k).dFn_dtheta
         # same finite-difference steps on the same physics: equal up to rounding of the
