@@ -48,6 +48,7 @@ import pickle
 from collections.abc import Callable, Iterator
 from contextvars import ContextVar
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -59,6 +60,14 @@ from .hydro.diffraction import taylor_diffraction_ratio
 from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
+from .hydro.offsets import (
+    OffsetsError,
+    OffsetsHull,
+    check_particulars,
+    hull_from_offsets,
+    read_offsets,
+)
+from .hydro.offsets import hydrostatics as offsets_hydrostatics
 from .hydro.propeller import fit_kt_quadratic, holtrop_thrust_deduction, taylor_wake
 from .hydro.resistance import HoltropHull, ResistanceFit, fit_resistance
 from .hydro.roll import ikeda_lift_damping_per_speed, roll_inertia
@@ -72,7 +81,51 @@ def _est(value: float, unit: str, source: str, status: str = "estimated") -> Coe
     return Coefficient(float(value), unit, source, status)
 
 
+def offsets_path(v: VesselData) -> Path | None:
+    """The offsets file named by ``[vessel] hull_offsets`` (relative to the vessel file)."""
+    name = v.meta.get("hull_offsets")
+    if not name:
+        return None
+    p = Path(str(name))
+    if not p.is_absolute() and v.path:
+        p = Path(v.path).parent / p
+    return p
+
+
+def offsets_hull(v: VesselData) -> OffsetsHull:
+    """The strip hull of the vessel's ``[vessel] hull_offsets`` table, checked against
+    the particulars (C_b, l.c.b., B); VesselFileError naming the contradiction."""
+    p = offsets_path(v)
+    if p is None:
+        raise VesselFileError("`vessel.hull_offsets`: the vessel has no offsets file")
+    try:
+        table = read_offsets(p)
+        hull = hull_from_offsets(
+            table,
+            L=v.get("particulars.L_pp"),
+            D=v.get("particulars.D"),
+            d_f=v.get("particulars.d_f"),
+            d_a=v.get("particulars.d_a"),
+            n_per_interval=max(2, int(v.get("hull.n_stations")) // max(1, table.x.size - 1)),
+        )
+        check_particulars(
+            offsets_hydrostatics(hull),
+            L=v.get("particulars.L_pp"),
+            B=v.get("particulars.B"),
+            d_m=0.5 * (v.get("particulars.d_f") + v.get("particulars.d_a")),
+            C_b=v.get("particulars.C_b"),
+            lcb_aft=v.get("particulars.lcb_aft"),
+            B_hull=2.0 * float(np.max(hull.b_wl)),
+            source=str(p),
+        )
+    except OffsetsError as exc:
+        raise VesselFileError(f"`vessel.hull_offsets`: {exc}") from None
+    return hull
+
+
 def _hull(v: VesselData, C_wp: float) -> HullForm:
+    if offsets_path(v) is not None:
+        return offsets_hull(v)
     return parametric_hull(
         L=v.get("particulars.L_pp"),
         B=v.get("particulars.B"),
@@ -310,6 +363,10 @@ def build_vessel_model(
     # ---- hull ---------------------------------------------------------------
     if v.has("hull.C_wp"):
         C_wp = v.get("hull.C_wp")
+    elif offsets_path(v) is not None:
+        oh = offsets_hull(v)
+        C_wp = oh.waterplane_area / (L * B)
+        est["hull.C_wp"] = _est(C_wp, "-", f"waterplane area of the offsets {offsets_path(v)}")
     else:
         C_wp = schneekluth_cwp(C_b)
         est["hull.C_wp"] = _est(
