@@ -246,7 +246,9 @@ def resolve_vessel(
 ) -> VesselModelData:
     """Cached :func:`build_vessel_model` (keyed by the vessel's name and coefficients
     and the wave-force builder)."""
-    key = (vessel.name, tuple(sorted(vessel.coefficients.items())), _builder_key(waves))
+    meta = tuple(sorted((k, str(v)) for k, v in vessel.meta.items()))  # wave_forces, offsets
+    key = (vessel.name, vessel.path, meta, tuple(sorted(vessel.coefficients.items())),
+           _builder_key(waves))  # fmt: skip
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
@@ -324,6 +326,22 @@ def _memo_fit(
     return memo.get(key, lambda: fit_resistance(fun, u_max, knot_spacing, **kwargs))
 
 
+#: ``[vessel] wave_forces`` of a vessel file: the wave-force model it asks for.
+WAVE_FORCE_MODELS = ("froude_krylov_strips", "panel_fk_diffraction", "panel_fk")
+
+
+def _file_wave_builder(vessel: VesselData) -> WaveForceBuilder:
+    """The builder named by ``[vessel] wave_forces`` (default: Froude-Krylov strips)."""
+    name = str(vessel.meta.get("wave_forces", WAVE_FORCE_MODELS[0]))
+    if name == "froude_krylov_strips":
+        return strip_waves
+    if name in ("panel_fk_diffraction", "panel_fk"):
+        from .hydro.panel import PanelWaveBuilder  # Capytaine only when asked for
+
+        return PanelWaveBuilder(diffraction=name == "panel_fk_diffraction")
+    raise VesselFileError(f"`vessel.wave_forces` must be one of {WAVE_FORCE_MODELS}, got {name!r}")
+
+
 def build_vessel_model(
     vessel: VesselData, *, waves: WaveForceBuilder | None = None
 ) -> VesselModelData:
@@ -335,8 +353,9 @@ def build_vessel_model(
         A validated vessel description.
     waves : WaveForceBuilder, optional
         Makes the wave-force model from the hull and loading
-        (:class:`~ship_models.contracts.WaveInputs`); default the Froude-Krylov
-        strips :func:`~ship_models.hydro.waves.strip_waves`.
+        (:class:`~ship_models.contracts.WaveInputs`); default the one the file names
+        in ``[vessel] wave_forces`` (:data:`WAVE_FORCE_MODELS`), else the
+        Froude-Krylov strips :func:`~ship_models.hydro.waves.strip_waves`.
 
     Returns
     -------
@@ -344,7 +363,7 @@ def build_vessel_model(
         With ``vessel`` holding file values plus estimates (status ``estimated`` or
         ``assumed``, method in ``source``) and ``wave_builder`` the builder used.
     """
-    builder: WaveForceBuilder = strip_waves if waves is None else waves
+    builder: WaveForceBuilder = _file_wave_builder(vessel) if waves is None else waves
     if not callable(builder):
         raise ValueError(
             f"`waves` must be a wave-force builder (a callable taking WaveInputs), got "
