@@ -100,7 +100,10 @@ _FORCES = ("X", "Y", "N", "K")
 
 
 def cache_dir() -> Path:
-    """Folder of the cached tables: ``$BROACHKIT_CACHE_DIR/panel`` or ``~/.cache/broachkit/panel``."""
+    """Folder of the cached tables.
+
+    ``$BROACHKIT_CACHE_DIR/panel``, or ``~/.cache/broachkit/panel``.
+    """
     base = os.environ.get("BROACHKIT_CACHE_DIR") or str(Path.home() / ".cache" / "broachkit")
     return Path(base) / "panel"
 
@@ -434,7 +437,10 @@ class PanelWaves:
         *,
         lift: bool = True,
     ) -> tuple[Any, Any, Any, Any]:
-        """Wave forces ``(X_w, Y_w, N_w, K_w)`` (see :class:`~ship_models.contracts.WaveForceModel`)."""
+        """Wave forces ``(X_w, Y_w, N_w, K_w)`` (N, N, N m, N m).
+
+        See :class:`~ship_models.contracts.WaveForceModel` for the arguments.
+        """
         a = 0.5 * H_over_lambda * lambda_over_L * self.strips.L
         ph = 2.0 * ops.pi * xi_over_lambda
         cs, sn = ops.cos(ph), ops.sin(ph)
