@@ -27,6 +27,7 @@ from ..options import (
     ship_from_args,
 )
 from ..progress import StatusLine
+from ..wave_info import wave_force_fields
 
 NAME = "critical"
 HELP = "critical Fn of capsizing due to broaching (heteroclinic bifurcation) at one course"
@@ -152,6 +153,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.Fn_guess is not None:
         check_fn(model, "--fn-guess", args.Fn_guess)
     result = {"vessel": model.vessel.name, **METHODS[args.method](model, params, args)}
+    result.update(wave_force_fields(model, params))  # issue 25: which wave forces were used
     if args.json:
         sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
     elif result["status"] != "SUCCESS" and not math.isfinite(result.get("Fn") or math.nan):
