@@ -93,9 +93,9 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
 log = logging.getLogger(__name__)
 
-#: Default grids of the table: 41 wavelengths on [1, 3] L, headings 0-60 deg.
+#: Default grids of the table: 41 wavelengths on [1, 3] L, headings 0-90 deg.
 LAMBDA_OVER_L = np.linspace(1.0, 3.0, 41)
-CHI_DEG = np.arange(0.0, 61.0, 10.0)
+CHI_DEG = np.arange(0.0, 91.0, 10.0)
 _FORCES = ("X", "Y", "N", "K")
 
 
@@ -241,8 +241,8 @@ def panel_table(
     Fc = np.ascontiguousarray(faces, dtype=np.int64)
     lL = np.asarray(lambda_over_L, dtype=float)
     chis = np.asarray(chi_deg, dtype=float)
-    if np.any(lL <= 0) or np.any(chis < 0) or np.any(chis >= 90):
-        raise ValueError("`lambda_over_L` must be > 0 and `chi_deg` in [0, 90) deg")
+    if np.any(lL <= 0) or np.any(chis < 0) or np.any(chis > 90):
+        raise ValueError("`lambda_over_L` must be > 0 and `chi_deg` in [0, 90] deg")
     speed = 0.0 if forward_speed_Fn is None else float(forward_speed_Fn) * math.sqrt(g * L)
     payload = {
         "mesh": hashlib.sha256(V.tobytes() + Fc.tobytes()).hexdigest(),
