@@ -186,3 +186,16 @@ def test_mesh_volume_of_a_box_is_exact():
     check_wetted_mesh(V, F)
     assert mesh_volume(V, F) == pytest.approx(10.0 * 3.0 * 1.0, rel=1e-12)
     assert math.isclose(h.volume, 30.0, rel_tol=1e-12)
+
+
+def test_capytaine_is_imported_only_for_the_panel_method():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, ship_models, ship_models.estimation, ship_models.analysis.sensitivity\n"
+        "from ship_models import purse_seiner\n"
+        "purse_seiner()\n"
+        "assert 'capytaine' not in sys.modules, 'capytaine imported'\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
