@@ -199,3 +199,24 @@ def test_capytaine_is_imported_only_for_the_panel_method():
         "assert 'capytaine' not in sys.modules, 'capytaine imported'\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_cli_hydrostatics_and_critical_name_the_wave_forces(capsys, tmp_path):
+    import json
+
+    from broachkit_cli.main import main
+
+    assert main(["vessels", "hydrostatics", "purse_seiner", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    hs = doc["hydrostatics"]
+    assert hs["volume"] == pytest.approx(414.8135, rel=1e-5)
+    assert hs["KM"] == pytest.approx(hs["KB"] + hs["BM"])
+    assert doc["wave_forces"]["model"] == "froude_krylov_strips"
+    assert doc["gz"]["max_gz_m"] > 0
+    assert main(["vessels", "hydrostatics", str(tmp_path / "none.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert main(["critical", "--chi-c", "10", "--method", "bvp", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["wave_force_model"] == "froude_krylov_strips"
+    assert doc["Fn"] == pytest.approx(0.30161168, abs=1e-7)
