@@ -41,22 +41,37 @@ names that origin (:func:`derivatives_about_g`).
 
 from __future__ import annotations
 
+import contextlib
+import inspect
 import logging
-from dataclasses import dataclass
+import pickle
+from collections.abc import Callable, Iterator
+from contextvars import ContextVar
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .contracts import WaveForceBuilder, WaveInputs
 from .forces import ShipForces
 from .hydro.added_mass import lewis_sway_added_mass, soding_surge_added_mass
 from .hydro.diffraction import taylor_diffraction_ratio
 from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
+from .hydro.offsets import (
+    OffsetsError,
+    OffsetsHull,
+    check_particulars,
+    hull_from_offsets,
+    read_offsets,
+)
+from .hydro.offsets import hydrostatics as offsets_hydrostatics
 from .hydro.propeller import fit_kt_quadratic, holtrop_thrust_deduction, taylor_wake
 from .hydro.resistance import HoltropHull, ResistanceFit, fit_resistance
 from .hydro.roll import ikeda_lift_damping_per_speed, roll_inertia
-from .hydro.waves import WaveStrips
+from .hydro.waves import strip_waves
 from .vessel import Coefficient, VesselData, VesselFileError
 
 log = logging.getLogger(__name__)
@@ -66,7 +81,51 @@ def _est(value: float, unit: str, source: str, status: str = "estimated") -> Coe
     return Coefficient(float(value), unit, source, status)
 
 
+def offsets_path(v: VesselData) -> Path | None:
+    """The offsets file named by ``[vessel] hull_offsets`` (relative to the vessel file)."""
+    name = v.meta.get("hull_offsets")
+    if not name:
+        return None
+    p = Path(str(name))
+    if not p.is_absolute() and v.path:
+        p = Path(v.path).parent / p
+    return p
+
+
+def offsets_hull(v: VesselData) -> OffsetsHull:
+    """The strip hull of the vessel's ``[vessel] hull_offsets`` table, checked against
+    the particulars (C_b, l.c.b., B); VesselFileError naming the contradiction."""
+    p = offsets_path(v)
+    if p is None:
+        raise VesselFileError("`vessel.hull_offsets`: the vessel has no offsets file")
+    try:
+        table = read_offsets(p)
+        hull = hull_from_offsets(
+            table,
+            L=v.get("particulars.L_pp"),
+            D=v.get("particulars.D"),
+            d_f=v.get("particulars.d_f"),
+            d_a=v.get("particulars.d_a"),
+            n_per_interval=max(2, int(v.get("hull.n_stations")) // max(1, table.x.size - 1)),
+        )
+        check_particulars(
+            offsets_hydrostatics(hull),
+            L=v.get("particulars.L_pp"),
+            B=v.get("particulars.B"),
+            d_m=0.5 * (v.get("particulars.d_f") + v.get("particulars.d_a")),
+            C_b=v.get("particulars.C_b"),
+            lcb_aft=v.get("particulars.lcb_aft"),
+            B_hull=2.0 * float(np.max(hull.b_wl)),
+            source=str(p),
+        )
+    except OffsetsError as exc:
+        raise VesselFileError(f"`vessel.hull_offsets`: {exc}") from None
+    return hull
+
+
 def _hull(v: VesselData, C_wp: float) -> HullForm:
+    if offsets_path(v) is not None:
+        return offsets_hull(v)
     return parametric_hull(
         L=v.get("particulars.L_pp"),
         B=v.get("particulars.B"),
@@ -154,6 +213,9 @@ class VesselModelData:
         Resistance regression inputs (for reports and checks).
     info : dict
         Derived numbers for reports (wetted-surface check, fit errors, ...).
+    wave_builder : WaveForceBuilder
+        How ``forces.waves`` was made (:func:`~ship_models.hydro.waves.strip_waves`
+        by default); a rebuild with changed coefficients uses it again.
     """
 
     vessel: VesselData
@@ -162,39 +224,151 @@ class VesselModelData:
     gz: GZCurve
     holtrop: HoltropHull
     info: dict[str, float]
+    wave_builder: WaveForceBuilder = field(default=strip_waves, repr=False)
 
 
 _CACHE: dict[tuple[Any, ...], VesselModelData] = {}
 _CACHE_SIZE = 8
 
 
-def resolve_vessel(vessel: VesselData) -> VesselModelData:
-    """Cached :func:`build_vessel_model` (keyed by the vessel's name and coefficients)."""
-    key = (vessel.name, tuple(sorted(vessel.coefficients.items())))
+def _builder_key(waves: WaveForceBuilder | None) -> Any:
+    if waves is None:
+        return None
+    try:
+        hash(waves)
+    except TypeError:
+        return ("id", id(waves))
+    return waves
+
+
+def resolve_vessel(
+    vessel: VesselData, *, waves: WaveForceBuilder | None = None
+) -> VesselModelData:
+    """Cached :func:`build_vessel_model` (keyed by the vessel's name and coefficients
+    and the wave-force builder)."""
+    meta = tuple(sorted((k, str(v)) for k, v in vessel.meta.items()))  # wave_forces, offsets
+    key = (vessel.name, vessel.path, meta, tuple(sorted(vessel.coefficients.items())),
+           _builder_key(waves))  # fmt: skip
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
-    out = build_vessel_model(vessel)
+    out = build_vessel_model(vessel, waves=waves)
     if len(_CACHE) >= _CACHE_SIZE:
         _CACHE.pop(next(iter(_CACHE)))
     _CACHE[key] = out
     return out
 
 
-def build_vessel_model(vessel: VesselData) -> VesselModelData:
+# ---------------------------------------------------------------------- memo
+class _Memo:
+    """Results of the expensive estimation steps keyed by their exact inputs."""
+
+    def __init__(self) -> None:
+        self.store: dict[bytes, Any] = {}
+        self.stats = {"hits": 0, "misses": 0}
+
+    def get(self, key: bytes, make: Callable[[], Any]) -> Any:
+        if key in self.store:
+            self.stats["hits"] += 1
+            return self.store[key]
+        self.stats["misses"] += 1
+        out = self.store[key] = make()
+        return out
+
+
+_MEMO: ContextVar[_Memo | None] = ContextVar("broachkit_estimation_memo", default=None)
+
+
+@contextlib.contextmanager
+def reuse_hydrostatics() -> Iterator[dict[str, int]]:
+    """Inside the context, rebuilds reuse the expensive steps with identical inputs.
+
+    :func:`build_vessel_model` computes the GZ curve (``gz_curve``), the IS-Code
+    topside fit (``marginal_topside_height``; together about 1.3 s of a 1.5 s build)
+    and the resistance spline (``fit_resistance``) through a memo keyed by their exact
+    inputs (the pickled hull form with all its arrays, GM and the keywords; for the
+    spline the resistance's values on the fit's own sample grid), so a rebuild with
+    one coefficient changed recomputes only what depends on it. Yields ``{"hits":
+    .., "misses": ..}`` (updated as the context runs). Nested contexts share the
+    outer memo.
+    """
+    outer = _MEMO.get()
+    if outer is not None:
+        yield outer.stats
+        return
+    memo = _Memo()
+    token = _MEMO.set(memo)
+    try:
+        yield memo.stats
+    finally:
+        _MEMO.reset(token)
+
+
+def _memo_call(name: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    memo = _MEMO.get()
+    if memo is None:
+        return fn(*args, **kwargs)
+    key = pickle.dumps((name, args, sorted(kwargs.items())), protocol=4)
+    return memo.get(key, lambda: fn(*args, **kwargs))
+
+
+def _memo_fit(
+    fun: Callable[[Any], Any], u_max: float, knot_spacing: float, **kwargs: Any
+) -> Any:
+    memo = _MEMO.get()
+    if memo is None:
+        return fit_resistance(fun, u_max, knot_spacing, **kwargs)
+    n_default = inspect.signature(fit_resistance).parameters["n_samples"].default
+    u = np.linspace(0.0, u_max, int(kwargs.get("n_samples", n_default)))
+    R = np.asarray(fun(u), dtype=float)  # the fit depends on ``fun`` only through these
+    key = pickle.dumps(("fit_resistance", R, float(u_max), float(knot_spacing),
+                        sorted(kwargs.items())), protocol=4)  # fmt: skip
+    return memo.get(key, lambda: fit_resistance(fun, u_max, knot_spacing, **kwargs))
+
+
+#: ``[vessel] wave_forces`` of a vessel file: the wave-force model it asks for.
+WAVE_FORCE_MODELS = ("froude_krylov_strips", "panel_fk_diffraction", "panel_fk")
+
+
+def _file_wave_builder(vessel: VesselData) -> WaveForceBuilder:
+    """The builder named by ``[vessel] wave_forces`` (default: Froude-Krylov strips)."""
+    name = str(vessel.meta.get("wave_forces", WAVE_FORCE_MODELS[0]))
+    if name == "froude_krylov_strips":
+        return strip_waves
+    if name in ("panel_fk_diffraction", "panel_fk"):
+        from .hydro.panel import PanelWaveBuilder  # Capytaine only when asked for
+
+        return PanelWaveBuilder(diffraction=name == "panel_fk_diffraction")
+    raise VesselFileError(f"`vessel.wave_forces` must be one of {WAVE_FORCE_MODELS}, got {name!r}")
+
+
+def build_vessel_model(
+    vessel: VesselData, *, waves: WaveForceBuilder | None = None
+) -> VesselModelData:
     """Estimate every coefficient the file does not give and build the force model.
 
     Parameters
     ----------
     vessel : VesselData
         A validated vessel description.
+    waves : WaveForceBuilder, optional
+        Makes the wave-force model from the hull and loading
+        (:class:`~ship_models.contracts.WaveInputs`); default the one the file names
+        in ``[vessel] wave_forces`` (:data:`WAVE_FORCE_MODELS`), else the
+        Froude-Krylov strips :func:`~ship_models.hydro.waves.strip_waves`.
 
     Returns
     -------
     VesselModelData
         With ``vessel`` holding file values plus estimates (status ``estimated`` or
-        ``assumed``, method in ``source``).
+        ``assumed``, method in ``source``) and ``wave_builder`` the builder used.
     """
+    builder: WaveForceBuilder = _file_wave_builder(vessel) if waves is None else waves
+    if not callable(builder):
+        raise ValueError(
+            f"`waves` must be a wave-force builder (a callable taking WaveInputs), got "
+            f"a {type(builder).__name__}"
+        )
     v = vessel
     est: dict[str, Coefficient] = {}
     rho, g, nu = v.get("environment.rho"), v.get("environment.g"), v.get("environment.nu")
@@ -208,6 +382,10 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
     # ---- hull ---------------------------------------------------------------
     if v.has("hull.C_wp"):
         C_wp = v.get("hull.C_wp")
+    elif offsets_path(v) is not None:
+        oh = offsets_hull(v)
+        C_wp = oh.waterplane_area / (L * B)
+        est["hull.C_wp"] = _est(C_wp, "-", f"waterplane area of the offsets {offsets_path(v)}")
     else:
         C_wp = schneekluth_cwp(C_b)
         est["hull.C_wp"] = _est(
@@ -234,7 +412,7 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
     if v.has("stability.topside_height"):
         topside = v.get("stability.topside_height")
     else:
-        topside = marginal_topside_height(hull, GM)
+        topside = _memo_call("marginal_topside_height", marginal_topside_height, hull, GM)
         est["stability.topside_height"] = _est(
             topside,
             "m",
@@ -243,7 +421,9 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
             "criteria (Part A 2.2) to within the 1 mm tolerance of the fit (the computed "
             "margin may miss zero by ~1e-4): the paper's condition 'marginally complies'",
         )
-    gz = gz_curve(
+    gz = _memo_call(
+        "gz_curve",
+        gz_curve,
         hull,
         GM,
         heel_step=v.get("stability.heel_step"),
@@ -288,7 +468,7 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
         def R_formula(u: Any) -> Any:
             return hh.total_resistance(u, rho=rho, g=g, nu=nu, form_factor=k1, C_A=C_A)
 
-        rfit = fit_resistance(R_formula, u_max, knot)
+        rfit = _memo_fit(R_formula, u_max, knot)
 
     # ---- propeller -------------------------------------------------------------
     D_p = v.get("propulsion.D_p")
@@ -458,17 +638,25 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
                 "(1928) Proc. R. Soc. Lond. A 120:260-283 (ship_models.hydro.diffraction)",
             )
         diffraction_factor = 1.0 + r_D
-    strips = WaveStrips.from_hull(
-        hull,
-        x_G=x_G,
-        zeta_G=zeta_G,
-        m22=m22,
-        z_H=z_H,
-        rho=rho,
-        g=g,
-        n_depth=int(v.get("hull.n_depth")),
-        surge_scale=surge_scale * diffraction_factor,
+    wave_model = builder(
+        WaveInputs(
+            vessel=vessel,
+            hull=hull,
+            x_G=x_G,
+            zeta_G=zeta_G,
+            m22=m22,
+            z_H=z_H,
+            rho=rho,
+            g=g,
+            n_depth=int(v.get("hull.n_depth")),
+            surge_scale=surge_scale * diffraction_factor,
+        )
     )
+    if not callable(getattr(wave_model, "forces", None)):
+        raise ValueError(
+            f"`waves`: the builder gave a {type(wave_model).__name__}, which has no "
+            "forces(xi_over_lambda, u, chi, H_over_lambda, lambda_over_L, ops, *, lift) method"
+        )
     q_speed = 0.5 * rho * L * d_m
     forces = ShipForces(
         rho=rho,
@@ -509,7 +697,7 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
         kt=(float(kt[0]), float(kt[1]), float(kt[2])),
         resistance=rfit,
         gz_coeffs=np.array(gz.coeffs),
-        waves=strips,
+        waves=wave_model,
         T_E=v.get("autopilot.T_E"),
         delta_max=v.get("rudder.delta_max"),
     )
@@ -538,7 +726,13 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
     }
     resolved = vessel.with_estimates(est)
     log.debug("resolved vessel %s with %d estimates", vessel.name, len(est))
-    return VesselModelData(resolved, forces, hull, gz, hh, info)
+    return VesselModelData(resolved, forces, hull, gz, hh, info, builder)
 
 
-__all__ = ["VesselModelData", "build_vessel_model", "derivatives_about_g", "resolve_vessel"]
+__all__ = [
+    "VesselModelData",
+    "build_vessel_model",
+    "derivatives_about_g",
+    "resolve_vessel",
+    "reuse_hydrostatics",
+]

@@ -34,9 +34,9 @@ import numpy as np
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.typing import FloatArray
 
+from .contracts import WaveForceModel
 from .hydro.propeller import revolutions, thrust
 from .hydro.resistance import ResistanceFit
-from .hydro.waves import WaveStrips
 
 _EPS2 = 1e-12  # (m/s)^2 regularisation of square roots at u = n = 0
 
@@ -71,8 +71,9 @@ class ShipForces:
         Calm-water resistance curve.
     gz_coeffs : ndarray, shape (n,)
         ``GZ(phi) = sum_i gz_coeffs[i-1] sin(i phi)`` (m).
-    waves : WaveStrips
-        Strip data of the wave forces.
+    waves : WaveForceModel
+        The wave forces (:class:`~ship_models.contracts.WaveForceModel`; by default
+        the Froude-Krylov strips :class:`~ship_models.hydro.waves.WaveStrips`).
     T_E, delta_max : float
         Steering-gear time constant (s) and rudder limit (rad).
     """
@@ -115,7 +116,7 @@ class ShipForces:
     kt: tuple[float, float, float]
     resistance: ResistanceFit
     gz_coeffs: FloatArray
-    waves: WaveStrips
+    waves: WaveForceModel
     T_E: float
     delta_max: float
 

@@ -220,6 +220,25 @@ def _is_system(obj: Any) -> bool:
     return all(hasattr(obj, a) for a in ("state_names", "param_names", "f", "jacobian"))
 
 
+def vessel_model(
+    data: VesselModelData | VesselData, kind: Literal["4dof", "surge"] = "4dof", **options: Any
+) -> Any:
+    """The model of kind ``kind`` (4-DOF by default) of resolved vessel data.
+
+    Parameters
+    ----------
+    data : VesselModelData or VesselData
+        Resolved data (used as they are) or a vessel (resolved with the options'
+        ``waves`` builder, default Froude-Krylov strips).
+    kind : {"4dof", "surge"}
+    **options
+        Keyword options of the model class.
+    """
+    if kind not in _MODEL_CLASSES:
+        raise ValueError(f"`kind` must be '4dof' or 'surge', got {kind!r}")
+    return _MODEL_CLASSES[kind](data, **options)
+
+
 # ---------------------------------------------------------------------- registration
 def register_model(
     name: str,
@@ -596,4 +615,5 @@ __all__ = [
     "refresh_plugins",
     "register_model",
     "unregister_model",
+    "vessel_model",
 ]

@@ -33,10 +33,11 @@ from continuation.settings import NewtonSettings
 from continuation.system import System
 from continuation.typing import FloatArray
 
+from .contracts import WaveForceBuilder
 from .estimation import VesselModelData
 from .forces import ShipForces
 from .paper import PAPER_FN
-from .umeda_4dof import _as_vessel
+from .umeda_4dof import _as_vessel, rebuilt_data
 from .vessel import VesselData
 
 SURGE_STATE_NAMES = ("xi_G", "u")
@@ -73,12 +74,19 @@ class SurgeModel(System):
     vessel : VesselData, str, Path or VesselModelData
         As for :class:`~ship_models.umeda_4dof.Umeda4DOF`; pass ``model.data`` to share
         an already resolved vessel.
+    waves : WaveForceBuilder, optional
+        Builds the wave-force model (default: Froude-Krylov strips).
 
     Parameters of the system: ``(Fn, H_over_lambda, lambda_over_L)``.
     """
 
-    def __init__(self, vessel: VesselData | str | Path | VesselModelData = "purse_seiner") -> None:
-        self.data = _as_vessel(vessel)
+    def __init__(
+        self,
+        vessel: VesselData | str | Path | VesselModelData = "purse_seiner",
+        *,
+        waves: WaveForceBuilder | None = None,
+    ) -> None:
+        self.data = _as_vessel(vessel, waves)
         self.forces: ShipForces = self.data.forces
         self.vessel = self.data.vessel
         defaults = {
@@ -104,6 +112,15 @@ class SurgeModel(System):
         f1 = (u - F.celerity(lL, ops)) / F.wavelength(lL)
         f2 = F.surge_acceleration(xi, u, 0.0, n, Hl, lL, ops)
         return ops.stack([f1, f2])
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """Keyword options of the constructor (none besides the vessel)."""
+        return {}
+
+    def rebuild(self, data: VesselModelData | VesselData) -> SurgeModel:
+        """This model on other vessel data (VesselData resolved with its wave builder)."""
+        return type(self)(rebuilt_data(self.data, data))
 
     def index(self, name: str) -> int:
         """Index of a state name."""

@@ -56,7 +56,8 @@ from continuation.settings import NewtonSettings
 from continuation.system import System
 from continuation.typing import FloatArray
 
-from .estimation import VesselModelData, resolve_vessel
+from .contracts import WaveForceBuilder
+from .estimation import VesselModelData, build_vessel_model, resolve_vessel
 from .forces import ShipForces
 from .paper import PAPER_CHI_C, PAPER_FN
 from .vessel import VesselData, load_vessel
@@ -70,12 +71,32 @@ def smooth_saturation(x: Any, limit: float, order: int, ops: Ops = NUMPY_OPS) ->
     return x / (1.0 + (x / limit) ** order) ** (1.0 / order)
 
 
-def _as_vessel(vessel: VesselData | str | Path | VesselModelData) -> VesselModelData:
+def _as_vessel(
+    vessel: VesselData | str | Path | VesselModelData, waves: WaveForceBuilder | None = None
+) -> VesselModelData:
     if isinstance(vessel, VesselModelData):
+        if waves is not None and waves is not vessel.wave_builder:
+            raise ValueError(
+                "`waves`: give a wave-force builder with a vessel file or VesselData, not "
+                "with already resolved VesselModelData (its forces.waves is built)"
+            )
         return vessel
     if not isinstance(vessel, VesselData):
         vessel = load_vessel(vessel)
-    return resolve_vessel(vessel)
+    return resolve_vessel(vessel, waves=waves)
+
+
+def rebuilt_data(
+    template: VesselModelData, data: VesselModelData | VesselData
+) -> VesselModelData:
+    """``data`` resolved with ``template``'s wave-force builder (VesselModelData as is)."""
+    if isinstance(data, VesselModelData):
+        return data
+    if not isinstance(data, VesselData):
+        raise ValueError(
+            f"`data` must be VesselData or VesselModelData, got a {type(data).__name__}"
+        )
+    return build_vessel_model(data, waves=template.wave_builder)
 
 
 class Umeda4DOF(System):
@@ -92,6 +113,9 @@ class Umeda4DOF(System):
         Even exponent of the smooth saturation (default 16).
     wave_lift : bool
         Include the slender-body lift due to wave particle velocity (default True).
+    waves : WaveForceBuilder, optional
+        Builds the wave-force model from the hull (default: Froude-Krylov strips,
+        :func:`~ship_models.hydro.waves.strip_waves`); see :mod:`ship_models.contracts`.
 
     Attributes
     ----------
@@ -115,12 +139,13 @@ class Umeda4DOF(System):
         saturation: bool = True,
         saturation_order: int = 16,
         wave_lift: bool = True,
+        waves: WaveForceBuilder | None = None,
     ) -> None:
         if saturation_order < 2 or saturation_order % 2:
             raise ValueError(
                 f"`saturation_order` must be an even integer >= 2, got {saturation_order}"
             )
-        self.data = _as_vessel(vessel)
+        self.data = _as_vessel(vessel, waves)
         self.forces: ShipForces = self.data.forces
         self.vessel = self.data.vessel
         self.saturation = bool(saturation)
@@ -186,6 +211,27 @@ class Umeda4DOF(System):
         return ops.stack([f1, f2, f3, f4, f5, f6, f7, f8])
 
     # ------------------------------------------------------------------ helpers
+    @property
+    def options(self) -> dict[str, Any]:
+        """The keyword options of this model (``saturation``, ``saturation_order``,
+        ``wave_lift``), as the constructor takes them."""
+        return {
+            "saturation": self.saturation,
+            "saturation_order": self.saturation_order,
+            "wave_lift": self.wave_lift,
+        }
+
+    def rebuild(self, data: VesselModelData | VesselData) -> Umeda4DOF:
+        """This model (same class, options and wave-force builder) on other vessel data.
+
+        Parameters
+        ----------
+        data : VesselModelData or VesselData
+            Resolved data used as it is, or a vessel resolved with this model's
+            wave-force builder (``self.data.wave_builder``).
+        """
+        return type(self)(rebuilt_data(self.data, data), **self.options)
+
     def index(self, name: str) -> int:
         """Index of a state name (``"xi_G"``, ``"u"``, ...)."""
         return self.state_index(name)
@@ -396,4 +442,4 @@ def _failed(res: NewtonResult, message: str, throw: bool) -> NewtonResult:
     return NewtonResult(res.z, False, res.iterations, res.residual_norm, status, message)
 
 
-__all__ = ["PARAM_NAMES", "STATE_NAMES", "Umeda4DOF", "smooth_saturation"]
+__all__ = ["PARAM_NAMES", "STATE_NAMES", "Umeda4DOF", "rebuilt_data", "smooth_saturation"]

@@ -38,6 +38,7 @@ from ..options import (
     ship_from_args,
 )
 from ..progress import StatusLine
+from ..wave_info import wave_force_fields
 
 NAME = "critical"
 HELP = "capsizing threshold Fn at one course, its mechanism and the heteroclinic Fn"
@@ -299,6 +300,7 @@ def _run(args: argparse.Namespace) -> int:
         check_fn(model, "--fn-guess", args.Fn_guess)
     _window(model, params, args)
     result = {"vessel": model.vessel.name, **METHODS[args.method](model, params, args)}
+    result.update(wave_force_fields(model, params))  # issue 25: which wave forces were used
     ok = result["status"] == "SUCCESS" and result.get("Fn") is not None
     if args.json:
         sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")

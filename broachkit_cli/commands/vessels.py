@@ -5,6 +5,7 @@
     broachkit vessels list [--json]
     broachkit vessels show NAME [--json] [--no-estimate]
     broachkit vessels validate FILE [--schema-only]
+    broachkit vessels hydrostatics NAME [--json]
 
 ``NAME`` is a registered model name (``broachkit vessels list``) or the path to a
 vessel ``.toml`` file. ``show`` prints every coefficient with its value, unit,
@@ -12,6 +13,11 @@ status and source, including those the estimation pipeline fills (status
 ``estimated``/``assumed``); ``--no-estimate`` shows only what the file gives.
 ``validate`` exits with 0 and prints ``valid`` for a good file; for a bad one it
 exits with 1 and prints the error, which names the offending field.
+``hydrostatics`` prints the hull's upright hydrostatics (volume, LCB, KB, BM,
+waterplane area and moments, from its offsets when the file names a
+``[vessel] hull_offsets`` table, else from the form-parameter hull), the GZ curve by
+direct integration at heel, and the wave-force amplitudes of the vessel's wave-force
+model at its design wave for courses 0-60 deg.
 """
 
 from __future__ import annotations
@@ -51,6 +57,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="check the file format and values only (do not run the estimation pipeline)",
     )
+    p = sub.add_parser(
+        "hydrostatics", help="hull hydrostatics, GZ curve and wave-force amplitudes of a vessel"
+    )
+    p.add_argument("name", metavar="NAME", help="registered model name or path to a .toml file")
+    p.add_argument("--json", action="store_true", help="print JSON")
     for action in sub.choices.values():
         add_verbose(action)
 
@@ -132,6 +143,91 @@ def _run_show(args: argparse.Namespace) -> int:
     return 0
 
 
+def hydrostatics_report(name: str) -> dict[str, Any]:
+    """Hydrostatics, GZ and wave-force amplitudes of a vessel (JSON-ready)."""
+    import numpy as np
+
+    from ship_models.contracts import wave_model_name
+    from ship_models.estimation import offsets_path
+    from ship_models.hydro.offsets import hydrostatics
+    from ship_models.registry import get_vessel_data
+
+    data = get_vessel_data(name)
+    v = data.vessel
+    hs = hydrostatics(data.hull)
+    rho = v.get("environment.rho")
+    gz = data.gz
+    phi_deg = np.arange(0.0, math.degrees(gz.phi[-1]) + 1e-9, 5.0)
+    F = data.forces
+    Hl, lL = v.get("waves.H_over_lambda"), v.get("waves.lambda_over_L")
+    c = float(F.celerity(lL))
+    xi = np.linspace(0.0, 1.0, 64, endpoint=False)
+    amps = {}
+    for deg in range(0, 61, 10):
+        chi = math.radians(deg)
+        f = np.array([F.waves.forces(s, c, chi, Hl, lL) for s in xi], dtype=float)
+        amps[str(deg)] = dict(
+            zip(("X_w", "Y_w", "N_w", "K_w"), np.abs(f).max(axis=0).tolist(), strict=True)
+        )
+    off = offsets_path(v)
+    return {
+        "vessel": v.name,
+        "hull": str(off) if off is not None else "form-parameter hull of the particulars",
+        "hydrostatics": hs.as_dict()
+        | {"displacement_t": hs.volume * rho / 1000.0, "KM": hs.KB + hs.BM},
+        "gz": {
+            "phi_deg": phi_deg.tolist(),
+            "gz_m": np.interp(np.radians(phi_deg), gz.phi, gz.gz).tolist(),
+            "max_gz_m": gz.max_gz[1],
+            "phi_max_gz_deg": math.degrees(gz.max_gz[0]),
+            "phi_vanishing_deg": math.degrees(gz.vanishing_angle),
+            "GM_m": v.get("loading.GM"),
+            "topside_height_m": data.info["topside_height"],
+        },
+        "wave_forces": {
+            "model": wave_model_name(data),
+            "H_over_lambda": Hl,
+            "lambda_over_L": lL,
+            "amplitude_by_chi_deg": amps,
+        },
+    }
+
+
+def _run_hydrostatics(args: argparse.Namespace) -> int:
+    doc = hydrostatics_report(args.name)
+    if args.json:
+        sys.stdout.write(json.dumps(doc, indent=2) + "\n")
+        return 0
+    out = sys.stdout
+    h = doc["hydrostatics"]
+    out.write(f"vessel {doc['vessel']}: hull {doc['hull']}\n")
+    out.write(
+        f"  volume {h['volume']:.4g} m^3 ({h['displacement_t']:.4g} t), C_b {h['C_b']:.4f}, "
+        f"LCB {h['lcb']:+.4g} m (from midship, + fwd)\n"
+        f"  KB {h['KB']:.4g} m, BM {h['BM']:.4g} m, KM {h['KM']:.4g} m\n"
+        f"  waterplane {h['A_wp']:.4g} m^2, LCF {h['lcf']:+.4g} m, I_T {h['I_T']:.4g} m^4, "
+        f"I_L {h['I_L']:.4g} m^4\n"
+    )
+    g = doc["gz"]
+    out.write(
+        f"GZ (GM {g['GM_m']:g} m): max {g['max_gz_m']:.4g} m at {g['phi_max_gz_deg']:.1f} deg, "
+        f"vanishing at {g['phi_vanishing_deg']:.1f} deg\n"
+    )
+    out.write("  " + "  ".join(f"{p:.0f}:{z:.3f}" for p, z in zip(g["phi_deg"], g["gz_m"],
+                                                                  strict=True)) + "\n")  # fmt: skip
+    w = doc["wave_forces"]
+    out.write(
+        f"wave forces ({w['model']}), H/lambda = {w['H_over_lambda']:.4g}, lambda/L = "
+        f"{w['lambda_over_L']:.4g}: amplitudes X_w, Y_w (kN), N_w, K_w (kN m)\n"
+    )
+    for deg, a in w["amplitude_by_chi_deg"].items():
+        out.write(
+            f"  chi {deg:>2} deg: {a['X_w'] / 1e3:9.1f} {a['Y_w'] / 1e3:9.1f} "
+            f"{a['N_w'] / 1e3:9.1f} {a['K_w'] / 1e3:9.1f}\n"
+        )
+    return 0
+
+
 def _run_validate(args: argparse.Namespace) -> int:
     from ship_models.estimation import resolve_vessel
     from ship_models.vessel import load_vessel
@@ -174,4 +270,6 @@ def run(args: argparse.Namespace) -> int:
         except PluginError as exc:
             sys.stderr.write(f"broachkit vessels show: error: {exc}\n")
             return 1
+    if action == "hydrostatics":
+        return _run_hydrostatics(args)
     return _run_validate(args)

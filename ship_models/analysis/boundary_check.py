@@ -17,7 +17,6 @@ system can satisfy the boundary conditions without being that orbit:
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
@@ -25,6 +24,7 @@ from continuation.params import Params
 from continuation.settings import NewtonSettings
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .events import capsize_angle
 
 #: Largest 2-norm distance between the orbit's saddle and the crest saddle followed
@@ -32,17 +32,17 @@ from .events import capsize_angle
 SADDLE_MATCH = 1e-6
 
 
-def max_roll(model: Any, x: FloatArray) -> float:
+def max_roll(model: VesselModel, x: FloatArray) -> float:
     """``max |phi|`` (rad) over the orbit samples ``x (M, n)``."""
     return float(np.max(np.abs(np.asarray(x, dtype=float)[:, model.state_index("phi")])))
 
 
-def boundary_refusal(model: Any, x: FloatArray, x_from: FloatArray, params: Params) -> str:
+def boundary_refusal(model: VesselModel, x: FloatArray, x_from: FloatArray, params: Params) -> str:
     """Why the orbit ``x (M, n)`` from the saddle ``x_from`` is no capsizing boundary.
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     x : ndarray, shape (M, n)
         Orbit samples.
     x_from : ndarray, shape (n,)

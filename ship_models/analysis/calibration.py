@@ -44,15 +44,16 @@ import scipy.sparse.linalg as spla
 from continuation.casadi_compile import uncompiled
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from ..estimation import build_vessel_model
-from ..umeda_4dof import Umeda4DOF
+from ..registry import vessel_model
 from ..vessel import Coefficient, VesselData, dump_vessel, load_vessel
 from .critical_bvp import critical_fn_bvp
 from .critical_curve import CriticalCurve, critical_curve
 from .critical_result import CriticalFn
 from .sensitivity.adjoint import _fn_index
 from .sensitivity.factors import FACTORS, SYSTEM_PARAMS
-from .sensitivity.rebuild import _model_options, model_at
+from .sensitivity.rebuild import model_at
 
 log = logging.getLogger(__name__)
 
@@ -164,7 +165,7 @@ def _bordered_solve(
     key: str,
     theta0: float,
     target: float,
-    options: dict[str, Any],
+    template: VesselModel,
     tol: float,
     max_iter: int,
     rel_step: float,
@@ -177,12 +178,12 @@ def _bordered_solve(
     def g_theta(p_theta: Any, zz: FloatArray, theta: float, g0: FloatArray) -> FloatArray:
         h = rel_step * abs(theta) if theta != 0 else rel_step
         p_h = prob.replace(system=model_at(raw, {key: theta + h}, resolved=resolved,
-                                           options=options))  # fmt: skip
+                                           model=template))  # fmt: skip
         return (np.asarray(p_h.residual(zz)) - g0) / h
 
     # predictor: theta0 + dtheta, z + dz/dtheta dtheta (one solve with G_z)
     theta = float(theta0)
-    p0 = prob.replace(system=model_at(raw, {key: theta}, resolved=resolved, options=options))
+    p0 = prob.replace(system=model_at(raw, {key: theta}, resolved=resolved, model=template))
     g0 = np.asarray(p0.residual(z), dtype=float)
     J = sp.csc_matrix(p0.jacobian(z))
     gt = g_theta(p0, z, theta, g0)
@@ -198,7 +199,7 @@ def _bordered_solve(
     rn = math.inf
     it = 0
     for it in range(1, max_iter + 1):
-        p_t = prob.replace(system=model_at(raw, {key: theta}, resolved=resolved, options=options))
+        p_t = prob.replace(system=model_at(raw, {key: theta}, resolved=resolved, model=template))
         zz = z.copy()
         zz[i] = target
         g = np.asarray(p_t.residual(zz), dtype=float)
@@ -279,16 +280,16 @@ def calibrate(
     if not target_source.strip():
         raise ValueError("`target_source` must say where the target comes from")
     raw = vessel if isinstance(vessel, VesselData) else load_vessel(vessel)
-    base = build_vessel_model(raw)
+    given = connection.orbit.problem.system if connection is not None else None
+    base = build_vessel_model(raw, waves=given.data.wave_builder if given is not None else None)
     resolved = base.vessel
     _check_key(coefficient, resolved)
     c0 = resolved.coefficients[coefficient]
     if connection is None:
-        m = Umeda4DOF(base)
-        connection = critical_fn_bvp(chi_c, model=m, **bvp_options)
+        connection = critical_fn_bvp(chi_c, model=vessel_model(base), **bvp_options)
     if not connection.success:
         raise ValueError(f"the starting connection did not converge: {connection.message}")
-    opts = _model_options(connection.orbit.problem.system)
+    template: VesselModel = connection.orbit.problem.system  # rebuilt with its wave forces
     conn = connection
     theta = c0.value
     iters = 0
@@ -297,11 +298,11 @@ def calibrate(
     for rnd in range(1, max_rounds + 1):
         with uncompiled():  # one-off rebuilt models (see continuation.casadi_compile)
             theta, it, _ = _bordered_solve(conn, raw, resolved, coefficient, theta, target_Fn,
-                                           opts, tol, max_iter, rel_step)  # fmt: skip
+                                           template, tol, max_iter, rel_step)  # fmt: skip
         iters += it
         cal_vessel = _calibrated_vessel(raw, c0, coefficient, theta, target_Fn,
                                         conn.chi_c, target_source)  # fmt: skip
-        model = Umeda4DOF(build_vessel_model(cal_vessel), **opts)
+        model = template.rebuild(cal_vessel)
         check = critical_fn_bvp(conn.chi_c, model=model, params=conn.orbit.params.replace(
             Fn=target_Fn), guess=conn, **bvp_options)  # fmt: skip
         if not check.success:
@@ -395,12 +396,10 @@ def calibrated_curves(
     fresh one-course solves fail there, so points past 25 deg need checking.
     """
     raw = vessel if isinstance(vessel, VesselData) else load_vessel(vessel)
-    opts = _model_options(cal.connection.orbit.problem.system)
+    template: VesselModel = cal.connection.orbit.problem.system
     chis = np.asarray(chi_c_values, dtype=float)
-    pred = critical_curve(chis, model=Umeda4DOF(build_vessel_model(raw), **opts),
-                          **curve_options)  # fmt: skip
-    calc = critical_curve(chis, model=Umeda4DOF(build_vessel_model(cal.vessel), **opts),
-                          **curve_options)  # fmt: skip
+    pred = critical_curve(chis, model=template.rebuild(raw), **curve_options)
+    calc = critical_curve(chis, model=template.rebuild(cal.vessel), **curve_options)
     return CalibratedCurves(chis, pred, calc, cal)
 
 

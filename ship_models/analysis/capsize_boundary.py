@@ -65,6 +65,7 @@ from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .boundary_check import SADDLE_MATCH, max_roll
 from .crest_saddle import crest_saddle
 from .critical_bvp import _guess_mesh
@@ -294,7 +295,7 @@ def _start(
 
 
 def _passages(
-    model: Any, tr: Any, saddle: FloatArray, scales: FloatArray, radius: float
+    model: VesselModel, tr: Any, saddle: FloatArray, scales: FloatArray, radius: float
 ) -> list[tuple[int, int, float]]:
     """Closest approaches ``(k, sample index, distance)`` to ``saddle + k e_xi`` in time order."""
     x = np.asarray(tr.x)
@@ -394,7 +395,7 @@ def _problem(
     )
 
 
-def landing_refusal(model: Any, res: LandingResult) -> str:
+def landing_refusal(model: VesselModel, res: LandingResult) -> str:
     """Why a converged landing is no capsizing boundary (empty when it is one).
 
     The orbit must stay below the angle of vanishing stability, and its end equilibrium
@@ -454,7 +455,9 @@ def _solve_point(
     return _point(model, res, b, k)
 
 
-def _point(model: Any, res: LandingResult, b: SuddenChangeBoundary, k: int) -> BoundaryPoint:
+def _point(
+    model: VesselModel, res: LandingResult, b: SuddenChangeBoundary, k: int
+) -> BoundaryPoint:
     fn = res.value("Fn")
     status, msg = res.status, res.message
     refusal = landing_refusal(model, res) if res.errors is not None or res.success else ""
@@ -526,7 +529,7 @@ def _bridge(
 
 # ------------------------------------------------------------------ entry point
 def capsizing_boundary_bvp(
-    model: Any,
+    model: VesselModel,
     params_from: Any,
     chi_c_to: float,
     xi_0: Sequence[float],
@@ -546,7 +549,7 @@ def capsizing_boundary_bvp(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params_from : Params, mapping or array
         The old controls (ignored with ``orbit``).
     chi_c_to : float

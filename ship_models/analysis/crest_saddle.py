@@ -12,8 +12,6 @@ eigen-structure), after checking that it has exactly one unstable eigenvalue.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from continuation.errors import ContinuationError
@@ -21,11 +19,12 @@ from continuation.params import Params
 from continuation.settings import NewtonSettings
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .eigen import eigen_structure
 from .fixed_points import FixedPoint
 
 
-def crest_equilibrium(model: Any, params: Params) -> tuple[FloatArray, float]:
+def crest_equilibrium(model: VesselModel, params: Params) -> tuple[FloatArray, float]:
     """The crest equilibrium followed from ``chi_c = 0`` and its residual ``max |F|``.
 
     ``model.find_equilibrium`` continues the ``chi_c = 0`` surge root in ``chi_c`` (a
@@ -50,7 +49,7 @@ def crest_equilibrium(model: Any, params: Params) -> tuple[FloatArray, float]:
     return np.asarray(res.z, dtype=float), float(res.residual_norm)
 
 
-def crest_saddle(model: Any, params: Params) -> FixedPoint:
+def crest_saddle(model: VesselModel, params: Params) -> FixedPoint:
     """The crest equilibrium as a saddle of index 1 with its eigen-structure.
 
     Returns

@@ -63,6 +63,7 @@ from continuation.settings import ContinuationSettings
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .crest_saddle import crest_saddle
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
@@ -76,7 +77,7 @@ WINDING = {"xi_G": -1}
 N_INTERVALS, DEGREE = 60, 4
 
 
-def _params(model: Any, params: Any, name: str = "params") -> Params:
+def _params(model: VesselModel, params: Any, name: str = "params") -> Params:
     if isinstance(params, Params):
         return params
     if params is None:
@@ -85,7 +86,7 @@ def _params(model: Any, params: Any, name: str = "params") -> Params:
 
 
 def simulated_cycle(
-    model: Any,
+    model: VesselModel,
     params: Any,
     *,
     x_guess: Any = None,
@@ -101,7 +102,7 @@ def simulated_cycle(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params : Params, mapping or array
     x_guess : array_like, shape (8,), optional
     t_settle : float

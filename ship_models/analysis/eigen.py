@@ -24,13 +24,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from continuation.params import Params
 from continuation.stability import eigen
 from continuation.typing import ComplexArray, FloatArray
+
+from ..contracts import VesselModel
 
 #: Ship state names (Umeda 1999, Eq. 1), in the order of the state vector.
 SHIP_STATES = ("xi_G", "u", "v", "chi", "r", "phi", "p_roll", "delta")
@@ -46,13 +47,13 @@ MOTION_COMPONENTS = {
 
 
 def paper_scales(
-    model: Any, params: Params | FloatArray, x: FloatArray
+    model: VesselModel, params: Params | FloatArray, x: FloatArray
 ) -> tuple[FloatArray, float]:
     r"""State scales and time scale of the paper's nondimensionalisation at a point.
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
         Supplies ``celerity`` and ``forces.L``.
     params : Params or ndarray, shape (6,)
     x : ndarray, shape (8,)
@@ -219,7 +220,7 @@ class EigenStructure:
 
 
 def eigen_structure(
-    model: Any,
+    model: VesselModel,
     x: FloatArray | Sequence[float],
     params: Params | FloatArray,
     *,
@@ -229,7 +230,7 @@ def eigen_structure(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     x : array_like, shape (8,)
         The fixed point.
     params : Params or ndarray, shape (6,)

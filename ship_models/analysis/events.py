@@ -20,8 +20,10 @@ import scipy.optimize as so
 
 from continuation.events import Event
 
+from ..contracts import VesselModel
 
-def vanishing_angle(model: Any, *, n_grid: int = 3600) -> float:
+
+def vanishing_angle(model: VesselModel, *, n_grid: int = 3600) -> float:
     r"""Angle of vanishing stability of the model's GZ curve (rad).
 
     The first zero of ``model.forces.gz`` in :math:`(0, \pi]` after it has been
@@ -44,7 +46,7 @@ def vanishing_angle(model: Any, *, n_grid: int = 3600) -> float:
     return float(so.brentq(lambda a: float(gz(a)), phi[k], phi[k + 1], xtol=1e-14))
 
 
-def capsize_angle(model: Any, angle: float | None = None) -> float:
+def capsize_angle(model: VesselModel, angle: float | None = None) -> float:
     """The roll angle (rad) beyond which a run counts as capsized.
 
     ``angle`` if given (validated), else :func:`vanishing_angle` of the model.
@@ -57,12 +59,14 @@ def capsize_angle(model: Any, angle: float | None = None) -> float:
     return a
 
 
-def capsize_event(model: Any, angle: float | None = None, *, terminal: bool = True) -> Event:
+def capsize_event(
+    model: VesselModel, angle: float | None = None, *, terminal: bool = True
+) -> Event:
     r"""Terminal event ``|phi| - phi_cap = 0`` crossed upwards: the ship capsizes.
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
         Supplies the index of ``phi`` and the GZ curve.
     angle : float, optional
         Capsize angle (rad); default the angle of vanishing stability of the model's

@@ -35,6 +35,7 @@ from continuation.settings import NewtonSettings
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from ..surge import SurgeModel
 from ..umeda_4dof import follow_in_chi_c
 from .eigen import EigenStructure, eigen_structure
@@ -48,7 +49,7 @@ CHI_C_MAX = math.radians(50.0)
 _SURGE_CACHE: weakref.WeakKeyDictionary[Any, SurgeModel] = weakref.WeakKeyDictionary()
 
 
-def surge_model_of(model: Any) -> SurgeModel:
+def surge_model_of(model: VesselModel) -> SurgeModel:
     """The uncoupled surge model sharing ``model``'s resolved vessel (cached per model)."""
     sm = _SURGE_CACHE.get(model)
     if sm is None:
@@ -128,7 +129,7 @@ class FixedPoint:
         return d
 
 
-def lift_surge_point(model: Any, xi: float, u: float) -> FloatArray:
+def lift_surge_point(model: VesselModel, xi: float, u: float) -> FloatArray:
     """The 8-state point ``(xi, u, 0, 0, 0, 0, 0, 0)`` of a chi_c = 0 surge fixed point."""
     x = np.zeros(model.n_states)
     x[model.index("xi_G")] = xi
@@ -136,7 +137,9 @@ def lift_surge_point(model: Any, xi: float, u: float) -> FloatArray:
     return x
 
 
-def surge_roots(model: Any, params: Params | None = None, *, n_grid: int = 400) -> list[FloatArray]:
+def surge_roots(
+    model: VesselModel, params: Params | None = None, *, n_grid: int = 400
+) -> list[FloatArray]:
     """Fixed points at ``chi_c = 0`` from the uncoupled surge model, lifted to 8 states.
 
     The surge force ``T(c; n) - R(c) + X_w(xi)`` is bracketed on ``n_grid`` intervals of
@@ -146,7 +149,7 @@ def surge_roots(model: Any, params: Params | None = None, *, n_grid: int = 400) 
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params : Params, optional
         Only ``Fn``, ``H_over_lambda`` and ``lambda_over_L`` are used (default: the
         model's defaults).
@@ -173,7 +176,7 @@ def surge_roots(model: Any, params: Params | None = None, *, n_grid: int = 400) 
 
 
 def trace_in_chi_c(
-    model: Any,
+    model: VesselModel,
     params: Params | None = None,
     *,
     chi_c_max: float = CHI_C_MAX,
@@ -186,7 +189,7 @@ def trace_in_chi_c(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params : Params, optional
         ``Fn`` and the wave/autopilot parameters; its ``chi_c`` is ignored.
     chi_c_max : float
@@ -221,7 +224,7 @@ def trace_in_chi_c(
 
 
 def trace_in_fn(
-    model: Any,
+    model: VesselModel,
     x0: FloatArray,
     params: Params | None = None,
     *,
@@ -236,7 +239,7 @@ def trace_in_fn(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     x0 : ndarray, shape (8,)
         A fixed point (or a close guess) at ``params``.
     params : Params, optional
@@ -296,7 +299,7 @@ def _crossings(branch: Branch, target: float) -> list[FloatArray]:
 
 
 def polish(
-    model: Any, x0: FloatArray, params: Params, settings: NewtonSettings | None = None
+    model: VesselModel, x0: FloatArray, params: Params, settings: NewtonSettings | None = None
 ) -> FixedPoint | None:
     """Newton-polish a fixed point and compute its eigen-structure (None if no convergence)."""
     s = settings or NewtonSettings(tol=1e-10, step_tol=1e-10, max_iter=30)
@@ -309,7 +312,7 @@ def polish(
 
 
 def fixed_points(
-    model: Any,
+    model: VesselModel,
     params: Params | None = None,
     *,
     chi_c_max: float | None = None,
@@ -324,7 +327,7 @@ def fixed_points(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params : Params, optional
         Target parameters (default: the model's defaults, Fn = 0.3248, chi_c = 10 deg).
     chi_c_max : float, optional
@@ -375,7 +378,7 @@ def fixed_points(
 
 
 def find_fixed_point(
-    model: Any, params: Params | None = None, label: str = "crest", **kwargs: Any
+    model: VesselModel, params: Params | None = None, label: str = "crest", **kwargs: Any
 ) -> FixedPoint:
     """The fixed point with ``label`` (e.g. ``"crest"``) among :func:`fixed_points`.
 

@@ -33,6 +33,7 @@ import numpy as np
 
 from continuation.params import Params
 
+from ..contracts import VesselModel
 from .fixed_points import FixedPoint, fixed_points
 from .manifold import ShipManifold, unstable_manifold
 from .outcomes import ShipOutcome
@@ -44,7 +45,7 @@ def _via(fate: Any) -> tuple[str, ...]:
 
 
 def build_global_picture(
-    model: Any,
+    model: VesselModel,
     params: Params | None = None,
     *,
     points: Sequence[FixedPoint] | None = None,
@@ -58,7 +59,7 @@ def build_global_picture(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params : Params, optional
         Default: the model's defaults.
     points : sequence of FixedPoint, optional

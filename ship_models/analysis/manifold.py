@@ -81,6 +81,7 @@ from continuation.params import Params
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
 from .fixed_points import FixedPoint, find_fixed_point, fixed_points
@@ -323,7 +324,7 @@ class ShipFateSettings:
 
 
 def classify_ship_fate(
-    model: Any,
+    model: VesselModel,
     params: Params,
     x0: FloatArray,
     *,
@@ -340,7 +341,7 @@ def classify_ship_fate(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params : Params
     x0 : ndarray, shape (8,)
     points : sequence of FixedPoint
@@ -510,7 +511,7 @@ def manifold_start(saddle: FixedPoint, eps: float, sign: float) -> FloatArray:
 
 
 def unstable_manifold(
-    model: Any,
+    model: VesselModel,
     params: Params | None = None,
     saddle: FixedPoint | str = "crest",
     *,
@@ -525,7 +526,7 @@ def unstable_manifold(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params : Params, optional
         Default: the model's defaults (``ship_models.paper``: Fn = 0.3248, chi_c = 10 deg).
     saddle : FixedPoint or str

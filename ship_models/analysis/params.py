@@ -13,8 +13,12 @@ from typing import Any
 
 from continuation.params import Params
 
+from ..contracts import VesselModel
 
-def ship_params(model: Any, params: Any = None, name: str = "params", **changes: float) -> Params:
+
+def ship_params(
+    model: VesselModel, params: Any = None, name: str = "params", **changes: float
+) -> Params:
     """``params`` as checked :class:`Params` of ``model``, with ``changes`` applied.
 
     Parameters
@@ -68,7 +72,7 @@ def course(value: Any, name: str = "chi_c") -> float:
     return v
 
 
-def ship_model(model: Any) -> Any:
+def ship_model(model: VesselModel | None) -> VesselModel:
     """``model`` checked to be an Umeda4DOF-like System, or a new purse seiner if None.
 
     No model is cached: a caller that solves many courses passes its model.

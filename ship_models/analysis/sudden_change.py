@@ -54,6 +54,7 @@ from continuation.params import Params
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
 from .fixed_points import fixed_points
@@ -65,7 +66,7 @@ log = logging.getLogger(__name__)
 
 
 # ------------------------------------------------------------------------ helpers
-def _given(model: Any, params: Any, name: str) -> Params:
+def _given(model: VesselModel, params: Any, name: str) -> Params:
     if params is None:
         raise ValueError(f"`{name}` must be given (Params, mapping or array)")
     return ship_params(model, params, name)
@@ -90,7 +91,7 @@ def _position(value: Any, name: str = "xi_0") -> float:
     return v
 
 
-def _capsize_sim_event(model: Any, angle: float | None) -> SimEvent:
+def _capsize_sim_event(model: VesselModel, angle: float | None) -> SimEvent:
     phi_cap = capsize_angle_of(model, angle)
     i_phi = model.state_index("phi")
     return SimEvent(
@@ -102,7 +103,7 @@ def _capsize_sim_event(model: Any, angle: float | None) -> SimEvent:
     )
 
 
-def default_guess(model: Any, params: Params, xi: float = 0.0) -> FloatArray:
+def default_guess(model: VesselModel, params: Params, xi: float = 0.0) -> FloatArray:
     """A calm-water start: ``u`` the nominal speed of ``Fn``, heading ``chi_c``, rest 0.
 
     Returns
@@ -118,7 +119,7 @@ def default_guess(model: Any, params: Params, xi: float = 0.0) -> FloatArray:
 
 # ----------------------------------------------------------------- periodic orbit
 def periodic_orbit(
-    model: Any,
+    model: VesselModel,
     params: Any,
     *,
     x_guess: Any = None,
@@ -147,7 +148,7 @@ def periodic_orbit(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params : Params, mapping or array
         The controls of the orbit (e.g. Fn = 0.1, chi_c = 0).
     x_guess : array_like, shape (8,), optional
@@ -330,7 +331,7 @@ def _outcome(fate: ShipFate) -> ShipOutcome:
     return ShipOutcome.UNDECIDED
 
 
-def _orbit_for(model: Any, params_from: Any, orbit: ShootingOrbit | None) -> ShootingOrbit:
+def _orbit_for(model: VesselModel, params_from: Any, orbit: ShootingOrbit | None) -> ShootingOrbit:
     if orbit is not None:
         if not isinstance(orbit, ShootingOrbit):
             raise ValueError(f"`orbit` must be a ShootingOrbit, got {type(orbit).__name__}")
@@ -342,7 +343,7 @@ def _orbit_for(model: Any, params_from: Any, orbit: ShootingOrbit | None) -> Sho
 
 
 def sudden_change(
-    model: Any,
+    model: VesselModel,
     params_from: Any,
     params_to: Any,
     xi_0: float,
@@ -357,7 +358,7 @@ def sudden_change(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params_from : Params, mapping or array
         The old controls (ignored when ``orbit`` is given), e.g. Fn = 0.1, chi_c = 0.
     params_to : Params, mapping or array
@@ -472,7 +473,7 @@ def _fn_bracket(value: Any) -> tuple[float, float]:
 
 
 def sudden_change_boundary(
-    model: Any,
+    model: VesselModel,
     params_from: Any,
     chi_c_to: float,
     xi_0: float,
@@ -499,7 +500,7 @@ def sudden_change_boundary(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     params_from : Params, mapping or array
         The old controls (ignored with ``orbit``); the new ones are these with
         ``chi_c = chi_c_to`` and the bisected ``Fn``.
@@ -652,7 +653,7 @@ class SuddenChangeMap:
 
 
 def sudden_change_map(
-    model: Any,
+    model: VesselModel,
     params_from: Any,
     chi_c_to: float,
     xi_0: Sequence[float],

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -31,6 +30,7 @@ from continuation.params import Params
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .crest_saddle import crest_saddle
 from .events import capsize_event
 from .fixed_points import FixedPoint
@@ -92,7 +92,7 @@ class UpslopeRun:
 
 
 def upslope_branch(
-    model: Any,
+    model: VesselModel,
     params: Params,
     *,
     eps: float = 1e-6,
@@ -208,7 +208,7 @@ def connection_guess(
 
 
 def _try_guess(
-    model: Any, params: Params, reasons: list[str] | None = None
+    model: VesselModel, params: Params, reasons: list[str] | None = None
 ) -> tuple[UpslopeRun | None, ShipOutcome]:
     """The upslope branch at ``params`` and its fate; the run is None if unusable as a guess.
 
@@ -240,7 +240,7 @@ def _failed_attempts(reasons: list[str], attempts: int) -> str:
     return f" (no upslope branch could be computed at Fn = {fns})"
 
 
-def guess_run(model: Any, params: Params, bracket: tuple[float, float]) -> UpslopeRun:
+def guess_run(model: VesselModel, params: Params, bracket: tuple[float, float]) -> UpslopeRun:
     """A simulated upslope branch near the critical ``Fn``, usable as a connection guess.
 
     The branch at ``params`` if it comes within :data:`GUESS_REACH` of the shifted

@@ -51,6 +51,9 @@ def section_polygons(hull: HullForm, n_side: int = 40, topside_height: float = 0
     """
     if topside_height < 0:
         raise ValueError(f"`topside_height` must be >= 0, got {topside_height}")
+    own = getattr(hull, "section_polygons", None)
+    if callable(own):  # a hull given by its offsets has its own sections
+        return np.asarray(own(topside_height), dtype=float)
     s = 1.0 - (1.0 - np.linspace(0.0, 1.0, n_side + 1)) ** 3  # 0 (WL) .. 1 (keel)
     s = s[::-1]  # keel -> WL
     d = hull.d[:, None]

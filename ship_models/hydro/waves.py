@@ -67,7 +67,7 @@ effect on the rudder is ignored, as in the paper.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
@@ -76,6 +76,9 @@ from continuation.ops import NUMPY_OPS, Ops
 from continuation.typing import FloatArray
 
 from .hull import HullForm
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from ..contracts import WaveInputs
 
 _SMALL = 1e-2
 
@@ -170,6 +173,13 @@ class WaveStrips:
     g: float
     L: float
     surge_scale: float = 1.0
+
+    @property
+    def name(self) -> str:
+        """``"froude_krylov_strips"`` (with the surge factor when it is not 1)."""
+        if self.surge_scale == 1.0:
+            return "froude_krylov_strips"
+        return f"froude_krylov_strips (X_w x {self.surge_scale:.6g})"
 
     @classmethod
     def from_hull(
@@ -296,4 +306,30 @@ class WaveStrips:
         return X, Y, N, K
 
 
-__all__ = ["WaveStrips", "g1", "sinc", "sinc_g1"]
+def strip_waves(inputs: WaveInputs) -> WaveStrips:
+    """The default :class:`~ship_models.contracts.WaveForceBuilder`: Froude-Krylov strips.
+
+    Parameters
+    ----------
+    inputs : WaveInputs
+        Hull, G, sway added masses and environment of the vessel.
+
+    Returns
+    -------
+    WaveStrips
+        :meth:`WaveStrips.from_hull` of the inputs.
+    """
+    return WaveStrips.from_hull(
+        inputs.hull,
+        x_G=inputs.x_G,
+        zeta_G=inputs.zeta_G,
+        m22=inputs.m22,
+        z_H=inputs.z_H,
+        rho=inputs.rho,
+        g=inputs.g,
+        n_depth=inputs.n_depth,
+        surge_scale=inputs.surge_scale,
+    )
+
+
+__all__ = ["WaveStrips", "g1", "sinc", "sinc_g1", "strip_waves"]

@@ -21,13 +21,14 @@ from continuation.newton import newton
 from continuation.settings import NewtonSettings
 from continuation.typing import FloatArray
 
+from ...contracts import VesselModel
 from ...estimation import build_vessel_model
-from ...umeda_4dof import Umeda4DOF
+from ...registry import vessel_model
 from ...vessel import SCHEMA, VesselData, VesselFileError, load_vessel
 from ..critical_bvp import critical_fn_bvp
 from ..critical_result import CriticalFn
 from .factors import FACTORS, NUMERICAL_KEYS, SYSTEM_PARAMS
-from .rebuild import _model_options, model_at, reuse_hydrostatics
+from .rebuild import model_at, reuse_hydrostatics
 from .result import Sensitivity, SensitivityEntry, _sort_key
 
 log = logging.getLogger(__name__)
@@ -67,18 +68,18 @@ class _Residuals:
     """Residual of the converged connection's discretisation for rebuilt models."""
 
     def __init__(self, conn: CriticalFn, vessel: VesselData, resolved: VesselData,
-                 options: Mapping[str, Any]) -> None:  # fmt: skip
+                 model: VesselModel) -> None:  # fmt: skip
         self.prob = conn.orbit.problem
         self.z = np.asarray(conn.orbit.z, dtype=float)
         self.vessel = vessel
         self.resolved = resolved
-        self.options = dict(options)
+        self.model = model  # rebuilt for each change (class, options, wave forces kept)
 
-    def problem_for(self, model: Umeda4DOF) -> Any:
+    def problem_for(self, model: VesselModel) -> Any:
         return self.prob.replace(system=model)
 
     def at(self, changes: Mapping[str, float], factors: Mapping[str, float]) -> FloatArray:
-        m = model_at(self.vessel, changes, factors, resolved=self.resolved, options=self.options)
+        m = model_at(self.vessel, changes, factors, resolved=self.resolved, model=self.model)
         with uncompiled():  # a one-off model: nothing of it is in the compile cache
             return np.asarray(self.problem_for(m).residual(self.z), dtype=float)
 
@@ -124,7 +125,7 @@ def _g_theta(
     return (-3 * g0 + 4 * g1 - g2) / (2 * h), h, "forward"
 
 
-def _factor_quantity(key: str, model: Any, conn: CriticalFn) -> float:
+def _factor_quantity(key: str, model: VesselModel, conn: CriticalFn) -> float:
     """The quantity a factor scales, at the base point (N or N m)."""
     F = model.forces
     pv = conn.orbit.params
@@ -143,7 +144,7 @@ def _factor_quantity(key: str, model: Any, conn: CriticalFn) -> float:
     return float(np.max(np.abs(vals)))
 
 
-def wave_surge_amplitude(model: Any, chi_c: float, lambda_over_L: float | None = None,
+def wave_surge_amplitude(model: VesselModel, chi_c: float, lambda_over_L: float | None = None,
                          H_over_lambda: float | None = None) -> float:  # fmt: skip
     """Amplitude of the wave surge force ``max |X_w|`` over one wavelength (N)."""
     F = model.forces
@@ -162,7 +163,7 @@ def critical_fn_sensitivity(
     vessel: VesselData | str | Path = "purse_seiner",
     keys: Iterable[str] | None = None,
     connection: CriticalFn | None = None,
-    model: Umeda4DOF | None = None,
+    model: VesselModel | None = None,
     rel_step: float = 1e-4,
     abs_step: float = 1e-5,
     progress: Callable[[str], None] | None = None,
@@ -187,9 +188,10 @@ def critical_fn_sensitivity(
     connection : CriticalFn, optional
         A converged connection of this vessel at ``chi_c`` (else solved with
         :func:`~ship_models.analysis.critical_bvp.critical_fn_bvp`).
-    model : Umeda4DOF, optional
-        The model of ``vessel`` (built if omitted); its options (saturation, lift)
-        are kept for the rebuilt models.
+    model : VesselModel, optional
+        The model of ``vessel`` (the 4-DOF model if omitted); the rebuilt models are
+        its :meth:`~ship_models.contracts.VesselModel.rebuild` (class, options and
+        wave-force model kept).
     rel_step, abs_step : float
         Finite-difference steps.
     progress : callable, optional
@@ -216,15 +218,14 @@ def critical_fn_sensitivity(
 
 
 def _sensitivity(chi_c: float, raw: VesselData, keys: Iterable[str] | None,
-                 connection: CriticalFn | None, model: Umeda4DOF | None, rel_step: float,
+                 connection: CriticalFn | None, model: VesselModel | None, rel_step: float,
                  abs_step: float, progress: Callable[[str], None] | None,
                  bvp_options: Mapping[str, Any], stats: Mapping[str, int],
                  t0: float) -> Sensitivity:  # fmt: skip
     """Body of :func:`critical_fn_sensitivity` (inside :func:`reuse_hydrostatics`)."""
-    base = build_vessel_model(raw)
+    base = build_vessel_model(raw, waves=model.data.wave_builder if model is not None else None)
     resolved = base.vessel
-    m = model if model is not None else Umeda4DOF(base)
-    opts = _model_options(m)
+    m = model if model is not None else vessel_model(base)
     conn = connection or critical_fn_bvp(chi_c, model=m, **bvp_options)
     if not conn.success:
         raise ValueError(f"the connection at chi_c = {math.degrees(chi_c):g} deg did not "
@@ -240,7 +241,7 @@ def _sensitivity(chi_c: float, raw: VesselData, keys: Iterable[str] | None,
     e = np.zeros(J.shape[0])
     e[_fn_index(prob)] = 1.0
     lam = lu.solve(e, trans="T")
-    res = _Residuals(conn, raw, resolved, opts)
+    res = _Residuals(conn, raw, resolved, m)
     entries = [_entry(k, res, lam, m, conn, raw, resolved, rel_step, abs_step, progress)
                for k in key_list]  # fmt: skip
     log.info("sensitivity: %d coefficients, hydrostatics reused %d / %d calls",
@@ -249,7 +250,7 @@ def _sensitivity(chi_c: float, raw: VesselData, keys: Iterable[str] | None,
     return Sensitivity(conn.chi_c, conn.Fn, tuple(entries), conn, time.perf_counter() - t0)
 
 
-def _entry(k: str, res: _Residuals, lam: FloatArray, m: Umeda4DOF, conn: CriticalFn,
+def _entry(k: str, res: _Residuals, lam: FloatArray, m: VesselModel, conn: CriticalFn,
            raw: VesselData, resolved: VesselData, rel_step: float, abs_step: float,
            progress: Callable[[str], None] | None) -> SensitivityEntry:  # fmt: skip
     """The sensitivity entry of one key (see :func:`critical_fn_sensitivity`)."""
@@ -273,7 +274,7 @@ def _entry(k: str, res: _Residuals, lam: FloatArray, m: Umeda4DOF, conn: Critica
 
 def resolve_at(
     conn: CriticalFn,
-    model: Umeda4DOF,
+    model: VesselModel,
     *,
     same_discretisation: bool = True,
     params: Mapping[str, float] | None = None,

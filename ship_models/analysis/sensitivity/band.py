@@ -18,7 +18,7 @@ from ...estimation import build_vessel_model
 from ...vessel import SCHEMA, VesselData, load_vessel
 from .adjoint import resolve_at
 from .factors import SYSTEM_PARAMS
-from .rebuild import _model_options, model_at
+from .rebuild import model_at
 from .result import Sensitivity, SensitivityEntry
 
 log = logging.getLogger(__name__)
@@ -138,8 +138,7 @@ def uncertainty_band(
     failed = 0
     if n_samples > 0:
         rng = np.random.default_rng(seed)
-        m0 = sens.connection.orbit.problem.system
-        opts = _model_options(m0)
+        m0 = sens.connection.orbit.problem.system  # rebuilt per sample (wave forces kept)
         sys_p = {}
         for _ in range(int(n_samples)):
             changes: dict[str, float] = {}
@@ -150,7 +149,7 @@ def uncertainty_band(
                 dlin += e.dFn_dtheta * (th - e.value)
             sys_p = {SYSTEM_PARAMS[k]: changes.pop(k) for k in list(changes) if k in SYSTEM_PARAMS}
             try:
-                m = model_at(raw, changes, resolved=resolved, options=opts)
+                m = model_at(raw, changes, resolved=resolved, model=m0)
                 with uncompiled():  # a one-off model (see continuation.casadi_compile)
                     fn = resolve_at(sens.connection, m, same_discretisation=False, params=sys_p)
             except (ValueError, ArithmeticError) as exc:

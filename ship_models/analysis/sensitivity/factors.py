@@ -12,10 +12,10 @@ from typing import Any
 
 from continuation.ops import NUMPY_OPS, Ops
 
+from ...contracts import WaveForceModel
 from ...estimation import VesselModelData
 from ...forces import ShipForces
 from ...hydro.propeller import revolutions
-from ...hydro.waves import WaveStrips
 
 #: Factors on intermediate quantities of the force model (name -> description).
 FACTORS: dict[str, str] = {
@@ -54,15 +54,20 @@ _KT = ("propulsion.K_T0", "propulsion.K_T1", "propulsion.K_T2")
 
 
 @dataclass(frozen=True)
-class _FactoredWaves(WaveStrips):
-    """Wave strips with factors on the lateral force amplitudes."""
+class _FactoredWaves:
+    """A wave-force model with factors on the lateral force amplitudes."""
 
+    inner: WaveForceModel
     f_Y: float = 1.0
     f_N: float = 1.0
     f_K: float = 1.0
 
+    @property
+    def name(self) -> str:
+        return self.inner.name
+
     def forces(self, *args: Any, **kwargs: Any) -> tuple[Any, Any, Any, Any]:
-        X, Y, N, K = super().forces(*args, **kwargs)
+        X, Y, N, K = self.inner.forces(*args, **kwargs)
         return X, self.f_Y * Y, self.f_N * N, self.f_K * K
 
 
@@ -101,9 +106,8 @@ def _with_factors(data: VesselModelData, factors: Mapping[str, float]) -> Vessel
     if all(float(v) == 1.0 for v in factors.values()):
         return data
     F = data.forces
-    w = F.waves
     waves = _FactoredWaves(
-        **{f.name: getattr(w, f.name) for f in dataclasses.fields(WaveStrips)},
+        F.waves,
         f_Y=float(factors.get("factor.Y_w", 1.0)),
         f_N=float(factors.get("factor.N_w", 1.0)),
         f_K=float(factors.get("factor.K_w", 1.0)),

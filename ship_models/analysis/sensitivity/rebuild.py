@@ -1,93 +1,18 @@
-"""The 4-DOF model rebuilt with some coefficients and factors changed, cheaply."""
+"""The vessel's model rebuilt with some coefficients and factors changed, cheaply.
+
+The expensive hydrostatic steps are reused inside
+:func:`~ship_models.estimation.reuse_hydrostatics` (re-exported here).
+"""
 
 from __future__ import annotations
 
-import contextlib
-import inspect
-import pickle
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
-
-from continuation.typing import FloatArray
-
-from ... import estimation as _estimation
-from ...estimation import build_vessel_model
-from ...umeda_4dof import Umeda4DOF
+from ...contracts import VesselModel
+from ...estimation import build_vessel_model, reuse_hydrostatics
 from ...vessel import Coefficient, VesselData
 from .factors import _KT, _with_factors
-
-#: Hydrostatic computations of the estimation that dominate a rebuild (the GZ curve and
-#: the IS-Code topside fit: about 1.3 s of 1.5 s); most coefficients leave their inputs
-#: (hull, GM, heel step) unchanged, so a rebuild at theta +- h reuses them.
-_HYDROSTATIC_CALLS = ("gz_curve", "marginal_topside_height")
-
-
-@contextlib.contextmanager
-def reuse_hydrostatics() -> Iterator[dict[str, int]]:
-    """Memoise the estimation's hydrostatic calls on their exact arguments.
-
-    Inside the context, :func:`ship_models.estimation.build_vessel_model` calls
-    ``gz_curve`` and ``marginal_topside_height`` through a cache keyed by the pickled
-    arguments (the hull form with all its arrays, ``GM`` and the keywords), so a call
-    with bit-identical inputs returns the earlier result and any changed input (a
-    hull dimension, GM, the heel step) recomputes; likewise ``fit_resistance``, keyed
-    by the resistance's values on the fit's own sample grid (what the fit depends on).
-    Yields ``{"hits": .., "misses": ..}``.
-    """
-    stats = {"hits": 0, "misses": 0}
-    saved = {name: getattr(_estimation, name) for name in _HYDROSTATIC_CALLS}
-
-    def cached(name: str, fn: Callable[..., Any]) -> Callable[..., Any]:
-        store: dict[bytes, Any] = {}
-
-        def call(*args: Any, **kwargs: Any) -> Any:
-            key = pickle.dumps((args, sorted(kwargs.items())), protocol=4)
-            if key in store:
-                stats["hits"] += 1
-                return store[key]
-            stats["misses"] += 1
-            out = store[key] = fn(*args, **kwargs)
-            return out
-
-        call.__name__ = name
-        return call
-
-    fit = _estimation.fit_resistance
-    n_default = inspect.signature(fit).parameters["n_samples"].default
-    fits: dict[bytes, Any] = {}
-
-    def cached_fit(fun: Callable[[FloatArray], FloatArray], u_max: float,
-                   knot_spacing: float, **kwargs: Any) -> Any:  # fmt: skip
-        # the fit depends on ``fun`` only through its values on its sample grid
-        u = np.linspace(0.0, u_max, int(kwargs.get("n_samples", n_default)))
-        R = np.asarray(fun(u), dtype=float)
-        key = pickle.dumps((R, float(u_max), float(knot_spacing), sorted(kwargs.items())))
-        if key in fits:
-            stats["hits"] += 1
-            return fits[key]
-        stats["misses"] += 1
-        out = fits[key] = fit(fun, u_max, knot_spacing, **kwargs)
-        return out
-
-    try:
-        for name, fn in saved.items():
-            setattr(_estimation, name, cached(name, fn))
-        _estimation.fit_resistance = cached_fit
-        yield stats
-    finally:
-        for name, fn in saved.items():
-            setattr(_estimation, name, fn)
-        _estimation.fit_resistance = fit
-
-
-def _model_options(model: Any) -> dict[str, Any]:
-    return {
-        "saturation": bool(getattr(model, "saturation", True)),
-        "saturation_order": int(getattr(model, "saturation_order", 16)),
-        "wave_lift": bool(getattr(model, "wave_lift", True)),
-    }
 
 
 def _overridden(raw: VesselData, resolved: VesselData, changes: Mapping[str, float]) -> VesselData:
@@ -111,9 +36,14 @@ def model_at(
     factors: Mapping[str, float] | None = None,
     *,
     resolved: VesselData | None = None,
+    model: VesselModel | None = None,
     options: Mapping[str, Any] | None = None,
-) -> Umeda4DOF:
-    """The 4-DOF model rebuilt with some coefficients and factors changed.
+) -> VesselModel:
+    """The vessel's model rebuilt with some coefficients and factors changed.
+
+    The model rebuilds itself (:meth:`~ship_models.contracts.VesselModel.rebuild`):
+    its class, options and wave-force builder are kept, so a vessel with its own wave
+    forces keeps them.
 
     Parameters
     ----------
@@ -127,11 +57,25 @@ def model_at(
         ``{name: value}`` of :data:`FACTORS`.
     resolved : VesselData, optional
         ``vessel`` with its estimates (gives units and values of estimated keys).
+    model : VesselModel, optional
+        The model to rebuild (default: the 4-DOF model of ``vessel`` with
+        ``options``).
     options : mapping, optional
-        ``saturation``, ``saturation_order``, ``wave_lift`` of :class:`Umeda4DOF`.
+        ``saturation``, ``saturation_order``, ``wave_lift`` of the default model
+        (only without ``model``).
     """
+    if model is not None and options:
+        raise ValueError("`options`: give either `model` (its options are kept) or options")
+    builder = model.data.wave_builder if model is not None else None
     if resolved is None:
-        resolved = build_vessel_model(vessel).vessel
+        resolved = build_vessel_model(vessel, waves=builder).vessel
     v = _overridden(vessel, resolved, dict(changes or {}))
-    data = _with_factors(build_vessel_model(v), dict(factors or {}))
-    return Umeda4DOF(data, **dict(options or {}))
+    data = _with_factors(build_vessel_model(v, waves=builder), dict(factors or {}))
+    if model is None:
+        from ...registry import vessel_model  # (the registry imports the model classes)
+
+        return vessel_model(data, **dict(options or {}))
+    return model.rebuild(data)
+
+
+__all__ = ["model_at", "reuse_hydrostatics"]

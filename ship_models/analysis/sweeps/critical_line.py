@@ -16,6 +16,7 @@ from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from ...contracts import VesselModel
 from .context import _finite
 from .surge import surge_threshold
 
@@ -81,7 +82,7 @@ def _interp_row(P: FloatArray, Z: FloatArray, h: float) -> FloatArray | None:
 
 
 def critical_line(
-    model: Any,
+    model: VesselModel,
     chi_c: float,
     lambda_over_L: float,
     H_over_lambda: Sequence[float],
@@ -113,7 +114,7 @@ def critical_line(
 
     Parameters
     ----------
-    model : Umeda4DOF
+    model : VesselModel
     chi_c : float
         Course (rad).
     lambda_over_L : float
