@@ -309,6 +309,7 @@ def bk_periodic(demo: Demo, eq: Any, ntst: int | None = None, adapt: int | None 
         eq, "H1", st, mesh=CollocationMesh(ntst or demo.ntst, 4, 1.0), events=events,
         period_max=demo.period_max, adapt_every=demo.adapt_every if adapt is None else adapt,
         detect_pd=demo.detect, detect_ns=demo.detect,
+        error_tol=None,  # AUTO's settings: its mesh (NTST, IAD) and tolerances, no more
     )  # fmt: skip
 
 

@@ -31,8 +31,9 @@ class Status(enum.Enum):
         "increase `t_max`."
     )
     PERIOD_UNBOUNDED = (
-        "The period of the cycles grew past `period_max`: the branch approaches a "
-        "homoclinic or heteroclinic orbit."
+        "The period of the cycles grows without bound (past `period_max`, or until the "
+        "parameter is within its discretisation error of its limit): the branch "
+        "approaches a homoclinic or heteroclinic orbit."
     )
     MAX_ITER = "The maximum number of iterations/evaluations was reached before the tolerance."
     DISCRETISATION_ERROR = (

@@ -104,8 +104,7 @@ def test_bautin_fold_of_cycles():
     assert [sp.label for sp in lpc] == ["LPC1"]
     assert lpc[0].located
     assert lpc[0].p == pytest.approx(-0.25, abs=1e-9)
-    prob = br.problem
-    X, _ = prob.layout.split(lpc[0].x)
+    X = orbit_at(br, lpc[0]).X  # (the mesh of the LPC's row)
     assert np.max(np.hypot(X[:, 0], X[:, 1])) ** 2 == pytest.approx(0.5, abs=1e-7)
     r = br.records["max_x"]
     np.testing.assert_allclose(br.p, r**4 - r**2, atol=1e-10)
@@ -191,8 +190,8 @@ def _vdp_period_by_simulation(mu: float) -> float:
 
 
 def test_a_branch_on_too_coarse_a_mesh_says_so_and_error_tol_fixes_it():
-    """van der Pol from mu = 1 to 10 (the jumps sharpen as mu grows). At the defaults
-    (40 uniform intervals, no error_tol) the period at mu = 10 is off by more than 1 %,
+    """van der Pol from mu = 1 to 10 (the jumps sharpen as mu grows). On a fixed mesh
+    (40 uniform intervals, error_tol=None) the period at mu = 10 is off by more than 1 %,
     and the message must say that the collocation error estimate is large there. With
     ``error_tol`` the mesh grows: the start cycle is refined before the first step
     (its estimate within the tolerance) and the periods at mu = 5 and 10 agree with a
@@ -209,7 +208,7 @@ def test_a_branch_on_too_coarse_a_mesh_says_so_and_error_tol_fixes_it():
         return {sp.label: float(sp.x[-1]) for sp in br.special_points
                 if sp.label in ref and sp.located}  # fmt: skip
 
-    coarse = continue_periodic(s, orb, {"mu": 1.0}, "mu", st, events=uz)
+    coarse = continue_periodic(s, orb, {"mu": 1.0}, "mu", st, events=uz, error_tol=None)
     assert coarse.status == Status.PARAM_BOUND
     assert abs(periods(coarse)["UZ10"] - ref["UZ10"]) > 1e-2 * ref["UZ10"]
     assert "Collocation error estimate above" in coarse.message
@@ -288,7 +287,7 @@ def test_rossler_period_doubling_against_shooting():
     # section x_1 = x_1(0)), then its monodromy from the variational equations
     c = pd.p
     pv = np.array([0.2, 0.2, c])
-    X0, T0 = br.problem.orbit(pd.x, pd.p).X[0], br.problem.orbit(pd.x, pd.p).T
+    X0, T0 = orbit_at(br, pd).X[0], orbit_at(br, pd).T
     y = np.array([X0[0], X0[2], T0])
     for _ in range(8):
         x0 = np.array([y[0], X0[1], y[1]])
@@ -300,7 +299,7 @@ def test_rossler_period_doubling_against_shooting():
         y = y - np.linalg.solve(A, r)
     ref = np.linalg.eigvals(Mo)
     assert np.min(np.abs(ref + 1.0)) < 1e-5
-    assert y[2] == pytest.approx(br.problem.orbit(pd.x, pd.p).T, abs=1e-7)
+    assert y[2] == pytest.approx(orbit_at(br, pd).T, abs=1e-7)
 
 
 def test_rossler_switch_onto_doubled_branch():
@@ -396,8 +395,12 @@ def test_pendulum_rotation_period_blows_up_at_homoclinic():
                                 winding={"theta": 1})  # fmt: skip
     assert orb.X[-1, 0] - orb.X[0, 0] == pytest.approx(2 * math.pi)
     # T = int dtheta / v: the rotation at I = 1.2 against direct simulation
+    # on one mesh of 100 intervals (error_tol=None): the end at period_max, and the
+    # Liouville check of the multipliers on that mesh (the default adapted mesh is
+    # checked in test_periodic_defaults.py)
     br = continue_periodic(s, orb, P, "I", ContinuationSettings(ds=-0.02, ds_max=0.05,
-                           max_steps=300, p_min=0.0), period_max=40.0)  # fmt: skip
+                           max_steps=300, p_min=0.0), period_max=40.0,
+                           error_tol=None)  # fmt: skip
     assert br.status == Status.PERIOD_UNBOUNDED
     assert "T=40" in br.message and "I=0.5973" in br.message
     I_hc = _pendulum_homoclinic(g)

@@ -20,14 +20,16 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import networkx as nx
 import numpy as np
 
 from ..status import Status
 from .classifier import FateClassifier
 from .fates import Fate, FateKind, _with_shift
+
+if TYPE_CHECKING:  # (networkx is imported where a graph is built or compared: ~0.2 s)
+    import networkx as nx
 from .manifolds import unstable_manifold
 
 log = logging.getLogger(__name__)
@@ -154,6 +156,8 @@ def build_global_graph(
     match = float(match_tol) if match_tol is not None else 1e3 * clf.tol
     if not match > 0:
         raise ValueError(f"`match_tol` must be positive, got {match_tol!r}")
+    import networkx as nx
+
     g = nx.MultiDiGraph(
         params=np.array(clf.p),
         state_names=tuple(system.state_names),
@@ -324,6 +328,8 @@ def compare_graphs(g1: nx.MultiDiGraph, g2: nx.MultiDiGraph) -> GraphDiff:
     -------
     GraphDiff
     """
+    import networkx as nx
+
     for name, g in (("g1", g1), ("g2", g2)):
         if not isinstance(g, nx.MultiDiGraph):
             raise ValueError(f"`{name}` must be a networkx.MultiDiGraph, got {type(g).__name__}")

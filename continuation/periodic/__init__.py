@@ -11,7 +11,8 @@ bifurcations of cycles.
   and gives a guess of the connecting orbit);
 * starts: :func:`periodic_orbit_from_hopf`, :func:`orbit_from_trajectory`,
   :func:`orbit_from_array`; :func:`solve_orbit`, :func:`adapt_mesh`;
-* :func:`multipliers`, :func:`orbit_at`, :func:`problem_at` along a branch.
+* :func:`multipliers`, :func:`orbit_at`, :func:`problem_at`, :func:`special_problem`
+  along a branch (whose mesh adapts to ``error_tol`` by default).
 
 Example (the van der Pol oscillator, period 6.6632868593 at ``mu = 1``)::
 
@@ -41,6 +42,7 @@ from .continuation import (
     period_limit,
     problem_at,
     solve_orbit,
+    special_problem,
 )
 from .doubling import continue_period_doubled, doubled_orbit, switch_period_doubling
 from .floquet import FloquetResult, floquet, ns_test, pd_test
@@ -75,5 +77,6 @@ __all__ = [
     "periodic_orbit_from_hopf",
     "problem_at",
     "solve_orbit",
+    "special_problem",
     "switch_period_doubling",
 ]

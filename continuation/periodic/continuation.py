@@ -61,6 +61,25 @@ log = logging.getLogger(__name__)
 TRIVIAL_TOL = 1e-3
 
 
+#: Default tolerance of the collocation error estimate of :func:`continue_periodic`
+#: (states' units): the mesh adapts and grows to keep every row within it (AUTO-07p, too,
+#: adapts its mesh by default).
+ERROR_TOL = 1e-6
+
+#: A branch ends with ``Status.PERIOD_UNBOUNDED`` where the period grows without bound and
+#: the parameter is within this many times its discretisation error (``|p_{2N} - p_N|``
+#: at fixed period) of the limit ``p*`` fitted to ``T = a - b ln|p* - p|`` (beyond that
+#: the rows cannot tell on which side of ``p*`` they are).
+LIMIT_MARGIN = 10.0
+
+#: Rows count as within ``error_tol`` up to this factor (the row where a segment stopped
+#: has the estimate at the tolerance to the locator's accuracy).
+ERROR_SLACK = 1.01
+
+#: Label of the terminal event that stops a segment where the error estimate reaches
+#: ``error_tol`` (the next segment has more intervals).
+_ERR_EVENT = "error_tol"
+
 #: Without ``error_tol``, rows whose collocation error estimate exceeds this fraction of
 #: the cycle's range (largest ``max - min`` of a state) are named in the branch's
 #: message: a cycle drawn on too coarse a mesh (e.g. a relaxation oscillation whose
@@ -200,7 +219,7 @@ def continue_periodic(
     progress: Callable[[Any], None] | None = None,
     throw: bool = False,
     adapt_every: int = 0,
-    error_tol: float | None = None,
+    error_tol: float | None = ERROR_TOL,
     max_intervals: int = 400,
 ) -> Branch:
     r"""Continue a branch of periodic orbits in the parameter ``free``.
@@ -243,20 +262,30 @@ def continue_periodic(
         ``> 0``: continue in segments of this many steps and equidistribute the mesh
         (same number of intervals) on the last cycle of each segment before the next
         (:func:`adapt_mesh`); ``settings.max_steps`` counts all steps. The branch's
-        ``problem`` is then a :class:`CycleSegments` (one problem per mesh). 0: one
-        mesh throughout.
-    error_tol : float, optional
+        ``problem`` is then a :class:`CycleSegments` (one problem per mesh; use
+        :func:`problem_at` and :func:`orbit_at`). 0: one mesh throughout (10 with
+        ``error_tol``).
+    error_tol : float or None
         Tolerance of the collocation error estimate (record ``error``,
-        :func:`~continuation.periodic.problem.error_estimate`, in the states' units).
-        Where a segment ends above it, the next mesh gets more intervals,
-        :math:`N' = \lceil 1.2 N (e/\text{tol})^{1/(m+1)} \rceil` (at most
-        ``max_intervals``); rows left above it are named in the branch's message.
-        Implies ``adapt_every = 10`` when ``adapt_every`` is 0; the start cycle is
-        refined first where its estimate exceeds the tolerance. Without it the number
-        of intervals never changes, and the error of a cycle whose period grows (near
-        a homoclinic orbit) or whose jumps sharpen grows with it: rows whose estimate
+        :func:`~continuation.periodic.problem.error_estimate`, in the states' units;
+        default :data:`ERROR_TOL`). The start cycle is refined first where its
+        estimate exceeds it; a segment stops at the row where the estimate reaches it
+        (a terminal event) and the next one continues on a mesh of more intervals,
+        :math:`N' = \lceil 1.2 N (2 e/\text{tol})^{1/(m+1)} \rceil` (at most
+        ``max_intervals``), so that every row is within the tolerance; where
+        ``max_intervals`` cannot keep it, the branch ends there with
+        ``Status.DISCRETISATION_ERROR``, and a branch with rows above it never ends
+        with an ``ok`` status. Implies ``adapt_every = 10`` when ``adapt_every`` is 0.
+        With a tolerance, a branch whose period grows without bound (a cycle
+        approaching a homoclinic or heteroclinic orbit) ends with
+        ``Status.PERIOD_UNBOUNDED`` even without ``period_max``: where the parameter
+        comes within :data:`LIMIT_MARGIN` times its discretisation error of the fitted
+        limit, before the rows could pass it. ``None``: one fixed mesh (unless
+        ``adapt_every``), as AUTO-07p with ``IAD = 0``; the error of a cycle whose
+        period grows or whose jumps sharpen then grows with it, rows whose estimate
         exceeds :data:`ERROR_NOTE_REL` of the cycle's range are named in the branch's
-        message (``records["error"]`` holds every row's estimate).
+        message (``records["error"]`` holds every row's estimate), and nothing stops a
+        branch at a homoclinic end but ``period_max``.
     max_intervals : int
         Cap on the number of intervals for ``error_tol``.
 
@@ -303,10 +332,11 @@ def continue_periodic(
         settings, detect=dataclasses.replace(settings.detect, hopf=False)
     )
     run = dict(period_max=period_max, detect_pd=detect_pd, detect_ns=detect_ns,
-               events=events, progress=progress, throw=throw)  # fmt: skip
+               events=events, progress=progress, throw=throw,
+               error_tol=error_tol)  # fmt: skip
 
     def one(st: ContinuationSettings) -> Branch:
-        if adapt_every == 0:
+        if adapt_every == 0 and error_tol is None:
             return _continue_once(orb, free, st, **run)  # type: ignore[arg-type]
         return _continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals)
 
@@ -388,11 +418,17 @@ def _continue_once(
     throw: bool,
     fix_period: bool = False,
     period_sign: float = 0.0,
+    error_tol: float | None = None,
+    previous: PeriodicOrbit | None = None,
 ) -> Branch:
     """One driver run on one mesh (PD/NS/T_max events, phase reference per step);
     ``fix_period``: the start is corrected at its period rather than its parameter;
     ``period_sign`` (+1/-1): the branch leaves the start with the period growing /
-    shrinking (0: by the sign of ``settings.ds`` in the parameter)."""
+    shrinking (0: by the sign of ``settings.ds`` in the parameter); ``previous``: the
+    cycle of the row before ``orb`` on the branch being continued, whose secant
+    ``orb - previous`` (on ``orb``'s mesh) the first tangent follows instead (the
+    direction of a restart is then right at folds and where the parameter hardly
+    moves); ``error_tol``: a terminal event where the error estimate rises through it."""
     prob = PeriodicOrbitProblem.from_orbit(orb, free)
     T_col = prob.layout.T_col
     evs: list[Event] = []
@@ -404,6 +440,13 @@ def _continue_once(
         evs.append(Event("NS", prob.ns_test, slope=False))
     if period_max is not None:
         evs.append(Event("T_max", lambda z, p: period_max - z[T_col], terminal=True))
+    if error_tol is not None:
+        lay, errw = prob.layout, prob._errw  # type: ignore[attr-defined]
+
+        def margin(z: FloatArray, p: float) -> float:
+            return float(error_tol - errw(lay.split(np.asarray(z, dtype=float))[0]))
+
+        evs.append(Event(_ERR_EVENT, margin, direction="down", terminal=True, slope=False))
     evs.extend(events)
 
     def accept(bp: Any) -> None:
@@ -414,7 +457,8 @@ def _continue_once(
     br = continue_branch(
         prob, prob.reference, orb.param(free), settings=settings, events=evs,
         throw=throw, progress=accept, start_fixed=T_col if fix_period else None,
-        start_orient=_period_orient(prob, period_sign),
+        start_orient=(_period_orient(prob, period_sign) if previous is None
+                      else _secant_orient(prob, orb, previous, free)),
     )  # fmt: skip
     return dataclasses.replace(br, special_points=_relabel(br.special_points, prob))
 
@@ -464,6 +508,15 @@ def _period_orient(prob: PeriodicOrbitProblem, sign: float) -> FloatArray | None
     return e
 
 
+def _secant_orient(
+    prob: PeriodicOrbitProblem, orb: PeriodicOrbit, previous: PeriodicOrbit, free: str
+) -> FloatArray:
+    """The secant ``(z, p)`` from ``previous`` to ``orb``, both on ``orb``'s mesh."""
+    prev = previous.on_mesh(orb.mesh)
+    dz = prob.layout.join(orb.X - prev.X, orb.T - prev.T)
+    return np.append(dz, orb.param(free) - previous.param(free))
+
+
 def _continue_segments(
     orb: PeriodicOrbit,
     free: str,
@@ -491,29 +544,51 @@ def _continue_segments(
     while True:
         segs.append(br)
         left -= max(len(br) - 1, 0)
-        if br.status != Status.MAX_STEPS or left <= 0 or len(br) < 2:
+        if error_tol is not None:
+            end = _limit_end(_merge_segments(segs), free)
+            if end is not None:
+                return end
+        at_tol = br.status == Status.EVENT and repr(_ERR_EVENT) in br.message
+        if at_tol and (left <= 0 or len(br) < 2):
+            segs[-1] = dataclasses.replace(br, status=Status.MAX_STEPS,
+                                           message=Status.MAX_STEPS.value)  # fmt: skip
+        if not (br.status == Status.MAX_STEPS or at_tol) or left <= 0 or len(br) < 2:
             break
         last = orbit_at(br, len(br) - 1)
-        n_new = _refined_intervals(last, float(br.records["error"][-1]), error_tol,
-                                   max_intervals)  # fmt: skip
+        err = float(br.records["error"][-1])
+        if at_tol:  # (the row where the estimate reached the tolerance: grow the mesh)
+            err = max(err, (1.0 + 1e-3) * error_tol)  # type: ignore[operator]
+        n_new = _refined_intervals(last, err, error_tol, max_intervals)
+        if at_tol and n_new is None:
+            msg = (
+                f"{Status.DISCRETISATION_ERROR.value} The collocation error estimate reaches "
+                f"error_tol={error_tol:g} at {free}={br.p[-1]:.10g} on "
+                f"{last.mesh.n_intervals} intervals (max_intervals={max_intervals}); the "
+                "branch up to there is kept."
+            )
+            log.warning(msg)
+            segs[-1] = dataclasses.replace(br, status=Status.DISCRETISATION_ERROR, message=msg)
+            break
         sgn = 1.0 if br.p[-1] >= br.p[-2] else -1.0
-        # where the parameter hardly moves (near a homoclinic orbit) its sign is noise:
-        # go on in the direction of the period instead
-        dT = float(br.records["T"][-1] - br.records["T"][-2])
-        dp_rel = abs(float(br.p[-1] - br.p[-2])) / max(abs(float(br.p[-1])), 1.0)
-        t_sign = math.copysign(1.0, dT) if dp_rel < 1e-8 and dT != 0.0 else 0.0
         ds = min(max(abs(float(br.ds[-1])), abs(st.ds)), st.ds_max)
         st = dataclasses.replace(st, ds=sgn * ds, max_steps=min(every, left))
         moved = last.on_mesh(last.mesh.equidistributed(last.X, n_new))
-        nxt = _continue_once(moved, free, st, period_sign=t_sign, **run)
+        if error_tol is not None:
+            # the restart cycle itself within the tolerance (else the next segment's
+            # rows start above it, and no crossing of it stops them)
+            moved = _refine_start(moved, free, error_tol, max_intervals, fix_period=True)
+        # the restart leaves along the secant of the last step (at a fold, or near a
+        # homoclinic orbit where the parameter hardly moves, its sign in p is noise)
+        prev = orbit_at(br, len(br) - 2)
+        nxt = _continue_once(moved, free, st, previous=prev, **run)
         if len(nxt) == 0:
             log.info("restart on the adapted mesh failed at %s=%.8g: %s", free, br.p[-1],
                      nxt.message)  # fmt: skip
-            nxt = _continue_once(moved, free, st, fix_period=True, period_sign=t_sign, **run)
-        if len(nxt) == 0:
+            nxt = _continue_once(moved, free, st, fix_period=True, previous=prev, **run)
+        if len(nxt) == 0 and not at_tol:
             log.warning("restart at fixed period failed at %s=%.8g (%s); mesh kept", free,
                         br.p[-1], nxt.message)  # fmt: skip
-            nxt = _continue_once(last, free, st, fix_period=True, period_sign=t_sign, **run)
+            nxt = _continue_once(last, free, st, fix_period=True, previous=prev, **run)
         if len(nxt) == 0:
             # the restart on the new mesh failed (e.g. near a homoclinic orbit, where the
             # start correction at fixed parameter is ill-conditioned): keep the branch
@@ -528,6 +603,106 @@ def _continue_segments(
     return _merge_segments(segs)
 
 
+def _truncated(br: Branch, k: int, status: Status, message: str) -> Branch:
+    """Rows ``0 .. k`` of a cycle branch (with the special points between them)."""
+    probs, first = _segments_of(br)
+    keep = [i for i, f in enumerate(first) if f <= k] or [0]
+    problem: Any = br.problem
+    if isinstance(problem, CycleSegments):
+        problem = CycleSegments(tuple(probs[i] for i in keep), tuple(first[i] for i in keep))
+    return dataclasses.replace(
+        br,
+        problem=problem,
+        p=br.p[: k + 1],
+        x=br.x[: k + 1],
+        eigenvalues=br.eigenvalues[: k + 1],
+        n_unstable=br.n_unstable[: k + 1],
+        ds=br.ds[: k + 1],
+        newton_iters=br.newton_iters[: k + 1],
+        records={name: v[: k + 1] for name, v in br.records.items()},
+        special_points=tuple(sp for sp in br.special_points if sp.index < k),
+        status=status,
+        message=message,
+    )
+
+
+def _limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
+    r"""The branch ended where its period grows without bound and its parameter has
+    come within its own error of the limit, or None while it has not.
+
+    Near a homoclinic or heteroclinic orbit of saddles ``p = p^* + c e^{-T/b}``. Where
+    the period grew over the last ``n_tail`` rows and the parameter moved one way (or
+    has stalled at round-off), ``p*`` is fitted
+    (:func:`period_limit`), and where the parameter has nearly converged to it the
+    parameter's discretisation error is estimated by re-solving the last cycle at its
+    period on the mesh with every interval halved, ``delta = |p_{2N} - p_N|``. Rows
+    within ``LIMIT_MARGIN delta + 1e-12 (1 + |p*|)`` of ``p*`` (the last term the
+    round-off of ``p``) cannot tell on which side of the limit they are: the branch is
+    cut before the first of them, with ``Status.PERIOD_UNBOUNDED``. A discretised
+    cycle does not see the end (on a finite mesh the period stays finite and the rows
+    may pass ``p*``, where no cycle exists), so this is where the branch must stop.
+    Only where the fit is as good as that bound: a cycle snaking towards a
+    saddle-focus loop (Shilnikov; cycles on both sides of ``p*``) is not ended here.
+    """
+    n = len(br)
+    if n < n_tail + 2:
+        return None
+    T = np.asarray(br.records["T"][-n_tail:], dtype=float)
+    p_tail = np.asarray(br.p[-n_tail:], dtype=float)
+    if not np.all(np.diff(T) > 0):
+        return None
+    dp = np.diff(p_tail)
+    stalled = float(np.ptp(p_tail)) <= 1e-8 * (1.0 + float(np.max(np.abs(p_tail))))
+    if not (np.all(dp > 0) or np.all(dp < 0) or stalled):
+        return None  # (the parameter turns: not the monotone approach, e.g. snaking)
+    try:
+        lim = period_limit(br, n_fit=n_tail)
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    if not math.isfinite(lim.p_star):
+        return None
+    # (cheap pre-check before the discretisation estimate: the parameter has nearly
+    # converged, its remaining distance small against its last moves or tiny)
+    span = float(np.ptp(p_tail))
+    if abs(float(p_tail[-1]) - lim.p_star) > max(0.1 * span, 1e-8 * (1.0 + abs(lim.p_star))):
+        return None
+    last = orbit_at(br, n - 1)
+    try:
+        fine = solve_orbit(last.on_mesh(last.mesh.refined()), free, fix_period=True)
+    except ConvergenceError as exc:
+        log.debug("no discretisation estimate of %s at T=%.6g: %s", free, last.T, exc)
+        return None
+    delta = abs(fine.param(free) - float(br.p[-1]))
+    thr = LIMIT_MARGIN * delta + 1e-12 * (1.0 + abs(lim.p_star))
+    if not lim.fit_residual <= thr:
+        # the rows do not follow the monotone law to their accuracy (e.g. the snaking
+        # of a cycle near a saddle-focus loop, with cycles on both sides of p*): no end
+        return None
+    log.debug("period limit %s*=%.15g: delta %.2g, fit rms %.2g, last row %.3g from it",
+              free, lim.p_star, delta, lim.fit_residual, float(br.p[-1]) - lim.p_star)  # fmt: skip
+    # the side of the rows: that of the rows before the period took off
+    T_all = np.asarray(br.records["T"], dtype=float)
+    rising = n - 1
+    while rising > 0 and T_all[rising - 1] < T_all[rising]:
+        rising -= 1
+    dist = np.asarray(br.p, dtype=float) - lim.p_star
+    side = math.copysign(1.0, float(dist[rising]) if dist[rising] != 0.0 else 1.0)
+    dist = side * dist
+    close = np.flatnonzero(dist[rising:] <= thr)
+    if close.size == 0:
+        return None
+    k = max(rising + int(close[0]) - 1, 1)
+    msg = (
+        f"{Status.PERIOD_UNBOUNDED.value} The period grows without bound towards "
+        f"{free}*={lim.p_star:.12g} (fit of T = a - b ln|{free}* - {free}|); the rows "
+        f"stop {dist[k]:.2g} before it, where the parameter's discretisation error "
+        f"({delta:.1g}) no longer tells the side. Last period T={br.records['T'][k]:.10g} "
+        f"at {free}={br.p[k]:.12g}."
+    )
+    log.info(msg)
+    return _truncated(br, k, Status.PERIOD_UNBOUNDED, msg)
+
+
 def _refined_intervals(
     orb: PeriodicOrbit, error: float, error_tol: float | None, max_intervals: int
 ) -> int | None:
@@ -536,14 +711,20 @@ def _refined_intervals(
     N = orb.mesh.n_intervals
     if error_tol is None or not math.isfinite(error) or error <= error_tol or N >= max_intervals:
         return None
-    factor = 1.2 * (error / error_tol) ** (1.0 / (orb.mesh.degree + 1))
+    # aim at half the tolerance (the estimate scales as h^(m+1)), with 20 % to spare
+    factor = 1.2 * (2.0 * error / error_tol) ** (1.0 / (orb.mesh.degree + 1))
     n_new = min(max_intervals, max(N + 1, math.ceil(N * factor)))
     log.info("error estimate %.3g > error_tol %.3g: %d -> %d intervals", error, error_tol, N, n_new)
     return n_new
 
 
 def _refine_start(
-    orb: PeriodicOrbit, free: str, error_tol: float, max_intervals: int, rounds: int = 4
+    orb: PeriodicOrbit,
+    free: str,
+    error_tol: float,
+    max_intervals: int,
+    rounds: int = 4,
+    fix_period: bool = False,
 ) -> PeriodicOrbit:
     """The start cycle on a mesh whose error estimate is within ``error_tol`` (at most
     ``max_intervals`` intervals, ``rounds`` refinements by :func:`_refined_intervals`),
@@ -555,7 +736,7 @@ def _refine_start(
         if n_new is None:
             break
         try:
-            orb = adapt_mesh(orb, n_new, rounds=1, free=free)
+            orb = adapt_mesh(orb, n_new, rounds=1, free=free, fix_period=fix_period)
         except ConvergenceError as exc:
             log.info("start cycle kept on %d intervals: %s", orb.mesh.n_intervals, exc)
             break
@@ -605,7 +786,7 @@ def _merge_segments(segs: list[Branch]) -> Branch:
                 sp = dataclasses.replace(sp, label=f"{key}{count[key]}")
         relabelled.append(sp)
     return Branch(
-        problem=CycleSegments(tuple(probs), tuple(first_row)),
+        problem=CycleSegments(tuple(probs), tuple(first_row)) if len(probs) > 1 else probs[0],
         free=last.free,
         p=np.concatenate(rows["p"]),
         x=np.vstack(rows["x"]),
@@ -643,10 +824,11 @@ def _finish(
         )
         specials = tuple(s for s in specials if s.label != "T_max")
         log.info(message)
+    specials = tuple(s for s in specials if s.label != _ERR_EVENT)
     out = []
     for sp in specials:
         if sp.kind == SpecialKind.USER and sp.label in ("PD", "NS") and sp.located:
-            err = problem_at(br, sp.index).floquet(sp.x, sp.p).trivial_error
+            err = special_problem(br, sp).floquet(sp.x, sp.p).trivial_error
             if err > TRIVIAL_TOL:
                 log.warning("%s at %s=%.8g: multipliers unreliable (%.3g); reported as "
                             "bracketed, not located", sp.label, free, sp.p, err)  # fmt: skip
@@ -678,7 +860,9 @@ def _finish(
             log.warning(note.strip())
             message = message + note
     if len(br) and error_tol is not None and "error" in br.records:
-        over = np.flatnonzero(br.records["error"] > error_tol)
+        # (the row where a segment stopped has the estimate at the tolerance, to the
+        # locator's accuracy)
+        over = np.flatnonzero(br.records["error"] > ERROR_SLACK * error_tol)
         if over.size:
             note = (
                 f" Collocation error estimate above error_tol={error_tol:g} at {over.size} of "
@@ -688,6 +872,8 @@ def _finish(
             )
             log.warning(note.strip())
             message = message + note
+            if status.ok:
+                status = Status.DISCRETISATION_ERROR
     return dataclasses.replace(br, special_points=specials, status=status, message=message)
 
 
@@ -715,6 +901,28 @@ def problem_at(branch: Branch, k: int) -> PeriodicOrbitProblem:
     return prob
 
 
+def special_problem(branch: Branch, sp: SpecialPoint) -> PeriodicOrbitProblem:
+    """The :class:`PeriodicOrbitProblem` (mesh) on which special point ``sp`` was found.
+
+    A point in the first step of a later segment of an adapted branch lies on that
+    segment's mesh although its step starts at the previous segment's last row: of the
+    meshes of rows ``sp.index`` and ``sp.index + 1`` the one with the right number of
+    unknowns and the smaller collocation residual at ``sp``.
+    """
+    x = np.asarray(sp.x, dtype=float)
+    cands = []
+    for k in (sp.index, min(sp.index + 1, len(branch) - 1)):
+        prob = problem_at(branch, max(k, 0))
+        if prob.n_unknowns == x.size and all(prob is not q for q in cands):
+            cands.append(prob)
+    if len(cands) == 1:
+        return cands[0]
+    if not cands:
+        raise ValueError("`sp` is not a point of this cycle branch (no mesh of its size)")
+    res = [float(np.max(np.abs(q.residual(x, sp.p)[:-1]))) for q in cands]
+    return cands[int(np.argmin(res))]
+
+
 def multipliers(branch: Branch) -> np.ndarray:
     """Nontrivial Floquet multipliers at every row of a cycle branch, ``(N, n - 1)``."""
     with blas_threads_for(branch.x.shape[1] if branch.x.ndim == 2 else 0, sparse=True):
@@ -725,7 +933,7 @@ def multipliers(branch: Branch) -> np.ndarray:
 def orbit_at(branch: Branch, k: int | SpecialPoint) -> PeriodicOrbit:
     """The cycle at row ``k`` (or at a special point) of a cycle branch."""
     if isinstance(k, SpecialPoint):
-        return problem_at(branch, k.index).orbit(k.x, k.p)
+        return special_problem(branch, k).orbit(k.x, k.p)
     k = int(k) + len(branch) if k < 0 else int(k)
     return problem_at(branch, k).orbit(_row(branch, k), branch.p[k])
 
@@ -894,4 +1102,5 @@ __all__ = [
     "period_limit",
     "problem_at",
     "solve_orbit",
+    "special_problem",
 ]

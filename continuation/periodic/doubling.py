@@ -25,7 +25,7 @@ from ..bvp.collocation import CollocationMesh
 from ..errors import ConvergenceError
 from ..settings import ContinuationSettings, NewtonSettings
 from .collocation import monodromy_factors
-from .continuation import continue_periodic, problem_at
+from .continuation import continue_periodic, special_problem
 from .floquet import monodromy
 from .orbit import PeriodicOrbit
 from .problem import PeriodicOrbitProblem
@@ -87,7 +87,7 @@ def switch_period_doubling(
     sp = _pd_point(branch, which)
     if not sp.located:
         raise ValueError("the PD point was bracketed, not located")
-    prob = problem_at(branch, sp.index)
+    prob = special_problem(branch, sp)
     orbit = prob.orbit(sp.x, sp.p)
     B, _ = prob._blocks(sp.x, sp.p)
     Phi, S = monodromy_factors(prob.layout, B, stages=True)
