@@ -186,3 +186,20 @@ def test_resistance_table_function() -> None:
 
 def test_loaded_seiner_is_a_fishing_vessel() -> None:
     assert load_vessel("purse_seiner").meta["hull_type"] == "fishing_vessel"
+
+
+def test_curves_round_trip_through_toml(tmp_path) -> None:
+    from ship_models.vessel import dump_vessel
+
+    doc = _seiner_doc()
+    doc["vessel"]["propeller_method"] = "curve"
+    doc["curves"] = {
+        "K_T": {"coefficients": [0.34, -0.27, -0.14], "J_range": [0.0, 0.9],
+                "source": "t", "status": "measured"},
+        "w_P": {"x": [0.0, 5.0, 10.0], "y": [0.25, 0.24, 0.22], "x_unit": "kn", "y_unit": "-",
+                "source": "t", "status": "measured"},
+    }  # fmt: skip
+    v = parse_vessel(doc)
+    back = load_vessel(dump_vessel(v, tmp_path / "v.toml"))
+    assert back.curves == v.curves and back.propeller_method == "curve"
+    assert back.curves["w_P"].x[1] == pytest.approx(5.0 * 1852.0 / 3600.0, rel=1e-15)
