@@ -432,6 +432,17 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
             kt_curve = Polynomial1D(np.array(kt, dtype=float), (0.0, np.inf))
         propeller = Propeller(D_p, kt_curve, (float(kt[0]), float(kt[1]), float(kt[2])),
                               w_P, t_P, w_curve, t_curve)  # fmt: skip
+        # the revolution solve is a fixed number of Newton steps (CasADi-traceable):
+        # check it converged over the Froude numbers analyses use, or refuse the curve
+        for Fn_chk in (0.1, 0.2, 0.3, 0.4, 0.5):
+            u_chk = Fn_chk * np.sqrt(g * L)
+            res = propeller.revolution_residual(u_chk, float(rfit.evaluate(u_chk)), rho)
+            if not res < 1e-9:
+                raise VesselFileError(
+                    f"`curves.K_T` / propeller: no thrust-resistance balance found at Fn "
+                    f"{Fn_chk} (relative residual {res:.1e}); check that K_T(J) decreases "
+                    "and stays positive over the advance ratios of the nominal speeds"
+                )
 
     # ---- added masses -----------------------------------------------------------
     m22 = lewis_sway_added_mass(rho, hull.b_wl, hull.d, hull.beta)
