@@ -56,7 +56,7 @@ from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_tops
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
 from .hydro.propeller import (
     Propeller,
-    bseries_kt_polynomial,
+    bseries_kt_curve,
     bseries_zero_thrust_J,
     fit_kt_quadratic,
     holtrop_thrust_deduction,
@@ -377,14 +377,14 @@ def build_vessel_model(vessel: VesselData) -> VesselModelData:
         kt = (k0, k1_, k2)
         J_zero = bseries_zero_thrust_J(PD, AE, Z)
         if prop_method == "bseries":
-            kt_curve = Polynomial1D(np.array(bseries_kt_polynomial(PD, AE, Z)), (0.0, J_zero))
+            kt_curve = bseries_kt_curve(PD, AE, Z)
             kt_err = 0.0
             validity.append(
                 ValidityRange(
                     f"K_T (Wageningen B{Z}-{AE:.2f}, P/D {PD:.3g}, full polynomial)",
                     "J", 0.0, J_zero,
-                    "K_T >= 0 (beyond, the regression's extrapolation to a windmilling "
-                    "propeller; Oosterveld & van Oossanen 1975 fit open-water data)",
+                    "K_T >= 0 (Oosterveld & van Oossanen 1975 fit open-water data; beyond, "
+                    "a windmilling propeller: a monotone C2 continuation, assumed)",
                 )  # fmt: skip
             )
         else:

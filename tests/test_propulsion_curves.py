@@ -203,3 +203,37 @@ def test_curves_round_trip_through_toml(tmp_path) -> None:
     back = load_vessel(dump_vessel(v, tmp_path / "v.toml"))
     assert back.curves == v.curves and back.propeller_method == "curve"
     assert back.curves["w_P"].x[1] == pytest.approx(5.0 * 1852.0 / 3600.0, rel=1e-15)
+
+
+@pytest.mark.parametrize("pd", [0.6, 0.8, 1.0, 1.2, 1.4])
+def test_bseries_tail_is_c2_and_decreasing(pd: float) -> None:
+    from ship_models.hydro.propeller import bseries_kt_curve
+
+    kt = bseries_kt_curve(pd, 0.55, 4)
+    J0 = kt.valid[1]
+    J = np.linspace(0.0, J0, 50)
+    np.testing.assert_allclose(kt(J), bseries_kt(J, pd, 0.55, 4), atol=1e-14)
+    # C2 at J0: the tail is a truncated cubic (value, slope, curvature continuous)
+    h = 1e-4
+    d2 = [(kt(J0 + s + h) - 2 * kt(J0 + s) + kt(J0 + s - h)) / h**2 for s in (-2 * h, 2 * h)]
+    assert abs(d2[1] - d2[0]) < 1e-2
+    # strictly decreasing (a windmilling propeller brakes more) far beyond the range
+    JJ = np.linspace(J0, 30.0, 3000)
+    assert np.all(np.diff(kt(JJ)) < 0)
+    assert np.all(kt.derivative(JJ) < 0)
+
+
+def test_bseries_vessel_has_no_spurious_surf_riding_in_gentle_waves() -> None:
+    """The extrapolated cubic used to give thrust at J >> J0 (surf-riding at Fn 0.019 in
+    H/lambda = 0.02); with the C2 tail the gentle wave has no surge threshold, as with
+    the quadratic fit."""
+    import math
+
+    from continuation.status import Status
+    from ship_models.analysis.sweeps import surge as S
+    from ship_models.surge import SurgeModel
+
+    doc = _seiner_doc()
+    doc["vessel"]["propeller_method"] = "bseries"
+    st = S.surge_threshold(SurgeModel(parse_vessel(doc)), 0.02, 1.5)
+    assert st.status is Status.NO_BRACKET and math.isnan(st.Fn)

@@ -24,6 +24,7 @@ stand: outside it the function is an extrapolation, which
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -149,16 +150,25 @@ def interpolating_spline(
 
 @dataclass(frozen=True)
 class Polynomial1D:
-    """``p(x) = sum_i c_i x^i`` with the interval ``valid`` on which it was fitted."""
+    r"""``p(x) = sum_i c_i x^i`` with the interval ``valid`` on which it was fitted.
+
+    An optional C2 tail beyond ``tail_start``,
+    :math:`p(x) + t\,(x - x_t)_+^3`, changes only the third derivative there (e.g. to
+    continue a regression beyond its range by its quadratic Taylor part).
+    """
 
     coeffs: FloatArray
     valid: tuple[float, float]
+    tail_start: float = math.inf
+    tail_cubic: float = 0.0
 
     def evaluate(self, x: Any, ops: Ops = NUMPY_OPS) -> Any:
         """Horner evaluation (NumPy or CasADi)."""
         out: Any = 0.0
         for c in self.coeffs[::-1]:
             out = out * x + float(c)
+        if self.tail_cubic != 0.0 and math.isfinite(self.tail_start):
+            out = out + self.tail_cubic * ops.fmax(x - self.tail_start, 0.0) ** 3
         return out
 
     def derivative(self, x: Any, ops: Ops = NUMPY_OPS) -> Any:
@@ -166,6 +176,8 @@ class Polynomial1D:
         out: Any = 0.0
         for i in range(len(self.coeffs) - 1, 0, -1):
             out = out * x + i * float(self.coeffs[i])
+        if self.tail_cubic != 0.0 and math.isfinite(self.tail_start):
+            out = out + 3.0 * self.tail_cubic * ops.fmax(x - self.tail_start, 0.0) ** 2
         return out
 
     def __call__(self, x: FloatArray | float) -> FloatArray:

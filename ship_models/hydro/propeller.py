@@ -196,6 +196,35 @@ def bseries_zero_thrust_J(P_D: float, AE_A0: float, Z: int) -> float:
     return float(real[0])
 
 
+def bseries_kt_curve(P_D: float, AE_A0: float, Z: int) -> Any:
+    r"""The B-series K_T(J) with a monotone C2 continuation beyond ``K_T = 0``.
+
+    Up to :math:`J_0` (``K_T(J_0) = 0``, :func:`bseries_zero_thrust_J`) the polynomial
+    of Oosterveld & van Oossanen (1975), cubic in J, is used as published. Beyond, the
+    regression has no data (a windmilling propeller) and its cubic term, extrapolated,
+    turns K_T up again at large J (spurious thrust when the ship is much faster than
+    the propeller's advance speed, e.g. at low commanded revolutions). There the
+    curve is continued by its quadratic Taylor part at :math:`J_0` plus a cubic
+    :math:`d\,s^3`, :math:`s = J - J_0`, with :math:`d = -\max(C, 0)^2 / |K_T'(J_0)|`
+    (:math:`C = K_T''(J_0)/2`), which keeps it C2 and strictly decreasing for all
+    :math:`J > J_0` (the stated assumption: a windmilling propeller brakes more the
+    faster the inflow). Analyses that reach it are warned (:mod:`ship_models.validity`).
+
+    Returns
+    -------
+    Polynomial1D
+        ``valid = (0, J_0)``.
+    """
+    from .curves import Polynomial1D
+
+    c = bseries_kt_polynomial(P_D, AE_A0, Z)
+    J0 = bseries_zero_thrust_J(P_D, AE_A0, Z)
+    slope = c[1] + 2 * c[2] * J0 + 3 * c[3] * J0**2
+    curv2 = c[2] + 3 * c[3] * J0
+    d = -(max(curv2, 0.0) ** 2) / abs(slope) if slope < 0 else 0.0
+    return Polynomial1D(np.array(c), (0.0, J0), tail_start=J0, tail_cubic=-c[3] + d)
+
+
 @dataclass(frozen=True)
 class Propeller:
     r"""Open-water propeller with general K_T(J) and speed-dependent w_P, t_P.
@@ -287,6 +316,7 @@ class Propeller:
 __all__ = [
     "Propeller",
     "bseries_kt",
+    "bseries_kt_curve",
     "bseries_kt_polynomial",
     "bseries_zero_thrust_J",
     "fit_kt_quadratic",
