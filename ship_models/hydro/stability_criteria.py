@@ -329,7 +329,7 @@ def weather_criterion(
     area_b = _area(phi, gz, phi_c, phi2) - lw2 * (phi2 - phi_c) if phi2 > phi_c else 0.0
     limit = min(math.radians(16.0), 0.8 * phi_deck_edge)
     checks = [
-        Criterion("weather_area_b_over_a", area_b / area_a, 1.0, "-", "Part A 2.3.1.3"),
+        Criterion("weather_area_b_over_a", area_b / area_a, 1.0, "-", "Part A 2.3.1.4"),
         Criterion("weather_steady_heel_margin", limit - phi0, 0.0, "rad", "Part A 2.3.1.2"),
     ]
     return WeatherCriterion(
