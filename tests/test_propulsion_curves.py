@@ -237,3 +237,22 @@ def test_bseries_vessel_has_no_spurious_surf_riding_in_gentle_waves() -> None:
     doc["vessel"]["propeller_method"] = "bseries"
     st = S.surge_threshold(SurgeModel(parse_vessel(doc)), 0.02, 1.5)
     assert st.status is Status.NO_BRACKET and math.isnan(st.Fn)
+
+
+def test_resistance_what_if_table_reproduces_the_default() -> None:
+    """studies/resistance_beyond_range.py: at a = 0 its table is the default R(u) (the
+    what-if numbers are differences to the default, not to a sampling error)."""
+    from ship_models import Umeda4DOF
+    from studies.resistance_beyond_range import raised_vessel
+
+    base = Umeda4DOF("purse_seiner").forces
+    sg = np.sqrt(base.g * base.L)
+    u = np.linspace(0.2, 0.64 * sg, 400)
+    R0 = base.resistance_force(u)
+    m0 = Umeda4DOF(raised_vessel(0.0, 0.38, 0.45)).forces
+    np.testing.assert_allclose(m0.resistance_force(u), R0, rtol=1e-5)
+    m1 = Umeda4DOF(raised_vessel(0.5, 0.38, 0.45)).forces
+    hi = u / sg >= 0.47  # two table spacings past the blend, whose curvature jumps at 0.45
+    np.testing.assert_allclose(m1.resistance_force(u[hi]), 1.5 * R0[hi], rtol=1e-5)
+    lo = u / sg <= 0.37
+    np.testing.assert_allclose(m1.resistance_force(u[lo]), R0[lo], rtol=1e-5)
