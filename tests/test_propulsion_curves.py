@@ -254,5 +254,5 @@ def test_resistance_what_if_table_reproduces_the_default() -> None:
     m1 = Umeda4DOF(raised_vessel(0.5, 0.38, 0.45)).forces
     hi = u / sg >= 0.47  # two table spacings past the blend, whose curvature jumps at 0.45
     np.testing.assert_allclose(m1.resistance_force(u[hi]), 1.5 * R0[hi], rtol=1e-5)
-    lo = u / sg <= 0.37
+    lo = u / sg <= 0.36  # the spline error decays geometrically away from 0.38
     np.testing.assert_allclose(m1.resistance_force(u[lo]), R0[lo], rtol=1e-5)
