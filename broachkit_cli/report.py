@@ -184,6 +184,50 @@ def sensitivity_context(results: Mapping[str, Any]) -> dict[str, Any] | None:
     }
 
 
+def intact_stability_context(name: str = "purse_seiner") -> dict[str, Any] | None:
+    """The IMO 2008 IS Code checks of the vessel by class, and the weather criterion.
+
+    From :func:`ship_models.hydro.stability_criteria.vessel_intact_stability`; ``None``
+    (section left out, with a log line) if the checks cannot be evaluated.
+    """
+    import math
+
+    from ship_models.hydro.stability_criteria import vessel_intact_stability
+    from ship_models.registry import get_vessel_data
+
+    try:
+        r = vessel_intact_stability(get_vessel_data(name))
+    except ValueError as exc:
+        log.warning("intact stability section left out of the report: %s", exc)
+        return None
+
+    def show(c: Any) -> tuple[str, str, str, str, str]:
+        deg = c.unit == "rad"
+        val = math.degrees(c.value) if deg else c.value
+        req = math.degrees(c.required) if deg else c.required
+        unit = "deg" if deg else c.unit
+        return (c.name, f"{_fmt(val)} {unit}", f">= {_fmt(req)} {unit}", c.verdict, c.clause)
+
+    w = r["weather"]
+    return {
+        "vessel_class": r["vessel_class"],
+        "general": [show(c) for c in r["general"]],
+        "weather": [show(c) for c in w.checks],
+        "weather_numbers": [
+            ("windage area A (hull and topside only, a lower bound)", f"{_fmt(r['A_wind'])} m^2"),
+            ("windage lever Z", f"{_fmt(r['Z_wind'])} m"),
+            ("steady wind lever lw1 / gust lever lw2", f"{_fmt(w.lw1)} / {_fmt(w.lw2)} m"),
+            ("steady heel phi0 (limit)", f"{_fmt(math.degrees(w.phi0))} "
+             f"({_fmt(math.degrees(w.phi0_limit))}) deg"),
+            ("roll to windward phi1 (T by the Code's formula)",
+             f"{_fmt(math.degrees(w.phi1))} deg (T = {_fmt(w.T_roll)} s)"),
+            ("areas a, b", f"{_fmt(w.area_a)}, {_fmt(w.area_b)} m rad"),
+            ("largest windage area that passes (same Z)", f"{_fmt(r['A_wind_limit'])} m^2"),
+        ],  # fmt: skip
+        "assumptions": r["assumptions"],
+    }
+
+
 def write_report(out: Path, results: Mapping[str, Any], doc: Mapping[str, Any]) -> Path:
     """Render ``out/report.html`` from the step summaries and the job's document.
 
@@ -231,6 +275,7 @@ def write_report(out: Path, results: Mapping[str, Any], doc: Mapping[str, Any]) 
         all_figures=list(doc.get("figures", [])),
         vessel=vessel,
         sensitivity=sensitivity_context(results),
+        stability=intact_stability_context(),
         run={
             "started": doc.get("started", _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")),
             "total_seconds": doc.get("total_seconds"),

@@ -56,6 +56,7 @@ import numpy as np
 from .contracts import WaveForceBuilder, WaveInputs
 from .forces import ShipForces
 from .hydro.added_mass import lewis_sway_added_mass, soding_surge_added_mass
+from .hydro.curves import Polynomial1D, interpolating_spline
 from .hydro.diffraction import taylor_diffraction_ratio
 from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
@@ -68,10 +69,25 @@ from .hydro.offsets import (
     read_offsets,
 )
 from .hydro.offsets import hydrostatics as offsets_hydrostatics
-from .hydro.propeller import fit_kt_quadratic, holtrop_thrust_deduction, taylor_wake
-from .hydro.resistance import HoltropHull, ResistanceFit, fit_resistance
+from .hydro.propeller import (
+    Propeller,
+    bseries_kt_curve,
+    bseries_zero_thrust_J,
+    fit_kt_quadratic,
+    holtrop_thrust_deduction,
+    taylor_wake,
+)
+from .hydro.resistance import (
+    HOLTROP_FN_MAX,
+    HOLTROP_RANGE_SOURCE,
+    HoltropHull,
+    ResistanceFit,
+    fit_resistance,
+    resistance_table,
+)
 from .hydro.roll import ikeda_lift_damping_per_speed, roll_inertia
 from .hydro.waves import strip_waves
+from .validity import ValidityRange
 from .vessel import Coefficient, VesselData, VesselFileError
 
 log = logging.getLogger(__name__)
@@ -156,6 +172,12 @@ def _holtrop(v: VesselData, hull: HullForm, C_wp: float, S: float) -> HoltropHul
         S=S,
         C_stern=v.get("resistance.C_stern"),
     )
+
+
+def _quadratic_fit(J: Any, kt: Any) -> tuple[float, float, float]:
+    A = np.column_stack([np.ones_like(J), J, J**2])
+    c = np.linalg.lstsq(A, kt, rcond=None)[0]
+    return float(c[0]), float(c[1]), float(c[2])
 
 
 def derivatives_about_g(prime: dict[str, float], a_over_L: float) -> dict[str, float]:
@@ -248,7 +270,7 @@ def resolve_vessel(
     and the wave-force builder)."""
     meta = tuple(sorted((k, str(v)) for k, v in vessel.meta.items()))  # wave_forces, offsets
     key = (vessel.name, vessel.path, meta, tuple(sorted(vessel.coefficients.items())),
-           _builder_key(waves))  # fmt: skip
+           tuple(sorted(vessel.curves.items())), _builder_key(waves))  # fmt: skip
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
@@ -439,8 +461,22 @@ def build_vessel_model(
 
     # ---- resistance -----------------------------------------------------------
     hh = _holtrop(v, hull, C_wp, S_f)
-    rfit: ResistanceFit
-    if v.has("resistance.R0_prime"):
+    hull_type = v.meta.get("hull_type", "")
+    validity: list[ValidityRange] = []
+    rfit: Any
+    if v.resistance_method == "table":
+        curve = v.curves["resistance"]
+        rfit = resistance_table(curve.x, curve.y)
+        validity.append(
+            ValidityRange(
+                f"resistance table ({curve.status}: {curve.source})",
+                "u",
+                0.0,
+                curve.x_range[1],
+                "speed range of the measured table",
+            )
+        )
+    elif v.has("resistance.R0_prime"):
         # MMG standard method: R(u) = R0' rho/2 L d u^2 (exact, no fit)
         u_max = (
             v.get("resistance.Fn_max_fit") * np.sqrt(g * L)
@@ -469,26 +505,77 @@ def build_vessel_model(
             return hh.total_resistance(u, rho=rho, g=g, nu=nu, form_factor=k1, C_A=C_A)
 
         rfit = _memo_fit(R_formula, u_max, knot)
+        fn_hi = HOLTROP_FN_MAX.get(hull_type)
+        if fn_hi is not None:
+            validity.append(
+                ValidityRange(
+                    "resistance (Holtrop & Mennen 1982 / Holtrop 1984 regression)",
+                    "Fn",
+                    0.0,
+                    fn_hi,
+                    HOLTROP_RANGE_SOURCE,
+                )
+            )
+        validity.append(
+            ValidityRange(
+                "resistance spline fit", "u", 0.0, rfit.u_max, "resistance.Fn_max_fit"
+            )
+        )
 
     # ---- propeller -------------------------------------------------------------
     D_p = v.get("propulsion.D_p")
-    if v.has("propulsion.K_T0"):
+    prop_method = v.propeller_method
+    kt_curve: Any = None
+    Z = int(v.get("propulsion.n_blades"))
+    PD, AE = v.get("propulsion.P_over_D"), v.get("propulsion.AE_over_A0")
+    if prop_method == "curve":
+        c = v.curves["K_T"]
+        if c.is_table:
+            kt_curve = interpolating_spline(np.array(c.x), np.array(c.y))
+        else:
+            kt_curve = Polynomial1D(np.array(c.coefficients), c.x_range)
+        Jg = np.linspace(c.x_range[0], min(c.x_range[1], 1.5), 200)
+        kt = _quadratic_fit(Jg, kt_curve(Jg))
+        kt_err = float("nan")
+        validity.append(
+            ValidityRange(
+                f"K_T curve ({c.status}: {c.source})", "J", c.x_range[0], c.x_range[1],
+                "range of the measured K_T(J)",
+            )  # fmt: skip
+        )
+    elif v.has("propulsion.K_T0") and prop_method == "bseries_quadratic":
         kt = (v.get("propulsion.K_T0"), v.get("propulsion.K_T1"), v.get("propulsion.K_T2"))
         kt_err = float("nan")
     else:
-        Z, PD, AE = (
-            int(v.get("propulsion.n_blades")),
-            v.get("propulsion.P_over_D"),
-            v.get("propulsion.AE_over_A0"),
-        )
-        k0, k1_, k2, kt_err = fit_kt_quadratic(PD, AE, Z, v.get("propulsion.J_max_fit"))
+        J_fit = v.get("propulsion.J_max_fit")
+        k0, k1_, k2, kt_err = fit_kt_quadratic(PD, AE, Z, J_fit)
         kt = (k0, k1_, k2)
-        src = (
-            f"least-squares quadratic in J on [0, {v.get('propulsion.J_max_fit')}] of the "
-            f"Wageningen B{Z}-{AE:.2f} P/D={PD} polynomial (Oosterveld & van Oossanen 1975)"
-        )
-        for name, val in zip(("K_T0", "K_T1", "K_T2"), kt, strict=True):
-            est[f"propulsion.{name}"] = _est(val, "-", src)
+        J_zero = bseries_zero_thrust_J(PD, AE, Z)
+        if prop_method == "bseries":
+            kt_curve = bseries_kt_curve(PD, AE, Z)
+            kt_err = 0.0
+            validity.append(
+                ValidityRange(
+                    f"K_T (Wageningen B{Z}-{AE:.2f}, P/D {PD:.3g}, full polynomial)",
+                    "J", 0.0, J_zero,
+                    "K_T >= 0 (Oosterveld & van Oossanen 1975 fit open-water data; beyond, "
+                    "a windmilling propeller: a monotone C2 continuation, assumed)",
+                )  # fmt: skip
+            )
+        else:
+            src = (
+                f"least-squares quadratic in J on [0, {J_fit}] of the "
+                f"Wageningen B{Z}-{AE:.2f} P/D={PD} polynomial (Oosterveld & van Oossanen 1975)"
+            )
+            for name, val in zip(("K_T0", "K_T1", "K_T2"), kt, strict=True):
+                est[f"propulsion.{name}"] = _est(val, "-", src)
+            validity.append(
+                ValidityRange(
+                    f"K_T (quadratic fit of the B{Z}-{AE:.2f} P/D {PD:.3g} polynomial)",
+                    "J", 0.0, min(J_fit, J_zero),
+                    f"fitted on J <= {J_fit}; B-series K_T = 0 at J = {J_zero:.3f}",
+                )  # fmt: skip
+            )
     if v.has("propulsion.w_P"):
         w_P = v.get("propulsion.w_P")
     else:
@@ -501,6 +588,36 @@ def build_vessel_model(
             B, L, d_m, D_p, hh.C_P, hh.lcb_percent, v.get("resistance.C_stern")
         )
         est["propulsion.t_P"] = _est(t_P, "-", "Holtrop (1984) single-screw thrust deduction")
+    w_curve = t_curve = None
+    for name in ("w_P", "t_P"):
+        if name in v.curves:
+            cv = v.curves[name]
+            spl = interpolating_spline(np.array(cv.x), np.array(cv.y), slope_start=0.0)
+            if name == "w_P":
+                w_curve = spl
+            else:
+                t_curve = spl
+            validity.append(
+                ValidityRange(f"{name}(u) curve ({cv.source})", "u", 0.0, cv.x_range[1],
+                              "speed range of the measured curve")  # fmt: skip
+            )
+    propeller = None
+    if kt_curve is not None or w_curve is not None or t_curve is not None:
+        if kt_curve is None:
+            kt_curve = Polynomial1D(np.array(kt, dtype=float), (0.0, np.inf))
+        propeller = Propeller(D_p, kt_curve, (float(kt[0]), float(kt[1]), float(kt[2])),
+                              w_P, t_P, w_curve, t_curve)  # fmt: skip
+        # the revolution solve is a fixed number of Newton steps (CasADi-traceable):
+        # check it converged over the Froude numbers analyses use, or refuse the curve
+        for Fn_chk in (0.1, 0.2, 0.3, 0.4, 0.5):
+            u_chk = Fn_chk * np.sqrt(g * L)
+            res = propeller.revolution_residual(u_chk, float(rfit.evaluate(u_chk)), rho)
+            if not res < 1e-9:
+                raise VesselFileError(
+                    f"`curves.K_T` / propeller: no thrust-resistance balance found at Fn "
+                    f"{Fn_chk} (relative residual {res:.1e}); check that K_T(J) decreases "
+                    "and stays positive over the advance ratios of the nominal speeds"
+                )
 
     # ---- added masses -----------------------------------------------------------
     m22 = lewis_sway_added_mass(rho, hull.b_wl, hull.d, hull.beta)
@@ -700,6 +817,8 @@ def build_vessel_model(
         waves=wave_model,
         T_E=v.get("autopilot.T_E"),
         delta_max=v.get("rudder.delta_max"),
+        propeller=propeller,
+        validity=tuple(validity),
     )
     phi_m, gz_m = gz.max_gz
     info = {

@@ -76,6 +76,12 @@ class ShipForces:
         the Froude-Krylov strips :class:`~ship_models.hydro.waves.WaveStrips`).
     T_E, delta_max : float
         Steering-gear time constant (s) and rudder limit (rad).
+    propeller : Propeller or None
+        General open-water model (K_T curve, speed-dependent w_P, t_P,
+        :class:`~ship_models.hydro.propeller.Propeller`); None: the quadratic ``kt``
+        with constant ``w_P``, ``t_P`` (closed-form revolutions).
+    validity : tuple of ValidityRange
+        Ranges of the surge-balance estimates (:mod:`ship_models.validity`).
     """
 
     rho: float
@@ -119,6 +125,8 @@ class ShipForces:
     waves: WaveForceModel
     T_E: float
     delta_max: float
+    propeller: Any = None
+    validity: tuple[Any, ...] = ()
 
     # ------------------------------------------------------------------ waves
     def wavelength(self, lambda_over_L: Any) -> Any:
@@ -141,9 +149,15 @@ class ShipForces:
     def revolutions(self, Fn: Any, ops: Ops = NUMPY_OPS) -> Any:
         """Commanded propeller revolution ``n(Fn)`` (1/s): ``T(u0; n) = R(u0)``."""
         u0 = self.nominal_speed(Fn)
+        return self.revolutions_for(u0, self.resistance.evaluate(u0, ops), ops)
+
+    def revolutions_for(self, u0: Any, R0: Any, ops: Ops = NUMPY_OPS) -> Any:
+        """Revolution ``n`` with ``T(u0; n) = R0`` (1/s)."""
+        if self.propeller is not None:
+            return self.propeller.revolutions(u0, R0, self.rho, ops)
         return revolutions(
             u0,
-            self.resistance.evaluate(u0, ops),
+            R0,
             rho=self.rho,
             D_p=self.D_p,
             w_P=self.w_P,
@@ -152,8 +166,10 @@ class ShipForces:
             ops=ops,
         )
 
-    def thrust_force(self, u: Any, n: Any) -> Any:
+    def thrust_force(self, u: Any, n: Any, ops: Ops = NUMPY_OPS) -> Any:
         """Effective propeller thrust ``T(u; n)`` (N)."""
+        if self.propeller is not None:
+            return self.propeller.thrust(u, n, self.rho, ops)
         return thrust(u, n, rho=self.rho, D_p=self.D_p, w_P=self.w_P, t_P=self.t_P, k=self.kt)
 
     def surge_acceleration(
@@ -171,17 +187,60 @@ class ShipForces:
         """Eq. (5): ``(T(u; n) - R(u) + X_w) / (m + m_x)`` (m/s^2)."""
         if X_w is None:
             X_w = self.waves.forces(xi, u, chi, H_over_lambda, lambda_over_L, ops, lift=False)[0]
-        return (self.thrust_force(u, n) - self.resistance_force(u, ops) + X_w) / (
+        return (self.thrust_force(u, n, ops) - self.resistance_force(u, ops) + X_w) / (
             self.mass + self.m_x
         )
+
+    def check_validity(self, Fn: float, lambda_over_L: float, vessel: str = "") -> list[str]:
+        """Check the speeds of an analysis at ``Fn`` against :attr:`validity`.
+
+        The surge speeds visited run up to the wave celerity ``c``, and ``n(Fn)`` is
+        set at ``u0 = Fn sqrt(g L)``: each range is evaluated at both (for ``"J"``
+        ranges at the commanded revolution). Leaving a range is logged once
+        (:func:`ship_models.validity.report`).
+
+        Returns
+        -------
+        list of str
+            The coefficients used outside their range at these parameters.
+        """
+        from .validity import report
+
+        out: list[str] = []
+        if not self.validity or not Fn > 0:
+            return out
+        sqrt_gL = float(np.sqrt(self.g * self.L))
+        u0 = float(self.nominal_speed(Fn))
+        c = float(self.celerity(lambda_over_L))
+        n = None
+        for rng in self.validity:
+            for u, where in ((u0, f"the nominal speed (Fn {Fn:.4g})"),
+                             (c, f"wave celerity (Fn {c / sqrt_gL:.4g})")):  # fmt: skip
+                if rng.variable == "Fn":
+                    val = u / sqrt_gL
+                elif rng.variable == "u":
+                    val = u
+                else:
+                    if n is None:
+                        n = float(self.revolutions(Fn))
+                    w = self.w_P if self.propeller is None else float(self.propeller.wake(u))
+                    val = (1.0 - w) * u / (n * self.D_p)
+                    where = f"{where}, n = {n:.4g} 1/s"
+                if report(vessel, rng, val, where) and rng.coefficient not in out:
+                    out.append(rng.coefficient)
+        return out
 
     # ------------------------------------------------------------------ rudder
     def rudder_speed(self, u: Any, n: Any, ops: Ops = NUMPY_OPS) -> Any:
         """Effective inflow speed at the rudder ``u_R`` (m/s)."""
-        ua = (1.0 - self.w_P) * u
-        D = self.D_p
-        k0, k1, k2 = self.kt
-        q = ua * ua + 8.0 / np.pi * (k0 * n * n * D * D + k1 * ua * n * D + k2 * ua * ua)
+        if self.propeller is not None:
+            ua = (1.0 - self.propeller.wake(u, ops)) * u
+            q = ua * ua + 8.0 / np.pi * self.propeller.loading(ua, n, ops)
+        else:
+            ua = (1.0 - self.w_P) * u
+            D = self.D_p
+            k0, k1, k2 = self.kt
+            q = ua * ua + 8.0 / np.pi * (k0 * n * n * D * D + k1 * ua * n * D + k2 * ua * ua)
         Q = ops.sqrt(ops.fmax(q, 0.0) + _EPS2)
         inner = (1.0 - self.kappa) * ua + self.kappa * Q
         return self.epsilon * ops.sqrt(

@@ -232,6 +232,21 @@ class Umeda4DOF(System):
         """
         return type(self)(rebuilt_data(self.data, data), **self.options)
 
+    def check_params(self, p: Any, name: str = "p") -> FloatArray:
+        """Parameter vector (as :meth:`continuation.System.check_params`).
+
+        Also checks, once per new ``(Fn, lambda/L)``, the speeds the analysis visits
+        (nominal speed to wave celerity) against the validity ranges of the resistance
+        and thrust estimates (:meth:`ShipForces.check_validity`: a WARNING names the
+        coefficient and the speed, once per coefficient).
+        """
+        arr = super().check_params(p, name)
+        key = (float(arr[0]), float(arr[3]))
+        if key != getattr(self, "_validity_checked", None):
+            self._validity_checked = key
+            self.forces.check_validity(key[0], key[1], self.vessel.name)
+        return arr
+
     def index(self, name: str) -> int:
         """Index of a state name (``"xi_G"``, ``"u"``, ...)."""
         return self.state_index(name)

@@ -53,6 +53,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .vessel_curves import CurveData, CurveError, curves_to_toml, parse_curves
+
 STATUSES = ("given", "measured", "estimated", "assumed", "calibrated")
 
 #: Kinds of uncertainty in the ``[uncertainties]`` section.
@@ -66,6 +68,21 @@ UNCERTAINTY_TYPES = ("relative", "absolute")
 #: A measured ratio to the selected model can be given as
 #: ``hydrodynamics.wave_surge_scale``.
 WAVE_SURGE_MODELS = ("froude_krylov", "froude_krylov_taylor")
+
+#: Resistance methods selectable by ``[vessel] resistance_method``: ``"holtrop"``
+#: (default; ITTC-1957 + Holtrop 1984, or the MMG R0' when ``resistance.R0_prime`` is
+#: given) or ``"table"`` (the measured ``[curves] resistance``).
+RESISTANCE_METHODS = ("holtrop", "table")
+
+#: Open-water propeller models selectable by ``[vessel] propeller_method``:
+#: ``"bseries_quadratic"`` (default; quadratic fit of the Wageningen B-series on
+#: ``[0, J_max_fit]``, or the given K_T0..K_T2), ``"bseries"`` (the full B-series
+#: polynomial, cubic in J) or ``"curve"`` (the ``[curves] K_T`` table or polynomial).
+PROPELLER_METHODS = ("bseries_quadratic", "bseries", "curve")
+
+#: Hull types known to ``[vessel] hull_type`` (sets the validity range of the
+#: regressions, e.g. Holtrop & Mennen's Fn range for trawlers).
+HULL_TYPES = ("fishing_vessel", "merchant")
 
 #: Breaking limit of the wave steepness (Michell 1893: H/lambda = 0.142 ~ 1/7).
 BREAKING_STEEPNESS = 1.0 / 7.0
@@ -587,6 +604,7 @@ class VesselData(Mapping[str, Coefficient]):
     coefficients: Mapping[str, Coefficient] = field(repr=False)
     path: str = ""
     uncertainties: Mapping[str, Uncertainty] = field(default_factory=dict, repr=False)
+    curves: Mapping[str, CurveData] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         coeffs = dict(self.coefficients)
@@ -597,6 +615,23 @@ class VesselData(Mapping[str, Coefficient]):
             raise VesselFileError(
                 f"`vessel.wave_surge_model` must be one of {WAVE_SURGE_MODELS}, got {model!r}"
             )
+        for key, allowed in (
+            ("resistance_method", RESISTANCE_METHODS),
+            ("propeller_method", PROPELLER_METHODS),
+            ("hull_type", HULL_TYPES),
+        ):
+            if key in meta and meta[key] not in allowed:
+                raise VesselFileError(
+                    f"`vessel.{key}` must be one of {allowed}, got {meta[key]!r}"
+                )
+        curves = dict(self.curves)
+        if meta.get("resistance_method") == "table" and "resistance" not in curves:
+            raise VesselFileError(
+                "`vessel.resistance_method` = 'table' needs a `curves.resistance` table"
+            )
+        if meta.get("propeller_method") == "curve" and "K_T" not in curves:
+            raise VesselFileError("`vessel.propeller_method` = 'curve' needs a `curves.K_T` entry")
+        object.__setattr__(self, "curves", curves)
         unc = dict(self.uncertainties)
         for k, u in unc.items():
             if not isinstance(u, Uncertainty):
@@ -606,6 +641,16 @@ class VesselData(Mapping[str, Coefficient]):
         object.__setattr__(self, "coefficients", coeffs)
         object.__setattr__(self, "meta", meta)
         object.__setattr__(self, "uncertainties", unc)
+
+    @property
+    def resistance_method(self) -> str:
+        """The selected resistance method (``[vessel] resistance_method``)."""
+        return str(self.meta.get("resistance_method", RESISTANCE_METHODS[0]))
+
+    @property
+    def propeller_method(self) -> str:
+        """The selected open-water propeller model (``[vessel] propeller_method``)."""
+        return str(self.meta.get("propeller_method", PROPELLER_METHODS[0]))
 
     @property
     def wave_surge_model(self) -> str:
@@ -629,7 +674,14 @@ class VesselData(Mapping[str, Coefficient]):
         return len(self.coefficients)
 
     def __hash__(self) -> int:
-        return hash((self.name, tuple(sorted(self.coefficients.items()))))
+        return hash(
+            (
+                self.name,
+                tuple(sorted(self.coefficients.items())),
+                tuple(sorted(self.meta.items())),
+                tuple(sorted(self.curves.items())),
+            )
+        )
 
     def _resolve_key(self, key: str) -> str:
         if key in self.coefficients:
@@ -673,6 +725,8 @@ class VesselData(Mapping[str, Coefficient]):
             out.setdefault(sec, {})[name] = c.as_dict()
         if self.uncertainties:
             out["uncertainties"] = {k: u.as_dict() for k, u in self.uncertainties.items()}
+        if self.curves:
+            out["curves"] = {k: c.as_dict() for k, c in self.curves.items()}
         return out
 
     def with_overrides(self, overrides: Mapping[str, float | Coefficient]) -> VesselData:
@@ -701,14 +755,18 @@ class VesselData(Mapping[str, Coefficient]):
                 default_unit = next(iter(_UNITS[SCHEMA[sec][name].dim]))
                 unit = coeffs[key].unit if key in coeffs else default_unit
                 coeffs[key] = Coefficient(float(val), unit, "user override", "measured")
-        return VesselData(self.name, self.meta, coeffs, self.path, self.uncertainties)
+        return VesselData(
+            self.name, self.meta, coeffs, self.path, self.uncertainties, self.curves
+        )
 
     def with_estimates(self, estimates: Mapping[str, Coefficient]) -> VesselData:
         """A copy with estimated coefficients added (existing keys are kept)."""
         coeffs = dict(self.coefficients)
         for key, c in estimates.items():
             coeffs.setdefault(key, c)
-        return VesselData(self.name, self.meta, coeffs, self.path, self.uncertainties)
+        return VesselData(
+            self.name, self.meta, coeffs, self.path, self.uncertainties, self.curves
+        )
 
     def summary(self) -> list[tuple[str, float, str, str, str]]:
         """Rows ``(key, value, unit, status, source)`` sorted by key."""
@@ -739,12 +797,17 @@ def parse_vessel(doc: Mapping[str, Any], path: str = "") -> VesselData:
     if not isinstance(unc_raw, Mapping):
         raise VesselFileError("`uncertainties` must be a table keyed by dotted coefficient names")
     uncertainties = {str(k): _check_uncertainty(str(k), u) for k, u in unc_raw.items()}
+    try:
+        curves = parse_curves(doc.get("curves", {}))
+    except CurveError as exc:
+        raise VesselFileError(str(exc)) from None
     for sec, body in doc.items():
-        if sec in ("vessel", "uncertainties"):
+        if sec in ("vessel", "uncertainties", "curves"):
             continue
         if sec not in SCHEMA:
             raise VesselFileError(
-                f"`{sec}`: unknown section; sections are {['vessel', *SCHEMA, 'uncertainties']}"
+                f"`{sec}`: unknown section; sections are "
+                f"{['vessel', *SCHEMA, 'curves', 'uncertainties']}"
             )
         if not isinstance(body, Mapping):
             raise VesselFileError(f"`{sec}` must be a table")
@@ -755,7 +818,7 @@ def parse_vessel(doc: Mapping[str, Any], path: str = "") -> VesselData:
                     f"`{dotted}`: unknown key {key!r} in [{sec}]; allowed are {list(SCHEMA[sec])}"
                 )
             coeffs[dotted] = _check_table(dotted, raw)
-    return VesselData(name, meta, coeffs, path, uncertainties)
+    return VesselData(name, meta, coeffs, path, uncertainties, curves)
 
 
 def _toml_str(s: str) -> str:
@@ -791,6 +854,7 @@ def vessel_to_toml(vessel: VesselData, header: str = "") -> str:
                 f"{name} = {{ value = {_toml_num(c.value)}, unit = {_toml_str(c.unit)}, "
                 f"source = {_toml_str(c.source)}, status = {_toml_str(c.status)} }}"
             )
+    lines += curves_to_toml(vessel.curves)
     if vessel.uncertainties:
         lines += ["", "[uncertainties]"]
         for k, u in vessel.uncertainties.items():
@@ -852,6 +916,9 @@ def load_vessel(path_or_name: str | Path) -> VesselData:
 __all__ = [
     "BREAKING_STEEPNESS",
     "Coefficient",
+    "HULL_TYPES",
+    "PROPELLER_METHODS",
+    "RESISTANCE_METHODS",
     "UNCERTAINTY_TYPES",
     "Uncertainty",
     "WAVE_SURGE_MODELS",

@@ -33,6 +33,7 @@ which stays differentiable in ``Fn`` for CasADi (:func:`revolutions`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -178,8 +179,146 @@ def revolutions(
     return (-b + ops.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)
 
 
+def bseries_kt_polynomial(P_D: float, AE_A0: float, Z: int) -> tuple[float, ...]:
+    """Coefficients ``c_0..c_3`` of the B-series ``K_T(J) = sum c_s J^s`` (cubic in J)."""
+    C, s, t, u, v = _BSERIES_KT.T
+    coef = C * P_D**t * AE_A0**u * float(Z) ** v
+    return tuple(float(np.sum(coef[s == k])) for k in range(4))
+
+
+def bseries_zero_thrust_J(P_D: float, AE_A0: float, Z: int) -> float:
+    """Advance ratio at which the B-series ``K_T`` vanishes (smallest positive root)."""
+    c = bseries_kt_polynomial(P_D, AE_A0, Z)
+    roots = np.roots(c[::-1])
+    real = np.sort([r.real for r in roots if abs(r.imag) < 1e-12 and r.real > 0])
+    if real.size == 0:
+        raise ValueError(f"B-series K_T has no zero for P/D = {P_D}, AE/A0 = {AE_A0}, Z = {Z}")
+    return float(real[0])
+
+
+def bseries_kt_curve(P_D: float, AE_A0: float, Z: int) -> Any:
+    r"""The B-series K_T(J) with a monotone C2 continuation beyond ``K_T = 0``.
+
+    Up to :math:`J_0` (``K_T(J_0) = 0``, :func:`bseries_zero_thrust_J`) the polynomial
+    of Oosterveld & van Oossanen (1975), cubic in J, is used as published. Beyond, the
+    regression has no data (a windmilling propeller) and its cubic term, extrapolated,
+    turns K_T up again at large J (spurious thrust when the ship is much faster than
+    the propeller's advance speed, e.g. at low commanded revolutions). There the
+    curve is continued by its quadratic Taylor part at :math:`J_0` plus a cubic
+    :math:`d\,s^3`, :math:`s = J - J_0`, with :math:`d = -\max(C, 0)^2 / |K_T'(J_0)|`
+    (:math:`C = K_T''(J_0)/2`), which keeps it C2 and strictly decreasing for all
+    :math:`J > J_0` (the stated assumption: a windmilling propeller brakes more the
+    faster the inflow). Analyses that reach it are warned (:mod:`ship_models.validity`).
+
+    Returns
+    -------
+    Polynomial1D
+        ``valid = (0, J_0)``.
+    """
+    from .curves import Polynomial1D
+
+    c = bseries_kt_polynomial(P_D, AE_A0, Z)
+    J0 = bseries_zero_thrust_J(P_D, AE_A0, Z)
+    slope = c[1] + 2 * c[2] * J0 + 3 * c[3] * J0**2
+    curv2 = c[2] + 3 * c[3] * J0
+    d = -(max(curv2, 0.0) ** 2) / abs(slope) if slope < 0 else 0.0
+    return Polynomial1D(np.array(c), (0.0, J0), tail_start=J0, tail_cubic=-c[3] + d)
+
+
+@dataclass(frozen=True)
+class Propeller:
+    r"""Open-water propeller with general K_T(J) and speed-dependent w_P, t_P.
+
+    .. math::
+
+        T(u; n) = (1 - t_P(u))\,\rho\, n^2 D_p^4\, K_T(J),\qquad
+        J = \frac{(1 - w_P(u))\, u}{n D_p},
+
+    with ``K_T`` a :class:`~ship_models.hydro.curves.CubicSpline1D` (measured table)
+    or :class:`~ship_models.hydro.curves.Polynomial1D` (published polynomial, e.g. the
+    full B-series), and ``w_P(u)``, ``t_P(u)`` constants or splines of speed.
+
+    The revolution for the nominal speed solves :math:`K_T(J_0) = \tau J_0^2`,
+    :math:`\tau = R(u_0) / ((1 - t_P)\rho D_p^2 u_{a0}^2)`, by ``n_newton`` Newton
+    steps in J from the closed form of the quadratic ``kt_start`` (unrolled, so CasADi
+    differentiates the converged root; the residual is checked numerically by
+    :meth:`revolution_residual`), then :math:`n = u_{a0} / (J_0 D_p)`.
+
+    Attributes
+    ----------
+    D_p : float
+    kt : object
+        ``evaluate(J, ops)`` and ``derivative(J, ops)``.
+    kt_start : tuple of float
+        Quadratic ``(k0, k1, k2)`` close to ``kt`` (starting guess).
+    w_P, t_P : float
+        Constant fractions (used when the curves are None).
+    w_curve, t_curve : object or None
+        Speed-dependent fractions (``evaluate(u, ops)``).
+    n_newton : int
+        Newton steps of the revolution solve.
+    """
+
+    D_p: float
+    kt: Any
+    kt_start: tuple[float, float, float]
+    w_P: float
+    t_P: float
+    w_curve: Any = None
+    t_curve: Any = None
+    n_newton: int = 8
+
+    def wake(self, u: Any, ops: Ops = NUMPY_OPS) -> Any:
+        """``w_P(u)``."""
+        return self.w_P if self.w_curve is None else self.w_curve.evaluate(u, ops)
+
+    def deduction(self, u: Any, ops: Ops = NUMPY_OPS) -> Any:
+        """``t_P(u)``."""
+        return self.t_P if self.t_curve is None else self.t_curve.evaluate(u, ops)
+
+    def loading(self, ua: Any, n: Any, ops: Ops = NUMPY_OPS) -> Any:
+        """``K_T(J) n^2 D_p^2`` (m^2/s^2) at advance speed ``ua`` (``n > 0``)."""
+        n_safe = ops.fmax(n, 1e-9)
+        J = ua / (n_safe * self.D_p)
+        return self.kt.evaluate(J, ops) * n * n * self.D_p**2
+
+    def thrust(self, u: Any, n: Any, rho: float, ops: Ops = NUMPY_OPS) -> Any:
+        """Effective thrust (N)."""
+        ua = (1.0 - self.wake(u, ops)) * u
+        return (1.0 - self.deduction(u, ops)) * rho * self.D_p**2 * self.loading(ua, n, ops)
+
+    def advance_ratio_at(self, u0: Any, R0: Any, rho: float, ops: Ops = NUMPY_OPS) -> Any:
+        """``J_0`` with ``T(u0; n) = R0`` (see class doc)."""
+        ua0 = (1.0 - self.wake(u0, ops)) * u0
+        t0 = self.deduction(u0, ops)
+        k = self.kt_start
+        tau = R0 / ((1.0 - t0) * rho * self.D_p**2 * ua0 * ua0 + 1e-300)
+        # start: root of the quadratic k0 + k1 J + (k2 - tau) J^2 = 0 (positive)
+        a2 = k[2] - tau
+        J = (-k[1] - ops.sqrt(k[1] * k[1] - 4.0 * k[0] * a2)) / (2.0 * a2)
+        for _ in range(self.n_newton):
+            g = self.kt.evaluate(J, ops) - tau * J * J
+            dg = self.kt.derivative(J, ops) - 2.0 * tau * J
+            J = J - g / dg
+        return J
+
+    def revolutions(self, u0: Any, R0: Any, rho: float, ops: Ops = NUMPY_OPS) -> Any:
+        """Revolutions per second ``n`` with ``T(u0; n) = R0`` (``u0 > 0``)."""
+        ua0 = (1.0 - self.wake(u0, ops)) * u0
+        return ua0 / (self.advance_ratio_at(u0, R0, rho, ops) * self.D_p)
+
+    def revolution_residual(self, u0: float, R0: float, rho: float) -> float:
+        """Relative residual ``|T(u0; n) - R0| / R0`` of :meth:`revolutions` (NumPy)."""
+        n = self.revolutions(u0, R0, rho)
+        return float(abs(self.thrust(u0, n, rho) - R0) / max(abs(R0), 1e-300))
+
+
 __all__ = [
+    "Propeller",
     "bseries_kt",
+    "bseries_kt_curve",
+    "bseries_kt_polynomial",
+    "bseries_zero_thrust_J",
     "fit_kt_quadratic",
     "holtrop_thrust_deduction",
     "revolutions",

@@ -33,6 +33,8 @@ import numpy as np
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.typing import FloatArray
 
+from .curves import CubicSpline1D, interpolating_spline
+
 
 def ittc57_cf(Re: FloatArray | float) -> FloatArray:
     """ITTC-1957 friction coefficient ``0.075 / (log10(Re) - 2)^2`` (Re > 100)."""
@@ -268,4 +270,62 @@ def fit_resistance(
     return ResistanceFit(c[:2], knots, c[2:], float(u_max), err)
 
 
-__all__ = ["HoltropHull", "ResistanceFit", "fit_resistance", "ittc57_cf"]
+#: Upper Froude number of Holtrop & Mennen's (1982) regression by hull type: the
+#: range of the models behind it ("trawlers, coasters, tugs": Fn <= 0.38).
+HOLTROP_FN_MAX: dict[str, float] = {"fishing_vessel": 0.38}
+
+HOLTROP_RANGE_SOURCE = (
+    "Holtrop & Mennen (1982), An approximate power prediction method, ISP 29(335), "
+    "range of the regression for trawlers, coasters and tugs: Fn <= 0.38"
+)
+
+
+@dataclass(frozen=True)
+class ResistanceTable:
+    """Measured resistance R(u) interpolated by a C2 cubic spline.
+
+    The table is extended by ``R(0) = 0`` (if absent) and the spline is clamped to
+    ``R'(0) = 0`` (resistance is quadratic at low speed) with a natural end at the
+    highest measured speed (:func:`ship_models.hydro.curves.interpolating_spline`).
+
+    Attributes
+    ----------
+    spline : CubicSpline1D
+    u_max : float
+        Highest measured speed (m/s): the validity range is ``[0, u_max]``.
+    max_rel_error : float
+        0 (an interpolant).
+    """
+
+    spline: CubicSpline1D
+    u_max: float
+    max_rel_error: float = 0.0
+
+    def evaluate(self, u: Any, ops: Ops = NUMPY_OPS) -> Any:
+        """Resistance (N) at scalar ``u`` (NumPy or CasADi)."""
+        return self.spline.evaluate(u, ops)
+
+    def __call__(self, u: FloatArray | float) -> FloatArray:
+        """Resistance (N) at ``u`` (NumPy, any shape)."""
+        return self.spline(u)
+
+
+def resistance_table(u: Any, R: Any) -> ResistanceTable:
+    """:class:`ResistanceTable` through measured ``(u_i, R_i)`` (SI, u strictly increasing)."""
+    u = np.asarray(u, dtype=float)
+    R = np.asarray(R, dtype=float)
+    if u[0] > 0:
+        u, R = np.concatenate([[0.0], u]), np.concatenate([[0.0], R])
+    return ResistanceTable(interpolating_spline(u, R, slope_start=0.0), float(u[-1]))
+
+
+__all__ = [
+    "HOLTROP_FN_MAX",
+    "HOLTROP_RANGE_SOURCE",
+    "HoltropHull",
+    "ResistanceFit",
+    "ResistanceTable",
+    "fit_resistance",
+    "ittc57_cf",
+    "resistance_table",
+]

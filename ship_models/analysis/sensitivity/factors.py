@@ -15,7 +15,6 @@ from continuation.ops import NUMPY_OPS, Ops
 from ...contracts import WaveForceModel
 from ...estimation import VesselModelData
 from ...forces import ShipForces
-from ...hydro.propeller import revolutions
 
 #: Factors on intermediate quantities of the force model (name -> description).
 FACTORS: dict[str, str] = {
@@ -82,21 +81,12 @@ class _FactoredForces(ShipForces):
     def resistance_force(self, u: Any, ops: Ops = NUMPY_OPS) -> Any:
         return self.f_R_surf * super().resistance_force(u, ops)
 
-    def thrust_force(self, u: Any, n: Any) -> Any:
-        return self.f_T_surf * super().thrust_force(u, n)
+    def thrust_force(self, u: Any, n: Any, ops: Ops = NUMPY_OPS) -> Any:
+        return self.f_T_surf * super().thrust_force(u, n, ops)
 
     def revolutions(self, Fn: Any, ops: Ops = NUMPY_OPS) -> Any:
         u0 = self.nominal_speed(Fn)
-        return revolutions(
-            u0,
-            self.f_R_nominal * self.resistance.evaluate(u0, ops),
-            rho=self.rho,
-            D_p=self.D_p,
-            w_P=self.w_P,
-            t_P=self.t_P,
-            k=self.kt,
-            ops=ops,
-        )
+        return self.revolutions_for(u0, self.f_R_nominal * self.resistance.evaluate(u0, ops), ops)
 
 
 def _with_factors(data: VesselModelData, factors: Mapping[str, float]) -> VesselModelData:
