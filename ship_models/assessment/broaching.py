@@ -49,22 +49,24 @@ class CapsizingFn:
 def capsizing_fn(
     model: Any, params: Any, chi_c: float, Fn_guess: float | None = None
 ) -> CapsizingFn:
-    """The 4-DOF capsizing threshold at course ``chi_c`` (rad): the one place to switch
-    between ``ship_models.analysis.threshold.capsizing_threshold`` and the heteroclinic
-    ``critical_fn(..., method="bvp")``."""
-    try:
-        from ship_models.analysis.threshold import capsizing_threshold  # type: ignore
-    except ImportError:
-        capsizing_threshold = None
-    if capsizing_threshold is not None:
-        r = capsizing_threshold(model, params, chi_c=chi_c)
-        status = getattr(r.status, "name", str(r.status))
-        return CapsizingFn(float(r.Fn), status, str(r.mechanism))
-    from ship_models.analysis.critical import critical_fn
+    """The 4-DOF capsizing threshold at course ``chi_c`` (rad), by
+    :func:`ship_models.analysis.threshold.capsizing_threshold` (the lowest Fn at which the
+    upslope branch capsizes, with its mechanism).
 
-    kw = {} if Fn_guess is None else {"Fn_guess": Fn_guess}
-    r = critical_fn(model, params, chi_c=chi_c, method="bvp", **kw)
-    return CapsizingFn(float(r.Fn), r.status.name, "heteroclinic connection (Umeda 1999)")
+    Where nothing capsizes because the ship surf-rides instead (``chi_c = 0``: no lateral
+    motion), the surf-riding threshold, the heteroclinic Fn, is returned with the
+    mechanism ``"surf-riding"``: that is what C2 counts there.
+    """
+    from continuation.status import Status
+    from ship_models.analysis.params import ship_params
+    from ship_models.analysis.threshold import capsizing_threshold
+
+    changes = {} if Fn_guess is None else {"Fn": float(Fn_guess)}
+    p = ship_params(model, params, **changes)
+    r = capsizing_threshold(model, p, chi_c=chi_c)
+    if r.status is Status.NO_SOLUTION and math.isfinite(r.Fn_heteroclinic):
+        return CapsizingFn(float(r.Fn_heteroclinic), "SUCCESS", "surf-riding")
+    return CapsizingFn(float(r.Fn), r.status.name, str(r.mechanism))
 
 
 def rebin(fine: FloatArray, coarse: FloatArray) -> FloatArray:
