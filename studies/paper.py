@@ -201,6 +201,12 @@ def _critical_10(r: Mapping[str, Any]) -> Finding:
         ("bisection on the upslope branch's fate", f"[{_fmt(lo)}, {_fmt(hi)}]"),
         ("connecting orbit (collocation)", _fmt(bvp, ".8f")),
     )
+    th = (_get(r, "fig21_23", "threshold") or {}).get("threshold") or {}
+    for c, f, e, m in zip(th.get("chi_c_deg", []), th.get("Fn", []), th.get("error", []),
+                          th.get("mechanism", []), strict=False):  # fmt: skip
+        if c == 10.0:
+            nums += (("capsizing threshold (lowest capsizing Fn of the branch)",
+                      f"{_fmt(f, '.5f')} +- {_fmt(e, '.0e')} ({m})"),)  # fmt: skip
     band = _get(r, "sensitivity", "band")
     if band:  # the sensitivity step ran: its linear uncertainty band and the paper's place
         nums += (

@@ -338,12 +338,20 @@ def _run(args: argparse.Namespace) -> int:
                 f"bvp Fn = {result['Fn_heteroclinic']:.8f}; bisection bracket "
                 f"[{lo:.7f}, {hi:.7f}]; {result['why']}"
             )
-        verdict = (
-            "it is the capsizing threshold (the fates at -+0.002 are survive/capsize)"
-            if result.get("is_threshold")
-            else "it is NOT the capsizing threshold here: " + _reason(result)
-        )
-        sys.stdout.write(head + text + f"; {verdict}; {result['status']}\n")
+        chk = (result.get("bvp") or result).get("threshold_check") or {}
+        if result.get("is_threshold"):
+            verdict = "it is the capsizing threshold (the fates at -+0.002 are survive/capsize)"
+        elif chk:
+            verdict = (
+                "it is NOT the capsizing threshold here: the upslope branch "
+                f"{chk['below']['fate']} at Fn - 0.002 and {chk['above']['fate']} at Fn + 0.002 "
+                "(run without --method for the threshold)"
+            )
+        else:
+            verdict = "not checked against the fates: " + _reason(result)
+        status = result["status"] if result.get("is_threshold") else (
+            f"heteroclinic {result['status']}, not the threshold")  # fmt: skip
+        sys.stdout.write(head + text + f"; {verdict}; {status}\n")
     return 0 if ok else 1
 
 

@@ -66,6 +66,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
 
 
+#: What is differentiated, and when it is the capsizing threshold's derivative.
+QUANTITY = (
+    "derivatives of the heteroclinic Fn (the connection, by one adjoint solve); they are the "
+    "capsizing threshold's where its mechanism is heteroclinic (`broachkit critical`: the "
+    "default vessel up to 25 deg), not beyond"
+)
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``broachkit sensitivity``; returns the exit code."""
     from ship_models.analysis.sensitivity import (
@@ -93,7 +101,10 @@ def run(args: argparse.Namespace) -> int:
     needed = [k for k in vessel.uncertainties if k in resolved.coefficients]
     if needed and all(k in have for k in needed):  # a --keys subset gives no band
         band = uncertainty_band(sens, vessel, n_samples=args.samples, seed=args.seed)
-    doc: dict[str, Any] = {"sensitivity": sens.to_json()}
+    doc: dict[str, Any] = {
+        "quantity": QUANTITY,
+        "sensitivity": sens.to_json(),
+    }
     if band is not None:
         doc["band"] = band.to_json()
     if args.out is not None:
@@ -106,8 +117,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     out = sys.stdout
     out.write(
-        f"critical Fn = {sens.Fn:.8f} at chi_c = {args.chi_c:g} deg "
-        f"({len(sens.entries)} coefficients, {sens.elapsed:.0f} s)\n"
+        f"heteroclinic Fn = {sens.Fn:.8f} at chi_c = {args.chi_c:g} deg "
+        f"({len(sens.entries)} coefficients, {sens.elapsed:.0f} s)\n{QUANTITY}\n"
     )
     out.write(
         f"{'coefficient':<34} {'status':<10} {'value':>12} {'dFn/dtheta':>12} {'elast.':>9}\n"
