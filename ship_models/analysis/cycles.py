@@ -370,6 +370,7 @@ def cycle_branch(
     n_fit: int = 40,
     fit_from: float = 0.5,
     detect_pd: bool = False,
+    error_tol: float | None = 1e-6,
 ) -> CycleBranch:
     r"""Continue the ship's cycle in ``free`` until its period exceeds ``period_max``.
 
@@ -398,6 +399,9 @@ def cycle_branch(
     detect_pd : bool
         Also locate period doublings / Neimark-Sacker points (costs about twice the
         Floquet work; stability changes are in ``n_unstable`` either way).
+    error_tol : float or None
+        Collocation error tolerance of every row (the mesh grows to meet it;
+        :func:`continuation.periodic.continue_periodic`); None: one fixed mesh.
 
     Returns
     -------
@@ -409,7 +413,7 @@ def cycle_branch(
     st = ContinuationSettings(ds=ds, ds_max=ds_max, max_steps=max_steps, p_min=p_min, p_max=p_max)
     br = continue_periodic(model, orbit, orbit.params, free, st, period_max=period_max,
                            adapt_every=adapt_every, direction=direction, detect_pd=detect_pd,
-                           detect_ns=detect_pd)  # fmt: skip
+                           detect_ns=detect_pd, error_tol=error_tol)  # fmt: skip
     rec = br.records
     i_chi = model.param_names.index("chi_c")
     if free == "chi_c":

@@ -404,7 +404,8 @@ def cycle_bifurcations(
     if orbit is None:
         why = f"no settled overtaken cycle at Fn {Fn_min:.4f} or 0.1"
         return CycleBifurcations((), (), (), math.nan, math.nan, "NO_SOLUTION", why)
-    cb = cycle_branch(orbit, "Fn", p_max=Fn_max, detect_pd=True)
+    # the bifurcations name the mechanism; 1e-5 in the states locates them to ~1e-8 in Fn
+    cb = cycle_branch(orbit, "Fn", p_max=Fn_max, detect_pd=True, error_tol=1e-5)
     pd, lpc, ns = [], [], []
     for sp in cb.branch.special_points:
         if not Fn_min <= float(sp.p) <= Fn_max:
