@@ -327,11 +327,15 @@ def reuse_hydrostatics() -> Iterator[dict[str, int]]:
 
 
 def _memo_call(name: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    """``fn(*args, **kwargs)`` through the in-process memo (inside
+    :func:`reuse_hydrostatics`) and the disk cache (:mod:`ship_models.disk_cache`)."""
+    from .disk_cache import cached_call
+
     memo = _MEMO.get()
     if memo is None:
-        return fn(*args, **kwargs)
+        return cached_call(name, fn, *args, **kwargs)
     key = pickle.dumps((name, args, sorted(kwargs.items())), protocol=4)
-    return memo.get(key, lambda: fn(*args, **kwargs))
+    return memo.get(key, lambda: cached_call(name, fn, *args, **kwargs))
 
 
 def _memo_fit(
