@@ -54,7 +54,7 @@ CHI_C_DEG = 10.0
 PAPER_FN = PAPER_FN_BRACKET
 CHECK_COURSES_DEG = (0.0, 20.0, 30.0)
 #: Courses of the capsizing threshold (the lowest capsizing Fn and its mechanism).
-THRESHOLD_COURSES_DEG = (10.0, 20.0, 25.0, 30.0, 34.0, 38.0)
+THRESHOLD_COURSES_DEG = (10.0, 25.0, 30.0, 38.0)
 
 
 def _planes(model: Any, c: float) -> list[tuple[str, str, Callable[[np.ndarray], tuple]]]:

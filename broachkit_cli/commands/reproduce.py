@@ -193,7 +193,7 @@ def _step_task(key: str, module: str | None, out: str, studies: str | None) -> t
 #: Rough CPU seconds of each step on this 2-core machine (warm compile cache), used
 #: only to submit the side steps heaviest first (the pool then balances them).
 STEP_WEIGHTS = {
-    "demo": 2.0, "fig02_05": 2.5, "fig06_09": 1.0, "fig10_15": 8.0, "fig21_23": 12.0,
+    "demo": 2.0, "fig02_05": 2.5, "fig06_09": 1.0, "fig10_15": 8.0, "fig21_23": 40.0,
     "sensitivity": 11.0, "cycles": 7.5,
 }  # fmt: skip
 
