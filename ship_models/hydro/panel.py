@@ -423,8 +423,21 @@ class PanelWaves:
     def amplitudes(
         self, lambda_over_L: Any, chi: Any, ops: Ops = NUMPY_OPS
     ) -> list[tuple[Any, Any]]:
-        """Fitted ``(Re, Im)`` of the unit-amplitude ``(X, Y, N, K)``."""
-        return [(re(lambda_over_L, chi, ops), im(lambda_over_L, chi, ops)) for re, im in self.fits]
+        """Fitted ``(Re, Im)`` of the unit-amplitude ``(X, Y, N, K)`` (one shared basis)."""
+        Tt, P = self.fits[0][0].basis(lambda_over_L, chi, ops)  # even basis (X)
+        out = []
+        for pair in self.fits:
+            vals = []
+            for f in pair:
+                acc = 0.0
+                for i, Ti in enumerate(Tt):
+                    row = 0.0
+                    for j, Pj in enumerate(P):
+                        row = row + float(f.coef[i, j]) * Pj
+                    acc = acc + Ti * row
+                vals.append(chi * acc if f.odd else acc)
+            out.append((vals[0], vals[1]))
+        return out
 
     def forces(
         self,
@@ -450,12 +463,10 @@ class PanelWaves:
         X, Y, N, K = out
         X = self.strips.surge_scale * X
         if lift:
-            w = self.strips
-            _, Y1, N1, K1 = w.forces(xi_over_lambda, u, chi, H_over_lambda, lambda_over_L, ops,
-                                     lift=True)  # fmt: skip
-            _, Y0, N0, K0 = w.forces(xi_over_lambda, u, chi, H_over_lambda, lambda_over_L, ops,
-                                     lift=False)  # fmt: skip
-            Y, N, K = Y + (Y1 - Y0), N + (N1 - N0), K + (K1 - K0)
+            YL, NL, KL = self.strips.lift_forces(
+                xi_over_lambda, u, chi, H_over_lambda, lambda_over_L, ops
+            )
+            Y, N, K = Y + YL, N + NL, K + KL
         return X, Y, N, K
 
 
