@@ -163,3 +163,29 @@ def test_tabulated_model_reproduces_the_strips_through_the_whole_chain(seiner):
     assert got.success and ref.success
     # the fit's force error (< 1e-3 of the amplitude) moves Fn* by ~dFn/dX_w * 1e-3
     assert abs(got.Fn - ref.Fn) < 2e-4
+
+
+def test_mesh_file_round_trip_and_bad_meshes(tmp_path, hull):
+    """A hull mesh file (GDF, read by Capytaine) is clipped at the waterline and checked:
+    the same volume back; an inverted mesh, a hole, wrong units, a contradicting volume
+    are refused in one line."""
+    from ship_models.hydro.offsets import OffsetsError, mesh_volume
+    from ship_models.hydro.panel import read_hull_mesh, write_gdf
+
+    V, F = offsets_panels(hull, nx=30, nz=6)
+    vol = mesh_volume(V, F)
+    p = write_gdf(V, F, tmp_path / "hull.gdf")
+    V2, F2 = read_hull_mesh(p, L=hull.L, volume=vol)
+    assert mesh_volume(V2, F2) == pytest.approx(vol, rel=1e-9)
+    bad = {
+        "inverted": (V, F[:, ::-1]),
+        "open below the waterline": (V, np.delete(F, len(F) // 3, axis=0)),
+    }
+    for what, (v, f) in bad.items():
+        with pytest.raises(OffsetsError) as e:
+            read_hull_mesh(write_gdf(v, f, tmp_path / "bad.gdf"))
+        assert what in str(e.value) and "\n" not in str(e.value)
+    with pytest.raises(OffsetsError, match="units inconsistent"):
+        read_hull_mesh(write_gdf(V * 1000.0, F, tmp_path / "mm.gdf"), L=hull.L)
+    with pytest.raises(OffsetsError, match="particulars give"):
+        read_hull_mesh(p, volume=1.1 * vol)

@@ -304,6 +304,84 @@ def panel_table(
     return PanelTable(lL, np.radians(chis), fk, dif, L, info)
 
 
+def write_gdf(vertices: FloatArray, faces: FloatArray, path: str | Path, title: str = "") -> Path:
+    """Write quadrilateral panels as a WAMIT ``.gdf`` file (read by Capytaine and WAMIT).
+
+    Capytaine's axes (x forward, y to port, z up from the calm waterline), metres, no
+    symmetry flags (all panels written).
+    """
+    p = Path(path)
+    lines = [title or "broachkit hull panels", "1.0 9.80665", "0 0", str(len(faces))]
+    for f in np.asarray(faces, dtype=int):
+        for i in f:
+            x, y, z = vertices[i]
+            lines.append(f"{x:.9g} {y:.9g} {z:.9g}")
+    tmp = p.with_name(p.name + ".tmp")
+    tmp.write_text("\n".join(lines) + "\n")
+    tmp.replace(p)
+    return p
+
+
+def read_hull_mesh(
+    path: str | Path, *, L: float | None = None, volume: float | None = None
+) -> tuple[FloatArray, FloatArray]:
+    """A hull mesh file (any format Capytaine reads: GDF, Nemoh, HST, PNL, MAR; STL, OBJ,
+    MSH... through meshio or trimesh when installed), clipped at the calm waterline.
+
+    Parameters
+    ----------
+    path : path
+        The mesh, in Capytaine's axes (x forward, y to port, z up from the calm
+        waterline), metres.
+    L : float, optional
+        ``L_pp``: refuses a mesh whose length is not within a factor 2 (units).
+    volume : float, optional
+        The particulars' displacement volume ``C_b L B d_m``: refuses a mesh that
+        displaces more than 2 % more or less.
+
+    Returns
+    -------
+    vertices, faces
+        The wetted part, checked closed up to the waterline and outward
+        (:func:`~ship_models.hydro.offsets.check_wetted_mesh`).
+
+    Raises
+    ------
+    OffsetsError
+        Unreadable file, units, an open or inverted mesh, a contradicting volume.
+    """
+    from .offsets import OffsetsError, mesh_volume
+
+    cpt = _capytaine()
+    try:
+        mesh = cpt.load_mesh(str(path))
+        wet = mesh.immersed_part()
+        if hasattr(wet, "merged"):
+            wet = wet.merged()
+    except Exception as exc:  # the reader's own error, reduced to one line
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise OffsetsError(f"mesh {path}: cannot be read: {first}") from None
+    V = np.asarray(wet.vertices, dtype=float)
+    F = np.asarray(wet.faces, dtype=np.int64)
+    if F.size == 0:
+        raise OffsetsError(f"mesh {path}: no panel below the waterline z = 0")
+    length = float(np.ptp(V[:, 0]))
+    if L is not None and not 0.5 * L <= length <= 2.0 * L:
+        raise OffsetsError(
+            f"mesh {path}: it is {length:g} long but L_pp = {L:g} m (units inconsistent? "
+            "the mesh must be in metres)"
+        )
+    check_wetted_mesh(V, F, source=str(path))
+    if volume is not None:
+        got = mesh_volume(V, F)
+        if abs(got - volume) > 0.02 * got:
+            raise OffsetsError(
+                f"mesh {path}: displaces {got:.5g} m^3 but the particulars give "
+                f"C_b L B d_m = {volume:.5g} m^3"
+            )
+    return V, F
+
+
 # --------------------------------------------------------------------------- fit
 def _cheb(t: Any, n: int, ops: Ops) -> list[Any]:
     T = [1.0 + 0.0 * t, t]
@@ -514,4 +592,6 @@ __all__ = [
     "cache_dir",
     "hull_mesh",
     "panel_table",
+    "read_hull_mesh",
+    "write_gdf",
 ]
