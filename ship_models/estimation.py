@@ -334,6 +334,12 @@ def _file_wave_builder(vessel: VesselData) -> WaveForceBuilder:
     """The builder named by ``[vessel] wave_forces`` (default: Froude-Krylov strips)."""
     name = str(vessel.meta.get("wave_forces", WAVE_FORCE_MODELS[0]))
     if name == "froude_krylov_strips":
+        if vessel.meta.get("hull_mesh"):
+            raise VesselFileError(
+                "`vessel.hull_mesh` is used by the panel method only: set `vessel.wave_forces` "
+                "to 'panel_fk_diffraction' or 'panel_fk' (the strips use the offsets or the "
+                "particulars)"
+            )
         return strip_waves
     if name in ("panel_fk_diffraction", "panel_fk"):
         from .hydro.panel import PanelWaveBuilder  # Capytaine only when asked for

@@ -189,3 +189,35 @@ def test_mesh_file_round_trip_and_bad_meshes(tmp_path, hull):
         read_hull_mesh(write_gdf(V * 1000.0, F, tmp_path / "mm.gdf"), L=hull.L)
     with pytest.raises(OffsetsError, match="particulars give"):
         read_hull_mesh(p, volume=1.1 * vol)
+
+
+def test_vessel_file_with_a_mesh_and_panel_froude_krylov(tmp_path, seiner):
+    """[vessel] hull_mesh + wave_forces = panel_fk: the model's wave forces come from the
+    mesh file (Froude-Krylov only: no BEM solve) and match the strips; a mesh without a
+    panel method is refused."""
+    from ship_models.contracts import wave_model_name
+    from ship_models.estimation import build_vessel_model
+    from ship_models.hydro.panel import hull_mesh, write_gdf
+    from ship_models.vessel import VesselData, VesselFileError, dump_vessel, load_vessel
+
+    V, F = hull_mesh(seiner.hull, nx=50, nz=10)
+    write_gdf(V, F, tmp_path / "hull.gdf")
+    v = load_vessel("purse_seiner")
+    for wf, ok in (("panel_fk", True), ("froude_krylov_strips", False)):
+        meta = dict(v.meta) | {"hull_mesh": "hull.gdf", "wave_forces": wf}
+        dump_vessel(VesselData("meshed", meta, dict(v.coefficients)), tmp_path / "m.toml")
+        if not ok:
+            with pytest.raises(VesselFileError, match="hull_mesh"):
+                build_vessel_model(load_vessel(tmp_path / "m.toml"))
+            continue
+        from ship_models.hydro.panel import PanelWaveBuilder
+
+        builder = PanelWaveBuilder(
+            diffraction=False, lambda_over_L=(1.0, 1.5, 2.0, 2.5, 3.0), chi_deg=(0.0, 20.0, 40.0)
+        )
+        data = build_vessel_model(load_vessel(tmp_path / "m.toml"), waves=builder)
+        assert wave_model_name(data) == "panel_fk"
+        args = (0.3, 8.0, 0.2, HL, LL)
+        got = np.array(data.forces.waves.forces(*args, lift=False))
+        ref = np.array(seiner.forces.waves.forces(*args, lift=False))
+        assert abs(got[0] / ref[0] - 1) < 0.03  # 1,000 panels, 5 x 4 table fit

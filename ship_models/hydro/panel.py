@@ -304,6 +304,17 @@ def panel_table(
     return PanelTable(lL, np.radians(chis), fk, dif, L, info)
 
 
+def mesh_path(vessel: Any) -> Path | None:
+    """The mesh file named by ``[vessel] hull_mesh`` (relative to the vessel file)."""
+    name = getattr(vessel, "meta", {}).get("hull_mesh")
+    if not name:
+        return None
+    p = Path(str(name))
+    if not p.is_absolute() and getattr(vessel, "path", ""):
+        p = Path(vessel.path).parent / p
+    return p
+
+
 def write_gdf(vertices: FloatArray, faces: FloatArray, path: str | Path, title: str = "") -> Path:
     """Write quadrilateral panels as a WAMIT ``.gdf`` file (read by Capytaine and WAMIT).
 
@@ -485,6 +496,9 @@ class PanelWaves:
     ) -> PanelWaves:  # fmt: skip
         """Fit the table (see the module docstring)."""
         F = table.fk + (table.diffraction if diffraction else 0.0)
+        # never more unknowns than table nodes along either axis (no underdetermined fit)
+        n_t = min(n_t, table.lambda_over_L.size)
+        n_c = min(n_c, table.chi.size)
         fits = []
         worst = 0.0
         for n in range(4):
@@ -557,7 +571,10 @@ class PanelWaveBuilder:
     diffraction : bool
         Froude-Krylov + diffraction (default) or Froude-Krylov alone.
     nx, nz : int
-        Panels along the hull and from keel to waterline (each side).
+        Panels along the hull and from keel to waterline (each side) of the mesh made
+        from the hull's offsets; a vessel file naming ``[vessel] hull_mesh`` gives its
+        own mesh instead (:func:`read_hull_mesh`, displacement checked against the
+        hull's within 2 %).
     forward_speed_Fn : float or None
         Capytaine's low-speed option (default: zero speed).
     lambda_over_L, chi_deg : tuple of float
@@ -573,11 +590,16 @@ class PanelWaveBuilder:
 
     def __call__(self, inputs: WaveInputs) -> PanelWaves:
         strips = strip_waves(inputs)
-        V, F = hull_mesh(inputs.hull, nx=self.nx, nz=self.nz)
+        mesh_file = mesh_path(inputs.vessel)
+        if mesh_file is not None:  # the design tool's mesh, checked against the hull
+            V, F = read_hull_mesh(mesh_file, L=inputs.hull.L, volume=inputs.hull.volume)
+        else:
+            V, F = hull_mesh(inputs.hull, nx=self.nx, nz=self.nz)
         table = panel_table(
             V, F, L=inputs.hull.L, x_G=inputs.x_G, zeta_G=inputs.zeta_G, rho=inputs.rho,
             g=inputs.g, lambda_over_L=np.array(self.lambda_over_L),
             chi_deg=np.array(self.chi_deg), forward_speed_Fn=self.forward_speed_Fn,
+            solve=self.diffraction,
         )  # fmt: skip
         log.info("panel table: %s", table.info)
         return PanelWaves.from_table(table, strips, diffraction=self.diffraction)
@@ -590,6 +612,7 @@ __all__ = [
     "PanelWaveBuilder",
     "PanelWaves",
     "cache_dir",
+    "mesh_path",
     "hull_mesh",
     "panel_table",
     "read_hull_mesh",
