@@ -254,9 +254,6 @@ class OffsetsHull(HullForm):
     d_a: float = 0.0
     n_gauss: int = 3
 
-    def _baseline_heights(self, j: FloatArray | int) -> FloatArray:
-        return self.d[j]
-
     def _x_ap(self) -> FloatArray:
         return self.x + 0.5 * self.L
 

@@ -42,7 +42,7 @@ time factor; it is checked, with the phase, by the equality of Capytaine's
 Froude-Krylov force and the strip integration (``tests/test_panel_waves.py``).
 
 Table and interpolation. :func:`panel_table` solves the hull once per wavelength and
-heading (``lambda/L`` on ``[1, 3]``, ``chi`` on ``[0, 60]`` deg by default) and caches
+heading (``lambda/L`` on ``[1, 3]``, ``chi`` on ``[0, 90]`` deg by default) and caches
 the complex amplitudes on disk, keyed by a hash of every input (mesh, G, grids, water,
 speed, Capytaine's version). :class:`PanelWaves` fits each real and imaginary part by
 least squares in Chebyshev polynomials of ``lambda/L`` times powers of ``chi^2`` (even
