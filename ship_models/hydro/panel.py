@@ -18,11 +18,13 @@ assumption of Froude-Krylov-plus-diffraction corrections in surf-riding and broa
 studies. A ship surf-riding moves with the wave, so its encounter frequency
 :math:`\omega_e = \omega - k u\cos\chi` tends to zero and a zero-speed diffraction is
 an approximation, not a limit. As a bound, ``forward_speed_Fn`` gives Capytaine's
-low-forward-speed approximation at :math:`U = Fn\sqrt{gL}` (encounter frequency in
-the free-surface condition, the body condition without the steady flow; Capytaine
-documentation, "Forward speed", after Malenica, S. et al. 1995, "Wave and current
-forces on a vertical cylinder free to surge and sway", Appl. Ocean Res. 17:79-90); the
-spread between the two is the forward-speed uncertainty of the diffraction.
+forward-speed option at :math:`U = Fn\sqrt{gL}`: the Green function at the encounter
+frequency and the pressure :math:`i\omega_e\rho\phi + \rho U\,\partial\phi/\partial x`
+(Capytaine 3.0, ``BEMSolver.solve``), without the interaction with the steady flow
+around the hull, i.e. the encounter-frequency approximation of low-speed seakeeping
+(the speed terms of Salvesen, N., Tuck, E.O. & Faltinsen, O. 1970, "Ship motions and
+sea loads", Trans. SNAME 78:250-287, in their simplest form); the spread between the
+two is the forward-speed uncertainty of the diffraction.
 
 Axes and phase. The mesh is in Capytaine's axes (x forward, y to port, z up, origin
 midship on the calm waterline); the force is taken about G. The paper's wave
