@@ -60,17 +60,12 @@ from .hydro.diffraction import taylor_diffraction_ratio
 from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
-from .hydro.offsets import (
-    OffsetsError,
-    OffsetsHull,
-    check_particulars,
-    hull_from_offsets,
-    read_offsets,
-)
-from .hydro.offsets import hydrostatics as offsets_hydrostatics
+from .hydro.offsets import OffsetsError, OffsetsHull, hull_from_offsets, read_offsets
 from .hydro.propeller import fit_kt_quadratic, holtrop_thrust_deduction, taylor_wake
 from .hydro.resistance import HoltropHull, ResistanceFit, fit_resistance
 from .hydro.roll import ikeda_lift_damping_per_speed, roll_inertia
+from .hydro.upright import check_particulars
+from .hydro.upright import hydrostatics as offsets_hydrostatics
 from .hydro.waves import strip_waves
 from .vessel import Coefficient, VesselData, VesselFileError
 

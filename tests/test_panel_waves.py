@@ -14,11 +14,8 @@ pytest.importorskip("capytaine")
 from ship_models import get_vessel_data  # noqa: E402
 from ship_models.analysis.critical_bvp import critical_fn_bvp  # noqa: E402
 from ship_models.contracts import wave_model_name  # noqa: E402
-from ship_models.hydro.offsets import (  # noqa: E402
-    form_parameter_offsets,
-    hull_from_offsets,
-    offsets_panels,
-)
+from ship_models.hydro.mesh import offsets_panels  # noqa: E402
+from ship_models.hydro.offsets import form_parameter_offsets, hull_from_offsets  # noqa: E402
 from ship_models.hydro.panel import PanelTable, PanelWaves, panel_table  # noqa: E402
 from ship_models.hydro.waves import WaveStrips, strip_waves  # noqa: E402
 from ship_models.umeda_4dof import Umeda4DOF  # noqa: E402
@@ -169,7 +166,8 @@ def test_mesh_file_round_trip_and_bad_meshes(tmp_path, hull):
     """A hull mesh file (GDF, read by Capytaine) is clipped at the waterline and checked:
     the same volume back; an inverted mesh, a hole, wrong units, a contradicting volume
     are refused in one line."""
-    from ship_models.hydro.offsets import OffsetsError, mesh_volume
+    from ship_models.hydro.mesh import mesh_volume
+    from ship_models.hydro.offsets import OffsetsError
     from ship_models.hydro.panel import read_hull_mesh, write_gdf
 
     V, F = offsets_panels(hull, nx=30, nz=6)

@@ -81,13 +81,8 @@ from continuation.ops import NUMPY_OPS, Ops
 from continuation.typing import FloatArray
 
 from .hull import HullForm
-from .offsets import (
-    OffsetsHull,
-    check_wetted_mesh,
-    hull_from_offsets,
-    offsets_of_hull,
-    offsets_panels,
-)
+from .mesh import check_wetted_mesh, mesh_volume, offsets_panels
+from .offsets import OffsetsError, OffsetsHull, hull_from_offsets, offsets_of_hull
 from .waves import WaveStrips, strip_waves
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -363,8 +358,6 @@ def read_hull_mesh(
     OffsetsError
         Unreadable file, units, an open or inverted mesh, a contradicting volume.
     """
-    from .offsets import OffsetsError, mesh_volume
-
     cpt = _capytaine()
     try:
         mesh = cpt.load_mesh(str(path))
