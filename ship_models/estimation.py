@@ -61,14 +61,7 @@ from .hydro.diffraction import taylor_diffraction_ratio
 from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
-from .hydro.offsets import (
-    OffsetsError,
-    OffsetsHull,
-    check_particulars,
-    hull_from_offsets,
-    read_offsets,
-)
-from .hydro.offsets import hydrostatics as offsets_hydrostatics
+from .hydro.offsets import OffsetsError, OffsetsHull, hull_from_offsets, read_offsets
 from .hydro.propeller import (
     Propeller,
     bseries_kt_curve,
@@ -86,6 +79,8 @@ from .hydro.resistance import (
     resistance_table,
 )
 from .hydro.roll import ikeda_lift_damping_per_speed, roll_inertia
+from .hydro.upright import check_particulars
+from .hydro.upright import hydrostatics as offsets_hydrostatics
 from .hydro.waves import strip_waves
 from .validity import ValidityRange
 from .vessel import Coefficient, VesselData, VesselFileError
@@ -360,6 +355,12 @@ def _file_wave_builder(vessel: VesselData) -> WaveForceBuilder:
     """The builder named by ``[vessel] wave_forces`` (default: Froude-Krylov strips)."""
     name = str(vessel.meta.get("wave_forces", WAVE_FORCE_MODELS[0]))
     if name == "froude_krylov_strips":
+        if vessel.meta.get("hull_mesh"):
+            raise VesselFileError(
+                "`vessel.hull_mesh` is used by the panel method only: set `vessel.wave_forces` "
+                "to 'panel_fk_diffraction' or 'panel_fk' (the strips use the offsets or the "
+                "particulars)"
+            )
         return strip_waves
     if name in ("panel_fk_diffraction", "panel_fk"):
         from .hydro.panel import PanelWaveBuilder  # Capytaine only when asked for

@@ -12,20 +12,17 @@ from ship_models import get_vessel_data
 from ship_models.estimation import build_vessel_model
 from ship_models.hydro.hull import parametric_hull
 from ship_models.hydro.hydrostatics import gz_curve
+from ship_models.hydro.mesh import check_wetted_mesh, mesh_volume, offsets_panels
 from ship_models.hydro.offsets import (
     OffsetsError,
     OffsetsTable,
-    check_particulars,
-    check_wetted_mesh,
     form_parameter_offsets,
     hull_from_offsets,
-    hydrostatics,
-    mesh_volume,
-    offsets_panels,
     read_offsets,
     wigley_offsets,
     write_offsets,
 )
+from ship_models.hydro.upright import check_particulars, hydrostatics
 from ship_models.hydro.waves import WaveStrips
 from ship_models.vessel import VesselData, VesselFileError, dump_vessel, load_vessel
 

@@ -14,11 +14,8 @@ pytest.importorskip("capytaine")
 from ship_models import get_vessel_data  # noqa: E402
 from ship_models.analysis.critical_bvp import critical_fn_bvp  # noqa: E402
 from ship_models.contracts import wave_model_name  # noqa: E402
-from ship_models.hydro.offsets import (  # noqa: E402
-    form_parameter_offsets,
-    hull_from_offsets,
-    offsets_panels,
-)
+from ship_models.hydro.mesh import offsets_panels  # noqa: E402
+from ship_models.hydro.offsets import form_parameter_offsets, hull_from_offsets  # noqa: E402
 from ship_models.hydro.panel import PanelTable, PanelWaves, panel_table  # noqa: E402
 from ship_models.hydro.waves import WaveStrips, strip_waves  # noqa: E402
 from ship_models.umeda_4dof import Umeda4DOF  # noqa: E402
@@ -163,3 +160,62 @@ def test_tabulated_model_reproduces_the_strips_through_the_whole_chain(seiner):
     assert got.success and ref.success
     # the fit's force error (< 1e-3 of the amplitude) moves Fn* by ~dFn/dX_w * 1e-3
     assert abs(got.Fn - ref.Fn) < 2e-4
+
+
+def test_mesh_file_round_trip_and_bad_meshes(tmp_path, hull):
+    """A hull mesh file (GDF, read by Capytaine) is clipped at the waterline and checked:
+    the same volume back; an inverted mesh, a hole, wrong units, a contradicting volume
+    are refused in one line."""
+    from ship_models.hydro.mesh import mesh_volume
+    from ship_models.hydro.offsets import OffsetsError
+    from ship_models.hydro.panel import read_hull_mesh, write_gdf
+
+    V, F = offsets_panels(hull, nx=30, nz=6)
+    vol = mesh_volume(V, F)
+    p = write_gdf(V, F, tmp_path / "hull.gdf")
+    V2, F2 = read_hull_mesh(p, L=hull.L, volume=vol)
+    assert mesh_volume(V2, F2) == pytest.approx(vol, rel=1e-9)
+    bad = {
+        "inverted": (V, F[:, ::-1]),
+        "open below the waterline": (V, np.delete(F, len(F) // 3, axis=0)),
+    }
+    for what, (v, f) in bad.items():
+        with pytest.raises(OffsetsError) as e:
+            read_hull_mesh(write_gdf(v, f, tmp_path / "bad.gdf"))
+        assert what in str(e.value) and "\n" not in str(e.value)
+    with pytest.raises(OffsetsError, match="units inconsistent"):
+        read_hull_mesh(write_gdf(V * 1000.0, F, tmp_path / "mm.gdf"), L=hull.L)
+    with pytest.raises(OffsetsError, match="particulars give"):
+        read_hull_mesh(p, volume=1.1 * vol)
+
+
+def test_vessel_file_with_a_mesh_and_panel_froude_krylov(tmp_path, seiner):
+    """[vessel] hull_mesh + wave_forces = panel_fk: the model's wave forces come from the
+    mesh file (Froude-Krylov only: no BEM solve) and match the strips; a mesh without a
+    panel method is refused."""
+    from ship_models.contracts import wave_model_name
+    from ship_models.estimation import build_vessel_model
+    from ship_models.hydro.panel import hull_mesh, write_gdf
+    from ship_models.vessel import VesselData, VesselFileError, dump_vessel, load_vessel
+
+    V, F = hull_mesh(seiner.hull, nx=50, nz=10)
+    write_gdf(V, F, tmp_path / "hull.gdf")
+    v = load_vessel("purse_seiner")
+    for wf, ok in (("panel_fk", True), ("froude_krylov_strips", False)):
+        meta = dict(v.meta) | {"hull_mesh": "hull.gdf", "wave_forces": wf}
+        dump_vessel(VesselData("meshed", meta, dict(v.coefficients)), tmp_path / "m.toml")
+        if not ok:
+            with pytest.raises(VesselFileError, match="hull_mesh"):
+                build_vessel_model(load_vessel(tmp_path / "m.toml"))
+            continue
+        from ship_models.hydro.panel import PanelWaveBuilder
+
+        builder = PanelWaveBuilder(
+            diffraction=False, lambda_over_L=(1.0, 1.5, 2.0, 2.5, 3.0), chi_deg=(0.0, 20.0, 40.0)
+        )
+        data = build_vessel_model(load_vessel(tmp_path / "m.toml"), waves=builder)
+        assert wave_model_name(data) == "panel_fk"
+        args = (0.3, 8.0, 0.2, HL, LL)
+        got = np.array(data.forces.waves.forces(*args, lift=False))
+        ref = np.array(seiner.forces.waves.forces(*args, lift=False))
+        assert abs(got[0] / ref[0] - 1) < 0.03  # 1,000 panels, 5 x 4 table fit

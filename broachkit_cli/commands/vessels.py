@@ -149,7 +149,7 @@ def hydrostatics_report(name: str) -> dict[str, Any]:
 
     from ship_models.contracts import wave_model_name
     from ship_models.estimation import offsets_path
-    from ship_models.hydro.offsets import hydrostatics
+    from ship_models.hydro.upright import hydrostatics
     from ship_models.registry import get_vessel_data
 
     data = get_vessel_data(name)

@@ -31,10 +31,10 @@ one surface (so the strips, the hydrostatics and the panels describe the same hu
   Gauss-Legendre stations per station interval, sections integrated over the
   waterline intervals below the local draft by composite Gauss-Legendre quadrature
   (exact for the piecewise-linear section);
-* hydrostatics (:func:`hydrostatics`): displacement volume, LCB, KB, BM, waterplane
-  area and its moments, by the same quadrature;
-* panels (:func:`offsets_panels`): quadrilaterals with their vertices on the surface,
-  from the keel to the waterline, ends closed.
+* hydrostatics (:func:`ship_models.hydro.upright.hydrostatics`): displacement volume,
+  LCB, KB, BM, waterplane area and its moments, by the same quadrature;
+* panels (:func:`ship_models.hydro.mesh.offsets_panels`): quadrilaterals with their
+  vertices on the surface, from the keel to the waterline, ends closed.
 
 The waterline is the plane through the drafts ``d_a`` at the AP and ``d_f`` at the FP
 (trim by the stern if ``d_a > d_f``).
@@ -42,7 +42,6 @@ The waterline is the plane through the drafts ``d_a`` at the AP and ``d_f`` at t
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -223,7 +222,7 @@ def write_offsets(table: OffsetsTable, path: str | Path, comment: str = "") -> P
 
 
 # --------------------------------------------------------------------------- strips
-def _draft_at(x_ap: FloatArray, L: float, d_f: float, d_a: float) -> FloatArray:
+def draft_at(x_ap: FloatArray, L: float, d_f: float, d_a: float) -> FloatArray:
     """Draft above the baseline at stations ``x_ap`` from the AP (m)."""
     return d_a + (d_f - d_a) * np.asarray(x_ap, dtype=float) / L
 
@@ -253,9 +252,6 @@ class OffsetsHull(HullForm):
     d_f: float = 0.0
     d_a: float = 0.0
     n_gauss: int = 3
-
-    def _baseline_heights(self, j: FloatArray | int) -> FloatArray:
-        return self.d[j]
 
     def _x_ap(self) -> FloatArray:
         return self.x + 0.5 * self.L
@@ -371,7 +367,7 @@ def hull_from_offsets(
             f"offsets{src}: the stations span {span:g} m but L_pp = {L:g} m (units "
             "inconsistent? the file says `# units = m` or `# units = mm`)"
         )
-    T = _draft_at(table.x, L, d_f, d_a)
+    T = draft_at(table.x, L, d_f, d_a)
     if np.any(T <= 0) or max(d_f, d_a) >= D:
         raise OffsetsError(f"offsets{src}: drafts must be positive and below the depth D = {D:g} m")
     if table.z[-1] < max(d_f, d_a):
@@ -383,7 +379,7 @@ def hull_from_offsets(
     x0, x1 = table.x[:-1, None], table.x[1:, None]
     xs = (0.5 * (x0 + x1) + 0.5 * (x1 - x0) * t[None, :]).reshape(-1)
     ws = (0.5 * (x1 - x0) * wt[None, :]).reshape(-1)
-    d = _draft_at(xs, L, d_f, d_a)
+    d = draft_at(xs, L, d_f, d_a)
     b_wl = table.half_breadth(xs, d)
     # equivalent section coefficient (for the Lewis added masses only)
     tmp = OffsetsHull(
@@ -427,263 +423,6 @@ def offsets_of_hull(hull: HullForm, n_stations: int = 41, n_waterlines: int = 21
     return OffsetsTable(xs, zs, Y, "sampled from a strip hull")
 
 
-# --------------------------------------------------------------------------- hydrostatics
-@dataclass(frozen=True)
-class Hydrostatics:
-    """Upright hydrostatics at the given drafts (SI units).
-
-    Attributes
-    ----------
-    volume : float
-        Displacement volume (m^3).
-    lcb : float
-        Longitudinal centre of buoyancy from midship (m, forward +).
-    KB : float
-        Centre of buoyancy above the baseline at midship draft (m).
-    BM : float
-        Transverse metacentric radius ``I_T / volume`` (m).
-    A_wp : float
-        Waterplane area (m^2).
-    lcf : float
-        Centre of flotation from midship (m, forward +).
-    I_T, I_L : float
-        Transverse and longitudinal (about the centre of flotation) second moments of
-        the waterplane (m^4).
-    C_b : float
-        Block coefficient on ``L B d_m``.
-    """
-
-    volume: float
-    lcb: float
-    KB: float
-    BM: float
-    A_wp: float
-    lcf: float
-    I_T: float
-    I_L: float
-    C_b: float
-
-    def as_dict(self) -> dict[str, float]:
-        """Plain dictionary (for JSON)."""
-        return {k: float(getattr(self, k)) for k in self.__dataclass_fields__}
-
-
-def hydrostatics(hull: HullForm) -> Hydrostatics:
-    r"""Volume, LCB, KB, BM and waterplane moments of a strip hull.
-
-    .. math::
-
-        \nabla = \int S\,dx, \quad LCB = \frac{1}{\nabla}\int x S\,dx, \quad
-        A_{wp} = \int 2 b_{wl}\,dx, \quad I_T = \int \tfrac23 b_{wl}^3\,dx, \quad
-        I_L = \int 2 b_{wl} (x - LCF)^2 dx, \quad BM = I_T/\nabla
-
-    (strip quadrature of the hull's stations; for an :class:`OffsetsHull` the section
-    integrals are exact for the bilinear surface).
-    """
-    V = hull.volume
-    A_wp = hull.waterplane_area
-    lcf = float(hull.w @ (hull.x * 2.0 * hull.b_wl)) / A_wp
-    I_T = hull.waterplane_inertia
-    I_L = float(hull.w @ (2.0 * hull.b_wl * (hull.x - lcf) ** 2))
-    d_m = float(np.interp(0.0, hull.x, hull.d))
-    KB = d_m + hull.vcb  # vcb at the local waterline; with trim a small approximation
-    return Hydrostatics(
-        volume=V,
-        lcb=hull.lcb,
-        KB=KB,
-        BM=I_T / V,
-        A_wp=A_wp,
-        lcf=lcf,
-        I_T=I_T,
-        I_L=I_L,
-        C_b=V / (hull.L * hull.B * d_m),
-    )
-
-
-def check_particulars(
-    hs: Hydrostatics,
-    *,
-    L: float,
-    B: float,
-    d_m: float,
-    C_b: float,
-    lcb_aft: float,
-    rel_volume: float = 0.02,
-    rel_lcb: float = 0.01,
-    rel_breadth: float = 0.02,
-    B_hull: float | None = None,
-    source: str = "",
-) -> None:
-    """Refuse particulars that contradict the hull (one line naming the particular).
-
-    Parameters
-    ----------
-    hs : Hydrostatics
-        Of the hull.
-    L, B, d_m, C_b, lcb_aft : float
-        The vessel file's particulars (``lcb_aft > 0`` aft of midship).
-    rel_volume, rel_lcb, rel_breadth : float
-        Tolerances: displacement ``C_b L B d_m`` within ``rel_volume`` of the hull's,
-        LCB within ``rel_lcb L``, breadth within ``rel_breadth`` (usual precision of a
-        hydrostatic table read against a lines plan).
-    B_hull : float, optional
-        Largest breadth of the hull below the waterline.
-    source : str
-        Named in the message.
-
-    Raises
-    ------
-    OffsetsError
-    """
-    src = f" ({source})" if source else ""
-    if B_hull is not None and abs(B_hull - B) > rel_breadth * B:
-        raise OffsetsError(
-            f"`particulars.B` = {B:g} m contradicts the hull{src}: its largest breadth at "
-            f"the waterline is {B_hull:.4g} m"
-        )
-    V_given = C_b * L * B * d_m
-    if abs(V_given - hs.volume) > rel_volume * hs.volume:
-        raise OffsetsError(
-            f"`particulars.C_b` = {C_b:g} contradicts the hull{src}: C_b L B d_m = "
-            f"{V_given:.5g} m^3 but the hull displaces {hs.volume:.5g} m^3 (C_b = "
-            f"{hs.volume / (L * B * d_m):.4f})"
-        )
-    if abs(-lcb_aft - hs.lcb) > rel_lcb * L:
-        raise OffsetsError(
-            f"`particulars.lcb_aft` = {lcb_aft:g} m contradicts the hull{src}: its "
-            f"l.c.b. is {-hs.lcb:.4g} m aft of midship"
-        )
-
-
-# --------------------------------------------------------------------------- panels
-def offsets_panels(
-    hull: OffsetsHull, *, nx: int = 40, nz: int = 8
-) -> tuple[FloatArray, FloatArray]:
-    """Quadrilateral panels of the wetted hull (both sides, ends closed).
-
-    Axes of the panel mesh (those of Capytaine): x forward from midship, y to
-    **port**, z up from the calm waterline. The vertices lie on the bilinear surface:
-    ``nx`` stations equally spaced over the table's length, ``nz`` levels from the
-    keel to the local waterline (cosine-clustered at both ends), plus the flat
-    bottom from the centre plane out to the bottom offsets. Panels of zero area
-    (where the hull has no width) are dropped.
-
-    Returns
-    -------
-    vertices : ndarray, shape (n_v, 3)
-    faces : ndarray, shape (n_f, 4)
-        Vertex indices, counter-clockwise seen from the water (normals outward).
-    """
-    t = hull.table
-    L = hull.L
-    xs = np.linspace(t.x[0], t.x[-1], nx + 1)
-    T = _draft_at(xs, L, hull.d_f, hull.d_a)
-    s = 0.5 * (1.0 - np.cos(np.linspace(0.0, math.pi, nz + 1)))  # 0 keel .. 1 waterline
-    h = s[None, :] * T[:, None]
-    yb = t.half_breadth(np.broadcast_to(xs[:, None], h.shape), h)
-    # station curve: centre-plane keel point, then the offsets up to the waterline
-    Ys = np.concatenate([np.zeros((xs.size, 1)), yb], axis=1)  # (nx+1, nz+2)
-    Zs = np.concatenate([h[:, :1], h], axis=1) - T[:, None]
-    Xs = np.broadcast_to(xs[:, None], Ys.shape)
-    n_c = Ys.shape[1]
-    verts = []
-    faces = []
-
-    def side(sign: float) -> None:
-        base = sum(v.shape[0] for v in verts)
-        verts.append(np.stack([Xs - 0.5 * L, sign * Ys, Zs], axis=-1).reshape(-1, 3))
-        for i in range(xs.size - 1):
-            for k in range(n_c - 1):
-                a = base + i * n_c + k
-                b = base + (i + 1) * n_c + k
-                quad = [a, b, b + 1, a + 1]
-                faces.append(quad if sign < 0 else quad[::-1])
-
-    side(-1.0)  # starboard (y < 0 in Capytaine's axes)
-    side(+1.0)
-
-    def end(i: int, aft: bool) -> None:
-        base = sum(v.shape[0] for v in verts)
-        cur = np.stack([np.full(n_c, xs[i] - 0.5 * L), Ys[i], Zs[i]], axis=-1)
-        mid = cur.copy()
-        mid[:, 1] = 0.0
-        verts.append(np.concatenate([cur, mid, cur * [1.0, -1.0, 1.0]]))
-        for k in range(n_c - 1):
-            a, c, p = base + k, base + n_c + k, base + 2 * n_c + k
-            q1 = [a, a + 1, c + 1, c]  # starboard half
-            q2 = [c, c + 1, p + 1, p]  # port half
-            if not aft:
-                q1, q2 = q1[::-1], q2[::-1]
-            faces.extend([q1, q2])
-
-    end(0, aft=True)
-    end(xs.size - 1, aft=False)
-    V = np.concatenate(verts)
-    F = np.array(faces, dtype=int)
-    # merge coincident vertices (the sides meet at the keel and the ends)
-    key = np.round(V / (1e-9 * L)).astype(np.int64)
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    V, F = V[first], inverse.reshape(-1)[F]
-    area = _quad_areas(V, F)
-    keep = area > 1e-10 * L * L
-    return V, F[keep]
-
-
-def _quad_areas(V: FloatArray, F: FloatArray) -> FloatArray:
-    p = V[F]
-    n = 0.5 * np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
-    return np.linalg.norm(n, axis=1)
-
-
-def mesh_volume(V: FloatArray, F: FloatArray) -> float:
-    r"""Displaced volume of a wetted-hull mesh open at ``z = 0``: :math:`\int z\,n_z\,dS`.
-
-    With outward normals and the missing lid at ``z = 0`` (where the integrand
-    vanishes), the divergence theorem gives the volume; a negative value means
-    inverted normals.
-    """
-    p = V[F]
-    n = 0.5 * np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
-    zc = p[:, :, 2].mean(axis=1)
-    return float(np.sum(zc * n[:, 2]))
-
-
-def check_wetted_mesh(V: FloatArray, F: FloatArray, *, source: str = "", tol: float = 1e-6) -> None:
-    """Refuse a wetted-hull mesh that is open below the waterline or inverted.
-
-    Every edge used by one face only must lie on the waterline ``z = 0`` (else the
-    hull has a hole), and the enclosed volume :func:`mesh_volume` must be positive
-    (else the normals point into the hull).
-
-    Raises
-    ------
-    OffsetsError
-    """
-    src = f" {source}" if source else ""
-    if F.ndim != 2 or F.shape[1] not in (3, 4) or V.ndim != 2 or V.shape[1] != 3:
-        raise OffsetsError(f"mesh{src}: faces must be triangles or quadrilaterals in 3-D")
-    edges: dict[tuple[int, int], int] = {}
-    for f in F:
-        ids = [int(i) for i in f]
-        ring = [i for j, i in enumerate(ids) if i != ids[j - 1]]  # drop repeated corners
-        for j in range(len(ring)):
-            a, b = ring[j - 1], ring[j]
-            key = (min(a, b), max(a, b))
-            edges[key] = edges.get(key, 0) + 1
-    scale = float(np.ptp(V, axis=0).max())
-    for (a, b), count in edges.items():
-        if count == 1 and max(abs(V[a, 2]), abs(V[b, 2])) > tol * scale:
-            raise OffsetsError(
-                f"mesh{src} is open below the waterline: a free edge at z = "
-                f"{0.5 * (V[a, 2] + V[b, 2]):.4g} m (a hole; the hull must be closed up to "
-                "the waterline)"
-            )
-    if mesh_volume(V, F if F.shape[1] == 4 else np.c_[F, F[:, 2]]) <= 0:
-        raise OffsetsError(
-            f"mesh{src} is inverted: its normals point into the hull (negative volume)"
-        )
-
-
 def form_parameter_offsets(
     *,
     L: float,
@@ -715,7 +454,7 @@ def form_parameter_offsets(
     xs = np.linspace(0.0, L, n_stations)
     t = 2.0 * xs / L - 1.0
     d_m = 0.5 * (d_f + d_a)
-    d = _draft_at(xs, L, d_f, d_a)
+    d = draft_at(xs, L, d_f, d_a)
     b_wl, beta = _sections(
         t, d, B, d_m, C_M, ref.info["q_waterline"], ref.info["p_aft"], ref.info["p_fore"],
         beta_min, beta_max,
@@ -761,18 +500,13 @@ def wigley_offsets(
 
 __all__ = [
     "OFFSETS_HEADER",
-    "Hydrostatics",
     "OffsetsError",
     "OffsetsHull",
     "OffsetsTable",
-    "check_particulars",
-    "check_wetted_mesh",
+    "draft_at",
     "form_parameter_offsets",
     "hull_from_offsets",
-    "hydrostatics",
-    "mesh_volume",
     "offsets_of_hull",
-    "offsets_panels",
     "read_offsets",
     "wigley_offsets",
     "write_offsets",

@@ -18,11 +18,13 @@ assumption of Froude-Krylov-plus-diffraction corrections in surf-riding and broa
 studies. A ship surf-riding moves with the wave, so its encounter frequency
 :math:`\omega_e = \omega - k u\cos\chi` tends to zero and a zero-speed diffraction is
 an approximation, not a limit. As a bound, ``forward_speed_Fn`` gives Capytaine's
-low-forward-speed approximation at :math:`U = Fn\sqrt{gL}` (encounter frequency in
-the free-surface condition, the body condition without the steady flow; Capytaine
-documentation, "Forward speed", after Malenica, S. et al. 1995, "Wave and current
-forces on a vertical cylinder free to surge and sway", Appl. Ocean Res. 17:79-90); the
-spread between the two is the forward-speed uncertainty of the diffraction.
+forward-speed option at :math:`U = Fn\sqrt{gL}`: the Green function at the encounter
+frequency and the pressure :math:`i\omega_e\rho\phi + \rho U\,\partial\phi/\partial x`
+(Capytaine 3.0, ``BEMSolver.solve``), without the interaction with the steady flow
+around the hull, i.e. the encounter-frequency approximation of low-speed seakeeping
+(the speed terms of Salvesen, N., Tuck, E.O. & Faltinsen, O. 1970, "Ship motions and
+sea loads", Trans. SNAME 78:250-287, in their simplest form); the spread between the
+two is the forward-speed uncertainty of the diffraction.
 
 Axes and phase. The mesh is in Capytaine's axes (x forward, y to port, z up, origin
 midship on the calm waterline); the force is taken about G. The paper's wave
@@ -42,7 +44,7 @@ time factor; it is checked, with the phase, by the equality of Capytaine's
 Froude-Krylov force and the strip integration (``tests/test_panel_waves.py``).
 
 Table and interpolation. :func:`panel_table` solves the hull once per wavelength and
-heading (``lambda/L`` on ``[1, 3]``, ``chi`` on ``[0, 60]`` deg by default) and caches
+heading (``lambda/L`` on ``[1, 3]``, ``chi`` on ``[0, 90]`` deg by default) and caches
 the complex amplitudes on disk, keyed by a hash of every input (mesh, G, grids, water,
 speed, Capytaine's version). :class:`PanelWaves` fits each real and imaginary part by
 least squares in Chebyshev polynomials of ``lambda/L`` times powers of ``chi^2`` (even
@@ -79,13 +81,8 @@ from continuation.ops import NUMPY_OPS, Ops
 from continuation.typing import FloatArray
 
 from .hull import HullForm
-from .offsets import (
-    OffsetsHull,
-    check_wetted_mesh,
-    hull_from_offsets,
-    offsets_of_hull,
-    offsets_panels,
-)
+from .mesh import check_wetted_mesh, mesh_volume, offsets_panels
+from .offsets import OffsetsError, OffsetsHull, hull_from_offsets, offsets_of_hull
 from .waves import WaveStrips, strip_waves
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -304,6 +301,93 @@ def panel_table(
     return PanelTable(lL, np.radians(chis), fk, dif, L, info)
 
 
+def mesh_path(vessel: Any) -> Path | None:
+    """The mesh file named by ``[vessel] hull_mesh`` (relative to the vessel file)."""
+    name = getattr(vessel, "meta", {}).get("hull_mesh")
+    if not name:
+        return None
+    p = Path(str(name))
+    if not p.is_absolute() and getattr(vessel, "path", ""):
+        p = Path(vessel.path).parent / p
+    return p
+
+
+def write_gdf(vertices: FloatArray, faces: FloatArray, path: str | Path, title: str = "") -> Path:
+    """Write quadrilateral panels as a WAMIT ``.gdf`` file (read by Capytaine and WAMIT).
+
+    Capytaine's axes (x forward, y to port, z up from the calm waterline), metres, no
+    symmetry flags (all panels written).
+    """
+    p = Path(path)
+    lines = [title or "broachkit hull panels", "1.0 9.80665", "0 0", str(len(faces))]
+    for f in np.asarray(faces, dtype=int):
+        for i in f:
+            x, y, z = vertices[i]
+            lines.append(f"{x:.9g} {y:.9g} {z:.9g}")
+    tmp = p.with_name(p.name + ".tmp")
+    tmp.write_text("\n".join(lines) + "\n")
+    tmp.replace(p)
+    return p
+
+
+def read_hull_mesh(
+    path: str | Path, *, L: float | None = None, volume: float | None = None
+) -> tuple[FloatArray, FloatArray]:
+    """A hull mesh file (any format Capytaine reads: GDF, Nemoh, HST, PNL, MAR; STL, OBJ,
+    MSH... through meshio or trimesh when installed), clipped at the calm waterline.
+
+    Parameters
+    ----------
+    path : path
+        The mesh, in Capytaine's axes (x forward, y to port, z up from the calm
+        waterline), metres.
+    L : float, optional
+        ``L_pp``: refuses a mesh whose length is not within a factor 2 (units).
+    volume : float, optional
+        The particulars' displacement volume ``C_b L B d_m``: refuses a mesh that
+        displaces more than 2 % more or less.
+
+    Returns
+    -------
+    vertices, faces
+        The wetted part, checked closed up to the waterline and outward
+        (:func:`~ship_models.hydro.offsets.check_wetted_mesh`).
+
+    Raises
+    ------
+    OffsetsError
+        Unreadable file, units, an open or inverted mesh, a contradicting volume.
+    """
+    cpt = _capytaine()
+    try:
+        mesh = cpt.load_mesh(str(path))
+        wet = mesh.immersed_part()
+        if hasattr(wet, "merged"):
+            wet = wet.merged()
+    except Exception as exc:  # the reader's own error, reduced to one line
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise OffsetsError(f"mesh {path}: cannot be read: {first}") from None
+    V = np.asarray(wet.vertices, dtype=float)
+    F = np.asarray(wet.faces, dtype=np.int64)
+    if F.size == 0:
+        raise OffsetsError(f"mesh {path}: no panel below the waterline z = 0")
+    length = float(np.ptp(V[:, 0]))
+    if L is not None and not 0.5 * L <= length <= 2.0 * L:
+        raise OffsetsError(
+            f"mesh {path}: it is {length:g} long but L_pp = {L:g} m (units inconsistent? "
+            "the mesh must be in metres)"
+        )
+    check_wetted_mesh(V, F, source=str(path))
+    if volume is not None:
+        got = mesh_volume(V, F)
+        if abs(got - volume) > 0.02 * got:
+            raise OffsetsError(
+                f"mesh {path}: displaces {got:.5g} m^3 but the particulars give "
+                f"C_b L B d_m = {volume:.5g} m^3"
+            )
+    return V, F
+
+
 # --------------------------------------------------------------------------- fit
 def _cheb(t: Any, n: int, ops: Ops) -> list[Any]:
     T = [1.0 + 0.0 * t, t]
@@ -407,6 +491,9 @@ class PanelWaves:
     ) -> PanelWaves:  # fmt: skip
         """Fit the table (see the module docstring)."""
         F = table.fk + (table.diffraction if diffraction else 0.0)
+        # never more unknowns than table nodes along either axis (no underdetermined fit)
+        n_t = min(n_t, table.lambda_over_L.size)
+        n_c = min(n_c, table.chi.size)
         fits = []
         worst = 0.0
         for n in range(4):
@@ -423,8 +510,21 @@ class PanelWaves:
     def amplitudes(
         self, lambda_over_L: Any, chi: Any, ops: Ops = NUMPY_OPS
     ) -> list[tuple[Any, Any]]:
-        """Fitted ``(Re, Im)`` of the unit-amplitude ``(X, Y, N, K)``."""
-        return [(re(lambda_over_L, chi, ops), im(lambda_over_L, chi, ops)) for re, im in self.fits]
+        """Fitted ``(Re, Im)`` of the unit-amplitude ``(X, Y, N, K)`` (one shared basis)."""
+        Tt, P = self.fits[0][0].basis(lambda_over_L, chi, ops)  # even basis (X)
+        out = []
+        for pair in self.fits:
+            vals = []
+            for f in pair:
+                acc = 0.0
+                for i, Ti in enumerate(Tt):
+                    row = 0.0
+                    for j, Pj in enumerate(P):
+                        row = row + float(f.coef[i, j]) * Pj
+                    acc = acc + Ti * row
+                vals.append(chi * acc if f.odd else acc)
+            out.append((vals[0], vals[1]))
+        return out
 
     def forces(
         self,
@@ -450,12 +550,10 @@ class PanelWaves:
         X, Y, N, K = out
         X = self.strips.surge_scale * X
         if lift:
-            w = self.strips
-            _, Y1, N1, K1 = w.forces(xi_over_lambda, u, chi, H_over_lambda, lambda_over_L, ops,
-                                     lift=True)  # fmt: skip
-            _, Y0, N0, K0 = w.forces(xi_over_lambda, u, chi, H_over_lambda, lambda_over_L, ops,
-                                     lift=False)  # fmt: skip
-            Y, N, K = Y + (Y1 - Y0), N + (N1 - N0), K + (K1 - K0)
+            YL, NL, KL = self.strips.lift_forces(
+                xi_over_lambda, u, chi, H_over_lambda, lambda_over_L, ops
+            )
+            Y, N, K = Y + YL, N + NL, K + KL
         return X, Y, N, K
 
 
@@ -468,7 +566,10 @@ class PanelWaveBuilder:
     diffraction : bool
         Froude-Krylov + diffraction (default) or Froude-Krylov alone.
     nx, nz : int
-        Panels along the hull and from keel to waterline (each side).
+        Panels along the hull and from keel to waterline (each side) of the mesh made
+        from the hull's offsets; a vessel file naming ``[vessel] hull_mesh`` gives its
+        own mesh instead (:func:`read_hull_mesh`, displacement checked against the
+        hull's within 2 %).
     forward_speed_Fn : float or None
         Capytaine's low-speed option (default: zero speed).
     lambda_over_L, chi_deg : tuple of float
@@ -484,11 +585,16 @@ class PanelWaveBuilder:
 
     def __call__(self, inputs: WaveInputs) -> PanelWaves:
         strips = strip_waves(inputs)
-        V, F = hull_mesh(inputs.hull, nx=self.nx, nz=self.nz)
+        mesh_file = mesh_path(inputs.vessel)
+        if mesh_file is not None:  # the design tool's mesh, checked against the hull
+            V, F = read_hull_mesh(mesh_file, L=inputs.hull.L, volume=inputs.hull.volume)
+        else:
+            V, F = hull_mesh(inputs.hull, nx=self.nx, nz=self.nz)
         table = panel_table(
             V, F, L=inputs.hull.L, x_G=inputs.x_G, zeta_G=inputs.zeta_G, rho=inputs.rho,
             g=inputs.g, lambda_over_L=np.array(self.lambda_over_L),
             chi_deg=np.array(self.chi_deg), forward_speed_Fn=self.forward_speed_Fn,
+            solve=self.diffraction,
         )  # fmt: skip
         log.info("panel table: %s", table.info)
         return PanelWaves.from_table(table, strips, diffraction=self.diffraction)
@@ -501,6 +607,9 @@ __all__ = [
     "PanelWaveBuilder",
     "PanelWaves",
     "cache_dir",
+    "mesh_path",
     "hull_mesh",
     "panel_table",
+    "read_hull_mesh",
+    "write_gdf",
 ]

@@ -286,24 +286,52 @@ class WaveStrips:
             self.w, sk * wp, ops
         )
         if lift:
-            omega = ops.sqrt(self.g * k)
-            area = _const(self.area, ops)
-            vw = a * omega * s * ck * C / area  # (J,)
-            kd = k * self.d_T
-            vT = (
-                a
-                * omega
-                * s
-                * ops.cos(2.0 * ops.pi * xi_over_lambda + k * self.x_T * c)
-                * (1.0 - ops.exp(-kd))
-                / kd
-            )
-            YL = u * self.m22_T * vT
-            NL = u * self.x_T * self.m22_T * vT + u * _dot(self.w * self.m22, vw, ops)
+            YL, NL, KL = self._lift(xi_over_lambda, u, k, a, s, c, ck, C, ops)
             Y = Y + YL
             N = N + NL
-            K = K - self.z_H * YL
+            K = K + KL
         return X, Y, N, K
+
+    def _lift(
+        self, xi: Any, u: Any, k: Any, a: Any, s: Any, c: Any, ck: Any, C: Any, ops: Ops
+    ) -> tuple[Any, Any, Any]:
+        omega = ops.sqrt(self.g * k)
+        area = _const(self.area, ops)
+        vw = a * omega * s * ck * C / area  # (J,)
+        kd = k * self.d_T
+        vT = (
+            a
+            * omega
+            * s
+            * ops.cos(2.0 * ops.pi * xi + k * self.x_T * c)
+            * (1.0 - ops.exp(-kd))
+            / kd
+        )
+        YL = u * self.m22_T * vT
+        NL = u * self.x_T * self.m22_T * vT + u * _dot(self.w * self.m22, vw, ops)
+        return YL, NL, -self.z_H * YL
+
+    def lift_forces(
+        self,
+        xi_over_lambda: Any,
+        u: Any,
+        chi: Any,
+        H_over_lambda: Any,
+        lambda_over_L: Any,
+        ops: Ops = NUMPY_OPS,
+    ) -> tuple[Any, Any, Any]:
+        """The wave-lift part ``(Y_L, N_L, K_L)`` of :meth:`forces` alone (module doc)."""
+        lam = lambda_over_L * self.L
+        k = 2.0 * ops.pi / lam
+        a = 0.5 * H_over_lambda * lam
+        s = ops.sin(chi)
+        c = ops.cos(chi)
+        x = _const(self.x, ops)
+        ck = ops.cos(2.0 * ops.pi * xi_over_lambda + k * x * c)
+        zeta = _const(self.zeta, ops)
+        b = _const(self.b, ops)
+        C = _rowsum(_const(self.wz, ops) * ops.exp(k * zeta) * 2.0 * b * sinc(k * s * b, ops), ops)
+        return self._lift(xi_over_lambda, u, k, a, s, c, ck, C, ops)
 
 
 def strip_waves(inputs: WaveInputs) -> WaveStrips:
