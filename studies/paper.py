@@ -272,6 +272,13 @@ def _squares(r: Mapping[str, Any]) -> Finding:
          f"{s['Fn'] - s['heteroclinic_Fn']:+.1e}")
         for s in sq
     )  # fmt: skip
+    th = (_get(r, "fig21_23", "threshold") or {}).get("threshold") or {}
+    th_at = dict(zip(th.get("chi_c_deg", []), th.get("Fn", []), strict=False))
+    nums += tuple(
+        (f"chi_c = {s['chi_c_deg']:g} deg: experiment - capsizing threshold",
+         f"{s['Fn'] - th_at[s['chi_c_deg']]:+.1e}")
+        for s in sq if th_at.get(s["chi_c_deg"]) is not None
+    )  # fmt: skip
     tol = [max(1e-5, s["bracket"][1] - s["bracket"][0]) for s in sq]
     below = all(s["Fn"] - s["heteroclinic_Fn"] <= t for s, t in zip(sq, tol, strict=True))
     worst = max(abs(s["Fn"] - s["heteroclinic_Fn"]) / s["heteroclinic_Fn"] for s in sq)
