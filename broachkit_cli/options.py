@@ -313,12 +313,35 @@ def check_chi_c_deg(name: str, value: float) -> float:
     return v
 
 
+#: Environment variable giving the default number of worker processes (read once, here).
+WORKERS_ENV = "BROACHKIT_WORKERS"
+
+
 def check_workers(value: Any, name: str = "--workers") -> int:
-    """A count of worker processes: a positive integer, or None for one per core."""
-    n = (os.cpu_count() or 1) if value is None else value
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise ValueError(f"{name} must be a positive integer, got {n!r}")
-    return n
+    """A count of worker processes for a command, passed on to the library as an argument.
+
+    ``value`` when given, else ``$BROACHKIT_WORKERS`` when set, else one per core;
+    checked by the library's one check (:func:`continuation.sweep.check_workers`: a
+    positive integer, at most :data:`continuation.sweep.MAX_WORKERS`).
+
+    Raises
+    ------
+    ValueError
+        Naming the option (or the environment variable).
+    """
+    from continuation.sweep.backends import check_workers as check
+    from continuation.sweep.backends import default_workers
+
+    if value is not None:
+        return int(check(value, name))
+    raw = os.environ.get(WORKERS_ENV, "").strip()
+    if not raw:
+        return default_workers()
+    try:
+        n = int(raw)
+    except ValueError:
+        raise ValueError(f"{WORKERS_ENV} must be a positive integer, got {raw!r}") from None
+    return int(check(n, WORKERS_ENV))
 
 
 def wave_changes(args: argparse.Namespace) -> dict[str, float]:
@@ -399,6 +422,7 @@ __all__ = [
     "add_wave",
     "check_chi_c_deg",
     "check_fn",
+    "WORKERS_ENV",
     "check_workers",
     "finite",
     "fn_limit",

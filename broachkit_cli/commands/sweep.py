@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..options import MAX_LIST_VALUES, parse_list
+from ..options import MAX_LIST_VALUES, check_workers, parse_list
 
 NAME = "sweep"
 HELP = "parallel, resumable sweeps: sudden-change boundary, Fig. 23 squares, critical surface"
@@ -90,7 +90,10 @@ def _common(p: argparse.ArgumentParser) -> None:
     )
     where.add_argument("--scheduler", default=None, help="Dask scheduler address tcp://HOST:PORT")
     where.add_argument(
-        "--processes", type=int, default=None, help="N local processes (default: one per core)"
+        "--processes",
+        type=int,
+        default=None,
+        help="N local processes (default: $BROACHKIT_WORKERS, else one per core)",
     )
     where.add_argument("--serial", action="store_true", help="run in this process (debugging)")
     p.add_argument(
@@ -139,10 +142,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _run_options(args: argparse.Namespace) -> dict[str, Any]:
-    for flag in ("workers", "processes"):
-        v = getattr(args, flag)
-        if v is not None and v < 1:
-            raise ValueError(f"--{flag} must be a positive integer, got {v}")
     opts: dict[str, Any] = {
         "store": args.out / "checkpoints",
         "progress": args.progress,
@@ -151,11 +150,11 @@ def _run_options(args: argparse.Namespace) -> dict[str, Any]:
     if args.scheduler:
         opts["scheduler"] = args.scheduler
     elif args.workers is not None:
-        opts.update(backend="dask", workers=args.workers)
+        opts.update(backend="dask", workers=check_workers(args.workers, "--workers"))
     elif args.serial:
         opts["backend"] = "serial"
     else:
-        opts.update(backend="processes", workers=args.processes)
+        opts.update(backend="processes", workers=check_workers(args.processes, "--processes"))
     return opts
 
 
@@ -412,6 +411,7 @@ def run(args: argparse.Namespace) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ValueError(f"--out cannot be created: {args.out} ({exc.strerror})") from None
+    _run_options(args)  # worker counts checked before anything starts
     fn = {"boundary": _boundary, "courses": _courses, "surface": _surface}[args.sweep]
     data, outcome = fn(args)
     data = {"status": outcome.status, **data}
