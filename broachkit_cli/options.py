@@ -397,14 +397,10 @@ def ship_from_args(args: argparse.Namespace) -> tuple[Any, Any]:
 
 
 def json_safe(obj: Any) -> Any:
-    """``obj`` with every non-finite float replaced by ``None`` (strict JSON has no NaN)."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [json_safe(v) for v in obj]
-    return obj
+    """``obj`` with every non-finite float replaced by ``None`` (:mod:`continuation.atomic`)."""
+    from continuation.atomic import json_safe as safe
+
+    return safe(obj)
 
 
 __all__ = [

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from broachkit_cli.files import write_atomic
+from continuation.atomic import write_atomic
 
 _LOADED: dict[str, dict[str, Any]] = {}
 

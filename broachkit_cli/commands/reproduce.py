@@ -365,7 +365,9 @@ def key_numbers(results: dict[str, Any]) -> dict[str, Any]:
 def _figures(out: Path, keys: list[str]) -> list[str]:
     figs: list[str] = []
     for key in keys:
-        figs += sorted(str(p.relative_to(out)) for p in (out / key).glob("*.png"))
+        figs += sorted(
+            str(p.relative_to(out)) for p in (out / key).glob("*.png") if not p.name.startswith(".")
+        )
     return figs
 
 
