@@ -171,10 +171,20 @@ def main(argv: list[str] | None = None) -> int:
         if verbose:
             traceback.print_exc()
         sys.stderr.write(
-            f"broachkit {name}: failed: {type(exc).__name__}: {_one_line(exc)} "
-            "(--verbose shows the traceback)\n"
+            f"broachkit {name}: failed: {_failure_text(exc)} (--verbose shows the traceback)\n"
         )
         return 1
+
+
+def _failure_text(exc: BaseException) -> str:
+    """A failure in words, without the exception's class name."""
+    if isinstance(exc, OSError) and exc.strerror:
+        where = f" ({exc.filename})" if exc.filename else ""
+        return f"{exc.strerror}{where}"
+    if isinstance(exc, MemoryError):
+        return "out of memory"
+    text = _one_line(exc)
+    return text or "an internal error"
 
 
 def _one_line(exc: BaseException) -> str:

@@ -243,8 +243,28 @@ def prepare_out(out: Path | str | None, name: str = "--out") -> Path | None:
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
-        reason = exc.strerror or type(exc).__name__
+        reason = exc.strerror or "not writable"
         raise ValueError(f"{name}: cannot write to {p} ({reason})") from None
+    return p
+
+
+def prepare_out_file(out: Path | str, default_name: str, name: str = "--out") -> Path:
+    """The output *file* of a command, checked writable before anything is computed.
+
+    An existing folder (or a path ending in ``/``) means ``folder/default_name``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` when the file's folder cannot be created or written to.
+    """
+    text = str(out)
+    p = Path(out)
+    if p.is_dir() or text.endswith(("/", os.sep)):
+        p = p / default_name
+    if p.exists() and not p.is_file():
+        raise ValueError(f"{name}: {p} exists and is not a file")
+    prepare_out(p.parent if str(p.parent) else Path("."), name)
     return p
 
 
@@ -425,6 +445,7 @@ __all__ = [
     "json_safe",
     "load_model",
     "prepare_out",
+    "prepare_out_file",
     "ship_from_args",
     "wave_changes",
 ]

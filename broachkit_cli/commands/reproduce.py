@@ -236,7 +236,7 @@ class _SideSteps:
             except cf.BrokenExecutor as exc:
                 raise RuntimeError(f"the worker process running {key} died ({exc})") from None
             except Exception as exc:  # noqa: BLE001 - reported with the step's name
-                raise RuntimeError(f"step {key} failed: {type(exc).__name__}: {exc}") from None
+                raise RuntimeError(f"step {key} failed: {exc}") from None
             self.pending.remove(key)
             out.append((key, value, seconds))
         return out

@@ -17,7 +17,6 @@ Examples::
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import math
 import sys
@@ -27,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from ..options import MAX_LIST_VALUES, check_workers, parse_list
+from ..files import write_json, write_text
+from ..options import MAX_LIST_VALUES, check_workers, parse_list, prepare_out
 
 NAME = "sweep"
 HELP = "parallel, resumable sweeps: sudden-change boundary, Fig. 23 squares, critical surface"
@@ -169,7 +169,7 @@ def _plt() -> Any:
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:
-    path.write_text(json.dumps(data, indent=1, allow_nan=False, default=str) + "\n")
+    write_json(path, data, default=str, indent=1)
 
 
 def _clean(v: Any) -> Any:
@@ -318,7 +318,7 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
         for j, h in enumerate(r.H_over_lambda):
             cells = [float(lL), float(h), float(r.Fn[i, j]), float(r.Fn_surge[i, j])]
             lines.append(",".join("" if math.isnan(v) else repr(v) for v in cells))
-    (out / "surface.csv").write_text("\n".join(lines) + "\n")
+    write_text(out / "surface.csv", "\n".join(lines) + "\n")
     data = {
         "chi_c_deg": r.chi_c_deg,
         "H_over_lambda": _clean(r.H_over_lambda),
@@ -407,10 +407,7 @@ def run(args: argparse.Namespace) -> int:
     Returns 0 when every task succeeded and every check agreed, 1 if a task failed or a
     check disagreed, 130 if interrupted (finished tasks are kept in the checkpoints).
     """
-    try:
-        args.out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ValueError(f"--out cannot be created: {args.out} ({exc.strerror})") from None
+    prepare_out(args.out)  # checked (created, writable) before anything is computed
     _run_options(args)  # worker counts checked before anything starts
     fn = {"boundary": _boundary, "courses": _courses, "surface": _surface}[args.sweep]
     data, outcome = fn(args)
