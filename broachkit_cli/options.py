@@ -26,8 +26,6 @@ CHI_C_MAX_DEG = 85.0
 #: Plausible range of the wavelength-to-length ratio lambda/L (the strip wave
 #: forces and the paper's regime: 0.5 .. 3 in Umeda 1999).
 LAMBDA_OVER_L_RANGE = (0.2, 5.0)
-#: Largest vessel file read (bytes): a vessel file is a few kB.
-MAX_VESSEL_FILE_BYTES = 1_000_000
 #: Most values a list option (``--chi-c 0:30:5``) may give; a range with a tiny step
 #: is refused before anything is allocated.
 MAX_LIST_VALUES = 1000
@@ -278,8 +276,12 @@ def _check_vessel_name(name: str) -> None:
         p = Path(text)
         if not p.is_file():
             raise ValueError(f"--vessel: no vessel file {text!r}")
-        if p.stat().st_size > MAX_VESSEL_FILE_BYTES:
-            raise ValueError(f"--vessel: {text!r} is too large for a vessel file")
+        from ship_models.validation import check_file_size
+
+        try:
+            check_file_size(p)
+        except ValueError as exc:
+            raise ValueError(f"--vessel: {exc}") from None
 
 
 def load_model(vessel: str) -> Any:
