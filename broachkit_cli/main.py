@@ -17,10 +17,12 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 import traceback
 import warnings
 from types import ModuleType
+from typing import Any
 
 from .interrupt import acknowledge, sticky_interrupt
 from .options import OneLineParser, add_verbose
@@ -100,19 +102,45 @@ def with_default_command(argv: list[str], commands: dict[str, ModuleType]) -> li
     return [*argv[:i], DEFAULT_COMMAND, *rest]
 
 
+class _StderrHandler(logging.StreamHandler):
+    """Writes to the ``sys.stderr`` of the moment (never to a stream closed since)."""
+
+    @property  # type: ignore[override]
+    def stream(self) -> Any:
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value: Any) -> None:
+        pass
+
+
 def configure_logging(verbose: bool) -> None:
     """Library messages: warnings only by default, everything with ``--verbose``."""
     root = logging.getLogger()
     for h in list(root.handlers):
         if getattr(h, "_broachkit", False):
             root.removeHandler(h)
-    handler = logging.StreamHandler(sys.stderr)
+    handler = _StderrHandler()
     handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
     handler._broachkit = True  # type: ignore[attr-defined]
     root.addHandler(handler)
     root.setLevel(logging.DEBUG if verbose else logging.WARNING)
-    for noisy in ("matplotlib", "PIL", "numba", "distributed", "asyncio"):
+    for noisy in ("matplotlib", "PIL", "numba", "asyncio"):
         logging.getLogger(noisy).setLevel(logging.WARNING)
+    if not verbose:
+        handler.addFilter(_quiet_libraries)
+        # Dask's own processes read their log level from the environment they inherit
+        os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "error")
+
+
+#: Loggers of the library and of Dask: shown only with ``--verbose`` (errors always).
+LIBRARY_LOGGERS = ("continuation", "ship_models", "studies", "distributed", "dask", "tornado")
+
+
+def _quiet_libraries(record: logging.LogRecord) -> bool:
+    """Without ``--verbose``: library and Dask records only from ERROR up."""
+    top = record.name.split(".")[0]
+    return top not in LIBRARY_LOGGERS or record.levelno >= logging.ERROR
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -144,10 +172,20 @@ def main(argv: list[str] | None = None) -> int:
         if verbose:
             traceback.print_exc()
         sys.stderr.write(
-            f"broachkit {name}: failed: {type(exc).__name__}: {_one_line(exc)} "
-            "(--verbose shows the traceback)\n"
+            f"broachkit {name}: failed: {_failure_text(exc)} (--verbose shows the traceback)\n"
         )
         return 1
+
+
+def _failure_text(exc: BaseException) -> str:
+    """A failure in words, without the exception's class name."""
+    if isinstance(exc, OSError) and exc.strerror:
+        where = f" ({exc.filename})" if exc.filename else ""
+        return f"{exc.strerror}{where}"
+    if isinstance(exc, MemoryError):
+        return "out of memory"
+    text = _one_line(exc)
+    return text or "an internal error"
 
 
 def _one_line(exc: BaseException) -> str:

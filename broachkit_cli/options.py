@@ -26,8 +26,6 @@ CHI_C_MAX_DEG = 85.0
 #: Plausible range of the wavelength-to-length ratio lambda/L (the strip wave
 #: forces and the paper's regime: 0.5 .. 3 in Umeda 1999).
 LAMBDA_OVER_L_RANGE = (0.2, 5.0)
-#: Largest vessel file read (bytes): a vessel file is a few kB.
-MAX_VESSEL_FILE_BYTES = 1_000_000
 #: Most values a list option (``--chi-c 0:30:5``) may give; a range with a tiny step
 #: is refused before anything is allocated.
 MAX_LIST_VALUES = 1000
@@ -243,8 +241,28 @@ def prepare_out(out: Path | str | None, name: str = "--out") -> Path | None:
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
-        reason = exc.strerror or type(exc).__name__
+        reason = exc.strerror or "not writable"
         raise ValueError(f"{name}: cannot write to {p} ({reason})") from None
+    return p
+
+
+def prepare_out_file(out: Path | str, default_name: str, name: str = "--out") -> Path:
+    """The output *file* of a command, checked writable before anything is computed.
+
+    An existing folder (or a path ending in ``/``) means ``folder/default_name``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` when the file's folder cannot be created or written to.
+    """
+    text = str(out)
+    p = Path(out)
+    if p.is_dir() or text.endswith(("/", os.sep)):
+        p = p / default_name
+    if p.exists() and not p.is_file():
+        raise ValueError(f"{name}: {p} exists and is not a file")
+    prepare_out(p.parent if str(p.parent) else Path("."), name)
     return p
 
 
@@ -258,8 +276,12 @@ def _check_vessel_name(name: str) -> None:
         p = Path(text)
         if not p.is_file():
             raise ValueError(f"--vessel: no vessel file {text!r}")
-        if p.stat().st_size > MAX_VESSEL_FILE_BYTES:
-            raise ValueError(f"--vessel: {text!r} is too large for a vessel file")
+        from ship_models.validation import check_file_size
+
+        try:
+            check_file_size(p)
+        except ValueError as exc:
+            raise ValueError(f"--vessel: {exc}") from None
 
 
 def load_model(vessel: str) -> Any:
@@ -313,12 +335,35 @@ def check_chi_c_deg(name: str, value: float) -> float:
     return v
 
 
+#: Environment variable giving the default number of worker processes (read once, here).
+WORKERS_ENV = "BROACHKIT_WORKERS"
+
+
 def check_workers(value: Any, name: str = "--workers") -> int:
-    """A count of worker processes: a positive integer, or None for one per core."""
-    n = (os.cpu_count() or 1) if value is None else value
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise ValueError(f"{name} must be a positive integer, got {n!r}")
-    return n
+    """A count of worker processes for a command, passed on to the library as an argument.
+
+    ``value`` when given, else ``$BROACHKIT_WORKERS`` when set, else one per core;
+    checked by the library's one check (:func:`continuation.sweep.check_workers`: a
+    positive integer, at most :data:`continuation.sweep.MAX_WORKERS`).
+
+    Raises
+    ------
+    ValueError
+        Naming the option (or the environment variable).
+    """
+    from continuation.sweep.backends import check_workers as check
+    from continuation.sweep.backends import default_workers
+
+    if value is not None:
+        return int(check(value, name))
+    raw = os.environ.get(WORKERS_ENV, "").strip()
+    if not raw:
+        return default_workers()
+    try:
+        n = int(raw)
+    except ValueError:
+        raise ValueError(f"{WORKERS_ENV} must be a positive integer, got {raw!r}") from None
+    return int(check(n, WORKERS_ENV))
 
 
 def wave_changes(args: argparse.Namespace) -> dict[str, float]:
@@ -374,14 +419,10 @@ def ship_from_args(args: argparse.Namespace) -> tuple[Any, Any]:
 
 
 def json_safe(obj: Any) -> Any:
-    """``obj`` with every non-finite float replaced by ``None`` (strict JSON has no NaN)."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [json_safe(v) for v in obj]
-    return obj
+    """``obj`` with every non-finite float replaced by ``None`` (:mod:`continuation.atomic`)."""
+    from continuation.atomic import json_safe as safe
+
+    return safe(obj)
 
 
 __all__ = [
@@ -399,12 +440,14 @@ __all__ = [
     "add_wave",
     "check_chi_c_deg",
     "check_fn",
+    "WORKERS_ENV",
     "check_workers",
     "finite",
     "fn_limit",
     "json_safe",
     "load_model",
     "prepare_out",
+    "prepare_out_file",
     "ship_from_args",
     "wave_changes",
 ]

@@ -63,6 +63,8 @@ from typing import Any, ParamSpec, TypeVar
 import casadi as ca
 import numpy as np
 
+from .atomic import replace
+
 log = logging.getLogger(__name__)
 
 #: Compiler flags: -O1 compiles the ship's functions in about 5-9 s each and runs them
@@ -249,7 +251,7 @@ def _compiled(fn: ca.Function, allowed: bool = True) -> ca.Function:
                         [cc, *FLAGS, "-o", str(out), str(c_file)],
                         check=True, capture_output=True, timeout=TIMEOUT,
                     )  # fmt: skip
-                    os.replace(out, lib)  # atomic: a concurrent process sees all or nothing
+                    replace(out, lib)  # atomic: a concurrent process sees all or nothing
             finally:
                 shutil.rmtree(marker, ignore_errors=True)
         ext = ca.external(name, str(lib))

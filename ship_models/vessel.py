@@ -609,6 +609,9 @@ class VesselData(Mapping[str, Coefficient]):
     def __post_init__(self) -> None:
         coeffs = dict(self.coefficients)
         validate(coeffs)
+        from .validation import check_plausible  # relations between fields (plausibility)
+
+        check_plausible(coeffs)
         meta = dict(self.meta)
         model = meta.get("wave_surge_model", WAVE_SURGE_MODELS[0])
         if model not in WAVE_SURGE_MODELS:
@@ -905,6 +908,9 @@ def load_vessel(path_or_name: str | Path) -> VesselData:
         raise ValueError(
             f"no vessel file {str(path_or_name)!r}; packaged vessels are {available_vessels()}"
         )
+    from .validation import check_file_size
+
+    check_file_size(p)
     try:
         with p.open("rb") as fh:
             doc = tomllib.load(fh)

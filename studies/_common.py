@@ -4,7 +4,7 @@ Study modules import this one as ``from studies._common import ...`` (``studies`
 a package installed with broachkit; ``python studies/<script>.py`` puts the folder
 above it on ``sys.path``). Everything here is generic: nothing knows about ships.
 Every file is written atomically (a temporary file renamed onto the final name,
-:mod:`broachkit_cli.files`), so an interrupted study never leaves a truncated file.
+:mod:`continuation.atomic`), so an interrupted study never leaves a truncated file.
 
 - :func:`output_dir` -- ``<root>/<name>``, created; root from ``--out``, else the
   environment variable ``BROACHKIT_OUT``, else ``./out``.
@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from broachkit_cli.files import atomic_path, write_atomic, write_atomic_group, write_json
+from continuation.atomic import atomic_path, write_atomic, write_atomic_group, write_json
 
 #: Environment variable naming the default output root.
 OUT_ENV = "BROACHKIT_OUT"

@@ -3,14 +3,14 @@
 The study's independent pieces -- one bisection per initial position (Figs. 16, 22)
 and per course (Fig. 23 squares), one row of an outcome map per Froude number -- are
 tasks of :func:`continuation.sweep.run_sweep` on local worker processes (one per core
-by default, :func:`sweep_workers`), checkpointed under the step's output folder.
+by default; the count is the study's ``workers`` argument), checkpointed under the
+step's output folder.
 
 The old periodic orbits are computed once (:func:`compute_orbits`, in a worker while
 the parent solves the connecting orbit) and handed to the tasks as a pickle file; a
 task's result depends only on its key and those orbits, so the tables are identical
 to a serial run (the same calls on the same numbers).
 
-- :func:`sweep_workers` -- workers of the study's pool (``BROACHKIT_WORKERS`` or one per core).
 - :func:`compute_orbits` -- the (0.1, 0 deg) and (0.3, 45 deg) orbits, pickled; their digest.
 - :func:`orbit_digest` -- a digest of the orbits' numbers (the sweep's ``context``).
 - :func:`task` -- one task (``key["task"]``: ``"row"`` or ``"boundary"``).
@@ -20,39 +20,15 @@ from __future__ import annotations
 
 import hashlib
 import math
-import os
 import pickle
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from broachkit_cli.files import write_atomic
-
-#: Environment variable with the number of worker processes of the study sweeps.
-WORKERS_ENV = "BROACHKIT_WORKERS"
+from continuation.atomic import write_atomic
 
 _LOADED: dict[str, dict[str, Any]] = {}
-
-
-def sweep_workers() -> int:
-    """Worker processes for the study sweeps: ``$BROACHKIT_WORKERS``, else one per core.
-
-    Raises
-    ------
-    ValueError
-        If ``BROACHKIT_WORKERS`` is not a positive integer.
-    """
-    raw = os.environ.get(WORKERS_ENV, "").strip()
-    if not raw:
-        return max(os.cpu_count() or 1, 1)
-    try:
-        n = int(raw)
-    except ValueError:
-        n = 0
-    if n < 1:
-        raise ValueError(f"{WORKERS_ENV} must be a positive integer, got {raw!r}")
-    return n
 
 
 def orbit_digest(orbits: dict[str, Any]) -> str:
@@ -172,10 +148,8 @@ def task(key: dict[str, Any]) -> dict[str, Any]:
 
 
 __all__ = [
-    "WORKERS_ENV",
     "compute_orbits",
     "load_orbits",
     "orbit_digest",
-    "sweep_workers",
     "task",
 ]

@@ -46,7 +46,7 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from continuation.status import Status
-from continuation.sweep import open_backend
+from continuation.sweep import check_workers, default_workers, open_backend
 from ship_models.paper import PAPER_FN_BRACKET
 from studies._common import (
     PLANE_LABELS,
@@ -58,7 +58,7 @@ from studies._common import (
     state_columns,
     write_json,
 )
-from studies._sudden_tasks import compute_orbits, load_orbits, sweep_workers, task
+from studies._sudden_tasks import compute_orbits, load_orbits, task
 
 CHI_TO_DEG = 10.0
 FROM_1 = (0.1, 0.0)  # (Fn, chi_c deg) of the first initial orbit (Figs. 16-21, 23)
@@ -165,6 +165,7 @@ def compute(
     full: bool = False,
     bvp: bool = False,
     backend: Any = None,
+    workers: int | None = None,
 ) -> dict[str, Any]:
     """Run the experiments; write figures and data; return the summary.
 
@@ -173,8 +174,8 @@ def compute(
     capsizing_boundary_bvp`), after re-bisecting each bracket to :data:`BVP_TOL` for the
     comparison; it adds a few minutes of CPU, so the main job leaves it off.
 
-    The bisections and map rows run on :func:`~studies._sudden_tasks.sweep_workers`
-    local processes (``BROACHKIT_WORKERS=1``: all in this process), checkpointed in
+    The bisections and map rows run on ``workers`` local processes (default one per
+    core, :func:`continuation.sweep.default_workers`; 1: all in this process), checkpointed in
     ``out/sweep`` (a rerun after an interruption redoes no finished task). ``backend``
     (a :class:`continuation.sweep.Backend`, left open) runs them on a pool that is
     already there instead: the main job's, which runs its other steps too.
@@ -185,7 +186,7 @@ def compute(
     out.mkdir(parents=True, exist_ok=True)
     t_all = time.perf_counter()
     model = purse_seiner()
-    workers = sweep_workers()
+    workers = default_workers() if workers is None else int(check_workers(workers))
     sweep_dir = out / SWEEP_DIR
     sweep_dir.mkdir(parents=True, exist_ok=True)
     orbits_path = str(sweep_dir / "orbits.pkl")

@@ -29,7 +29,7 @@ from typing import Any
 if __package__ in (None, ""):  # run as a script: make the `studies` package importable
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from broachkit_cli.files import atomic_path
+from continuation.atomic import atomic_path
 from ship_models.paper import PAPER_FN_BRACKET
 from studies._common import write_json
 

@@ -54,12 +54,13 @@ _FAKE_STUDY = """
 import json, os
 from pathlib import Path
 
-def compute(out, progress=None):
+def compute(out, progress=None, workers=None):
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     if os.environ.get("FAKE_FAIL") == out.name:
         raise RuntimeError("fake failure")
-    doc = {"pid": os.getpid(), "workers_env": os.environ.get("BROACHKIT_WORKERS")}
+    doc = {"pid": os.getpid(), "workers_env": os.environ.get("BROACHKIT_WORKERS"),
+           "workers": workers}
     (out / "summary.json").write_text(json.dumps(doc))
     return doc
 """
@@ -90,7 +91,9 @@ def test_reproduce_runs_other_steps_beside_the_sweep_step(
     assert os.getpid() not in (pids["fig10_15"], pids["fig21_23"])
     for k in doc["steps"]:
         assert not (out / k / ".incomplete").exists()
-        assert json.loads((out / k / "summary.json").read_text())["workers_env"] == "2"
+        # the count reaches the sweep step as an argument, never through the environment
+        assert json.loads((out / k / "summary.json").read_text())["workers_env"] is None
+    assert json.loads((out / "fig16_22" / "summary.json").read_text())["workers"] == 2
     # one worker: everything in this process
     assert main([*args, *steps, "--workers", "1", "--force"]) == 0
     capsys.readouterr()

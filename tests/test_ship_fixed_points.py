@@ -280,7 +280,7 @@ def test_fixed_points_past_the_fold_are_found(model, params, chi_branches):
 def test_find_fixed_point_and_bad_input(model, params):
     fp = find_fixed_point(model, params, "trough")
     assert fp.label == "trough"
-    with pytest.raises(ValueError, match="no fixed point labelled"):
+    with pytest.raises(ValueError, match="no nowhere fixed point at Fn = "):
         find_fixed_point(model, params, "nowhere")
     with pytest.raises(ValueError, match="chi_c_max"):
         trace_in_chi_c(model, params, chi_c_max=2.0)

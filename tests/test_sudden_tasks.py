@@ -17,14 +17,23 @@ from ship_models.analysis.sudden_change import (
 from studies import _sudden_tasks as st
 
 
-def test_sweep_workers_reads_the_environment(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv(st.WORKERS_ENV, "3")
-    assert st.sweep_workers() == 3
-    monkeypatch.setenv(st.WORKERS_ENV, "0")
-    with pytest.raises(ValueError, match=st.WORKERS_ENV):
-        st.sweep_workers()
-    monkeypatch.delenv(st.WORKERS_ENV)
-    assert st.sweep_workers() >= 1
+def test_the_worker_count_is_read_from_the_environment_once_at_the_cli(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from broachkit_cli.options import WORKERS_ENV, check_workers
+    from continuation.sweep import MAX_WORKERS
+
+    monkeypatch.setenv(WORKERS_ENV, "3")
+    assert check_workers(None) == 3
+    assert check_workers(2) == 2  # the option wins over the environment
+    for bad in ("0", "x", str(MAX_WORKERS + 1)):
+        monkeypatch.setenv(WORKERS_ENV, bad)
+        with pytest.raises(ValueError, match=WORKERS_ENV):
+            check_workers(None)
+    monkeypatch.delenv(WORKERS_ENV)
+    assert 1 <= check_workers(None) <= MAX_WORKERS
+    with pytest.raises(ValueError, match=f"--workers must be at most {MAX_WORKERS}"):
+        check_workers(100000)
 
 
 @pytest.mark.slow

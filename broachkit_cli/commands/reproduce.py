@@ -31,10 +31,10 @@ On ``--workers N`` local processes (default one per core; ``N = 1``: everything 
 this process): one pool of ``N`` worker processes (:mod:`continuation.sweep`) serves
 the whole job. The other steps are its tasks, submitted heaviest first
 (:data:`STEP_WEIGHTS`); the sudden-change step (:data:`SWEEP_STEP`) runs in this
-process and puts its bisections and map rows on the same pool (the environment
-variable ``BROACHKIT_WORKERS`` passes ``N`` on), so a worker that finishes a step
-takes the next task, whichever step it belongs to. Every step computes exactly what
-it computes alone, so the outputs do not depend on ``N``.
+process and puts its bisections and map rows on the same pool (``N`` is passed to it
+as an argument; ``$BROACHKIT_WORKERS`` is the default of ``--workers``), so a worker
+that finishes a step takes the next task, whichever step it belongs to. Every step
+computes exactly what it computes alone, so the outputs do not depend on ``N``.
 ``--only`` runs a subset. The studies are the package :mod:`studies`, installed with
 broachkit (``--studies DIR`` loads the scripts of another folder instead).
 """
@@ -50,7 +50,6 @@ import importlib.util
 import inspect
 import json
 import logging
-import os
 import platform
 import resource
 import shutil
@@ -88,8 +87,6 @@ STUDY_STEPS: tuple[tuple[str, str, str], ...] = (
 SWEEP_STEP = "fig16_22"
 #: A step's sub-folder of sweep checkpoints (resumed after an interruption).
 SWEEP_DIR = "sweep"
-#: Environment variable with the sweeps' number of worker processes.
-WORKERS_ENV = "BROACHKIT_WORKERS"
 
 
 def load_study(path: Path) -> ModuleType:
@@ -239,7 +236,7 @@ class _SideSteps:
             except cf.BrokenExecutor as exc:
                 raise RuntimeError(f"the worker process running {key} died ({exc})") from None
             except Exception as exc:  # noqa: BLE001 - reported with the step's name
-                raise RuntimeError(f"step {key} failed: {type(exc).__name__}: {exc}") from None
+                raise RuntimeError(f"step {key} failed: {exc}") from None
             self.pending.remove(key)
             out.append((key, value, seconds))
         return out
@@ -251,17 +248,8 @@ class _SideSteps:
 
 
 def _workers(args: argparse.Namespace) -> int:
-    """``--workers``, else ``$BROACHKIT_WORKERS`` when set, else one per core."""
-    if args.workers is not None:
-        return check_workers(args.workers)
-    env = os.environ.get(WORKERS_ENV, "").strip()
-    if not env:
-        return check_workers(None)
-    try:
-        n = int(env)
-    except ValueError:
-        raise ValueError(f"{WORKERS_ENV} must be a positive integer, got {env!r}") from None
-    return check_workers(n, WORKERS_ENV)
+    """``--workers``, else ``$BROACHKIT_WORKERS`` when set, else one per core (checked)."""
+    return check_workers(args.workers)
 
 
 def _inputs_of_steps(
@@ -403,7 +391,9 @@ def _threshold_numbers(th: Any) -> dict[str, Any] | None:
 def _figures(out: Path, keys: list[str]) -> list[str]:
     figs: list[str] = []
     for key in keys:
-        figs += sorted(str(p.relative_to(out)) for p in (out / key).glob("*.png"))
+        figs += sorted(
+            str(p.relative_to(out)) for p in (out / key).glob("*.png") if not p.name.startswith(".")
+        )
     return figs
 
 
@@ -461,7 +451,7 @@ def _summary_text(doc: dict[str, Any]) -> str:
             f"  reused from an earlier run: {', '.join(reused)} ({'; '.join(why)}: "
             "the inputs they were computed from are this run's)"
         )
-    if reused and redone:
+    if any(reason != "not run before" for reason in redone.values()):
         groups: dict[str, list[str]] = {}
         for k, reason in redone.items():
             groups.setdefault(reason, []).append(k)
@@ -483,25 +473,25 @@ def _run_step(
     pool: Any,
     module: str | None,
     studies: Path | None,
+    workers: int = 1,
 ) -> Any:
-    """Run a step here; the sweep step on ``pool`` when its ``compute`` takes a backend."""
-    if pool is None or key != SWEEP_STEP or module is None:
+    """Run a step here; the sweep step on ``pool`` (or ``workers`` processes) when its
+    ``compute`` takes a ``backend`` (``workers``)."""
+    if key != SWEEP_STEP or module is None:
         return fn(folder, say)
     mod = study_module(module, studies)  # loaded once (a --studies script runs on load)
-    kw = {"backend": pool} if "backend" in inspect.signature(mod.compute).parameters else {}
+    accepts = inspect.signature(mod.compute).parameters
+    kw: dict[str, Any] = {}
+    if pool is not None and "backend" in accepts:
+        kw["backend"] = pool
+    if "workers" in accepts:
+        kw["workers"] = workers
     return mod.compute(folder, progress=say, **kw)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the steps; 0 when every step ran, 130 when interrupted."""
-    before = os.environ.get(WORKERS_ENV)
-    try:
-        return _run(args)
-    finally:  # the job's worker count is not left behind in this process
-        if before is None:
-            os.environ.pop(WORKERS_ENV, None)
-        else:
-            os.environ[WORKERS_ENV] = before
+    return _run(args)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -509,7 +499,6 @@ def _run(args: argparse.Namespace) -> int:
     assert out is not None
     steps = _steps(args)
     workers = _workers(args)
-    os.environ[WORKERS_ENV] = str(workers)  # the studies' sweeps read it (and child processes)
     modules: dict[str, str | None] = {"demo": None, **{k: m for k, _, m in STUDY_STEPS}}
     results: dict[str, Any] = {}
     timing: dict[str, float] = {}
@@ -567,7 +556,7 @@ def _run(args: argparse.Namespace) -> int:
             t0 = time.perf_counter()
             try:
                 results[key] = _run_step(
-                    key, fn, folder, bar.message, pool, modules.get(key), args.studies
+                    key, fn, folder, bar.message, pool, modules.get(key), args.studies, workers
                 )
             except KeyboardInterrupt:
                 acknowledge()

@@ -26,7 +26,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..options import parse_list
+from ..files import write_json
+from ..options import parse_list, prepare_out, prepare_out_file
 
 NAME = "sensitivity"
 HELP = "sensitivity of the critical Fn to every vessel coefficient, and its uncertainty band"
@@ -87,6 +88,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"`--samples` must be >= 0, got {args.samples}")
     if args.top < 1:
         raise ValueError(f"`--top` must be >= 1, got {args.top}")
+    prepare_out(args.out)  # checked before anything is computed
     vessel = _vessel(args.vessel)
     keys = None if args.keys is None else [k.strip() for k in args.keys.split(",") if k.strip()]
 
@@ -108,8 +110,7 @@ def run(args: argparse.Namespace) -> int:
     if band is not None:
         doc["band"] = band.to_json()
     if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
-        (args.out / "sensitivity.json").write_text(json.dumps(doc, indent=2))
+        write_json(args.out / "sensitivity.json", doc)
         tornado_figure(sens, args.out / "tornado.png", top=args.top, band=band)
         doc["files"] = [str(args.out / "sensitivity.json"), str(args.out / "tornado.png")]
     if args.json:
@@ -169,7 +170,8 @@ def add_calibrate_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--coefficient",
         default="hydrodynamics.wave_surge_scale",
-        help="dotted key of the coefficient solved for (default hydrodynamics.wave_surge_scale)",
+        help="key of the coefficient solved for, dotted or its last part when unique "
+        "(default hydrodynamics.wave_surge_scale)",
     )
     parser.add_argument("--vessel", default="purse_seiner", help="vessel name or TOML path")
     parser.add_argument(
@@ -181,7 +183,8 @@ def add_calibrate_arguments(parser: argparse.ArgumentParser) -> None:
         "--out",
         type=Path,
         default=None,
-        help="calibrated vessel file (default <vessel>_calibrated.toml)",
+        help="calibrated vessel file, or a folder for <vessel>_calibrated.toml "
+        "(default <vessel>_calibrated.toml here)",
     )
     parser.add_argument(
         "--curve",
@@ -208,9 +211,10 @@ def run_calibrate(args: argparse.Namespace) -> int:
     chi = _chi(args.chi_c)
     courses = None if args.curve is None else _courses(args.curve)
     vessel = _vessel(args.vessel)
+    # the file is checked before anything is computed (a folder: <folder>/<vessel>_...)
+    out = prepare_out_file(args.out or Path("."), f"{vessel.name}_calibrated.toml")
     src = args.target_source or PAPER_TARGET_SOURCE
     cal = calibrate(args.coefficient, target, chi, vessel=vessel, target_source=src)
-    out = args.out or Path(f"{vessel.name}_calibrated.toml")
     path = cal.write(out)
     doc: dict[str, Any] = {"calibration": cal.to_json(), "file": str(path)}
     curves = None

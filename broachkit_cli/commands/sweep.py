@@ -17,7 +17,6 @@ Examples::
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import math
 import sys
@@ -27,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from ..options import MAX_LIST_VALUES, parse_list
+from ..files import write_json, write_text
+from ..options import MAX_LIST_VALUES, check_workers, parse_list, prepare_out
 
 NAME = "sweep"
 HELP = "parallel, resumable sweeps: sudden-change boundary, Fig. 23 squares, critical surface"
@@ -90,7 +90,10 @@ def _common(p: argparse.ArgumentParser) -> None:
     )
     where.add_argument("--scheduler", default=None, help="Dask scheduler address tcp://HOST:PORT")
     where.add_argument(
-        "--processes", type=int, default=None, help="N local processes (default: one per core)"
+        "--processes",
+        type=int,
+        default=None,
+        help="N local processes (default: $BROACHKIT_WORKERS, else one per core)",
     )
     where.add_argument("--serial", action="store_true", help="run in this process (debugging)")
     p.add_argument(
@@ -144,10 +147,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _run_options(args: argparse.Namespace) -> dict[str, Any]:
-    for flag in ("workers", "processes"):
-        v = getattr(args, flag)
-        if v is not None and v < 1:
-            raise ValueError(f"--{flag} must be a positive integer, got {v}")
     opts: dict[str, Any] = {
         "store": args.out / "checkpoints",
         "progress": args.progress,
@@ -156,11 +155,11 @@ def _run_options(args: argparse.Namespace) -> dict[str, Any]:
     if args.scheduler:
         opts["scheduler"] = args.scheduler
     elif args.workers is not None:
-        opts.update(backend="dask", workers=args.workers)
+        opts.update(backend="dask", workers=check_workers(args.workers, "--workers"))
     elif args.serial:
         opts["backend"] = "serial"
     else:
-        opts.update(backend="processes", workers=args.processes)
+        opts.update(backend="processes", workers=check_workers(args.processes, "--processes"))
     return opts
 
 
@@ -175,7 +174,7 @@ def _plt() -> Any:
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:
-    path.write_text(json.dumps(data, indent=1, allow_nan=False, default=str) + "\n")
+    write_json(path, data, default=str, indent=1)
 
 
 def _clean(v: Any) -> Any:
@@ -326,7 +325,7 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
         for j, h in enumerate(r.H_over_lambda):
             cells = [float(lL), float(h), float(r.Fn[i, j]), float(r.Fn_surge[i, j])]
             lines.append(",".join("" if math.isnan(v) else repr(v) for v in cells))
-    (out / "surface.csv").write_text("\n".join(lines) + "\n")
+    write_text(out / "surface.csv", "\n".join(lines) + "\n")
     data = {
         "chi_c_deg": r.chi_c_deg,
         "H_over_lambda": _clean(r.H_over_lambda),
@@ -427,10 +426,8 @@ def run(args: argparse.Namespace) -> int:
     Returns 0 when every task succeeded and every check agreed, 1 if a task failed or a
     check disagreed, 130 if interrupted (finished tasks are kept in the checkpoints).
     """
-    try:
-        args.out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ValueError(f"--out cannot be created: {args.out} ({exc.strerror})") from None
+    prepare_out(args.out)  # checked (created, writable) before anything is computed
+    _run_options(args)  # worker counts checked before anything starts
     fn = {"boundary": _boundary, "courses": _courses, "surface": _surface}[args.sweep]
     data, outcome = fn(args)
     data = {"status": outcome.status, **data}

@@ -7,13 +7,22 @@ interrupted sweep resumes without redoing any finished task. Knows nothing of th
 application.
 
 Public names: :func:`run_sweep`, :class:`SweepResult`, :class:`TaskRecord`,
-:func:`open_backend`, :class:`CheckpointStore`, :func:`file_digest`,
+:func:`open_backend`, :func:`check_workers` (the one check of a worker count, at most
+:data:`MAX_WORKERS`), :class:`CheckpointStore`, :func:`file_digest`,
 :func:`source_version`, :func:`task_id`.
 """
 
 from __future__ import annotations
 
-from .backends import BACKENDS, Backend, SerialExecutor, open_backend
+from .backends import (
+    BACKENDS,
+    MAX_WORKERS,
+    Backend,
+    SerialExecutor,
+    check_workers,
+    default_workers,
+    open_backend,
+)
 from .keys import canonical_json, file_digest, source_version, table_order, task_id
 from .run import DONE, FAILED, SweepResult, TaskRecord, execute_task, run_sweep
 from .store import CheckpointStore
@@ -21,6 +30,7 @@ from .store import CheckpointStore
 __all__ = [
     "BACKENDS",
     "DONE",
+    "MAX_WORKERS",
     "FAILED",
     "Backend",
     "CheckpointStore",
@@ -28,6 +38,8 @@ __all__ = [
     "SweepResult",
     "TaskRecord",
     "canonical_json",
+    "check_workers",
+    "default_workers",
     "execute_task",
     "file_digest",
     "open_backend",

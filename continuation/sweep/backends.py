@@ -49,6 +49,41 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+@contextlib.contextmanager
+def sigint_blocked() -> Any:
+    """Inside: SIGINT blocked in the calling (main) thread; pending Ctrl-C delivered after.
+
+    Processes and threads started inside inherit the blocked signal, so a Ctrl-C at the
+    terminal (sent to the whole process group) reaches only this process, which stops
+    its workers itself; without it, a worker still importing its modules prints a
+    ``KeyboardInterrupt`` traceback of its own. A no-op outside the main thread or on
+    platforms without ``pthread_sigmask``.
+    """
+    import threading
+
+    mask = getattr(signal, "pthread_sigmask", None)
+    if mask is None or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = mask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        mask(signal.SIG_SETMASK, old)
+
+
+class _QuietProcessPool(cf.ProcessPoolExecutor):
+    """A process pool whose workers are started with SIGINT blocked (:func:`sigint_blocked`).
+
+    The pool starts its processes inside ``submit`` (in the submitting thread), so that
+    is where the signal is blocked.
+    """
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> cf.Future:
+        with sigint_blocked():
+            return super().submit(fn, *args, **kwargs)
+
+
 class Backend:
     """An executor plus what the sweep needs to know about it.
 
@@ -169,17 +204,53 @@ def _stop_process_pool(ex: cf.ProcessPoolExecutor, timeout: float = 10.0) -> Non
         log.warning("a process pool's queue thread did not end; this process cannot fork")
 
 
-def _check_workers(workers: Any) -> int | None:
+#: Most local worker processes a sweep starts (each holds its own copy of the model and
+#: its compiled functions, a few hundred MB): one definition for every check.
+MAX_WORKERS = 64
+
+
+def check_workers(workers: Any, name: str = "`workers`") -> int | None:
+    """The one check of a count of local worker processes.
+
+    Parameters
+    ----------
+    workers : int or None
+        ``None`` (the caller's default, e.g. one per core) or an integer in
+        ``[1, MAX_WORKERS]``.
+    name : str
+        How the count is named in the message (``"--workers"`` on the command line).
+
+    Returns
+    -------
+    int or None
+        ``workers`` unchanged.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, for anything else (booleans, floats, 0, negative, or more than
+        :data:`MAX_WORKERS`).
+    """
     if workers is None:
         return None
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"`workers` must be a positive integer, got {workers!r}")
+        raise ValueError(f"{name} must be a positive integer, got {workers!r}")
+    if workers > MAX_WORKERS:
+        raise ValueError(
+            f"{name} must be at most {MAX_WORKERS} (each worker process holds its own "
+            f"copy of the model), got {workers}"
+        )
     return workers
+
+
+def default_workers() -> int:
+    """One worker process per core, at most :data:`MAX_WORKERS`."""
+    return max(1, min(os.cpu_count() or 1, MAX_WORKERS))
 
 
 def _process_pool(workers: int, start_method: str) -> cf.ProcessPoolExecutor:
     ctx = multiprocessing.get_context(start_method)
-    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_ignore_sigint)
+    return _QuietProcessPool(max_workers=workers, mp_context=ctx, initializer=_ignore_sigint)
 
 
 def _client_backend(
@@ -226,8 +297,8 @@ def open_backend(
     ValueError
         For an unknown backend, bad ``workers`` or an unreachable scheduler.
     """
-    n = _check_workers(workers)
-    cores = os.cpu_count() or 1
+    n = check_workers(workers)
+    cores = default_workers()
     if scheduler is not None:
         if not isinstance(scheduler, str) or not scheduler:
             raise ValueError(
@@ -259,15 +330,27 @@ def open_backend(
 
         k = n or cores
         # the sweep retries a task once itself; Dask must not resubmit it on its own
-        with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
-            cluster = LocalCluster(
-                n_workers=k,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=":0",
-                silence_logs=logging.ERROR,
-            )
-        client = Client(cluster)
+        # started with SIGINT blocked: the cluster's threads and processes inherit it,
+        # so Ctrl-C reaches this process only, which closes the cluster
+        started: list[Any] = []
+        try:
+            with dask.config.set({"distributed.scheduler.allowed-failures": 0}), sigint_blocked():
+                started.append(
+                    LocalCluster(
+                        n_workers=k,
+                        threads_per_worker=1,
+                        processes=True,
+                        dashboard_address=":0",
+                        silence_logs=logging.ERROR,
+                    )
+                )
+                started.append(Client(started[0]))
+        except BaseException:  # Ctrl-C during the start (delivered when unblocked)
+            for obj in reversed(started):
+                with contextlib.suppress(Exception):
+                    obj.close()
+            raise
+        cluster, client = started
         return _client_backend(client, "dask", (client, cluster), slots=k)
     raise ValueError(
         f"`backend` must be one of {', '.join(BACKENDS)}, a concurrent.futures.Executor or a "
@@ -275,4 +358,12 @@ def open_backend(
     )
 
 
-__all__ = ["BACKENDS", "Backend", "SerialExecutor", "open_backend"]
+__all__ = [
+    "BACKENDS",
+    "MAX_WORKERS",
+    "Backend",
+    "SerialExecutor",
+    "check_workers",
+    "default_workers",
+    "open_backend",
+]

@@ -1,7 +1,7 @@
 """Checkpoints of finished tasks: one JSON file per task, written atomically.
 
 Each record is written to a temporary file in the same directory and moved into place
-with :func:`os.replace` (atomic on POSIX and Windows), so a sweep killed at any moment
+(:mod:`continuation.atomic`, atomic on POSIX and Windows), so a sweep killed at any moment
 leaves every checkpoint either complete or absent -- never half written. Records are
 written by the process that runs the sweep (not by the workers), so remote workers
 need no shared file system.
@@ -12,9 +12,10 @@ from __future__ import annotations
 import json
 import logging
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
+
+from ..atomic import write_text
 
 log = logging.getLogger(__name__)
 
@@ -55,6 +56,8 @@ class CheckpointStore:
         """Every readable record, by task id (unreadable files are skipped with a warning)."""
         out: dict[str, dict[str, Any]] = {}
         for f in sorted(self.directory.glob("*.json")):
+            if f.name.startswith("."):  # a temporary file being written
+                continue
             try:
                 rec = json.loads(f.read_text())
             except (OSError, ValueError) as exc:
@@ -67,22 +70,10 @@ class CheckpointStore:
         return out
 
     def save(self, record: dict[str, Any]) -> Path:
-        """Write one record atomically (temporary file + ``os.replace``)."""
+        """Write one record atomically (:func:`continuation.atomic.write_text`, fsynced)."""
         target = self.path(record["id"])
         text = json.dumps({"format": RECORD_FORMAT, **record}, indent=1)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=".tmp", dir=self.directory)
-        try:
-            with os.fdopen(fd, "w") as fh:
-                fh.write(text)
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, target)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        write_text(target, text, fsync=True)
         return target
 
 

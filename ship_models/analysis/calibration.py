@@ -147,6 +147,28 @@ class Calibration:
         }
 
 
+def coefficient_key(name: str, resolved: VesselData) -> str:
+    """The dotted key of a coefficient given by its key or by its last part when unique.
+
+    ``"wave_surge_scale"`` -> ``"hydrodynamics.wave_surge_scale"``. Names that are not
+    a coefficient's last part are returned unchanged (:func:`calibrate` then says so).
+
+    Raises
+    ------
+    ValueError
+        Naming the candidates, when the short name is the last part of several keys.
+    """
+    if name in resolved.coefficients or name in FACTORS or name in SYSTEM_PARAMS:
+        return name
+    matches = sorted(k for k in resolved.coefficients if k.rsplit(".", 1)[-1] == name)
+    if len(matches) > 1:
+        raise ValueError(
+            f"`coefficient` {name!r} is ambiguous in vessel {resolved.name!r}: "
+            f"give one of {', '.join(matches)}"
+        )
+    return matches[0] if matches else name
+
+
 def _check_key(key: str, resolved: VesselData) -> None:
     if key in FACTORS:
         raise ValueError(f"`coefficient` {key!r} is a sensitivity factor, not a vessel "
@@ -155,7 +177,11 @@ def _check_key(key: str, resolved: VesselData) -> None:
         raise ValueError(f"`coefficient` {key!r} is a wave/autopilot parameter, not a ship "
                          "coefficient; it cannot be calibrated")  # fmt: skip
     if key not in resolved.coefficients:
-        raise ValueError(f"`coefficient`: no coefficient {key!r} in vessel {resolved.name!r}")
+        import difflib
+
+        near = difflib.get_close_matches(key, list(resolved.coefficients), n=3)
+        hint = f" (did you mean {', '.join(near)}?)" if near else ""
+        raise ValueError(f"`coefficient`: no coefficient {key!r} in vessel {resolved.name!r}{hint}")
 
 
 def _bordered_solve(
@@ -283,6 +309,7 @@ def calibrate(
     given = connection.orbit.problem.system if connection is not None else None
     base = build_vessel_model(raw, waves=given.data.wave_builder if given is not None else None)
     resolved = base.vessel
+    coefficient = coefficient_key(coefficient, resolved)
     _check_key(coefficient, resolved)
     c0 = resolved.coefficients[coefficient]
     if connection is None:

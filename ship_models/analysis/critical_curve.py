@@ -32,6 +32,7 @@ from continuation.casadi_compile import compiling
 from continuation.errors import ContinuationError
 from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
+from continuation.sweep.backends import check_workers
 from continuation.sweep.forked import ForkedTasks
 from continuation.typing import FloatArray
 
@@ -318,8 +319,8 @@ def critical_curve(
             course(c, "chi_c_values")
     if np.any(chis > 0) and np.any(chis < 0):
         raise ValueError("`chi_c_values` must all have one sign (the curve starts at 0)")
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"`workers` must be a positive integer, got {workers!r}")
+    if check_workers(workers) is None:
+        raise ValueError("`workers` must be a positive integer, got None")
     if not (math.isfinite(ds) and ds > 0 and math.isfinite(ds_max) and ds_max >= ds):
         raise ValueError(f"`ds` and `ds_max` must satisfy 0 < ds <= ds_max, got {ds}, {ds_max}")
     sign = -1.0 if np.any(chis < 0) else 1.0

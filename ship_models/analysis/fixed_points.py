@@ -39,7 +39,7 @@ from ..contracts import VesselModel
 from ..surge import SurgeModel
 from ..umeda_4dof import follow_in_chi_c
 from .eigen import EigenStructure, eigen_structure
-from .params import ship_params
+from .params import describe_params, ship_params
 
 log = logging.getLogger(__name__)
 
@@ -393,8 +393,8 @@ def find_fixed_point(
         if fp.label == label:
             return fp
     raise ValueError(
-        f"no fixed point labelled {label!r} at {(ship_params(model, params)).as_dict()}; "
-        f"found {[fp.label for fp in pts]}"
+        f"no {label} fixed point at {describe_params(ship_params(model, params))}; "
+        f"found {', '.join(fp.label for fp in pts) or 'none'}"
     )
 
 

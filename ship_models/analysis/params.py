@@ -89,4 +89,31 @@ def ship_model(model: VesselModel | None) -> VesselModel:
     return model
 
 
-__all__ = ["course", "ship_model", "ship_params"]
+#: How each ship parameter is shown in messages: (label, unit, to the user's unit).
+_SHOWN: dict[str, tuple[str, str, Any]] = {
+    "Fn": ("Fn", "", float),
+    "chi_c": ("chi_c", " deg", math.degrees),
+    "H_over_lambda": ("H/lambda", "", float),
+    "lambda_over_L": ("lambda/L", "", float),
+    "K_R": ("K_R", "", float),
+    "T_D": ("T_D", " s", float),
+}
+
+
+def describe_params(params: Any) -> str:
+    """Parameters in words for a message: angles in degrees, plain numbers, no reprs.
+
+    ``"Fn = 0.25, chi_c = 42 deg, H/lambda = 0.1087, lambda/L = 1.5, K_R = 1, T_D = 0 s"``.
+    """
+    items = params.as_dict() if hasattr(params, "as_dict") else dict(params)
+    parts = []
+    for name, value in items.items():
+        label, unit, conv = _SHOWN.get(name, (name, "", float))
+        try:
+            parts.append(f"{label} = {conv(float(value)):.6g}{unit}")
+        except (TypeError, ValueError):
+            parts.append(f"{label} = {value}")
+    return ", ".join(parts)
+
+
+__all__ = ["course", "describe_params", "ship_model", "ship_params"]
