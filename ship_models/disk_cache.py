@@ -23,6 +23,8 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any, TypeVar
 
+from continuation.atomic import atomic_path
+
 log = logging.getLogger(__name__)
 
 R = TypeVar("R")
@@ -83,10 +85,8 @@ def cached_call(name: str, fn: Callable[..., R], *args: Any, **kwargs: Any) -> R
     out = fn(*args, **kwargs)
     with contextlib.suppress(OSError):
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        with open(tmp, "wb") as fh:
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:  # readers see all or nothing
             pickle.dump(out, fh, protocol=4)
-        os.replace(tmp, path)  # atomic: a concurrent reader sees all or nothing
     return out
 
 
