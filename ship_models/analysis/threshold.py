@@ -467,6 +467,14 @@ def _mechanism(
     return "torus breakdown", f"the overtaken cycle has a Neimark-Sacker point at {first:.5f}"
 
 
+def _fn_limit(model: Any) -> float:
+    """Largest Fn of the vessel's resistance fit (1 without one)."""
+    vessel = getattr(model, "vessel", None)
+    if vessel is not None and hasattr(vessel, "has") and vessel.has("resistance.Fn_max_fit"):
+        return float(vessel.get("resistance.Fn_max_fit"))
+    return 1.0
+
+
 #: Fraction of the rudder limit at which the crest saddle counts as saturated.
 RUDDER_SATURATED = 0.95
 
@@ -542,8 +550,13 @@ def capsizing_threshold(
     if heteroclinic is None and Fn_heteroclinic is None:
         from .critical_bvp import critical_fn_bvp
 
+        lo_g = max(window.Fn_lo, 0.1) if window.exists else 0.2
+        hi_g = min(window.Fn_hi, 0.65) if window.exists else 0.45
         try:
-            heteroclinic = critical_fn_bvp(chi, model=m, params=base, check=True)
+            bracket = (lo_g, max(hi_g, lo_g + 0.05))
+            heteroclinic = critical_fn_bvp(
+                chi, model=m, params=base, check=True, guess_bracket=bracket
+            )
         except (ValueError, ArithmeticError) as exc:  # no usable guess on this course
             log.debug("no heteroclinic connection at chi_c=%g deg: %s", math.degrees(chi), exc)
             heteroclinic = None
@@ -554,6 +567,7 @@ def capsizing_threshold(
         err_h = float(heteroclinic.error) if heteroclinic.error is not None else math.nan
     elif Fn_heteroclinic is not None:
         Fn_h, err_h = (float(v) for v in Fn_heteroclinic)
+    fn_limit = _fn_limit(m)
     lo_w = window.Fn_lo if window.exists else 0.05
     hi_w = window.Fn_hi if window.exists else 0.6
     if math.isfinite(Fn_h):
@@ -586,12 +600,18 @@ def capsizing_threshold(
         base_kw["elapsed"] = time.perf_counter() - t0
         return CapsizingThreshold(**base_kw)
 
-    try:
-        start = find_fixed_point(m, base.replace(Fn=lo), "crest")
-    except (ValueError, ArithmeticError) as exc:
+    start, first_error = None, ""
+    while lo < hi:  # the crest saddle may exist only higher up in the window
+        try:
+            start = find_fixed_point(m, base.replace(Fn=lo), "crest")
+            break
+        except (ValueError, ArithmeticError) as exc:
+            first_error = first_error or str(exc)
+            lo = min(hi, lo + cfg.coarse_step)
+    if start is None:
         return result(status=Status.NO_SOLUTION,
-                      message=f"no crest saddle at Fn = {lo:.4f}, chi_c = "
-                              f"{math.degrees(chi):.4g} deg: {exc}")  # fmt: skip
+                      message=f"no crest saddle in Fn [{lo:.4f}, {hi:.4f}] at chi_c = "
+                              f"{math.degrees(chi):.4g} deg: {first_error}")  # fmt: skip
     if _rudder_saturated(m, start):
         return result(status=Status.REJECTED,
                       message=f"the rudder is at its limit at the crest saddle (chi_c = "
@@ -605,11 +625,20 @@ def capsizing_threshold(
         return smp if smp.outcome in (CAPSIZE, SURVIVE) else None
 
     try:
-        found = lowest_fate(
-            decided, lo, hi, is_target=lambda smp: smp.outcome == CAPSIZE,
-            is_plain=lambda smp: smp.plain_cycle, step=cfg.step, coarse_step=cfg.coarse_step,
-            tol=cfg.tol,
-        )  # fmt: skip
+        def search(a: float, b: float) -> Any:
+            return lowest_fate(
+                decided, a, b, is_target=lambda smp: smp.outcome == CAPSIZE,
+                is_plain=lambda smp: smp.plain_cycle, step=cfg.step,
+                coarse_step=cfg.coarse_step, tol=cfg.tol,
+            )  # fmt: skip
+
+        found = search(lo, hi)
+        top = min(hi_w, fn_limit)
+        if found.bracket is None and Fn_range is None and hi < top - cfg.coarse_step:
+            # nothing capsizes up to just above the connection (gentle waves): the
+            # threshold, if any, lies higher in the window where the crest saddle exists
+            found = search(lo, top)
+            hi = top
         if found.bracket is None:
             above_h = [smp for smp in fates.sorted() if smp.outcome == SURVIVE]
             why, st = "", Status.NO_BRACKET
@@ -620,9 +649,10 @@ def capsizing_threshold(
                        "there is no capsizing threshold on this course)")  # fmt: skip
                 st = Status.NO_SOLUTION
             return result(samples=fates.sorted(), status=st,
-                          message=f"no capsize of the upslope branch found in Fn "
+                          scanned=(lo, hi),
+                          message=f"the upslope branch does not capsize anywhere in Fn "
                                   f"[{lo:.4f}, {hi:.4f}] at chi_c = {math.degrees(chi):.4g} "
-                                  f"deg: {found.message}{why}")  # fmt: skip
+                                  f"deg (grid {cfg.step:g}-{cfg.coarse_step:g}){why}")  # fmt: skip
         a, b = found.bracket
         Fn_c, err_c = found.p, found.error
         d = cfg.check_distance
