@@ -16,8 +16,8 @@ def _python_blocks() -> list[str]:
 
 def test_readme_has_the_two_setup_commands() -> None:
     text = README.read_text()
-    assert "pip install -e . && broachkit" in text
-    assert 'pip install -e ".[test]" && python -m pytest' in text
+    assert 'pip install -e ".[hull]" && broachkit' in text
+    assert 'pip install -e ".[test,hull]" && python -m pytest' in text
 
 
 @pytest.mark.parametrize("block", _python_blocks())
