@@ -134,7 +134,8 @@ def configure_logging(verbose: bool) -> None:
 
 
 #: Loggers of the library and of Dask: shown only with ``--verbose`` (errors always).
-LIBRARY_LOGGERS = ("continuation", "ship_models", "studies", "distributed", "dask", "tornado")
+LIBRARY_LOGGERS = ("continuation", "ship_models", "studies", "distributed", "dask", "tornado",
+                   "capytaine")
 
 
 def _quiet_libraries(record: logging.LogRecord) -> bool:

@@ -25,9 +25,9 @@ log = logging.getLogger(__name__)
 REPORT_NAME = "report.html"
 
 
-def _fmt(v: Any) -> str:
+def _fmt(v: Any, spec: str = ".8g") -> str:
     if isinstance(v, float):
-        return "n/a" if not math.isfinite(v) else f"{v:.8g}"
+        return "n/a" if not math.isfinite(v) else format(v, spec)
     if v is None:
         return "n/a"
     return str(v)
@@ -184,6 +184,29 @@ def sensitivity_context(results: Mapping[str, Any]) -> dict[str, Any] | None:
     }
 
 
+def diffraction_context(results: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The report's wave-force section from the optional ``diffraction`` step (None if it
+    did not run: ``broachkit reproduce --only diffraction``)."""
+    d = results.get("diffraction")
+    if not d:
+        return None
+    th = d.get("thresholds", {})
+    names = {"froude_krylov_strips": "Froude-Krylov, strips (the paper's model, default)",
+             "panel_fk": "Froude-Krylov, panel method",
+             "panel_fk_diffraction": "Froude-Krylov + diffraction, panel method"}  # fmt: skip
+    rows = [(names.get(k, k), _fmt(v.get("threshold_10deg"), ".5f"), v.get("mechanism_10deg", ""),
+             _fmt(v.get("Fn_10deg"))) for k, v in th.items()]  # fmt: skip
+    lo, hi = d.get("ratio_range_chi0", [None, None])
+    return {
+        "figure": "diffraction/diffraction.png",
+        "ratio": f"{_fmt(lo, '.2f')}-{_fmt(hi, '.2f')}",
+        "ratio_15": _fmt(d.get("ratio_at_1.5"), ".3f"),
+        "speed": "-".join(_fmt(v, ".2f") for v in d.get("ratio_speed_range_chi0", [])),
+        "rows": rows,
+        "panels": d.get("panels"),
+    }
+
+
 def intact_stability_context(name: str = "purse_seiner") -> dict[str, Any] | None:
     """The IMO 2008 IS Code checks of the vessel by class, and the weather criterion.
 
@@ -275,6 +298,7 @@ def write_report(out: Path, results: Mapping[str, Any], doc: Mapping[str, Any]) 
         all_figures=list(doc.get("figures", [])),
         vessel=vessel,
         sensitivity=sensitivity_context(results),
+        diffraction=diffraction_context(results),
         stability=intact_stability_context(),
         run={
             "started": doc.get("started", _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")),

@@ -23,7 +23,8 @@ import json
 import math
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -31,10 +32,21 @@ import numpy as np
 from ship_models import get_vessel_data
 from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.analysis.critical_curve import critical_curve
+from ship_models.analysis.threshold import capsizing_threshold
 from ship_models.hydro.panel import PanelWaveBuilder, hull_mesh, panel_table
 from ship_models.paper import PAPER_FN
 from ship_models.umeda_4dof import Umeda4DOF
-from studies._common import figure_style, new_figure, output_dir, save_csv, save_figure
+from studies._common import (
+    figure_style,
+    new_figure,
+    output_dir,
+    save_csv,
+    save_figure,
+    write_json,
+)
+
+#: The vessel of the study (the default vessel of the main job).
+VESSEL = "purse_seiner"
 
 CHI_CURVE_DEG = (0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0)
 LAMBDA = tuple(np.linspace(1.0, 3.0, 41))
@@ -46,7 +58,9 @@ def _log(msg: str) -> None:
     sys.stderr.flush()
 
 
-def ratio_data(vessel: str = "purse_seiner") -> dict[str, Any]:
+def ratio_data(
+    vessel: str = "purse_seiner", say: Callable[[str], None] | None = None
+) -> dict[str, Any]:
     """Surge-force ratios over lambda/L (zero speed; low-speed bound at chi = 0)."""
     data = get_vessel_data(vessel)
     V, F = hull_mesh(data.hull, nx=40, nz=8)
@@ -55,7 +69,7 @@ def ratio_data(vessel: str = "purse_seiner") -> dict[str, Any]:
                   g=w.g, lambda_over_L=np.array(LAMBDA))  # fmt: skip
     t0 = time.perf_counter()
     tab = panel_table(V, F, chi_deg=np.array(CHI_TABLE), **common,
-                      progress=lambda i, n: _log(f"panel table {i}/{n}"))  # fmt: skip
+                      progress=lambda i, n: (say or _log)(f"panel table {i}/{n}"))  # fmt: skip
     fwd = panel_table(V, F, chi_deg=np.array([0.0]), forward_speed_Fn=PAPER_FN, **common)
     r = tab.amplitude_ratio(0)
     return {
@@ -70,7 +84,9 @@ def ratio_data(vessel: str = "purse_seiner") -> dict[str, Any]:
     }
 
 
-def thresholds(vessel: str = "purse_seiner") -> dict[str, Any]:
+def thresholds(
+    vessel: str = "purse_seiner", say: Callable[[str], None] | None = None
+) -> dict[str, Any]:
     """Critical Fn at 10 deg and over the course for three wave-force models."""
     data = get_vessel_data(vessel)
     models = {
@@ -82,14 +98,19 @@ def thresholds(vessel: str = "purse_seiner") -> dict[str, Any]:
     }  # fmt: skip
     out: dict[str, Any] = {}
     for name, m in models.items():
-        _log(f"critical Fn at 10 deg: {name}")
+        (say or _log)(f"heteroclinic Fn at 10 deg: {name}")
         c10 = critical_fn_bvp(math.radians(10.0), model=m)
-        _log(f"critical curve: {name}")
+        (say or _log)(f"heteroclinic line: {name}")
         cur = critical_curve(np.radians(CHI_CURVE_DEG), model=m)
         chi_max = (
             float(np.max(np.abs(c10.orbit.x[:, m.state_index("chi")]))) if c10.orbit else math.nan
         )
+        (say or _log)(f"capsizing threshold at 10 deg: {name}")
+        th10 = capsizing_threshold(m, chi_c=math.radians(10.0), heteroclinic=c10)
         out[name] = {
+            "threshold_10deg": th10.Fn if math.isfinite(th10.Fn) else None,
+            "threshold_error_10deg": th10.error if math.isfinite(th10.error) else None,
+            "mechanism_10deg": th10.mechanism,
             "Fn_10deg": c10.Fn,
             "error_10deg": c10.error,
             "status_10deg": c10.status.name,
@@ -101,25 +122,31 @@ def thresholds(vessel: str = "purse_seiner") -> dict[str, Any]:
     return out
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=None, help="output folder (default: out/diffraction)")
-    ap.add_argument("--vessel", default="purse_seiner")
-    args = ap.parse_args(argv)
-    out = output_dir("diffraction", args.out) if args.out is None else output_dir("", args.out)
-    rd = ratio_data(args.vessel)
+def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Run the study into ``out`` (figures, CSV, ``summary.json``); the summary.
+
+    The main job runs it as its optional step ``diffraction``
+    (``broachkit reproduce --only diffraction``; needs the ``hull`` extra).
+    """
+    say = progress or _log
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    say("panel method: surge-force ratio over lambda/L (Capytaine, cached)")
+    rd = ratio_data(VESSEL, say)
     save_csv(out / "diffraction_ratio.csv",
              {k: rd[k] for k in ("lambda_over_L", "ratio_chi0", "ratio_chi30", "ratio_chi60",
                                   "ratio_chi0_speed")},
              meta={"quantity": "|X_FK + X_D| / |X_FK| of the surge force, panel method "
                    "(Capytaine), zero speed; ratio_chi0_speed: low-speed option at "
                    f"Fn = {PAPER_FN}", "panels": rd["n_panels"]})  # fmt: skip
-    th = thresholds(args.vessel)
+    say("heteroclinic Fn with strips FK, panel FK, panel FK + diffraction")
+    th = thresholds(VESSEL, say)
     cols: dict[str, Any] = {"chi_c_deg": np.array(CHI_CURVE_DEG)}
     for name, d in th.items():
         cols[f"Fn_{name}"] = np.array(d["Fn_curve"])
     save_csv(out / "critical_curve_diffraction.csv", cols,
-             meta={"quantity": "critical Fn of the heteroclinic bifurcation"})  # fmt: skip
+             meta={"quantity": "heteroclinic Fn (the capsizing threshold up to 25 deg for "
+                   "the strips' model)"})  # fmt: skip
     with figure_style():
         fig = new_figure((10.0, 4.0))
         ax1, ax2 = fig.subplots(1, 2)
@@ -137,8 +164,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         for name, d in th.items():
             ax2.plot(d["chi_c_deg"], d["Fn_curve"], "o-", label=name)
         ax2.set_xlabel("chi_c (deg)")
-        ax2.set_ylabel("critical Fn")
-        ax2.set_title("threshold with and without diffraction")
+        ax2.set_ylabel("heteroclinic Fn")
+        ax2.set_title("heteroclinic Fn with and without diffraction")
         ax2.legend(fontsize=8)
         save_figure(fig, out / "diffraction.png")
     summary = {
@@ -151,10 +178,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         "panels": rd["n_panels"],
         "table_seconds": rd["seconds"],
         "thresholds": th,
+        "figures": ["diffraction.png"],
     }
-    tmp = out / "summary.json.tmp"
-    tmp.write_text(json.dumps(summary, indent=2))
-    tmp.replace(out / "summary.json")
+    write_json(out / "summary.json", summary)
+    return summary
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m studies.diffraction [--out DIR]``."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", default=None, help="output folder (default: out/diffraction)")
+    args = ap.parse_args(argv)
+    out = output_dir("diffraction", args.out) if args.out is None else output_dir("", args.out)
+    summary = compute(out)
     _log(json.dumps(summary, indent=2))
     return 0
 

@@ -40,6 +40,9 @@ def _points(K: int) -> np.ndarray:
 
 @pytest.mark.skipif(compiled_mod._compiler() is None, reason="no C compiler")
 def test_compiled_values_equal_the_virtual_machine_and_are_cached(cache):
+    # one background compilation per process at a time: let those that earlier tests
+    # started finish first, or this one would only be queued behind them
+    compiled_mod.wait()
     s = _system()
     P = np.array([1.5, 3.2])
     X = _points(12)

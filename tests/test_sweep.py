@@ -233,7 +233,10 @@ def test_ctrl_c_cancels_pending_and_a_resume_redoes_nothing(tmp_path):
         [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
     t0 = time.monotonic()
-    while time.monotonic() - t0 < 60 and len(list(ck.glob("*.json"))) < 3:
+    def finished() -> int:  # checkpoints written (not the temporary ".name.tmp-*" files)
+        return sum(not f.name.startswith(".") for f in ck.glob("*.json"))
+
+    while time.monotonic() - t0 < 60 and finished() < 3:
         time.sleep(0.05)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)

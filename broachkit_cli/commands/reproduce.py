@@ -83,6 +83,11 @@ STUDY_STEPS: tuple[tuple[str, str, str], ...] = (
 )
 
 
+#: Steps run only when named in ``--only`` (slow, or needing an extra).
+OPTIONAL_STEPS: tuple[tuple[str, str, str], ...] = (
+    ("diffraction", "Wave forces with diffraction (panel method, the hull extra)", "diffraction"),
+)
+
 #: The step that runs its own sweep on worker processes (in this process).
 SWEEP_STEP = "fig16_22"
 #: A step's sub-folder of sweep checkpoints (resumed after an interruption).
@@ -125,7 +130,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         nargs="+",
         default=None,
         metavar="STEP",
-        help="run only these steps (demo, " + ", ".join(k for k, _, _ in STUDY_STEPS) + ")",
+        help="run only these steps (demo, " + ", ".join(k for k, _, _ in STUDY_STEPS)
+        + "; optional: " + ", ".join(k for k, _, _ in OPTIONAL_STEPS) + ")",
     )
     parser.add_argument(
         "--studies",
@@ -158,13 +164,15 @@ def _steps(args: argparse.Namespace) -> list[Step]:
     folder = args.studies
     if folder is not None and not folder.is_dir():
         raise ValueError(f"--studies: {folder} is not a folder")
-    for key, title, module in STUDY_STEPS:
+    optional = [s for s in OPTIONAL_STEPS if args.only and s[0] in args.only]
+    for key, title, module in (*STUDY_STEPS, *optional):
 
         def fn(out: Path, progress: Callable[[str], None], _m: str = module) -> Any:
             return study_module(_m, folder).compute(out, progress=progress)
 
         steps.append((key, title, fn))
-    keys = [k for k, _, _ in steps]
+    keys = [k for k, _, _ in steps] + [k for k, _, _ in OPTIONAL_STEPS if k not in
+                                         {s[0] for s in steps}]  # fmt: skip
     if args.only:
         unknown = [k for k in args.only if k not in keys]
         if unknown:
@@ -499,7 +507,9 @@ def _run(args: argparse.Namespace) -> int:
     assert out is not None
     steps = _steps(args)
     workers = _workers(args)
-    modules: dict[str, str | None] = {"demo": None, **{k: m for k, _, m in STUDY_STEPS}}
+    modules: dict[str, str | None] = {
+        "demo": None, **{k: m for k, _, m in (*STUDY_STEPS, *OPTIONAL_STEPS)}
+    }  # fmt: skip
     results: dict[str, Any] = {}
     timing: dict[str, float] = {}
     t_all = time.perf_counter()
