@@ -633,6 +633,16 @@ def capsizing_threshold(
             )  # fmt: skip
 
         found = search(lo, hi)
+        while (found.bracket is None and Fn_range is None and lo > max(lo_w, 0.05) + 1e-9
+               and fates(lo).outcome == CAPSIZE):  # fmt: skip
+            # the branch already capsizes where the scan began: the threshold lies lower
+            new_lo = max(lo_w, 0.05, lo - cfg.depth)
+            try:
+                find_fixed_point(m, base.replace(Fn=new_lo), "crest")
+            except (ValueError, ArithmeticError):
+                break  # no crest saddle lower down: the branch capsizes from its start
+            found = search(new_lo, lo + cfg.coarse_step)
+            lo = new_lo
         top = min(hi_w, fn_limit)
         if found.bracket is None and Fn_range is None and hi < top - cfg.coarse_step:
             # nothing capsizes up to just above the connection (gentle waves): the
@@ -642,6 +652,12 @@ def capsizing_threshold(
         if found.bracket is None:
             above_h = [smp for smp in fates.sorted() if smp.outcome == SURVIVE]
             why, st = "", Status.NO_BRACKET
+            if fates(lo).outcome == CAPSIZE:
+                return result(samples=fates.sorted(), status=st, scanned=(lo, hi),
+                              message=f"the upslope branch already capsizes at the lowest Fn "
+                                      f"with a crest saddle searched, {lo:.4f} (chi_c = "
+                                      f"{math.degrees(chi):.4g} deg): no threshold inside "
+                                      "the window")  # fmt: skip
             riding = ("equilibrium", "saddle")  # on the surge plane at chi_c = 0: a saddle
             if above_h and all(smp.label.startswith(riding) for smp in above_h[-2:]):
                 why = (" (above the connection the branch reaches a stable equilibrium: "
