@@ -5,7 +5,8 @@ The engine turns a ``KeyboardInterrupt`` inside a long computation into an
 right for a library but lets a study go on to its next computation. The command line
 wants the whole command to stop: :func:`sticky_interrupt` installs a SIGINT handler that
 raises ``KeyboardInterrupt`` as usual and, from then on, raises it again in the main
-thread every ``repeat`` seconds (``_thread.interrupt_main``) until the command
+thread every ``repeat`` seconds (a real SIGINT sent to the main thread, which also
+ends a blocking wait such as a future's ``result()``) until the command
 acknowledges it (:func:`acknowledge`, called where the interrupt is handled), so the
 command ends within about ``repeat`` seconds of the last computation that swallowed it.
 """
@@ -30,8 +31,14 @@ def acknowledge() -> None:
 def _repeat(repeat: float) -> None:
     requested, done = _state["requested"], _state["done"]
     requested.wait()
+    main_id = threading.main_thread().ident
     while not done.wait(repeat):
-        _thread.interrupt_main(signal.SIGINT)
+        if hasattr(signal, "pthread_kill") and main_id is not None:
+            # a real signal: it also wakes the main thread from a blocking wait (a
+            # future's result, a lock), which interrupt_main's flag alone does not
+            signal.pthread_kill(main_id, signal.SIGINT)
+        else:  # pragma: no cover - platforms without pthread_kill
+            _thread.interrupt_main(signal.SIGINT)
 
 
 @contextlib.contextmanager

@@ -130,17 +130,23 @@ def configure_logging(verbose: bool) -> None:
     if not verbose:
         handler.addFilter(_quiet_libraries)
         # Dask's own processes read their log level from the environment they inherit
-        os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "error")
+        os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "critical")
 
 
 #: Loggers of the library and of Dask: shown only with ``--verbose`` (errors always).
-LIBRARY_LOGGERS = ("continuation", "ship_models", "studies", "distributed", "dask", "tornado",
-                   "capytaine")
+LIBRARY_LOGGERS = ("continuation", "ship_models", "studies", "capytaine")
+
+
+#: Dask's loggers: its own shutdown reports (workers "died" when a sweep is stopped)
+#: are not the user's concern; shown only with ``--verbose``.
+DASK_LOGGERS = ("distributed", "dask", "tornado")
 
 
 def _quiet_libraries(record: logging.LogRecord) -> bool:
-    """Without ``--verbose``: library and Dask records only from ERROR up."""
+    """Without ``--verbose``: library records only from ERROR up, Dask's not at all."""
     top = record.name.split(".")[0]
+    if top in DASK_LOGGERS:
+        return record.levelno >= logging.CRITICAL
     return top not in LIBRARY_LOGGERS or record.levelno >= logging.ERROR
 
 

@@ -115,8 +115,30 @@ def vessel_context(name: str = "purse_seiner") -> dict[str, Any]:
         "is_code": is_code,
         "table1": table1,
         "coefficients": rows,
-        "derived": [(k, _fmt(float(val))) for k, val in sorted(info.items())],
+        "derived": [derived_row(k, float(val)) for k, val in sorted(info.items())],
     }
+
+
+#: Units of the estimation pipeline's derived numbers (``VesselModelData.info``);
+#: angles (radians there) are shown in degrees.
+DERIVED_UNITS: dict[str, str] = {
+    "volume": "m^3", "mass": "kg", "wetted_surface_hull": "m^2",
+    "wetted_surface_used": "m^2", "zeta_G": "m (centre of gravity above the waterline)",
+    "KG": "m", "KM": "m", "gz_fit_error": "m", "phi_gz_max": "deg", "gz_max": "m",
+    "phi_vanishing": "deg", "topside_height": "m",
+    "is_code_margin": "- (fraction of the tightest IS Code criterion)",
+    "resistance_fit_error": "- (relative)", "kt_fit_error": "- (relative)", "z_H": "m",
+    "z_R": "m", "eta_rudder": "- (rudder span in the propeller race / rudder span)",
+    "x_G": "m", "I_zz": "kg m^2",
+}  # fmt: skip
+_DERIVED_ANGLES = ("phi_gz_max", "phi_vanishing")
+
+
+def derived_row(key: str, value: float) -> tuple[str, str, str]:
+    """``(key, value, unit)`` of a derived number; angles in degrees, unknown units named."""
+    if key in _DERIVED_ANGLES:
+        value = math.degrees(value)
+    return key, _fmt(value), DERIVED_UNITS.get(key, "unit not recorded")
 
 
 def _vessel_figure(out: Path, name: str = "purse_seiner") -> str | None:
@@ -154,6 +176,17 @@ def key_number_rows(numbers: Mapping[str, Any]) -> list[tuple[str, str]]:
     return rows
 
 
+def differentiated_text(s: Mapping[str, Any]) -> str:
+    """How many of the vessel's coefficients the step differentiated, in words."""
+    n = int(s["n_coefficients"])
+    total = s.get("n_vessel_coefficients")
+    of = f" of {int(total)}" if total else ""
+    return (
+        f"{n}{of}: those with an uncertainty in the vessel file, the factors and the "
+        "system parameters (`broachkit sensitivity` differentiates every coefficient)"
+    )
+
+
 def sensitivity_context(results: Mapping[str, Any]) -> dict[str, Any] | None:
     """The report's sensitivity section from the ``sensitivity`` step's ``summary.json``.
 
@@ -172,7 +205,7 @@ def sensitivity_context(results: Mapping[str, Any]) -> dict[str, Any] | None:
             (f"band (Fn -+ {s['coverage']:g} sigma)", f"[{_fmt(lo)}, {_fmt(hi)}]"),
             ("the paper's value", f"[{_fmt(plo)}, {_fmt(phi)}]"),
             ("the paper's value inside the band", "yes" if s["paper_inside_band"] else "no"),
-            ("coefficients differentiated", _fmt(s["n_coefficients"])),
+            ("coefficients differentiated", differentiated_text(s)),
         ],
         "dominant": [
             (d["key"], _fmt(d["sigma_Fn"]),

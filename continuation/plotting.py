@@ -147,3 +147,58 @@ def plot_branch(
 
 
 __all__ = ["plot_branch"]
+
+
+# ------------------------------------------------------------------ legibility
+#: Width (CSS px) at which a report shows a figure; a wider PNG is scaled down to it.
+REPORT_FIGURE_PX = 1080
+#: Smallest legible text height on screen (CSS px) of a figure shown at that width.
+MIN_FONT_PX = 8.0
+#: PNG text key under which :func:`legibility_metadata` stores the smallest font size.
+FONT_KEY = "broachkit:min_font_pt"
+
+
+def smallest_font_pt(fig: Any) -> float:
+    """Smallest font size (pt) of the visible, non-empty text of a matplotlib figure."""
+    from matplotlib.text import Text
+
+    sizes = [
+        float(t.get_fontsize())
+        for t in fig.findobj(Text)
+        if t.get_visible() and t.get_text().strip()
+    ]
+    return min(sizes) if sizes else float("inf")
+
+
+def displayed_font_px(
+    font_pt: float, width_px: float, dpi: float, shown_px: float = REPORT_FIGURE_PX
+) -> float:
+    r"""Height on screen (CSS px) of ``font_pt`` text in a PNG shown at most ``shown_px`` wide.
+
+    .. math:: h = f \frac{\mathrm{dpi}}{72} \min\!\left(1, \frac{W_\mathrm{shown}}{W}\right)
+
+    with :math:`W` the PNG's width in pixels (a wider image is scaled down to the
+    column; a narrower one is shown at its size).
+    """
+    return font_pt * dpi / 72.0 * min(1.0, shown_px / width_px)
+
+
+def legibility_metadata(fig: Any) -> dict[str, str]:
+    """PNG metadata recording the figure's smallest font size (for :func:`png_font_px`)."""
+    return {FONT_KEY: f"{smallest_font_pt(fig):.3g}"}
+
+
+def png_font_px(path: Any, shown_px: float = REPORT_FIGURE_PX) -> float | None:
+    """Smallest text height (CSS px) of a PNG written with :func:`legibility_metadata`.
+
+    ``None`` when the PNG does not record its font size or DPI.
+    """
+    from PIL import Image
+
+    with Image.open(path) as im:
+        dpi = im.info.get("dpi", (None,))[0]
+        font = im.info.get(FONT_KEY)
+        width = im.size[0]
+    if dpi is None or font is None:
+        return None
+    return displayed_font_px(float(font), width, float(dpi), shown_px)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import logging
 import math
 import os
 from collections.abc import Iterator, Mapping, Sequence
@@ -28,6 +29,8 @@ from typing import Any
 import numpy as np
 
 from continuation.atomic import atomic_path, write_atomic, write_atomic_group, write_json
+
+log = logging.getLogger(__name__)
 
 #: Environment variable naming the default output root.
 OUT_ENV = "BROACHKIT_OUT"
@@ -100,8 +103,17 @@ def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int | None = Non
     p = Path(path)
     if p.suffix.lower() != ".png":
         p = p.with_name(p.name + ".png")
+    from continuation.plotting import MIN_FONT_PX, displayed_font_px, legibility_metadata
+
+    meta = legibility_metadata(fig)
+    d = dpi or STYLE["savefig.dpi"]
     with atomic_path(p) as tmp:
-        fig.savefig(tmp, dpi=dpi or STYLE["savefig.dpi"])
+        fig.savefig(tmp, dpi=d, metadata=meta)
+    w_px = fig.get_size_inches()[0] * d
+    shown = displayed_font_px(float(meta["broachkit:min_font_pt"]), w_px, d)
+    if shown < MIN_FONT_PX:
+        log.warning("%s: smallest text %.1f px high in the report (< %g)", p.name, shown,
+                    MIN_FONT_PX)  # fmt: skip
     if getattr(fig.canvas, "manager", None) is not None:  # a pyplot figure
         import matplotlib.pyplot as plt
 

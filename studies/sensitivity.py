@@ -76,6 +76,7 @@ def summarise(sens: Any, band: Any, *, top: int = TOP) -> dict[str, Any]:
             for e in rows[:top]
         ],
         "n_coefficients": len(sens.entries),
+        "n_vessel_coefficients": n_vessel_coefficients(),
     }
 
 
@@ -93,6 +94,15 @@ def write_outputs(out: Path, sens: Any, band: Any, *, seconds: float) -> dict[st
     summary["files"] = ["tornado.png", "sensitivity.json"]
     write_json(out / "summary.json", summary)
     return summary
+
+
+def n_vessel_coefficients() -> int:
+    """How many keys ``broachkit sensitivity`` differentiates by default (all of them)."""
+    from ship_models.analysis.sensitivity import default_keys
+    from ship_models.estimation import build_vessel_model
+    from ship_models.vessel import load_vessel
+
+    return len(default_keys(build_vessel_model(load_vessel("purse_seiner")).vessel))
 
 
 def main_job_keys(vessel: Any) -> list[str]:

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -253,7 +254,9 @@ def build_report(name: str | Path, out: str | Path | None = None) -> ReportFiles
         fig = new_figure((13.0, 14.0))
         gs = fig.add_gridspec(3, 3, height_ratios=[1.0, 1.0, 1.0])
         desc = v.meta.get("description", "")
-        fig.suptitle(f"Vessel report: {stem}" + (f" - {desc}" if desc else ""), fontsize=12)
+        title = f"Vessel report: {stem}" + (f" - {desc}" if desc else "")
+        # wrapped: a long description used to run past the figure's edges
+        fig.suptitle("\n".join(textwrap.wrap(title, 130)), fontsize=12)
         _panel_particulars(fig.add_subplot(gs[0, 0]), prow)
         _panel_gz(fig.add_subplot(gs[0, 1]), data)
         _panel_resistance(fig.add_subplot(gs[0, 2]), Fn, cols, Fn_k, Fn_c, uses_r0)
@@ -402,7 +405,7 @@ def _panel_status(ax: Any, data: VesselModelData) -> None:
             0.965,
             "\n".join(by[s]) if by[s] else "(none)",
             family="monospace",
-            fontsize=6.8,
+            fontsize=7.2,
             va="top",
             transform=ax.transAxes,
         )

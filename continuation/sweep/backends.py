@@ -108,6 +108,8 @@ class Backend:
     ) -> None:
         self.name, self.executor, self.slots = name, executor, max(int(slots), 1)
         self._rebuild, self._owned, self._alive = rebuild, owned, alive
+        #: Process ids this backend started (a LocalCluster's nannies and workers).
+        self.pids: tuple[int, ...] = ()
         #: Incremented each time the executor is replaced.
         self.generation = 0
 
@@ -156,16 +158,63 @@ class Backend:
             ex.shutdown(wait=not cancel, cancel_futures=cancel)
 
     def close(self, cancel: bool = False) -> None:
-        """Shut down what the sweep started (a passed-in executor or client stays open)."""
+        """Shut down what the sweep started (a passed-in executor or client stays open).
+
+        With ``cancel`` (Ctrl-C) the processes this backend started are killed first, so
+        closing a ``LocalCluster`` does not wait for its running tasks; a repeated Ctrl-C
+        during the shutdown does not cut it short (the sweep is already interrupted).
+        """
+        if cancel and self.pids:
+            _kill_processes(self.pids)
         if self._rebuild is not None or self.name == "serial":
             self._stop_executor(cancel)
         elif cancel and self.name.startswith("dask"):
-            self.executor.shutdown(wait=False)
+            with contextlib.suppress(Exception):
+                self.executor.shutdown(wait=False)
         for obj in self._owned:
             try:
-                obj.close()
+                if cancel and hasattr(obj, "close"):
+                    try:
+                        obj.close(timeout=2)
+                    except TypeError:
+                        obj.close()
+                else:
+                    obj.close()
+            except KeyboardInterrupt:
+                log.debug("a repeated interrupt while closing %s", type(obj).__name__)
             except Exception as exc:  # pragma: no cover - best effort at shutdown
                 log.warning("closing %s failed: %s", type(obj).__name__, exc)
+
+
+def _child_pids() -> set[int]:
+    try:
+        import psutil
+    except ImportError:  # pragma: no cover - psutil comes with distributed
+        return set()
+    return {c.pid for c in psutil.Process().children(recursive=True)}
+
+
+def _helper_pids() -> set[int]:
+    """Helper processes of ``multiprocessing`` (the resource tracker), never killed."""
+    from multiprocessing import resource_tracker
+
+    pid = getattr(resource_tracker._resource_tracker, "_pid", None)
+    return {pid} if pid else set()
+
+
+def _kill_processes(pids: tuple[int, ...]) -> None:
+    """Kill processes (and their children) this backend started; gone ones are skipped."""
+    import psutil
+
+    procs = []
+    for pid in pids:
+        with contextlib.suppress(psutil.Error):
+            p = psutil.Process(pid)
+            procs += [*p.children(recursive=True), p]
+    for p in procs:
+        with contextlib.suppress(psutil.Error):
+            p.kill()
+    psutil.wait_procs(procs, timeout=1.0)
 
 
 def _stop_process_pool(ex: cf.ProcessPoolExecutor, timeout: float = 10.0) -> None:
@@ -333,6 +382,7 @@ def open_backend(
         # started with SIGINT blocked: the cluster's threads and processes inherit it,
         # so Ctrl-C reaches this process only, which closes the cluster
         started: list[Any] = []
+        before = _child_pids()
         try:
             with dask.config.set({"distributed.scheduler.allowed-failures": 0}), sigint_blocked():
                 started.append(
@@ -351,7 +401,9 @@ def open_backend(
                     obj.close()
             raise
         cluster, client = started
-        return _client_backend(client, "dask", (client, cluster), slots=k)
+        be = _client_backend(client, "dask", (client, cluster), slots=k)
+        be.pids = tuple(sorted(_child_pids() - before - _helper_pids()))
+        return be
     raise ValueError(
         f"`backend` must be one of {', '.join(BACKENDS)}, a concurrent.futures.Executor or a "
         f"distributed.Client, got {backend!r}"
