@@ -7,10 +7,12 @@ cycles (see :mod:`continuation.periodic.floquet`):
 
 * ``LPC`` -- fold of cycles: the driver's fold (kind ``fold``, relabelled ``LPC1``...);
 * ``BPC`` -- branch point of cycles: the driver's branch point (kind ``bp``, ``BPC1``);
-* ``PD`` -- period doubling, a located zero of :math:`\prod (\mu_i + 1)` (a user-kind
-  point named ``"PD"``); :func:`switch_period_doubling` starts the doubled branch;
+* ``PD`` -- period doubling, a located zero of :math:`\prod (\mu_i + 1)` (kind
+  ``pd``, labelled ``"PD"``; ``br.find("pd")``); :func:`switch_period_doubling` starts
+  the doubled branch;
 * ``NS`` -- Neimark-Sacker, a located zero of :math:`\prod_{i<j} (\mu_i \mu_j - 1)`
-  with a complex pair on the unit circle (named ``"NS"``; neutral saddles dropped).
+  with a complex pair on the unit circle (kind ``ns``, labelled ``"NS"``; neutral
+  saddles dropped).
 
 All carry the driver's ``located`` flag and ``bracket``. The driver's Hopf test is
 switched off on cycle branches (its eigenvalues are Floquet exponents). PD and NS, like
@@ -189,12 +191,14 @@ def _relabel(
             count["BPC"] += 1
             sp = dataclasses.replace(sp, label=f"BPC{count['BPC']}")
         elif sp.kind == SpecialKind.USER and sp.label == "NS":
+            sp = dataclasses.replace(sp, kind=SpecialKind.NEIMARK_SACKER)
             ok, theta = is_neimark_sacker(prob.floquet(sp.x, sp.p).multipliers)
             if not ok:
                 log.info("NS test zero at p=%.8g is a neutral saddle: not reported", sp.p)
                 continue
             sp = dataclasses.replace(sp, data={**sp.data, "theta": theta})
         elif sp.kind == SpecialKind.USER and sp.label == "PD":
+            sp = dataclasses.replace(sp, kind=SpecialKind.PERIOD_DOUBLING)
             mu = prob.floquet(sp.x, sp.p).multipliers
             k = int(np.argmin(np.abs(mu + 1.0)))
             sp = dataclasses.replace(sp, data={**sp.data, "mu": float(mu[k].real)})
@@ -827,7 +831,8 @@ def _finish(
     specials = tuple(s for s in specials if s.label != _ERR_EVENT)
     out = []
     for sp in specials:
-        if sp.kind == SpecialKind.USER and sp.label in ("PD", "NS") and sp.located:
+        floquet = (SpecialKind.PERIOD_DOUBLING, SpecialKind.NEIMARK_SACKER)
+        if sp.kind in floquet and sp.located:
             err = special_problem(br, sp).floquet(sp.x, sp.p).trivial_error
             if err > TRIVIAL_TOL:
                 log.warning("%s at %s=%.8g: multipliers unreliable (%.3g); reported as "
