@@ -36,7 +36,14 @@ from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .detection import ProgressFn, Row, RunContext
 from .errors import ContinuationError, ConvergenceError
 from .events import Event
-from .problem import is_sparse, jacobian_is_stability, param_values, state_names
+from .problem import (
+    accept_hook,
+    is_sparse,
+    jacobian_is_stability,
+    param_values,
+    relabel,
+    state_names,
+)
 from .row_eigs import run_checked
 from .settings import ContinuationSettings
 from .status import Status
@@ -311,7 +318,7 @@ def _make_branch(
         ds=np.array(ds, dtype=float),
         newton_iters=np.array([r.iters for r in rows], dtype=int),
         records=records,
-        special_points=_relabel(specials),
+        special_points=relabel(problem, _relabel(specials)),
         status=status,
         message=message,
         settings=settings,
@@ -429,6 +436,16 @@ def continue_branch(
     if start_fixed is not None:
         p0 = float(start.p)  # corrected with z[start_fixed] held
 
+    accept = accept_hook(problem)  # the problem's life cycle: after every accepted row
+    if accept is not None:
+        user_progress = progress
+
+        def on_row(bp: BranchPoint) -> None:
+            accept(np.asarray(bp.x), float(bp.p))
+            if user_progress is not None:
+                user_progress(bp)
+
+        progress = on_row
     ctx_args = (problem, algorithm)
     ds_abs = abs(settings.ds)
     sgn = 1.0 if settings.ds > 0 else -1.0

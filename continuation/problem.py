@@ -8,24 +8,40 @@ The contract has two parts:
 
 * :class:`ContinuationProblem`, the five methods and two attributes every problem has
   (checked by ``isinstance``);
-* :class:`ProblemHooks`, the *optional* attributes and fast paths the engine uses when
-  a problem has them (``jacobian_is_stability``, ``linearize``, ``linearizer``,
-  ``bordered_evaluator``, ``step_kernel``, ``difference``, ...). They never change a
-  result beyond round-off, only what it costs (or, for ``difference`` and
-  ``state_names``, how rows are compared and labelled). The engine reads them only
-  through the accessor functions at the end of this module (:func:`linearize`,
-  :func:`linearizer`, :func:`bordered_evaluator`, :func:`step_kernel`,
-  :func:`jacobian_is_stability`, :func:`is_sparse`, :func:`difference`,
+* :class:`ProblemHooks`, the *optional* attributes the driver uses when a problem has
+  them. Two kinds:
+
+  - fast paths (``linearize``, ``linearizer``, ``bordered_evaluator``,
+    ``step_kernel``) and properties (``jacobian_is_stability``, ``exact_jacobian``,
+    ``sparse``, ``difference``, ``state_names``): they never change a result beyond
+    round-off, only what it costs (or how rows are compared and labelled);
+  - the life cycle: ``accept(z, p)`` after every accepted row (a problem with a
+    moving reference, e.g. the phase condition of periodic orbits, updates it
+    there) and ``relabel(specials)`` once on the finished branch's special points
+    (e.g. folds of cycles named ``LPC1``, Floquet zeros turned into the ``pd``/``ns``
+    kinds).
+
+  The engine reads them only through the accessor functions at the end of this
+  module (:func:`linearize`, :func:`linearizer`, :func:`bordered_evaluator`,
+  :func:`step_kernel`, :func:`jacobian_is_stability`, :func:`exact_jacobian`,
+  :func:`is_sparse`, :func:`difference`, :func:`accept_hook`, :func:`relabel`,
   :func:`record_function`, :func:`state_names`, :func:`param_values`): this module is
   the one place where a hook is looked up.
 
+How a run starts is not a hook of the problem but a keyword of
+:func:`~continuation.driver.continue_branch`, since it belongs to one run:
+``start_fixed`` (the unknown held in the start correction instead of ``p``) and
+``start_orient`` (the direction the first tangent points along, instead of the sign
+of ``ds``). :func:`check_problem` (:mod:`continuation.check`) tests a problem against
+this contract: shapes, derivatives against finite differences, hook consistency.
+
 :class:`EquilibriumProblem` (equilibria of a :class:`~continuation.system.System`)
-implements every hook.
+implements every fast path.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any, ClassVar, Protocol, runtime_checkable
@@ -33,6 +49,7 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 import numpy as np
 import scipy.sparse as sp
 
+from .branch import SpecialPoint
 from .params import Params
 from .system import System
 from .typing import ComplexArray, FloatArray
@@ -296,10 +313,30 @@ class ProblemHooks(Protocol):
         (optional) All parameter values; stored on the branch.
     system : object
         (optional) The underlying system (``state_names``, ``period``).
+    exact_jacobian : bool
+        (default False) ``G_z`` and ``G_p`` are exact derivatives (automatic
+        differentiation, not finite differences): the PALC step then predicts its
+        final Newton iterate (Newton converges quadratically next to a regular point).
+        A problem claiming it must pass :func:`check_problem` at a tight tolerance.
     """
 
     jacobian_is_stability: bool
     sparse: bool
+    exact_jacobian: bool
+
+    def accept(self, z: FloatArray, p: float) -> None:
+        """Called by the driver after every accepted row ``(z, p)`` (including the
+        start point), after the step's special points were located and before the
+        ``progress`` callback. For problems with a moving reference (the phase
+        condition of periodic orbits). Must not change ``G`` at ``(z, p)`` itself
+        beyond what re-anchoring the reference implies. Fallback: nothing."""
+        ...
+
+    def relabel(self, specials: Sequence[SpecialPoint]) -> tuple[SpecialPoint, ...]:
+        """Called by the driver once on the finished branch's special points (already
+        labelled ``F1``, ``H1``, ``BP1``... in branch order): may rename them, change
+        their kind, add data or drop spurious ones. Fallback: unchanged."""
+        ...
 
     def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
         """``(G (N,), G_z (N, N) dense or sparse, G_p (N,))`` in one evaluation.
@@ -347,6 +384,18 @@ def exact_jacobian(problem: Any) -> bool:
     derivatives (automatic differentiation, not finite differences), so that Newton's
     method converges quadratically next to a regular solution."""
     return bool(getattr(problem, "exact_jacobian", False))
+
+
+def accept_hook(problem: Any) -> Callable[[FloatArray, float], None] | None:
+    """``problem.accept`` (called after every accepted row), or None."""
+    fn = getattr(problem, "accept", None)
+    return fn if callable(fn) else None
+
+
+def relabel(problem: Any, specials: Sequence[SpecialPoint]) -> tuple[SpecialPoint, ...]:
+    """``problem.relabel(specials)`` if the problem has it, else ``specials``."""
+    fn = getattr(problem, "relabel", None)
+    return tuple(specials) if not callable(fn) else tuple(fn(tuple(specials)))
 
 
 def is_sparse(problem: Any) -> bool:
@@ -447,8 +496,10 @@ __all__ = [
     "ContinuationProblem",
     "EquilibriumProblem",
     "ProblemHooks",
+    "accept_hook",
     "bordered_evaluator",
     "difference",
+    "exact_jacobian",
     "has_linearize",
     "has_periodic_states",
     "is_sparse",
@@ -457,6 +508,7 @@ __all__ = [
     "linearizer",
     "param_values",
     "record_function",
+    "relabel",
     "state_names",
     "step_kernel",
 ]

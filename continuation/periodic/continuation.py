@@ -51,7 +51,6 @@ from ..params import Params
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
 from ..typing import FloatArray
-from .floquet import is_neimark_sacker
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
 from .problem import PeriodicOrbitProblem, error_estimate
 
@@ -176,34 +175,6 @@ def adapt_mesh(
         new = orbit.mesh.equidistributed(X, n_intervals)
         orbit = solve_orbit(orbit.on_mesh(new), free, newton, fix_period=fix_period)
     return orbit
-
-
-def _relabel(
-    specials: Sequence[SpecialPoint], prob: PeriodicOrbitProblem
-) -> tuple[SpecialPoint, ...]:
-    out = []
-    count = {"LPC": 0, "BPC": 0}
-    for sp in specials:
-        if sp.kind == SpecialKind.FOLD:
-            count["LPC"] += 1
-            sp = dataclasses.replace(sp, label=f"LPC{count['LPC']}")
-        elif sp.kind == SpecialKind.BRANCH_POINT:
-            count["BPC"] += 1
-            sp = dataclasses.replace(sp, label=f"BPC{count['BPC']}")
-        elif sp.kind == SpecialKind.USER and sp.label == "NS":
-            sp = dataclasses.replace(sp, kind=SpecialKind.NEIMARK_SACKER)
-            ok, theta = is_neimark_sacker(prob.floquet(sp.x, sp.p).multipliers)
-            if not ok:
-                log.info("NS test zero at p=%.8g is a neutral saddle: not reported", sp.p)
-                continue
-            sp = dataclasses.replace(sp, data={**sp.data, "theta": theta})
-        elif sp.kind == SpecialKind.USER and sp.label == "PD":
-            sp = dataclasses.replace(sp, kind=SpecialKind.PERIOD_DOUBLING)
-            mu = prob.floquet(sp.x, sp.p).multipliers
-            k = int(np.argmin(np.abs(mu + 1.0)))
-            sp = dataclasses.replace(sp, data={**sp.data, "mu": float(mu[k].real)})
-        out.append(sp)
-    return tuple(out)
 
 
 def continue_periodic(
@@ -453,18 +424,14 @@ def _continue_once(
         evs.append(Event(_ERR_EVENT, margin, direction="down", terminal=True, slope=False))
     evs.extend(events)
 
-    def accept(bp: Any) -> None:
-        prob.accept(np.asarray(bp.x), float(bp.p))
-        if progress is not None:
-            progress(bp)
-
-    br = continue_branch(
+    # the driver runs prob.accept after every accepted row and prob.relabel on the
+    # special points (the hooks of continuation.problem.ProblemHooks)
+    return continue_branch(
         prob, prob.reference, orb.param(free), settings=settings, events=evs,
-        throw=throw, progress=accept, start_fixed=T_col if fix_period else None,
+        throw=throw, progress=progress, start_fixed=T_col if fix_period else None,
         start_orient=(_period_orient(prob, period_sign) if previous is None
                       else _secant_orient(prob, orb, previous, free)),
     )  # fmt: skip
-    return dataclasses.replace(br, special_points=_relabel(br.special_points, prob))
 
 
 @dataclass(frozen=True, eq=False)

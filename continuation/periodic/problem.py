@@ -8,30 +8,36 @@ driver :func:`~continuation.driver.continue_branch` continues it.
 The phase condition's reference orbit is the previous accepted point: it is held in
 a small mutable slot of the (otherwise frozen) problem and replaced by
 :meth:`PeriodicOrbitProblem.accept` after every accepted row
-(:func:`~continuation.periodic.continuation.continue_periodic` does this through the
-driver's ``progress`` callback, which runs after the step's special points were
-located, so every point of one step uses the same reference).
+(the driver's ``accept`` hook, :class:`~continuation.problem.ProblemHooks`, which
+runs after the step's special points were located, so every point of one step uses
+the same reference); the driver's ``relabel`` hook names the special points as those
+of cycles (:meth:`PeriodicOrbitProblem.relabel`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import dataclasses
+import logging
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 
 from .._jit import compiled
+from ..branch import SpecialKind, SpecialPoint
 from ..bvp.collocation import CollocationMesh
 from ..linalg import csc_with_data
 from ..params import Params
 from ..typing import ComplexArray, FloatArray
 from .collocation import CollocationLayout, StageEvaluator, monodromy_factors
-from .floquet import FloquetResult, exponents, floquet, ns_test, pd_test
+from .floquet import FloquetResult, exponents, floquet, is_neimark_sacker, ns_test, pd_test
 from .orbit import PeriodicOrbit
 
 #: Number of points whose Floquet multipliers :meth:`PeriodicOrbitProblem.floquet` keeps.
 FLOQUET_MEMO = 4
+
+log = logging.getLogger(__name__)
 
 
 def error_estimate(mesh: CollocationMesh, X: FloatArray) -> float:
@@ -207,6 +213,40 @@ class PeriodicOrbitProblem:
         self._slot["ref"] = X[lay.stage_points].copy()
         self._slot["dref"] = self.mesh.derivative(X)
         self._slot["cache"] = None
+
+    def relabel(self, specials: Sequence[SpecialPoint]) -> tuple[SpecialPoint, ...]:
+        """The special points as points of cycles (the driver calls this once per branch).
+
+        Folds become ``LPC1, LPC2, ...``, branch points ``BPC1, ...``; the zeros of the
+        events ``"PD"``/``"NS"`` become the kinds ``pd`` (with the multiplier ``mu``
+        next to ``-1``) and ``ns`` (with the angle ``theta`` of the pair on the unit
+        circle); an NS zero without such a pair (a neutral saddle) is dropped.
+        """
+        out = []
+        count = {"LPC": 0, "BPC": 0}
+        for sp in specials:
+            if sp.kind == SpecialKind.FOLD:
+                count["LPC"] += 1
+                sp = dataclasses.replace(sp, label=f"LPC{count['LPC']}")
+            elif sp.kind == SpecialKind.BRANCH_POINT:
+                count["BPC"] += 1
+                sp = dataclasses.replace(sp, label=f"BPC{count['BPC']}")
+            elif sp.kind == SpecialKind.USER and sp.label == "NS":
+                ok, theta = is_neimark_sacker(self.floquet(sp.x, sp.p).multipliers)
+                if not ok:
+                    log.info("NS test zero at p=%.8g is a neutral saddle: not reported", sp.p)
+                    continue
+                sp = dataclasses.replace(
+                    sp, kind=SpecialKind.NEIMARK_SACKER, data={**sp.data, "theta": theta}
+                )
+            elif sp.kind == SpecialKind.USER and sp.label == "PD":
+                mu = self.floquet(sp.x, sp.p).multipliers
+                k = int(np.argmin(np.abs(mu + 1.0)))
+                sp = dataclasses.replace(
+                    sp, kind=SpecialKind.PERIOD_DOUBLING, data={**sp.data, "mu": float(mu[k].real)}
+                )
+            out.append(sp)
+        return tuple(out)
 
     # ------------------------------------------------------------------ evaluation
     def _stages(self, z: FloatArray, p: float, full: bool) -> Any:
