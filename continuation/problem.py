@@ -305,8 +305,9 @@ class ProblemHooks(Protocol):
         eigenvalues. Not so for augmented (codim-2) problems, whose Jacobian is not the
         linearisation of the flow.
     sparse : bool
-        (default False) ``G_z`` is a SciPy sparse matrix: the BLAS thread count is left
-        alone and the sparse linear algebra is used.
+        (default False) ``G_z`` is a SciPy sparse matrix: the sparse linear algebra is
+        used and BLAS is held to one thread (:mod:`continuation._threads`). A problem
+        whose ``jacobian`` returns a sparse matrix must set it.
     state_names : tuple of str
         (default ``system.state_names``, else ``z0, z1, ...``) Names of the unknowns.
     params : Params

@@ -338,6 +338,15 @@ class ContinuedLanding:
             raise ValueError("the problem has a fixed start point: nothing to continue in")
         self.problem = problem
 
+    #: ``G_z`` is a SciPy sparse (CSC) matrix (:class:`~continuation.problem.ProblemHooks`).
+    sparse = True
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the ``N`` unknowns, ``z0, z1, ...`` (the landing's ``state_names`` are
+        those of the system's states, not of ``z``)."""
+        return tuple(f"z{k}" for k in range(self.n_unknowns))
+
     @property
     def free(self) -> str:
         """The continuation parameter: the start parameter's name."""

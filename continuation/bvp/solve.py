@@ -563,6 +563,15 @@ class ContinuedConnection:
     #: differentiation): see :func:`~continuation.problem.exact_jacobian`.
     exact_jacobian = True
 
+    #: ``G_z`` is a SciPy sparse (CSC) matrix (:class:`~continuation.problem.ProblemHooks`).
+    sparse = True
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the ``N`` unknowns, ``z0, z1, ...`` (the connection's ``state_names`` are
+        those of the system's states, not of ``z``)."""
+        return tuple(f"z{k}" for k in range(self.n_unknowns))
+
     @property
     def free(self) -> str:
         """The continuation parameter (``problem.vary``)."""
