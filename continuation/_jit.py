@@ -19,7 +19,8 @@ LOADED: dict[str, ModuleType | None] = {}
 
 def compiled(name: str) -> ModuleType | None:
     """The kernel module ``name`` (absolute, e.g. ``"continuation.bvp._condense_jit"``),
-    imported at the first call; None when it cannot be imported (no Numba)."""
+    imported at the first call; None when it cannot be imported (no Numba).
+    """
     if name not in LOADED:
         try:
             LOADED[name] = importlib.import_module(name)

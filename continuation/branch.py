@@ -478,7 +478,7 @@ class Branch:
             The NPZ path written.
         """
         npz, js = self._paths(path)
-        arrays = {
+        arrays: dict[str, Any] = {
             "p": self.p,
             "x": self.x,
             "eigenvalues": self.eigenvalues,

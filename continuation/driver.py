@@ -83,7 +83,8 @@ def _run(
 ) -> _Run:
     """One direction from ``(z0, p0)``; ``orient``: a direction the start tangent must
     point along (``theta``-inner product > 0), overriding the sign rule of ``dp/ds``;
-    ``warn_fold``: warn when the start point is a fold (the sign rule is arbitrary)."""
+    ``warn_fold``: warn when the start point is a fold (the sign rule is arbitrary).
+    """
     s = ctx.settings
     run = _Run()
     try:
@@ -540,7 +541,8 @@ def _correct_start(
     fixed: int | None = None,
 ) -> CorrectorResult:
     """Newton's method on ``G(z, p0) = 0`` at fixed ``p0`` (bordered with ``e_p``), or
-    with the unknown ``z[fixed]`` held instead (bordered with its unit vector)."""
+    with the unknown ``z[fixed]`` held instead (bordered with its unit vector).
+    """
     u0 = np.append(z, p0)
     e_p = np.zeros(u0.size)
     e_p[-1 if fixed is None else int(fixed) % z.size] = 1.0

@@ -213,7 +213,8 @@ INTERP_POINTS = 4
 
 def _poly_zero(x: np.ndarray, g: np.ndarray, lo: float, hi: float) -> float | None:
     """The zero in ``[lo, hi]`` of the polynomial through ``(x_i, g_i)`` nearest its
-    secant zero; ``g`` changes sign between the samples at ``lo`` and ``hi``."""
+    secant zero; ``g`` changes sign between the samples at ``lo`` and ``hi``.
+    """
     scale = float(np.max(np.abs(g)))
     if not (scale > 0 and math.isfinite(scale)):
         return None
@@ -487,7 +488,8 @@ def locate_zero(
     def g_ok(d: float) -> float:
         """Largest ``|g|`` at a zero known to within ``d``: with `continuity`, a zero
         within ``d`` of the point leaves ``|g|`` there of about slope * d; allow
-        `continuity` times the mean slope over the bracket plus round-off noise."""
+        `continuity` times the mean slope over the bracket plus round-off noise.
+        """
         bound = g_jump * g_max
         if continuity is not None:
             bound = min(bound, continuity * abs(g_b - g_a) / width * d + 1e-6 * g_max)

@@ -216,7 +216,8 @@ class EquilibriumProblem:
     def bordered_evaluator(self) -> Any:
         """Fused evaluator of the bordered Newton system (dense problems with a CasADi
         trace; None otherwise), built once and cached; see
-        :meth:`continuation.system.System.bordered_evaluator`."""
+        :meth:`continuation.system.System.bordered_evaluator`.
+        """
         ev = self.__dict__.get("_bordered", False)
         if ev is False:
             make = getattr(self.system, "bordered_evaluator", None)
@@ -230,7 +231,8 @@ class EquilibriumProblem:
         """The compiled pseudo-arclength step of this problem
         (:class:`continuation._kernel.StepKernel`: dense, CasADi trace, a few states, a
         short tape, Numba installed; :func:`continuation._tape.step_kernel_for`), built
-        once and cached; None otherwise."""
+        once and cached; None otherwise.
+        """
         k = self.__dict__.get("_step_kernel", False)
         if k is False:
             from ._tape import step_kernel_for
@@ -330,13 +332,15 @@ class ProblemHooks(Protocol):
         start point), after the step's special points were located and before the
         ``progress`` callback. For problems with a moving reference (the phase
         condition of periodic orbits). Must not change ``G`` at ``(z, p)`` itself
-        beyond what re-anchoring the reference implies. Fallback: nothing."""
+        beyond what re-anchoring the reference implies. Fallback: nothing.
+        """
         ...
 
     def relabel(self, specials: Sequence[SpecialPoint]) -> tuple[SpecialPoint, ...]:
         """Called by the driver once on the finished branch's special points (already
         labelled ``F1``, ``H1``, ``BP1``... in branch order): may rename them, change
-        their kind, add data or drop spurious ones. Fallback: unchanged."""
+        their kind, add data or drop spurious ones. Fallback: unchanged.
+        """
         ...
 
     def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
@@ -351,25 +355,29 @@ class ProblemHooks(Protocol):
     ) -> Callable[[FloatArray, float], tuple[FloatArray, Any, FloatArray]] | None:
         """A fast evaluator ``(z, p) -> (G, G_z, G_p)`` with the values of
         :meth:`linearize` (built once; None: use :meth:`linearize`). May be cached in
-        the instance ``__dict__`` as ``_linearizer``."""
+        the instance ``__dict__`` as ``_linearizer``.
+        """
         ...
 
     def bordered_evaluator(self) -> BorderedEvaluatorLike | None:
         """The fused evaluator of the bordered Newton system (dense problems; built
         once; None: no fused path). May be cached in the instance ``__dict__`` as
         ``_bordered``. The corrector then runs one compiled call and one LAPACK
-        ``gesv`` per Newton iteration (:func:`continuation.algorithms.corrector.correct`)."""
+        ``gesv`` per Newton iteration (:func:`continuation.algorithms.corrector.correct`).
+        """
         ...
 
     def step_kernel(self) -> Any:
         """The compiled pseudo-arclength step (:class:`continuation._kernel.StepKernel`)
         or None. Used by :class:`~continuation.algorithms.palc.PALC` with
-        ``kernel=True``; a step the kernel does not accept is redone in Python."""
+        ``kernel=True``; a step the kernel does not accept is redone in Python.
+        """
         ...
 
     def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
         """``z1 - z2``, shape ``(N,)``, with periodic unknowns reduced modulo their
-        period (closed-loop detection and distances). Fallback: ``z1 - z2``."""
+        period (closed-loop detection and distances). Fallback: ``z1 - z2``.
+        """
         ...
 
 
@@ -383,7 +391,8 @@ def jacobian_is_stability(problem: Any) -> bool:
 def exact_jacobian(problem: Any) -> bool:
     """``problem.exact_jacobian`` (default False): ``G_z`` and ``G_p`` are exact
     derivatives (automatic differentiation, not finite differences), so that Newton's
-    method converges quadratically next to a regular solution."""
+    method converges quadratically next to a regular solution.
+    """
     return bool(getattr(problem, "exact_jacobian", False))
 
 
@@ -457,7 +466,8 @@ def difference(problem: Any) -> Callable[[FloatArray, FloatArray], FloatArray] |
 
 def has_periodic_states(problem: Any) -> bool:
     """``problem.difference`` may differ from ``z1 - z2``: the problem has one and its
-    system does not declare all periods zero (``system.period``)."""
+    system does not declare all periods zero (``system.period``).
+    """
     if difference(problem) is None:
         return False
     period = getattr(getattr(problem, "system", None), "period", None)
@@ -466,7 +476,8 @@ def has_periodic_states(problem: Any) -> bool:
 
 def record_function(problem: Any) -> Callable[[FloatArray, float], Mapping[str, float]] | None:
     """``problem.record``, or None when it is :class:`EquilibriumProblem`'s (always
-    empty, so not worth a call per row)."""
+    empty, so not worth a call per row).
+    """
     if getattr(type(problem), "record", None) is EquilibriumProblem.record:
         return None
     return problem.record  # type: ignore[no-any-return]
@@ -474,7 +485,8 @@ def record_function(problem: Any) -> Callable[[FloatArray, float], Mapping[str, 
 
 def state_names(problem: Any, n: int) -> tuple[str, ...]:
     """Names of the ``n`` unknowns: ``problem.state_names``, else
-    ``problem.system.state_names``, else ``("z0", ..., "z{n-1}")``."""
+    ``problem.system.state_names``, else ``("z0", ..., "z{n-1}")``.
+    """
     names = getattr(problem, "state_names", None)
     if names is None and hasattr(problem, "system"):
         names = getattr(problem.system, "state_names", None)

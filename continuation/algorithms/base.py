@@ -119,7 +119,8 @@ def adapt_ds(
     step (``<= grow_iters`` iterations), ``ds`` after a harder one, capped at
     ``ds_max``; ``ds * shrink`` after a failure (:data:`RETRY` for a step the driver
     refuses after the algorithm accepted it). Never below zero; the caller compares
-    with ``ds_min``."""
+    with ``ds_min``.
+    """
     if outcome.converged:
         if outcome.newton_iters <= grow_iters:
             return min(ds * settings.grow, settings.ds_max)

@@ -41,7 +41,8 @@ HAGER_ITERATIONS = 2
 @_jit
 def _lu_solve(lu: Any, piv: Any, x: Any, trans: bool) -> None:  # pragma: no cover - compiled
     """``x <- A^{-1} x`` (``A^{-T} x`` with ``trans``) in place, ``P A = L U`` in ``lu``
-    (unit lower ``L``), ``piv`` the row interchanges in LAPACK's order."""
+    (unit lower ``L``), ``piv`` the row interchanges in LAPACK's order.
+    """
     b = lu.shape[0]
     if not trans:
         for k in range(b):  # apply P
@@ -82,7 +83,8 @@ def _lu_solve(lu: Any, piv: Any, x: Any, trans: bool) -> None:  # pragma: no cov
 @_jit
 def _lu_inplace(lu: Any, piv: Any) -> tuple[float, float, bool]:  # pragma: no cover
     """LU with partial pivoting of ``lu`` (b, b) in place, interchanges in ``piv``;
-    returns ``(log|det|, sign of det, singular)``."""
+    returns ``(log|det|, sign of det, singular)``.
+    """
     b = lu.shape[0]
     lg = 0.0
     sg = 1.0
@@ -120,7 +122,8 @@ def _lu_inplace(lu: Any, piv: Any) -> tuple[float, float, bool]:  # pragma: no c
 @_jit
 def solve_many(K: Any, R: Any, X: Any) -> bool:  # pragma: no cover - compiled
     """``X[j] = K_j^{-1} R[j]`` for ``K (N, b, b)`` (overwritten by its LU factors),
-    ``R, X (N, b, k)``; False if a block is singular."""
+    ``R, X (N, b, k)``; False if a block is singular.
+    """
     N, b, k = R.shape
     piv = np.empty(b, dtype=np.int64)
     col = np.empty(b)
@@ -182,7 +185,8 @@ def factor_blocks(
     """Factorise the blocks ``A (N, b, b)`` in place and fill ``piv (N, b)``, ``W (N, b,
     wc)``, ``U (N, wr, wc)``, ``cond``, ``logdet``, ``sign`` (``(N,)`` each) from
     ``Asr (N, b, wc)`` and ``Ars (N, wr, b)`` (module doc). ``A`` holds ``L`` and ``U``
-    on return."""
+    on return.
+    """
     N, b, _ = A.shape
     wc = Asr.shape[2]
     wr = Ars.shape[1]
@@ -252,7 +256,8 @@ def solve_pre(
 ) -> None:  # pragma: no cover - compiled  # fmt: skip
     """The forward half of a condensed solve (``trans="N"``): ``ys[j] = A_j^{-1}
     b_s[j]`` and the reduced right-hand side ``br = b_r - sum_j A_rs,j ys[j]`` (``br``
-    has ``n_r + 1`` rows, the last one the padding slot), for ``Bm (size, k)``."""
+    has ``n_r + 1`` rows, the last one the padding slot), for ``Bm (size, k)``.
+    """
     N, b = rows_s.shape
     k = Bm.shape[1]
     nr = rest_r.size
@@ -282,7 +287,8 @@ def solve_post(
     ys: Any, W: Any, xr: Any, sr_cols: Any, cols_s: Any, rest_c: Any, out: Any
 ) -> None:  # pragma: no cover - compiled
     """The backward half: ``x_s[j] = ys[j] - W_j x_r[sr_cols[j]]`` (padding column
-    ``n_r``: zero) scattered with ``x_r`` into ``out (size, k)``."""
+    ``n_r``: zero) scattered with ``x_r`` into ``out (size, k)``.
+    """
     N, b, k = ys.shape
     nr = rest_c.size
     wc = W.shape[2]
@@ -304,7 +310,8 @@ def factor(
     A: np.ndarray, Asr: np.ndarray, Ars: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(piv, W, U, cond, logdet, sign)`` of the blocks; ``A`` is overwritten by its
-    LU factors (see :func:`factor_blocks` for the shapes)."""
+    LU factors (see :func:`factor_blocks` for the shapes).
+    """
     N, b, _ = A.shape
     wc, wr = Asr.shape[2], Ars.shape[1]
     piv = np.zeros((N, b), dtype=np.int64)

@@ -167,7 +167,8 @@ def _manifold_method(system: Any, lam_m: Any, lam_p: Any) -> str | None:
     """``"cvodes_adams"`` where both saddles' spectra ``lam_m``, ``lam_p`` (eigenvalues
     of the Jacobians there) are non-stiff (ratio at most :data:`_ADAMS_MAX_STIFFNESS`),
     else None (the simulator's default: BDF, or SciPy's DOP853 without a CasADi
-    trace)."""
+    trace).
+    """
     if not getattr(system, "has_casadi", False):
         return None
     lam = np.concatenate((np.asarray(lam_m), np.asarray(lam_p)))
@@ -373,7 +374,8 @@ def find_connection(
     if T is not None:
         mesh = CollocationMesh(n_intervals, degree, T_used)
     kw: dict[str, Any] = {"saddle_to": x_p} if shift is None else {"shift": shift}
-    prob = HeteroclinicProblem(system, params, free, saddle_from=x_m, mesh=mesh, phase=phase, **kw)
+    names = (free,) if isinstance(free, str) else tuple(free)
+    prob = HeteroclinicProblem(system, params, names, saddle_from=x_m, mesh=mesh, phase=phase, **kw)
     t_cut = float(t[k])
     reach = float(np.max(np.linalg.norm(x[: k + 1] - x_m, axis=1)))
     note = (

@@ -271,7 +271,7 @@ class LandingProblem:
     start: Any
     saddle: FloatArray
     shift: Any = None
-    mesh: CollocationMesh | None = None  # type: ignore[assignment]
+    mesh: CollocationMesh = None  # type: ignore[assignment]  # None: set in __post_init__
     T: float | None = None
     s: float = 0.0
     start_name: str = "s"

@@ -31,7 +31,7 @@ import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -344,7 +344,8 @@ class ContinuedLanding:
     @property
     def state_names(self) -> tuple[str, ...]:
         """Names of the ``N`` unknowns, ``z0, z1, ...`` (the landing's ``state_names`` are
-        those of the system's states, not of ``z``)."""
+        those of the system's states, not of ``z``).
+        """
         return tuple(f"z{k}" for k in range(self.n_unknowns))
 
     @property
@@ -386,7 +387,7 @@ def continue_landing(
     result: LandingResult,
     settings: ContinuationSettings | None = None,
     *,
-    direction: str = "forward",
+    direction: Literal["forward", "backward", "both"] = "forward",
     throw: bool = False,
     progress: Callable[[Any], None] | None = None,
 ) -> Any:

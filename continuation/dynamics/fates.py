@@ -236,7 +236,8 @@ class Fate:
 
     def first_visit(self, name: str | None = None, *, shifted: bool = False) -> SaddleVisit | None:
         """The first visit (of the saddle ``name``, if given; at a nonzero shift if
-        ``shifted``), or ``None``."""
+        ``shifted``), or ``None``.
+        """
         for v in self.visits:
             if name is not None and v.name != name:
                 continue

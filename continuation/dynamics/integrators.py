@@ -128,7 +128,8 @@ def sigint_recorded() -> Iterator[None]:
 
 def sigints_counted() -> int:
     """SIGINTs counted by :func:`sigint_recorded` so far (compare two readings taken
-    inside one block: a difference is an interrupt, even one a CasADi call lost)."""
+    inside one block: a difference is an interrupt, even one a CasADi call lost).
+    """
     return _Sigints.count
 
 

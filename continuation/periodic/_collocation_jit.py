@@ -68,7 +68,8 @@ def linearize(
 ) -> None:  # pragma: no cover - compiled  # fmt: skip
     """``G``, the CSC values ``data`` of ``dG/dz`` and ``Gp`` (module doc); ``vals``
     receives the unordered values, its first ``Bc.size`` entries the blocks ``B``
-    (``(N, m, m + 1, n, n)`` flattened). ``slot_of`` (empty: none) sums duplicates."""
+    (``(N, m, m + 1, n, n)`` flattened). ``slot_of`` (empty: none) sums duplicates.
+    """
     residual(X, T, F, D, e, h, shift, ref, dref, w, stage_points, G)
     n = X.shape[1]
     N = h.shape[0]

@@ -82,7 +82,8 @@ def _deflate(Phi: Any, F: Any, C: Any) -> tuple[float, float, float]:  # pragma:
 
 def deflate(Phi: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, float, float, float]:
     """``(C (N, n-1, n-1), sum ln|r_j|, sign of prod r_j, eps)`` (module doc), for
-    ``Phi (N, n, n)`` and ``F (N, n)``."""
+    ``Phi (N, n, n)`` and ``F (N, n)``.
+    """
     N, n, _ = Phi.shape
     C = np.empty((N, n - 1, n - 1))
     log_r, sign_r, eps = _deflate(

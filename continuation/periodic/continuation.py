@@ -403,7 +403,8 @@ def _continue_once(
     cycle of the row before ``orb`` on the branch being continued, whose secant
     ``orb - previous`` (on ``orb``'s mesh) the first tangent follows instead (the
     direction of a restart is then right at folds and where the parameter hardly
-    moves); ``error_tol``: a terminal event where the error estimate rises through it."""
+    moves); ``error_tol``: a terminal event where the error estimate rises through it.
+    """
     prob = PeriodicOrbitProblem.from_orbit(orb, free)
     T_col = prob.layout.T_col
     evs: list[Event] = []
@@ -678,7 +679,8 @@ def _refined_intervals(
     orb: PeriodicOrbit, error: float, error_tol: float | None, max_intervals: int
 ) -> int | None:
     """Number of intervals for the next segment (None: keep), from the error estimate
-    ``error`` of ``orb`` (order ``m + 1`` in the interval length)."""
+    ``error`` of ``orb`` (order ``m + 1`` in the interval length).
+    """
     N = orb.mesh.n_intervals
     if error_tol is None or not math.isfinite(error) or error <= error_tol or N >= max_intervals:
         return None
@@ -701,7 +703,8 @@ def _refine_start(
     ``max_intervals`` intervals, ``rounds`` refinements by :func:`_refined_intervals`),
     so that the first segment's rows are not left above the tolerance; a refinement
     that does not converge keeps the cycle as it was (the driver's start correction
-    and the message report what follows)."""
+    and the message report what follows).
+    """
     for _ in range(rounds):
         n_new = _refined_intervals(orb, error_estimate(orb.mesh, orb.X), error_tol, max_intervals)
         if n_new is None:
@@ -716,7 +719,8 @@ def _refine_start(
 
 def _merge_segments(segs: list[Branch]) -> Branch:
     """One branch from consecutive segments (the first row of each later segment, the
-    previous segment's last cycle on the new mesh, is dropped)."""
+    previous segment's last cycle on the new mesh, is dropped).
+    """
     rows: dict[str, list[Any]] = {k: [] for k in ("p", "x", "eig", "nun", "ds", "it")}
     recs: dict[str, list[float]] = {}
     specials: list[SpecialPoint] = []
@@ -746,8 +750,10 @@ def _merge_segments(segs: list[Branch]) -> Branch:
                  for x in rows["x"]]  # fmt: skip
     ev = [e for e in rows["eig"] if e.size]
     width = max((e.shape[1] for e in ev), default=0)
-    eig = np.vstack([np.pad(e, ((0, 0), (0, width - e.shape[1])), constant_values=np.nan)
-                     for e in rows["eig"]]) if width else np.zeros((base + 1, 0))  # fmt: skip
+    eig: np.ndarray = (
+        np.vstack([np.pad(e, ((0, 0), (0, width - e.shape[1])), constant_values=np.nan)
+                   for e in rows["eig"]]) if width else np.zeros((base + 1, 0))
+    )  # fmt: skip
     count = {"LPC": 0, "BPC": 0}
     relabelled = []
     for sp in specials:
@@ -851,7 +857,8 @@ def _finish(
 
 def _state_ranges(br: Branch) -> FloatArray:
     """Largest ``max - min`` of a state over the cycle at each row, shape ``(len(br),)``
-    (1 where no state moves, so that the ratio stays the absolute estimate)."""
+    (1 where no state moves, so that the ratio stays the absolute estimate).
+    """
     rec = br.records
     names = problem_at(br, 0).system.state_names
     r = np.max(np.vstack([rec[f"max_{s}"] - rec[f"min_{s}"] for s in names]), axis=0)
@@ -882,7 +889,7 @@ def special_problem(branch: Branch, sp: SpecialPoint) -> PeriodicOrbitProblem:
     unknowns and the smaller collocation residual at ``sp``.
     """
     x = np.asarray(sp.x, dtype=float)
-    cands = []
+    cands: list[PeriodicOrbitProblem] = []
     for k in (sp.index, min(sp.index + 1, len(branch) - 1)):
         prob = problem_at(branch, max(k, 0))
         if prob.n_unknowns == x.size and all(prob is not q for q in cands):
@@ -994,7 +1001,8 @@ def _log_fit(
     ``(p*, b, rms of the fit in p)``. For fixed ``b`` the fit is linear in ``(p*, c)``;
     ``b`` is found by a bounded scalar search on ``ln b``. Where that search ends on a
     bound or the rows agree to ``1e-10`` relative (``b`` is not determined by the rows),
-    the fit with ``b = b_fixed`` is returned, with ``b`` as NaN."""
+    the fit with ``b = b_fixed`` is returned, with ``b`` as NaN.
+    """
     Tn = T - float(np.min(T))  # exponentials in (0, 1]: no overflow
 
     def lsq(lb: float) -> tuple[float, float, float]:

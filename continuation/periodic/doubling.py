@@ -131,7 +131,8 @@ def continue_period_doubled(
 ) -> Branch:
     """The branch of doubled cycles from a PD point, continued away from it (the sign
     of ``settings.ds`` follows the side of :func:`switch_period_doubling`). Other
-    keywords go to :func:`~continuation.periodic.continuation.continue_periodic`."""
+    keywords go to :func:`~continuation.periodic.continuation.continue_periodic`.
+    """
     orb, side = switch_period_doubling(branch, which, amplitude=amplitude)
     settings = settings if settings is not None else ContinuationSettings()
     if side != 0.0:

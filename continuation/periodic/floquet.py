@@ -267,8 +267,8 @@ def floquet(
         c = C[:, 0, 0]
         lg = float(np.sum(np.log(np.maximum(np.abs(c), 5e-324))))
         sg = float(np.prod(np.where(c >= 0, 1.0, -1.0)))
-        mu1 = np.array([sg * math.exp(min(lg, 709.0))], dtype=complex)
-        return FloquetResult(mu1, complex(trivial), max(abs(trivial - 1.0), eps))
+        mu_1 = np.array([sg * math.exp(min(lg, 709.0))], dtype=complex)
+        return FloquetResult(mu_1, complex(trivial), max(abs(trivial - 1.0), eps))
     Cg = grouped(C)
     Q_start = dominance_basis(Cg)
     if Q_start is None and memo is not None:
@@ -277,7 +277,7 @@ def floquet(
     if memo is not None:
         memo["Q"] = Q
     if not ok:
-        mu = np.linalg.eigvals(monodromy(Cg))
+        mu = np.asarray(np.linalg.eigvals(monodromy(Cg)), dtype=complex)
     mu = mu[np.argsort(-np.abs(mu), kind="stable")]
     return FloquetResult(np.asarray(mu, dtype=complex), complex(trivial),
                          max(abs(trivial - 1.0), eps))  # fmt: skip
@@ -318,7 +318,8 @@ def ns_test(mu: ComplexArray) -> float:
 def is_neimark_sacker(mu: ComplexArray, tol: float = 1e-3) -> tuple[bool, float]:
     """At a zero of :func:`ns_test`: a complex pair on the unit circle? Returns
     ``(True, theta)`` with the pair's argument ``theta`` in ``(0, pi)``, or
-    ``(False, nan)`` (a neutral saddle: real ``mu``, ``1/mu``)."""
+    ``(False, nan)`` (a neutral saddle: real ``mu``, ``1/mu``).
+    """
     mu = np.asarray(mu, dtype=complex)
     best = math.inf
     theta = math.nan

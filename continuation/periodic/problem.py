@@ -130,6 +130,7 @@ class PeriodicOrbitProblem:
     winding: tuple[int, ...]
     reference: FloatArray
     _slot: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
+    _shift: FloatArray = field(init=False, repr=False)
 
     #: The Jacobian is a SciPy sparse (CSC) matrix: the driver's sparse solvers (a
     #: dense Jacobian was measured 10x slower in the driver even for 400 unknowns).
@@ -179,7 +180,8 @@ class PeriodicOrbitProblem:
     @property
     def exact_jacobian(self) -> bool:
         """The derivatives are exact where the system has a CasADi trace (else the
-        system's finite differences): :func:`~continuation.problem.exact_jacobian`."""
+        system's finite differences): :func:`~continuation.problem.exact_jacobian`.
+        """
         return bool(getattr(self.system, "has_casadi", False))
 
     @property
@@ -269,7 +271,7 @@ class PeriodicOrbitProblem:
             G = np.empty(self.layout.n_unknowns)
             kern.residual(X, T, F, D, e, h, self._shift, s["ref"], s["dref"], w, sp_, G)
             return G
-        return self.layout.residual(X, T, F, self._shift, s["ref"], s["dref"])  # type: ignore[attr-defined]
+        return self.layout.residual(X, T, F, self._shift, s["ref"], s["dref"])
 
     def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
         """``(G, dG/dz (CSC), dG/dp)`` in one evaluation of ``f, f_x, f_p``."""
@@ -290,7 +292,7 @@ class PeriodicOrbitProblem:
             B = vals[: args[5].size].reshape(lay.N, lay.m, lay.m + 1, lay.n, lay.n)
             self._slot["cache"] = (z.copy(), float(p), B, F)
             return G, csc_with_data(lay._template, data), Gp
-        G = lay.residual(X, T, F, self._shift, s["ref"], s["dref"])  # type: ignore[attr-defined]
+        G = lay.residual(X, T, F, self._shift, s["ref"], s["dref"])
         B = lay.blocks(X, T, J)
         Gz = lay.assemble(B, F, s["dref"])
         Gp = np.zeros(lay.n_unknowns)
@@ -319,7 +321,8 @@ class PeriodicOrbitProblem:
 
     def floquet(self, z: FloatArray, p: float) -> FloquetResult:
         """Floquet multipliers of the cycle ``z`` by condensation of the collocation
-        blocks (:func:`~continuation.periodic.collocation.monodromy_factors`)."""
+        blocks (:func:`~continuation.periodic.collocation.monodromy_factors`).
+        """
         key = (np.asarray(z, dtype=float).tobytes(), float(p))
         # a few points: the driver asks for the multipliers at a row, at the row moved
         # along its tangent (the events' slopes) and at the row again (records), in turn

@@ -180,7 +180,8 @@ def _resolve_point(branch: Branch, point: SpecialPoint | str) -> SpecialPoint:
 def _reference_tangent(branch: Branch, point: SpecialPoint, w: FloatArray) -> FloatArray:
     """Direction of the current branch at the point: the chord of the two rows around
     it (the tangent the locator stored is ill-determined exactly at a branch point,
-    where the bordered matrix is singular)."""
+    where the bordered matrix is singular).
+    """
     i = int(point.index)
     if 0 <= i and i + 1 < len(branch):
         chord = _delta(branch.problem, branch.x[i + 1], branch.p[i + 1], branch.x[i], branch.p[i])
@@ -236,7 +237,8 @@ def _orient(t: FloatArray, sign_ds: float) -> FloatArray:
     ``1e-3`` of the largest magnitude, so that mirror-symmetric problems (an
     antisymmetric kernel vector has two largest components of opposite sign, told apart
     only by round-off or by the point's own asymmetry, ~1e-5) are oriented the same way
-    on every machine."""
+    on every machine.
+    """
     if abs(float(t[-1])) > 1e-6:
         return t if t[-1] * sign_ds > 0 else -t
     mag = np.abs(t[:-1])
