@@ -133,10 +133,11 @@ def _offsets(n: int) -> tuple[int, int, int, int, int, int, int, int, int, int]:
 
 
 def out_layout(n: int) -> int:
-    """Length of a step's output buffer: ``eig`` (``2n``, complex as pairs), ``u``,
-    ``d`` (``n + 1`` each), ``G`` (``n``), ``G_z`` (``n^2``, Fortran order), ``G_p``
-    (``n``), the LU factors (``(n + 1)^2``, Fortran order), ``t_raw``, ``tau``, ``c``
-    (``n + 1`` each), in that order.
+    """Length of a step's output buffer.
+
+    ``eig`` (``2n``, complex as pairs), ``u``, ``d`` (``n + 1`` each), ``G`` (``n``),
+    ``G_z`` (``n^2``, Fortran order), ``G_p`` (``n``), the LU factors (``(n + 1)^2``,
+    Fortran order), ``t_raw``, ``tau``, ``c`` (``n + 1`` each), in that order.
     """
     return _offsets(n)[-1] + n + 1
 
@@ -149,9 +150,10 @@ if HAVE_NUMBA:
 
     @_jit
     def _run_tape(op, ia, ib, io, consts, w, u, p, f, nz):  # pragma: no cover - compiled
-        """Evaluate a linearisation tape (:func:`linearisation_tape`): inputs ``(u, p)``,
-        outputs ``(f, nz)``. One flat branch chain, the most frequent operations first
-        (a call per operation costs more than the operation).
+        """Evaluate a linearisation tape (:func:`linearisation_tape`).
+
+        Inputs ``(u, p)``, outputs ``(f, nz)``. One flat branch chain, the most frequent
+        operations first (a call per operation costs more than the operation).
         """
         for k in range(op.size):
             o = op[k]
@@ -316,8 +318,9 @@ if HAVE_NUMBA:
 
     @_jit
     def _backward_error(M, r, u):  # pragma: no cover - compiled
-        """``corrector._backward_error`` of the bordered residual ``r`` at ``u``: ``max(max_i
-        |G_i| / max_i (|M| |u|)_i, |r_n| / (|M| |u|)_n)``, ``i < n``.
+        """``corrector._backward_error`` of the bordered residual ``r`` at ``u``.
+
+        ``max(max_i |G_i| / max_i (|M| |u|)_i, |r_n| / (|M| |u|)_n)``, ``i < n``.
         """
         n1 = u.size
         n = n1 - 1
@@ -339,8 +342,10 @@ if HAVE_NUMBA:
 
     @_jit
     def _factor_solve(M, r, lu, x, piv, iw, ch):  # pragma: no cover - compiled
-        """LAPACK ``dgetrf`` of a copy of ``M`` into ``lu`` (1-based ``piv``) and
-        ``dgetrs`` for ``x = M^{-1} [r, e_{N+1}]`` (what ``dgesv`` does). Returns info.
+        """LAPACK ``dgetrf`` and ``dgetrs``: what ``dgesv`` does. Returns info.
+
+        ``dgetrf`` of a copy of ``M`` into ``lu`` (1-based ``piv``) and ``dgetrs`` for ``x =
+        M^{-1} [r, e_{N+1}]``.
         """
         n1 = r.size
         for j in range(n1):
@@ -377,8 +382,10 @@ if HAVE_NUMBA:
 
     @_jit
     def _views(fb, ib):  # pragma: no cover - compiled
-        """The kernel's buffers as views of its two packed arrays (one argument each:
-        a compiled call pays for every argument it unboxes). Layout: :class:`StepKernel`.
+        """The kernel's buffers as views of its two packed arrays.
+
+        One argument each: a compiled call pays for every argument it unboxes. Layout:
+        :class:`StepKernel`.
         """
         n, m, nnz, k, nw, lwork = ib[0], ib[1], ib[2], ib[3], ib[4], ib[5]
         n1 = n + 1
@@ -425,8 +432,9 @@ if HAVE_NUMBA:
     @_jit
     def _step(fb, ib, out, piv_out, ua, tau, wt, prev_d, prev_tau, sc, hermite, guarded,
               want_eig):  # fmt: skip  # pragma: no cover - compiled
-        """One pseudo-arclength step (``PALC.step`` with ``correct(..., exact=False)``
-        and ``make_point``), compiled.
+        """One pseudo-arclength step, compiled.
+
+        ``PALC.step`` with ``correct(..., exact=False)`` and ``make_point``.
 
         ``sc = (ds, prev_h, cos_hermite, max_contraction, max_distance, cos_max, tol,
         step_tol, max_iter, eig_tol, imag_tol, NOISE_SLACK, ROUNDOFF_FLOOR)``. On
@@ -706,8 +714,9 @@ class StepKernel:
 
 
 def _lazy(name: str, make: Any) -> property:
-    """A property over ``PointInfo``'s slot ``name`` that fills it with ``make(self)`` on
-    first read (and is written as the slot).
+    """A property over ``PointInfo``'s slot ``name``, filled with ``make(self)`` on first read.
+
+    It is written as the slot.
     """
     slot = getattr(PointInfo, name)
 

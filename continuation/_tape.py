@@ -85,8 +85,9 @@ class Tape:
 
 
 def tape_of(fn: Any) -> Tape | None:
-    """The instruction tape of an SX ``casadi.Function``, or None if it has an
-    operation the interpreter does not support (or is not an SX function).
+    """The instruction tape of an SX ``casadi.Function``, or None.
+
+    None if it has an operation the interpreter does not support (or is not an SX function).
     """
     import casadi as ca
 
@@ -121,11 +122,12 @@ def tape_of(fn: Any) -> Tape | None:
 
 
 def linearisation_tape(system: Any, index: int) -> tuple[Tape, Any, Any] | None:
-    """Tape of ``(u, p) -> (f, nz)`` for a system with a CasADi trace, where
-    ``u = (x, p_index)`` (shape ``(n + 1,)``; the ``index`` entry of ``p`` is ignored)
-    and ``nz`` are the structural non-zeros of ``[df/dx, df/dp_index]``; with their row
-    and column indices (int64 arrays). None without a trace, with an operation the
-    interpreter does not support, or with more than ``MAX_TAPE_INSTRUCTIONS``.
+    """Tape of ``(u, p) -> (f, nz)`` for a system with a CasADi trace.
+
+    Here ``u = (x, p_index)`` (shape ``(n + 1,)``; the ``index`` entry of ``p`` is ignored)
+    and ``nz`` are the structural non-zeros of ``[df/dx, df/dp_index]``; with their row and
+    column indices (int64 arrays). None without a trace, with an operation the interpreter
+    does not support, or with more than ``MAX_TAPE_INSTRUCTIONS``.
     """
     import casadi as ca
 
@@ -150,9 +152,10 @@ def linearisation_tape(system: Any, index: int) -> tuple[Tape, Any, Any] | None:
 
 
 def step_kernel_for(problem: Any) -> Any:
-    """The compiled step (:class:`continuation._kernel.StepKernel`) of an
-    :class:`~continuation.problem.EquilibriumProblem`, or None (sparse, no CasADi
-    trace, too large, an unsupported operation, or no Numba).
+    """The compiled step of an :class:`~continuation.problem.EquilibriumProblem`, or None.
+
+    :class:`continuation._kernel.StepKernel`; None when sparse, without a CasADi trace, too
+    large, with an unsupported operation, or without Numba.
     """
     if getattr(problem, "sparse", True):
         return None

@@ -223,8 +223,9 @@ class RunContext:
     def event_brackets(
         self, a: Row, b: Row, sigma_b: float, w: FloatArray, k: int
     ) -> list[tuple[tuple[float, PointInfo, float], tuple[float, PointInfo, float]]]:
-        """The sub-brackets of the step from ``a`` to ``b`` where event ``k`` crosses zero
-        (in its direction), in branch order: ``[((sigma_lo, point_lo, g_lo),
+        """The sub-brackets of the step from ``a`` to ``b`` where event ``k`` crosses zero.
+
+        Crossings in the event's direction, in branch order: ``[((sigma_lo, point_lo, g_lo),
         (sigma_hi, point_hi, g_hi)), ...]``.
 
         A sign change between the rows is the whole step. When ``g`` has the same sign
@@ -318,8 +319,9 @@ class RunContext:
     def locate_event(
         self, a: Row, b: Row, sigma_b: float, w: FloatArray, e: Event, lo: Any, hi: Any
     ) -> LocateResult:
-        """Locate the zero of event ``e`` in the sub-bracket ``(lo, hi)`` of the step
-        (ends ``(sigma, point, g)`` from :meth:`event_brackets`).
+        """Locate the zero of event ``e`` in the sub-bracket ``(lo, hi)`` of the step.
+
+        The ends are ``(sigma, point, g)`` from :meth:`event_brackets`.
 
         An event at a parameter value whose bracket is the whole step is solved
         directly at that value (:meth:`bound_direct`) where ``p`` is monotone along the
@@ -595,8 +597,9 @@ class RunContext:
     def point_on_bound(
         self, u: FloatArray, bound: float, c: FloatArray, w: FloatArray
     ) -> tuple[CorrectorResult, PointInfo] | None:
-        """Newton's method at fixed ``p = bound`` from ``u`` (its ``p`` replaced), and the
-        point with its tangent (border ``c``); None if either fails.
+        """Newton's method at fixed ``p = bound`` from ``u`` (its ``p`` replaced).
+
+        Returns the point with its tangent (border ``c``); None if either fails.
         """
         guess = np.array(u, dtype=float)
         guess[-1] = bound

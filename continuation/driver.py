@@ -81,9 +81,11 @@ def _run(
     orient: FloatArray | None = None,
     warn_fold: bool = True,
 ) -> _Run:
-    """One direction from ``(z0, p0)``; ``orient``: a direction the start tangent must
-    point along (``theta``-inner product > 0), overriding the sign rule of ``dp/ds``;
-    ``warn_fold``: warn when the start point is a fold (the sign rule is arbitrary).
+    """One direction from ``(z0, p0)``.
+
+    ``orient``: a direction the start tangent must point along (``theta``-inner product >
+    0), overriding the sign rule of ``dp/ds``; ``warn_fold``: warn when the start point is a
+    fold (the sign rule is arbitrary).
     """
     s = ctx.settings
     run = _Run()
@@ -494,8 +496,9 @@ def _checked_inputs(
     events: Sequence[Event],
     direction: str,
 ) -> tuple[ContinuationSettings, ContinuationAlgorithm, tuple[Event, ...], FloatArray, float]:
-    """The arguments of :func:`continue_branch` checked and with their defaults:
-    ``(settings, algorithm, events, z0 as float array (N,), p0 as float)``.
+    """The arguments of :func:`continue_branch` checked and with their defaults.
+
+    Returns ``(settings, algorithm, events, z0 as float array (N,), p0 as float)``.
 
     Raises
     ------
@@ -540,8 +543,9 @@ def _correct_start(
     settings: ContinuationSettings,
     fixed: int | None = None,
 ) -> CorrectorResult:
-    """Newton's method on ``G(z, p0) = 0`` at fixed ``p0`` (bordered with ``e_p``), or
-    with the unknown ``z[fixed]`` held instead (bordered with its unit vector).
+    """Newton's method on ``G(z, p0) = 0`` at fixed ``p0`` (bordered with ``e_p``).
+
+    Or with the unknown ``z[fixed]`` held instead (bordered with its unit vector).
     """
     u0 = np.append(z, p0)
     e_p = np.zeros(u0.size)

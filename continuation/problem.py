@@ -214,8 +214,9 @@ class EquilibriumProblem:
         return fn
 
     def bordered_evaluator(self) -> Any:
-        """Fused evaluator of the bordered Newton system (dense problems with a CasADi
-        trace; None otherwise), built once and cached; see
+        """Fused evaluator of the bordered Newton system, built once and cached.
+
+        Dense problems with a CasADi trace; None otherwise. See
         :meth:`continuation.system.System.bordered_evaluator`.
         """
         ev = self.__dict__.get("_bordered", False)
@@ -228,10 +229,10 @@ class EquilibriumProblem:
         return ev
 
     def step_kernel(self) -> Any:
-        """The compiled pseudo-arclength step of this problem
-        (:class:`continuation._kernel.StepKernel`: dense, CasADi trace, a few states, a
-        short tape, Numba installed; :func:`continuation._tape.step_kernel_for`), built
-        once and cached; None otherwise.
+        """The compiled pseudo-arclength step of this problem, built once and cached.
+
+        :class:`continuation._kernel.StepKernel` (dense, CasADi trace, a few states, a short tape,
+        Numba installed; :func:`continuation._tape.step_kernel_for`); None otherwise.
         """
         k = self.__dict__.get("_step_kernel", False)
         if k is False:
@@ -328,18 +329,20 @@ class ProblemHooks(Protocol):
     exact_jacobian: bool
 
     def accept(self, z: FloatArray, p: float) -> None:
-        """Called by the driver after every accepted row ``(z, p)`` (including the
-        start point), after the step's special points were located and before the
-        ``progress`` callback. For problems with a moving reference (the phase
-        condition of periodic orbits). Must not change ``G`` at ``(z, p)`` itself
-        beyond what re-anchoring the reference implies. Fallback: nothing.
+        """Called by the driver after every accepted row ``(z, p)``, the start included.
+
+        It runs after the step's special points were located and before the ``progress`` callback.
+        For problems with a moving reference (the phase condition of periodic orbits). Must not
+        change ``G`` at ``(z, p)`` itself beyond what re-anchoring the reference implies. Fallback:
+        nothing.
         """
         ...
 
     def relabel(self, specials: Sequence[SpecialPoint]) -> tuple[SpecialPoint, ...]:
-        """Called by the driver once on the finished branch's special points (already
-        labelled ``F1``, ``H1``, ``BP1``... in branch order): may rename them, change
-        their kind, add data or drop spurious ones. Fallback: unchanged.
+        """Called by the driver once on the finished branch's special points.
+
+        They come labelled ``F1``, ``H1``, ``BP1``... in branch order; the hook may rename them,
+        change their kind, add data or drop spurious ones. Fallback: unchanged.
         """
         ...
 
@@ -353,30 +356,34 @@ class ProblemHooks(Protocol):
     def linearizer(
         self,
     ) -> Callable[[FloatArray, float], tuple[FloatArray, Any, FloatArray]] | None:
-        """A fast evaluator ``(z, p) -> (G, G_z, G_p)`` with the values of
-        :meth:`linearize` (built once; None: use :meth:`linearize`). May be cached in
-        the instance ``__dict__`` as ``_linearizer``.
+        """A fast evaluator ``(z, p) -> (G, G_z, G_p)`` with the values of :meth:`linearize`.
+
+        Built once; None: use :meth:`linearize`. May be cached in the instance ``__dict__`` as
+        ``_linearizer``.
         """
         ...
 
     def bordered_evaluator(self) -> BorderedEvaluatorLike | None:
-        """The fused evaluator of the bordered Newton system (dense problems; built
-        once; None: no fused path). May be cached in the instance ``__dict__`` as
-        ``_bordered``. The corrector then runs one compiled call and one LAPACK
-        ``gesv`` per Newton iteration (:func:`continuation.algorithms.corrector.correct`).
+        """The fused evaluator of the bordered Newton system (dense problems; built once).
+
+        None: no fused path. May be cached in the instance ``__dict__`` as ``_bordered``. The
+        corrector then runs one compiled call and one LAPACK ``gesv`` per Newton iteration
+        (:func:`continuation.algorithms.corrector.correct`).
         """
         ...
 
     def step_kernel(self) -> Any:
-        """The compiled pseudo-arclength step (:class:`continuation._kernel.StepKernel`)
-        or None. Used by :class:`~continuation.algorithms.palc.PALC` with
-        ``kernel=True``; a step the kernel does not accept is redone in Python.
+        """The compiled pseudo-arclength step (:class:`continuation._kernel.StepKernel`) or None.
+
+        Used by :class:`~continuation.algorithms.palc.PALC` with ``kernel=True``; a step the kernel
+        does not accept is redone in Python.
         """
         ...
 
     def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
-        """``z1 - z2``, shape ``(N,)``, with periodic unknowns reduced modulo their
-        period (closed-loop detection and distances). Fallback: ``z1 - z2``.
+        """``z1 - z2``, shape ``(N,)``, with periodic unknowns reduced modulo their period.
+
+        Used by closed-loop detection and distances. Fallback: ``z1 - z2``.
         """
         ...
 
@@ -389,9 +396,10 @@ def jacobian_is_stability(problem: Any) -> bool:
 
 
 def exact_jacobian(problem: Any) -> bool:
-    """``problem.exact_jacobian`` (default False): ``G_z`` and ``G_p`` are exact
-    derivatives (automatic differentiation, not finite differences), so that Newton's
-    method converges quadratically next to a regular solution.
+    """``problem.exact_jacobian`` (default False): ``G_z`` and ``G_p`` are exact.
+
+    Exact: automatic differentiation, not finite differences, so that Newton's method converges
+    quadratically next to a regular solution.
     """
     return bool(getattr(problem, "exact_jacobian", False))
 
@@ -465,8 +473,10 @@ def difference(problem: Any) -> Callable[[FloatArray, FloatArray], FloatArray] |
 
 
 def has_periodic_states(problem: Any) -> bool:
-    """``problem.difference`` may differ from ``z1 - z2``: the problem has one and its
-    system does not declare all periods zero (``system.period``).
+    """``problem.difference`` may differ from ``z1 - z2``.
+
+    True when the problem has one and its system does not declare all periods zero
+    (``system.period``).
     """
     if difference(problem) is None:
         return False
@@ -475,8 +485,9 @@ def has_periodic_states(problem: Any) -> bool:
 
 
 def record_function(problem: Any) -> Callable[[FloatArray, float], Mapping[str, float]] | None:
-    """``problem.record``, or None when it is :class:`EquilibriumProblem`'s (always
-    empty, so not worth a call per row).
+    """``problem.record``, or None when it is :class:`EquilibriumProblem`'s.
+
+    That one is always empty, so not worth a call per row.
     """
     if getattr(type(problem), "record", None) is EquilibriumProblem.record:
         return None
@@ -484,8 +495,9 @@ def record_function(problem: Any) -> Callable[[FloatArray, float], Mapping[str, 
 
 
 def state_names(problem: Any, n: int) -> tuple[str, ...]:
-    """Names of the ``n`` unknowns: ``problem.state_names``, else
-    ``problem.system.state_names``, else ``("z0", ..., "z{n-1}")``.
+    """Names of the ``n`` unknowns.
+
+    ``problem.state_names``, else ``problem.system.state_names``, else ``("z0", ..., "z{n-1}")``.
     """
     names = getattr(problem, "state_names", None)
     if names is None and hasattr(problem, "system"):

@@ -169,13 +169,14 @@ def _accepted(
     ratio: Callable[[], float],
     backward_error: Callable[[], float],
 ) -> bool:
-    """The corrector's convergence test (see :func:`correct`), shared by its dense and
-    sparse iterations. ``rn``: ``max |r|`` now, ``rn_prev`` before the last step;
-    ``dn = max |du|`` of the correction at the current point and ``dn_ok`` its
-    componentwise test; ``step``/``step_ok`` the same of the last step taken; ``hi`` the
+    """The corrector's convergence test (see :func:`correct`).
+
+    Shared by its dense and sparse iterations. ``rn``: ``max |r|`` now, ``rn_prev`` before
+    the last step; ``dn = max |du|`` of the correction at the current point and ``dn_ok``
+    its componentwise test; ``step``/``step_ok`` the same of the last step taken; ``hi`` the
     upper bound of :func:`_step_bounds`; ``ratio()`` gives :func:`_step_ratio` of the
-    correction and ``backward_error()`` :func:`_backward_error` at the current point,
-    both evaluated only when the clause needing them is reached.
+    correction and ``backward_error()`` :func:`_backward_error` at the current point, both
+    evaluated only when the clause needing them is reached.
     """
     return bool(
         (rn <= tol and (dn_ok or step_ok))
@@ -198,8 +199,9 @@ def _accepted(
 
 
 def _give_up(it: int, max_iter: int, rn: float, rn0: float, tol: float) -> str:
-    """Why the corrector stops before taking step ``it + 1`` (empty: go on): the
-    iteration limit, or divergence (residual ``1e4`` times its initial value or ``tol``
+    """Why the corrector stops before taking step ``it + 1`` (empty: go on).
+
+    The iteration limit, or divergence (residual ``1e4`` times its initial value or ``tol``
     after two iterations). Shared by both iterations of :func:`correct`.
     """
     if it >= max_iter:

@@ -247,8 +247,9 @@ class PALC(ContinuationAlgorithm):
     def _kernel_step(
         self, kern: Any, problem: Any, state: StepState, settings: ContinuationSettings
     ) -> tuple[StepState, StepOutcome] | None:
-        """:meth:`step` as one compiled call; None when the kernel did not accept the
-        step (the Python step then runs and decides).
+        """:meth:`step` as one compiled call; None when the kernel did not accept the step.
+
+        The Python step then runs and decides.
         """
         a = state.point
         ds = state.ds

@@ -343,8 +343,9 @@ class ContinuedLanding:
 
     @property
     def state_names(self) -> tuple[str, ...]:
-        """Names of the ``N`` unknowns, ``z0, z1, ...`` (the landing's ``state_names`` are
-        those of the system's states, not of ``z``).
+        """Names of the ``N`` unknowns, ``z0, z1, ...``.
+
+        The landing's ``state_names`` are those of the system's states, not of ``z``.
         """
         return tuple(f"z{k}" for k in range(self.n_unknowns))
 

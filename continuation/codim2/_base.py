@@ -156,8 +156,9 @@ class AugmentedProblem:
         return np.zeros(self.n + 1)
 
     def _memo(self, tag: str, z: FloatArray, p: float, fn: Any) -> Any:
-        """``fn()`` cached on ``(tag, z, p)`` (the driver evaluates several test
-        functions at the same point).
+        """``fn()`` cached on ``(tag, z, p)``.
+
+        The driver evaluates several test functions at the same point.
         """
         key = (tag, np.asarray(z, dtype=float).tobytes(), float(p))
         cache: dict[Any, Any] = self._memo_cache  # type: ignore[attr-defined]

@@ -396,7 +396,8 @@ def _continue_once(
     error_tol: float | None = None,
     previous: PeriodicOrbit | None = None,
 ) -> Branch:
-    """One driver run on one mesh (PD/NS/T_max events, phase reference per step);
+    """One driver run on one mesh (PD/NS/T_max events, phase reference per step).
+
     ``fix_period``: the start is corrected at its period rather than its parameter;
     ``period_sign`` (+1/-1): the branch leaves the start with the period growing /
     shrinking (0: by the sign of ``settings.ds`` in the parameter); ``previous``: the
@@ -498,9 +499,10 @@ def _continue_segments(
     error_tol: float | None = None,
     max_intervals: int = 400,
 ) -> Branch:
-    """Segments of ``every`` steps with an equidistributed mesh each (see
-    :func:`continue_periodic`), merged into one branch; with ``error_tol`` the number
-    of intervals grows where the error estimate of a segment's last cycle exceeds it.
+    """Segments of ``every`` steps, each on an equidistributed mesh, merged into one branch.
+
+    See :func:`continue_periodic`; with ``error_tol`` the number of intervals grows where
+    the error estimate of a segment's last cycle exceeds it.
 
     Each segment after the first starts from the last cycle interpolated onto the
     equidistributed mesh; the driver's start correction (at fixed parameter) solves it
@@ -599,8 +601,10 @@ def _truncated(br: Branch, k: int, status: Status, message: str) -> Branch:
 
 
 def _limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
-    r"""The branch ended where its period grows without bound and its parameter has
-    come within its own error of the limit, or None while it has not.
+    r"""The end of a branch whose period grows without bound, or None.
+
+    The branch ended where its period grows without bound and its parameter has come within
+    its own error of the limit; None while it has not.
 
     Near a homoclinic or heteroclinic orbit of saddles ``p = p^* + c e^{-T/b}``. Where
     the period grew over the last ``n_tail`` rows and the parameter moved one way (or
@@ -678,8 +682,9 @@ def _limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
 def _refined_intervals(
     orb: PeriodicOrbit, error: float, error_tol: float | None, max_intervals: int
 ) -> int | None:
-    """Number of intervals for the next segment (None: keep), from the error estimate
-    ``error`` of ``orb`` (order ``m + 1`` in the interval length).
+    """Number of intervals for the next segment (None: keep).
+
+    From the error estimate ``error`` of ``orb`` (order ``m + 1`` in the interval length).
     """
     N = orb.mesh.n_intervals
     if error_tol is None or not math.isfinite(error) or error <= error_tol or N >= max_intervals:
@@ -699,11 +704,12 @@ def _refine_start(
     rounds: int = 4,
     fix_period: bool = False,
 ) -> PeriodicOrbit:
-    """The start cycle on a mesh whose error estimate is within ``error_tol`` (at most
-    ``max_intervals`` intervals, ``rounds`` refinements by :func:`_refined_intervals`),
-    so that the first segment's rows are not left above the tolerance; a refinement
-    that does not converge keeps the cycle as it was (the driver's start correction
-    and the message report what follows).
+    """The start cycle on a mesh whose error estimate is within ``error_tol``.
+
+    At most ``max_intervals`` intervals, ``rounds`` refinements by
+    :func:`_refined_intervals`, so that the first segment's rows are not left above the
+    tolerance; a refinement that does not converge keeps the cycle as it was (the driver's
+    start correction and the message report what follows).
     """
     for _ in range(rounds):
         n_new = _refined_intervals(orb, error_estimate(orb.mesh, orb.X), error_tol, max_intervals)
@@ -718,8 +724,10 @@ def _refine_start(
 
 
 def _merge_segments(segs: list[Branch]) -> Branch:
-    """One branch from consecutive segments (the first row of each later segment, the
-    previous segment's last cycle on the new mesh, is dropped).
+    """One branch from consecutive segments.
+
+    The first row of each later segment, the previous segment's last cycle on the new mesh,
+    is dropped.
     """
     rows: dict[str, list[Any]] = {k: [] for k in ("p", "x", "eig", "nun", "ds", "it")}
     recs: dict[str, list[float]] = {}
@@ -856,8 +864,9 @@ def _finish(
 
 
 def _state_ranges(br: Branch) -> FloatArray:
-    """Largest ``max - min`` of a state over the cycle at each row, shape ``(len(br),)``
-    (1 where no state moves, so that the ratio stays the absolute estimate).
+    """Largest ``max - min`` of a state over the cycle at each row, shape ``(len(br),)``.
+
+    1 where no state moves, so that the ratio stays the absolute estimate.
     """
     rec = br.records
     names = problem_at(br, 0).system.state_names
@@ -997,11 +1006,12 @@ class PeriodLimit:
 def _log_fit(
     p: FloatArray, T: FloatArray, b_fixed: float | None = None
 ) -> tuple[float, float, float]:
-    """Fit ``p = p* + c exp(-T / b)`` (i.e. ``T = a - b ln|p - p*|``); returns
-    ``(p*, b, rms of the fit in p)``. For fixed ``b`` the fit is linear in ``(p*, c)``;
-    ``b`` is found by a bounded scalar search on ``ln b``. Where that search ends on a
-    bound or the rows agree to ``1e-10`` relative (``b`` is not determined by the rows),
-    the fit with ``b = b_fixed`` is returned, with ``b`` as NaN.
+    """Fit ``p = p* + c exp(-T / b)`` (i.e. ``T = a - b ln|p - p*|``).
+
+    Returns ``(p*, b, rms of the fit in p)``. For fixed ``b`` the fit is linear in ``(p*,
+    c)``; ``b`` is found by a bounded scalar search on ``ln b``. Where that search ends on a
+    bound or the rows agree to ``1e-10`` relative (``b`` is not determined by the rows), the
+    fit with ``b = b_fixed`` is returned, with ``b`` as NaN.
     """
     Tn = T - float(np.min(T))  # exponentials in (0, 1]: no overflow
 

@@ -129,8 +129,9 @@ def continue_period_doubled(
     amplitude: float = 1e-2,
     **kwargs: Any,
 ) -> Branch:
-    """The branch of doubled cycles from a PD point, continued away from it (the sign
-    of ``settings.ds`` follows the side of :func:`switch_period_doubling`). Other
+    """The branch of doubled cycles from a PD point, continued away from it.
+
+    The sign of ``settings.ds`` follows the side of :func:`switch_period_doubling`. Other
     keywords go to :func:`~continuation.periodic.continuation.continue_periodic`.
     """
     orb, side = switch_period_doubling(branch, which, amplitude=amplitude)

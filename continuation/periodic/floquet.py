@@ -116,10 +116,11 @@ def grouped(factors: FloatArray, groups: int = GROUPS) -> FloatArray:
 
 
 def dominance_basis(factors: FloatArray) -> FloatArray | None:
-    r"""A start for :func:`periodic_eigenvalues`: an orthonormal ``Q`` whose first ``k``
-    columns span the invariant subspace of the ``k`` eigenvalues of largest modulus of
-    the explicitly formed product (real and imaginary parts of the eigenvectors, by
-    decreasing modulus, orthonormalised in that order), for every ``k``.
+    r"""A start for :func:`periodic_eigenvalues`: an orthonormal ``Q``.
+
+    Its first ``k`` columns span the invariant subspace of the ``k`` eigenvalues of largest
+    modulus of the explicitly formed product (real and imaginary parts of the eigenvectors,
+    by decreasing modulus, orthonormalised in that order), for every ``k``.
 
     The dominant invariant subspaces of the formed product are accurate even where its
     small eigenvalues have lost all digits, so the iteration starts next to its fixed
@@ -284,8 +285,7 @@ def floquet(
 
 
 def exponents(mu: ComplexArray, imag_tol: float = 1e-8) -> ComplexArray:
-    r"""Floquet exponents per period, :math:`\ln|\mu| + i \arg\mu`, for the driver's
-    stability count.
+    r"""Floquet exponents per period, :math:`\ln|\mu| + i \arg\mu` (the driver's stability count).
 
     Real multipliers (``|Im mu| <= imag_tol |mu|``), negative ones included, give real
     exponents :math:`\ln|\mu|`, so that ``Re > 0`` counts each multiplier outside the
@@ -316,8 +316,9 @@ def ns_test(mu: ComplexArray) -> float:
 
 
 def is_neimark_sacker(mu: ComplexArray, tol: float = 1e-3) -> tuple[bool, float]:
-    """At a zero of :func:`ns_test`: a complex pair on the unit circle? Returns
-    ``(True, theta)`` with the pair's argument ``theta`` in ``(0, pi)``, or
+    """At a zero of :func:`ns_test`: a complex pair on the unit circle?
+
+    Returns ``(True, theta)`` with the pair's argument ``theta`` in ``(0, pi)``, or
     ``(False, nan)`` (a neutral saddle: real ``mu``, ``1/mu``).
     """
     mu = np.asarray(mu, dtype=complex)

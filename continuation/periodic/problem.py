@@ -179,8 +179,10 @@ class PeriodicOrbitProblem:
 
     @property
     def exact_jacobian(self) -> bool:
-        """The derivatives are exact where the system has a CasADi trace (else the
-        system's finite differences): :func:`~continuation.problem.exact_jacobian`.
+        """The derivatives are exact where the system has a CasADi trace.
+
+        Else they are the system's finite differences:
+        :func:`~continuation.problem.exact_jacobian`.
         """
         return bool(getattr(self.system, "has_casadi", False))
 
@@ -320,8 +322,9 @@ class PeriodicOrbitProblem:
         return B, F
 
     def floquet(self, z: FloatArray, p: float) -> FloquetResult:
-        """Floquet multipliers of the cycle ``z`` by condensation of the collocation
-        blocks (:func:`~continuation.periodic.collocation.monodromy_factors`).
+        """Floquet multipliers of the cycle ``z`` by condensation of the collocation blocks.
+
+        See :func:`~continuation.periodic.collocation.monodromy_factors`.
         """
         key = (np.asarray(z, dtype=float).tobytes(), float(p))
         # a few points: the driver asks for the multipliers at a row, at the row moved

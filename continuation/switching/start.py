@@ -66,10 +66,10 @@ def offset_direction(
 
 
 class OrientedStart(ContinuationAlgorithm):
-    """Wraps an algorithm so that the start tangent points along ``+orient`` when
-    ``settings.ds > 0`` and along ``-orient`` otherwise (instead of the sign rule on
-    ``dp/ds``, which cannot tell the halves of a crossing branch apart where it is
-    vertical, e.g. at a pitchfork).
+    """An algorithm whose start tangent points along ``+orient`` (``-orient`` for ``ds < 0``).
+
+    Instead of the sign rule on ``dp/ds``, which cannot tell the halves of a crossing branch
+    apart where it is vertical, e.g. at a pitchfork.
     """
 
     def __init__(self, inner: ContinuationAlgorithm, orient: FloatArray) -> None:
@@ -117,8 +117,9 @@ def start_point(
     w: FloatArray,
     newton: NewtonSettings,
 ) -> tuple[FloatArray | None, str]:
-    """Solve ``G(u) = 0, <phi2, u - u*>_theta = sign a S`` from ``u* + sign a t_new``;
-    returns ``(u, "")`` or ``(None, reason)``.
+    """Solve ``G(u) = 0, <phi2, u - u*>_theta = sign a S`` from ``u* + sign a t_new``.
+
+    Returns ``(u, "")`` or ``(None, reason)``.
     """
     u_star = np.append(ct.z, ct.p)
     phi2, S = offset_direction(ct, t_new, w)
