@@ -177,3 +177,35 @@ def test_check_finds_a_wrong_derivative_and_a_wrong_shape():
     assert not bad.ok and "dp has shape (3,)" in bad.failures[0]
     bad = check_problem(StaleFastPath(**base), z, p)
     assert bad.failures == ("linearize differs from (residual, jacobian, dp)",)
+
+
+def test_driver_runs_the_life_cycle_hooks():
+    """``accept(z, p)`` once per accepted row (start included, in order, before
+    ``progress``) and ``relabel`` once on the finished branch's special points."""
+    from helpers import fold_normal_form
+
+    from continuation.driver import continue_branch
+    from continuation.settings import ContinuationSettings
+
+    calls: list[tuple[str, float]] = []
+
+    @dataclasses.dataclass(frozen=True)
+    class Hooked(EquilibriumProblem):
+        def accept(self, z, p):
+            calls.append(("accept", float(p)))
+
+        def relabel(self, specials):
+            calls.append(("relabel", float(len(specials))))
+            return tuple(dataclasses.replace(s, label=f"my{s.label}") for s in specials)
+
+    s = fold_normal_form()
+    prob = Hooked(s, s.params(mu=1.0), "mu")
+    seen: list[float] = []
+    br = continue_branch(prob, [1.0], 1.0, settings=ContinuationSettings(ds=-0.1, max_steps=30),
+                         progress=lambda bp: seen.append(float(bp.p)))  # fmt: skip
+    accepted = [p for k, p in calls if k == "accept"]
+    np.testing.assert_array_equal(accepted, br.p)
+    assert seen == accepted
+    assert [k for k, _ in calls].count("relabel") == 1 and calls[-1][0] == "relabel"
+    (fold,) = br.find("fold")
+    assert fold.label == "myF1" and fold.p == pytest.approx(0.0, abs=1e-8)
