@@ -23,6 +23,7 @@ from .settings import ContinuationSettings, DetectionSettings, NewtonSettings
 from .algorithms import PALC, Natural
 from .events import Event
 from .problem import ContinuationProblem, EquilibriumProblem
+from .check import ProblemCheck, check_problem
 
 # results, status and errors
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
@@ -66,6 +67,8 @@ __all__ = [
     "Event",
     "ContinuationProblem",
     "EquilibriumProblem",
+    "check_problem",
+    "ProblemCheck",
     # results, status and errors
     "Branch",
     "BranchPoint",

@@ -91,6 +91,7 @@ from .linalg import BorderedLU
 
 log = logging.getLogger(__name__)
 
+numba: Any
 try:  # pragma: no cover - exercised through the import
     import llvmlite.binding as _llvm
     import numba
@@ -132,10 +133,12 @@ def _offsets(n: int) -> tuple[int, int, int, int, int, int, int, int, int, int]:
 
 
 def out_layout(n: int) -> int:
-    """Length of a step's output buffer: ``eig`` (``2n``, complex as pairs), ``u``,
-    ``d`` (``n + 1`` each), ``G`` (``n``), ``G_z`` (``n^2``, Fortran order), ``G_p``
-    (``n``), the LU factors (``(n + 1)^2``, Fortran order), ``t_raw``, ``tau``, ``c``
-    (``n + 1`` each), in that order."""
+    """Length of a step's output buffer.
+
+    ``eig`` (``2n``, complex as pairs), ``u``, ``d`` (``n + 1`` each), ``G`` (``n``),
+    ``G_z`` (``n^2``, Fortran order), ``G_p`` (``n``), the LU factors (``(n + 1)^2``,
+    Fortran order), ``t_raw``, ``tau``, ``c`` (``n + 1`` each), in that order.
+    """
     return _offsets(n)[-1] + n + 1
 
 
@@ -147,9 +150,11 @@ if HAVE_NUMBA:
 
     @_jit
     def _run_tape(op, ia, ib, io, consts, w, u, p, f, nz):  # pragma: no cover - compiled
-        """Evaluate a linearisation tape (:func:`linearisation_tape`): inputs ``(u, p)``,
-        outputs ``(f, nz)``. One flat branch chain, the most frequent operations first
-        (a call per operation costs more than the operation)."""
+        """Evaluate a linearisation tape (:func:`linearisation_tape`).
+
+        Inputs ``(u, p)``, outputs ``(f, nz)``. One flat branch chain, the most frequent
+        operations first (a call per operation costs more than the operation).
+        """
         for k in range(op.size):
             o = op[k]
             if o == _K_MUL:
@@ -273,7 +278,8 @@ if HAVE_NUMBA:
         Writes the non-zeros into the top block of ``M`` (its structural zeros stay 0,
         its last row is the border ``c``) and ``r = (f, c . u - h)``. Returns
         ``(max|r|, r . r, max|u|, max|f|, sum M_ij^2)`` (maxima ignore NaN, the sums
-        do not), as the norms output of the CasADi evaluator."""
+        do not), as the norms output of the CasADi evaluator.
+        """
         _run_tape(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz)
         n1 = u.size
         n = n1 - 1
@@ -312,8 +318,10 @@ if HAVE_NUMBA:
 
     @_jit
     def _backward_error(M, r, u):  # pragma: no cover - compiled
-        """``corrector._backward_error`` of the bordered residual ``r`` at ``u``: ``max(max_i
-        |G_i| / max_i (|M| |u|)_i, |r_n| / (|M| |u|)_n)``, ``i < n``."""
+        """``corrector._backward_error`` of the bordered residual ``r`` at ``u``.
+
+        ``max(max_i |G_i| / max_i (|M| |u|)_i, |r_n| / (|M| |u|)_n)``, ``i < n``.
+        """
         n1 = u.size
         n = n1 - 1
         sf = 0.0
@@ -334,8 +342,11 @@ if HAVE_NUMBA:
 
     @_jit
     def _factor_solve(M, r, lu, x, piv, iw, ch):  # pragma: no cover - compiled
-        """LAPACK ``dgetrf`` of a copy of ``M`` into ``lu`` (1-based ``piv``) and
-        ``dgetrs`` for ``x = M^{-1} [r, e_{N+1}]`` (what ``dgesv`` does). Returns info."""
+        """LAPACK ``dgetrf`` and ``dgetrs``: what ``dgesv`` does. Returns info.
+
+        ``dgetrf`` of a copy of ``M`` into ``lu`` (1-based ``piv``) and ``dgetrs`` for ``x =
+        M^{-1} [r, e_{N+1}]``.
+        """
         n1 = r.size
         for j in range(n1):
             for i in range(n1):
@@ -371,8 +382,11 @@ if HAVE_NUMBA:
 
     @_jit
     def _views(fb, ib):  # pragma: no cover - compiled
-        """The kernel's buffers as views of its two packed arrays (one argument each:
-        a compiled call pays for every argument it unboxes). Layout: :class:`StepKernel`."""
+        """The kernel's buffers as views of its two packed arrays.
+
+        One argument each: a compiled call pays for every argument it unboxes. Layout:
+        :class:`StepKernel`.
+        """
         n, m, nnz, k, nw, lwork = ib[0], ib[1], ib[2], ib[3], ib[4], ib[5]
         n1 = n + 1
         o = 8
@@ -418,8 +432,9 @@ if HAVE_NUMBA:
     @_jit
     def _step(fb, ib, out, piv_out, ua, tau, wt, prev_d, prev_tau, sc, hermite, guarded,
               want_eig):  # fmt: skip  # pragma: no cover - compiled
-        """One pseudo-arclength step (``PALC.step`` with ``correct(..., exact=False)``
-        and ``make_point``), compiled.
+        """One pseudo-arclength step, compiled.
+
+        ``PALC.step`` with ``correct(..., exact=False)`` and ``make_point``.
 
         ``sc = (ds, prev_h, cos_hermite, max_contraction, max_distance, cos_max, tol,
         step_tol, max_iter, eig_tol, imag_tol, NOISE_SLACK, ROUNDOFF_FLOOR)``. On
@@ -428,7 +443,8 @@ if HAVE_NUMBA:
         Returns ``(code, iters, rn, gn, jac_finite, ctau, det_sign, eig_ok, n_real,
         n_pairs)``; ``code`` 0: the step is accepted with these values; 1: anything
         else (a rejection or a rare case: the caller runs the Python step instead,
-        which is authoritative)."""
+        which is authoritative).
+        """
         (tp_op, tp_ia, tp_ib, tp_io, tp_c, w, p, f, nz, rows, cols, M, r, lu, x, piv,
          A, wr, wi, work, iw, ch) = _views(fb, ib)  # fmt: skip
         n1 = ua.size
@@ -698,8 +714,10 @@ class StepKernel:
 
 
 def _lazy(name: str, make: Any) -> property:
-    """A property over ``PointInfo``'s slot ``name`` that fills it with ``make(self)`` on
-    first read (and is written as the slot)."""
+    """A property over ``PointInfo``'s slot ``name``, filled with ``make(self)`` on first read.
+
+    It is written as the slot.
+    """
     slot = getattr(PointInfo, name)
 
     def get(self: Any) -> Any:
@@ -722,7 +740,8 @@ def _lu_of(pt: KernelPoint) -> BorderedLU:
     lu = BorderedLU.from_dense_factors(
         pt._out[o[6] : o[7]].reshape((n1, n1), order="F"), pt._piv
     )
-    lu._sign = pt._bp_sign  # (ctau > 0: det [Gz Gp; (w o tau)^T] has the sign of det M)
+    # (ctau > 0: det [Gz Gp; (w o tau)^T] has the sign of det M; 2.0: not computed yet)
+    lu._sign = 2.0 if pt._bp_sign is None else pt._bp_sign
     return lu
 
 

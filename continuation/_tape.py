@@ -85,8 +85,10 @@ class Tape:
 
 
 def tape_of(fn: Any) -> Tape | None:
-    """The instruction tape of an SX ``casadi.Function``, or None if it has an
-    operation the interpreter does not support (or is not an SX function)."""
+    """The instruction tape of an SX ``casadi.Function``, or None.
+
+    None if it has an operation the interpreter does not support (or is not an SX function).
+    """
     import casadi as ca
 
     to_kernel = {getattr(ca, name): k for name, k in _CASADI_OPS.items() if hasattr(ca, name)}
@@ -113,18 +115,20 @@ def tape_of(fn: Any) -> Tape | None:
                 row[2] = ins[1] if len(ins) > 1 else 0
                 row[3] = outs[0]
         cols = [np.ascontiguousarray(code[:, j], dtype=np.int32) for j in range(4)]
-        return Tape(*cols, consts, int(fn.sz_w()))
+        return Tape(cols[0], cols[1], cols[2], cols[3], consts, int(fn.sz_w()))
     except (RuntimeError, NotImplementedError, TypeError) as exc:  # an MX function
         log.debug("no instruction tape: %s", exc)
         return None
 
 
 def linearisation_tape(system: Any, index: int) -> tuple[Tape, Any, Any] | None:
-    """Tape of ``(u, p) -> (f, nz)`` for a system with a CasADi trace, where
-    ``u = (x, p_index)`` (shape ``(n + 1,)``; the ``index`` entry of ``p`` is ignored)
-    and ``nz`` are the structural non-zeros of ``[df/dx, df/dp_index]``; with their row
-    and column indices (int64 arrays). None without a trace, with an operation the
-    interpreter does not support, or with more than ``MAX_TAPE_INSTRUCTIONS``."""
+    """Tape of ``(u, p) -> (f, nz)`` for a system with a CasADi trace.
+
+    Here ``u = (x, p_index)`` (shape ``(n + 1,)``; the ``index`` entry of ``p`` is ignored)
+    and ``nz`` are the structural non-zeros of ``[df/dx, df/dp_index]``; with their row and
+    column indices (int64 arrays). None without a trace, with an operation the interpreter
+    does not support, or with more than ``MAX_TAPE_INSTRUCTIONS``.
+    """
     import casadi as ca
 
     if getattr(system, "_ca", None) is None:
@@ -148,9 +152,11 @@ def linearisation_tape(system: Any, index: int) -> tuple[Tape, Any, Any] | None:
 
 
 def step_kernel_for(problem: Any) -> Any:
-    """The compiled step (:class:`continuation._kernel.StepKernel`) of an
-    :class:`~continuation.problem.EquilibriumProblem`, or None (sparse, no CasADi
-    trace, too large, an unsupported operation, or no Numba)."""
+    """The compiled step of an :class:`~continuation.problem.EquilibriumProblem`, or None.
+
+    :class:`continuation._kernel.StepKernel`; None when sparse, without a CasADi trace, too
+    large, with an unsupported operation, or without Numba.
+    """
     if getattr(problem, "sparse", True):
         return None
     system = getattr(problem, "system", None)

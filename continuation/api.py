@@ -117,7 +117,7 @@ def continue_equilibria(
         raise ValueError(f"`free` must be one of {system.param_names}, got {free!r}")
     x = system.check_state(x0, "x0")
     par = _params(system, params)
-    given = {
+    given: dict[str, Any] = {
         "ds": ds,
         "ds_min": ds_min,
         "ds_max": ds_max,

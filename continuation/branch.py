@@ -48,11 +48,26 @@ from .settings import ContinuationSettings, DetectionSettings, NewtonSettings
 from .status import Status
 from .typing import BoolArray, ComplexArray, FloatArray, IntArray
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+"""Version of the Branch file written by :meth:`Branch.save`.
+
+Version 1 stored the period doublings and Neimark-Sacker points of cycle branches
+as ``user`` points labelled ``"PD"``/``"NS"``; :meth:`Branch.load` reads them as the
+``pd``/``ns`` kinds of version 2.
+"""
+_LEGACY_CYCLE_KINDS = {"PD": "pd", "NS": "ns"}
 
 
 class SpecialKind(enum.StrEnum):
-    """Kinds of special points along a branch."""
+    """Kinds of special points along a branch.
+
+    Equilibria: ``fold``, ``hopf``, ``bp`` (and the codimension-two points of the
+    curves of :mod:`continuation.codim2`). Periodic orbits: a fold of cycles is a
+    ``fold`` (labelled ``"LPC1"``...), a branch point ``bp`` (``"BPC1"``...), a
+    period doubling ``pd`` (a Floquet multiplier through ``-1``, labelled ``"PD"``)
+    and a Neimark-Sacker point ``ns`` (a complex pair through the unit circle,
+    labelled ``"NS"``). ``user`` points are the zeros of monitored events.
+    """
 
     FOLD = "fold"
     HOPF = "hopf"
@@ -62,6 +77,8 @@ class SpecialKind(enum.StrEnum):
     ZERO_HOPF = "zh"
     GENERALIZED_HOPF = "gh"
     DOUBLE_HOPF = "hh"
+    PERIOD_DOUBLING = "pd"
+    NEIMARK_SACKER = "ns"
     USER = "user"
 
 
@@ -203,6 +220,22 @@ class BranchPoint:
 
 def _settings_to_json(s: ContinuationSettings) -> dict[str, Any]:
     return dataclasses.asdict(s)
+
+
+def _special_points(meta: Mapping[str, Any], cycles: bool) -> tuple[SpecialPoint, ...]:
+    """The special points of a Branch file, version-1 cycle points read as ``pd``/``ns``.
+
+    ``cycles``: the branch is one of periodic orbits (it records the period ``T``);
+    only there a version-1 ``user`` point labelled ``"PD"``/``"NS"`` was a Floquet
+    point (on other branches it is a user event of that name and stays one).
+    """
+    out = []
+    legacy = cycles and int(meta.get("version", 1)) < 2
+    for d in meta["special_points"]:
+        if legacy and d["kind"] == SpecialKind.USER and d.get("label") in _LEGACY_CYCLE_KINDS:
+            d = {**d, "kind": _LEGACY_CYCLE_KINDS[d["label"]]}
+        out.append(SpecialPoint.from_json(d))
+    return tuple(out)
 
 
 def _settings_from_json(d: Mapping[str, Any] | None) -> ContinuationSettings | None:
@@ -396,9 +429,10 @@ class Branch:
         raise ValueError(f"unknown parameter name {name!r}; valid names are {known}")
 
     def find(self, kind: SpecialKind | str) -> tuple[SpecialPoint, ...]:
-        """Special points of ``kind`` (``"fold"``, ``"hopf"``, ``"bp"``, ``"user"``...).
+        """Special points of ``kind`` (``"fold"``, ``"hopf"``, ``"bp"``, ``"pd"``...).
 
-        The name of a monitored user event is also accepted and selects its points.
+        The name of a monitored user event, or a point's label (``"PD"``, ``"LPC1"``),
+        is also accepted and selects the points of that label.
 
         Raises
         ------
@@ -406,7 +440,7 @@ class Branch:
             If ``kind`` is neither a :class:`SpecialKind` nor a monitored event name.
         """
         if isinstance(kind, str) and kind not in {k.value for k in SpecialKind}:
-            labels = {s.label for s in self.special_points if s.kind == SpecialKind.USER}
+            labels = {s.label for s in self.special_points}
             if kind in self.event_names or kind in labels:
                 return tuple(s for s in self.special_points if s.label == kind)
             raise ValueError(
@@ -444,7 +478,7 @@ class Branch:
             The NPZ path written.
         """
         npz, js = self._paths(path)
-        arrays = {
+        arrays: dict[str, Any] = {
             "p": self.p,
             "x": self.x,
             "eigenvalues": self.eigenvalues,
@@ -495,7 +529,7 @@ class Branch:
             ds=arr["ds"],
             newton_iters=arr["newton_iters"],
             records=records,
-            special_points=tuple(SpecialPoint.from_json(d) for d in meta["special_points"]),
+            special_points=_special_points(meta, "T" in records),
             status=Status[meta["status"]],
             message=meta.get("message", ""),
             settings=_settings_from_json(meta.get("settings")),

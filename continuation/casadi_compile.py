@@ -279,8 +279,11 @@ _PENDING: dict[int, tuple[Any, Path]] = {}
 
 
 def _library(fns: list[ca.Function], cc: str) -> tuple[str, Path]:
-    """The C source of ``fns`` and the cache path of its library (named after ``fns[0]``
-    and the SHA-256 of the source, the compiler command, CasADi and the platform)."""
+    """The C source of ``fns`` and the cache path of its library.
+
+    The library is named after ``fns[0]`` and the SHA-256 of the source, the compiler
+    command, CasADi and the platform.
+    """
     gen = ca.CodeGenerator("fn.c", {"with_header": False})
     for f in fns:
         gen.add(f)

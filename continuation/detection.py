@@ -107,6 +107,13 @@ def _hermite_at_p(
 
 @dataclass(eq=False, slots=True)
 class Row:
+    """One accepted (or trial) point of a run with what detection needs of it.
+
+    Attributes are the unknowns ``z`` (N,), the parameter ``p``, the stability
+    eigenvalues and their unstable counts, the step ``ds`` that reached it, the Newton
+    iterations, the records, the event values and their slopes ``d(event)/ds``.
+    """
+
     z: FloatArray
     p: float
     eig: ComplexArray | None
@@ -117,6 +124,11 @@ class Row:
     events: list[float]
     point: PointInfo
     slopes: list[float] = field(default_factory=list)  # d(event)/ds along the tangent
+
+
+def _minus_bound(bound: float) -> Callable[[Any, float], float]:
+    """``(point, t) -> p - bound``: the test function of a parameter bound."""
+    return lambda pt, t: float(pt.p) - bound
 
 
 class RunContext:
@@ -149,6 +161,7 @@ class RunContext:
 
     # ------------------------------------------------------------------ rows
     def make_row(self, pt: PointInfo, ds: float) -> Row:
+        """The :class:`Row` of a corrected point: eigenvalues, counts, records, events."""
         ev = self.eig(pt)
         counts = pt.cache.get("counts") if ev is not None else None
         if counts is None and ev is not None:
@@ -179,6 +192,10 @@ class RunContext:
         | None = None,
         same_branch: bool = False,
     ) -> LocateResult:
+        """The zero of ``test`` between rows ``a`` and ``b`` (:func:`.locate_zero`).
+
+        With ``settings.detect.locate`` off, the bracket's end (or row ``a``) unlocated.
+        """
         det = self.settings.detect
         if not det.locate:
             if bracket is not None:
@@ -206,8 +223,9 @@ class RunContext:
     def event_brackets(
         self, a: Row, b: Row, sigma_b: float, w: FloatArray, k: int
     ) -> list[tuple[tuple[float, PointInfo, float], tuple[float, PointInfo, float]]]:
-        """The sub-brackets of the step from ``a`` to ``b`` where event ``k`` crosses zero
-        (in its direction), in branch order: ``[((sigma_lo, point_lo, g_lo),
+        """The sub-brackets of the step from ``a`` to ``b`` where event ``k`` crosses zero.
+
+        Crossings in the event's direction, in branch order: ``[((sigma_lo, point_lo, g_lo),
         (sigma_hi, point_hi, g_hi)), ...]``.
 
         A sign change between the rows is the whole step. When ``g`` has the same sign
@@ -301,12 +319,14 @@ class RunContext:
     def locate_event(
         self, a: Row, b: Row, sigma_b: float, w: FloatArray, e: Event, lo: Any, hi: Any
     ) -> LocateResult:
-        """Locate the zero of event ``e`` in the sub-bracket ``(lo, hi)`` of the step
-        (ends ``(sigma, point, g)`` from :meth:`event_brackets`).
+        """Locate the zero of event ``e`` in the sub-bracket ``(lo, hi)`` of the step.
+
+        The ends are ``(sigma, point, g)`` from :meth:`event_brackets`.
 
         An event at a parameter value whose bracket is the whole step is solved
         directly at that value (:meth:`bound_direct`) where ``p`` is monotone along the
-        step; otherwise, and if that solve fails, its zero is located as any other."""
+        step; otherwise, and if that solve fails, its zero is located as any other.
+        """
         if (
             e.param_value is not None
             and self.settings.detect.locate
@@ -373,11 +393,11 @@ class RunContext:
         if hopf:
             assert ac is not None and bc is not None
             assert a.eig is not None and b.eig is not None
-            if abs(b.counts[1] - a.counts[1]) > 1:
+            if abs(bc[1] - ac[1]) > 1:
                 log.warning(
                     "%d complex pairs crossed between p=%.8g and p=%.8g; only one Hopf point "
                     "is located: reduce ds_max to separate them",
-                    abs(b.counts[1] - a.counts[1]),
+                    abs(bc[1] - ac[1]),
                     pa.p,
                     pb.p,
                 )
@@ -577,8 +597,10 @@ class RunContext:
     def point_on_bound(
         self, u: FloatArray, bound: float, c: FloatArray, w: FloatArray
     ) -> tuple[CorrectorResult, PointInfo] | None:
-        """Newton's method at fixed ``p = bound`` from ``u`` (its ``p`` replaced), and the
-        point with its tangent (border ``c``); None if either fails."""
+        """Newton's method at fixed ``p = bound`` from ``u`` (its ``p`` replaced).
+
+        Returns the point with its tangent (border ``c``); None if either fails.
+        """
         guess = np.array(u, dtype=float)
         guess[-1] = bound
         e_p = np.zeros(guess.size)
@@ -654,7 +676,7 @@ class RunContext:
                     b.point,
                     sigma_b,
                     w,
-                    lambda pt, t, bound=bound: pt.p - bound,
+                    _minus_bound(bound),
                     pa - bound,
                     pb - bound,
                     newton=s.newton,

@@ -36,7 +36,14 @@ from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .detection import ProgressFn, Row, RunContext
 from .errors import ContinuationError, ConvergenceError
 from .events import Event
-from .problem import is_sparse, jacobian_is_stability, param_values, state_names
+from .problem import (
+    accept_hook,
+    is_sparse,
+    jacobian_is_stability,
+    param_values,
+    relabel,
+    state_names,
+)
 from .row_eigs import run_checked
 from .settings import ContinuationSettings
 from .status import Status
@@ -74,9 +81,12 @@ def _run(
     orient: FloatArray | None = None,
     warn_fold: bool = True,
 ) -> _Run:
-    """One direction from ``(z0, p0)``; ``orient``: a direction the start tangent must
-    point along (``theta``-inner product > 0), overriding the sign rule of ``dp/ds``;
-    ``warn_fold``: warn when the start point is a fold (the sign rule is arbitrary)."""
+    """One direction from ``(z0, p0)``.
+
+    ``orient``: a direction the start tangent must point along (``theta``-inner product >
+    0), overriding the sign rule of ``dp/ds``; ``warn_fold``: warn when the start point is a
+    fold (the sign rule is arbitrary).
+    """
     s = ctx.settings
     run = _Run()
     try:
@@ -311,7 +321,7 @@ def _make_branch(
         ds=np.array(ds, dtype=float),
         newton_iters=np.array([r.iters for r in rows], dtype=int),
         records=records,
-        special_points=_relabel(specials),
+        special_points=relabel(problem, _relabel(specials)),
         status=status,
         message=message,
         settings=settings,
@@ -429,6 +439,16 @@ def continue_branch(
     if start_fixed is not None:
         p0 = float(start.p)  # corrected with z[start_fixed] held
 
+    accept = accept_hook(problem)  # the problem's life cycle: after every accepted row
+    if accept is not None:
+        user_progress = progress
+
+        def on_row(bp: BranchPoint) -> None:
+            accept(np.asarray(bp.x), float(bp.p))
+            if user_progress is not None:
+                user_progress(bp)
+
+        progress = on_row
     ctx_args = (problem, algorithm)
     ds_abs = abs(settings.ds)
     sgn = 1.0 if settings.ds > 0 else -1.0
@@ -476,8 +496,9 @@ def _checked_inputs(
     events: Sequence[Event],
     direction: str,
 ) -> tuple[ContinuationSettings, ContinuationAlgorithm, tuple[Event, ...], FloatArray, float]:
-    """The arguments of :func:`continue_branch` checked and with their defaults:
-    ``(settings, algorithm, events, z0 as float array (N,), p0 as float)``.
+    """The arguments of :func:`continue_branch` checked and with their defaults.
+
+    Returns ``(settings, algorithm, events, z0 as float array (N,), p0 as float)``.
 
     Raises
     ------
@@ -522,8 +543,10 @@ def _correct_start(
     settings: ContinuationSettings,
     fixed: int | None = None,
 ) -> CorrectorResult:
-    """Newton's method on ``G(z, p0) = 0`` at fixed ``p0`` (bordered with ``e_p``), or
-    with the unknown ``z[fixed]`` held instead (bordered with its unit vector)."""
+    """Newton's method on ``G(z, p0) = 0`` at fixed ``p0`` (bordered with ``e_p``).
+
+    Or with the unknown ``z[fixed]`` held instead (bordered with its unit vector).
+    """
     u0 = np.append(z, p0)
     e_p = np.zeros(u0.size)
     e_p[-1 if fixed is None else int(fixed) % z.size] = 1.0

@@ -366,8 +366,11 @@ class HopfTest:
 
     @property
     def ok(self) -> bool:
-        """Both rows have a critical pair, with real parts of opposite signs or one of
-        them inside the ``eig_tol`` band (``0 <= Re <= eig_tol``) and the other above."""
+        """Both rows have a critical pair, its real parts on both sides of zero.
+
+        Real parts of opposite signs, or one of them inside the ``eig_tol`` band (``0 <= Re
+        <= eig_tol``) and the other above.
+        """
         if self.lam_a is None or self.lam_b is None:
             return False
         ra, rb = self.lam_a.real, self.lam_b.real
@@ -375,8 +378,10 @@ class HopfTest:
 
     @property
     def outside(self) -> bool:
-        """The real parts have the same (positive) sign, one of them in the ``eig_tol``
-        band: the zero of ``Re`` lies just outside the step, beyond that row."""
+        """The real parts have the same (positive) sign, one of them in the ``eig_tol`` band.
+
+        The zero of ``Re`` lies just outside the step, beyond that row.
+        """
         return self.ok and self.lam_a.real * self.lam_b.real > 0  # type: ignore[union-attr]
 
     def track(self, eigs: ComplexArray, t: float) -> complex | None:

@@ -42,9 +42,11 @@ def _inf_norm(v: FloatArray) -> float:
 
 
 def _finite(v: FloatArray) -> bool:
-    """True when every entry of ``v`` is finite (one dot product; entries beyond
-    ``1e154`` in magnitude also count as non-finite, which only ever happens for
-    diverging iterates)."""
+    """True when every entry of ``v`` is finite (one dot product).
+
+    Entries beyond ``1e154`` in magnitude also count as non-finite, which only ever happens
+    for diverging iterates.
+    """
     s = float(v.dot(v))
     return s < math.inf  # False for inf and NaN
 
@@ -130,8 +132,10 @@ def csc_with_data(template: Any, data: FloatArray) -> Any:
 
 
 class _BorderPattern:
-    """Positions of the entries of ``Gz``, ``Gp`` and ``c`` in the bordered CSC matrix
-    (depends only on the sparsity pattern of ``Gz``; built once per pattern)."""
+    """Positions of the entries of ``Gz``, ``Gp`` and ``c`` in the bordered CSC matrix.
+
+    They depend only on the sparsity pattern of ``Gz``: built once per pattern.
+    """
 
     __slots__ = ("indptr", "indices", "nnz", "pos", "border_pos", "template")
 

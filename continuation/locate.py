@@ -170,8 +170,9 @@ def tangent_agrees(pt: PointInfo, a: PointInfo, b: PointInfo, w: Any) -> bool:
 
 
 def fold_guess(a: PointInfo, b: PointInfo, sigma_b: float) -> float | None:
-    """First trial ``sigma`` for a fold between ``a`` and ``b``: the stationary point of
-    the cubic Hermite interpolant of ``p(sigma)``.
+    """First trial ``sigma`` for a fold between ``a`` and ``b``.
+
+    The stationary point of the cubic Hermite interpolant of ``p(sigma)``.
 
     Along the step ``sigma = c . (u - u_a)`` with ``c = w o tau_a`` (the border of
     ``b``), so ``dp/dsigma = tau_p / (c . tau)``: ``tau_a[-1]`` at ``a`` and
@@ -212,8 +213,10 @@ INTERP_POINTS = 4
 
 
 def _poly_zero(x: np.ndarray, g: np.ndarray, lo: float, hi: float) -> float | None:
-    """The zero in ``[lo, hi]`` of the polynomial through ``(x_i, g_i)`` nearest its
-    secant zero; ``g`` changes sign between the samples at ``lo`` and ``hi``."""
+    """The zero in ``[lo, hi]`` of the polynomial through ``(x_i, g_i)`` nearest its secant zero.
+
+    ``g`` changes sign between the samples at ``lo`` and ``hi``.
+    """
     scale = float(np.max(np.abs(g)))
     if not (scale > 0 and math.isfinite(scale)):
         return None
@@ -485,9 +488,12 @@ def locate_zero(
     g_max = max(abs(g_a), abs(g_b))
 
     def g_ok(d: float) -> float:
-        """Largest ``|g|`` at a zero known to within ``d``: with `continuity`, a zero
-        within ``d`` of the point leaves ``|g|`` there of about slope * d; allow
-        `continuity` times the mean slope over the bracket plus round-off noise."""
+        """Largest ``|g|`` at a zero known to within ``d``.
+
+        With `continuity`, a zero within ``d`` of the point leaves ``|g|`` there of about
+        slope * d; allow `continuity` times the mean slope over the bracket plus round-off
+        noise.
+        """
         bound = g_jump * g_max
         if continuity is not None:
             bound = min(bound, continuity * abs(g_b - g_a) / width * d + 1e-6 * g_max)

@@ -29,7 +29,8 @@ class Params(Mapping[str, float]):
     """
 
     names: tuple[str, ...]
-    values: FloatArray = field(repr=False)
+    # (the array of values shadows Mapping.values(), the documented API of Params)
+    values: FloatArray = field(repr=False)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         names = tuple(str(n) for n in self.names)

@@ -14,6 +14,8 @@ _MARKERS = {
     SpecialKind.FOLD: "o",
     SpecialKind.HOPF: "s",
     SpecialKind.BRANCH_POINT: "D",
+    SpecialKind.PERIOD_DOUBLING: "v",
+    SpecialKind.NEIMARK_SACKER: "p",
     SpecialKind.USER: "^",
 }
 

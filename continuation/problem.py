@@ -8,24 +8,40 @@ The contract has two parts:
 
 * :class:`ContinuationProblem`, the five methods and two attributes every problem has
   (checked by ``isinstance``);
-* :class:`ProblemHooks`, the *optional* attributes and fast paths the engine uses when
-  a problem has them (``jacobian_is_stability``, ``linearize``, ``linearizer``,
-  ``bordered_evaluator``, ``step_kernel``, ``difference``, ...). They never change a
-  result beyond round-off, only what it costs (or, for ``difference`` and
-  ``state_names``, how rows are compared and labelled). The engine reads them only
-  through the accessor functions at the end of this module (:func:`linearize`,
-  :func:`linearizer`, :func:`bordered_evaluator`, :func:`step_kernel`,
-  :func:`jacobian_is_stability`, :func:`is_sparse`, :func:`difference`,
+* :class:`ProblemHooks`, the *optional* attributes the driver uses when a problem has
+  them. Two kinds:
+
+  - fast paths (``linearize``, ``linearizer``, ``bordered_evaluator``,
+    ``step_kernel``) and properties (``jacobian_is_stability``, ``exact_jacobian``,
+    ``sparse``, ``difference``, ``state_names``): they never change a result beyond
+    round-off, only what it costs (or how rows are compared and labelled);
+  - the life cycle: ``accept(z, p)`` after every accepted row (a problem with a
+    moving reference, e.g. the phase condition of periodic orbits, updates it
+    there) and ``relabel(specials)`` once on the finished branch's special points
+    (e.g. folds of cycles named ``LPC1``, Floquet zeros turned into the ``pd``/``ns``
+    kinds).
+
+  The engine reads them only through the accessor functions at the end of this
+  module (:func:`linearize`, :func:`linearizer`, :func:`bordered_evaluator`,
+  :func:`step_kernel`, :func:`jacobian_is_stability`, :func:`exact_jacobian`,
+  :func:`is_sparse`, :func:`difference`, :func:`accept_hook`, :func:`relabel`,
   :func:`record_function`, :func:`state_names`, :func:`param_values`): this module is
   the one place where a hook is looked up.
 
+How a run starts is not a hook of the problem but a keyword of
+:func:`~continuation.driver.continue_branch`, since it belongs to one run:
+``start_fixed`` (the unknown held in the start correction instead of ``p``) and
+``start_orient`` (the direction the first tangent points along, instead of the sign
+of ``ds``). :func:`check_problem` (:mod:`continuation.check`) tests a problem against
+this contract: shapes, derivatives against finite differences, hook consistency.
+
 :class:`EquilibriumProblem` (equilibria of a :class:`~continuation.system.System`)
-implements every hook.
+implements every fast path.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any, ClassVar, Protocol, runtime_checkable
@@ -33,6 +49,7 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 import numpy as np
 import scipy.sparse as sp
 
+from .branch import SpecialPoint
 from .params import Params
 from .system import System
 from .typing import ComplexArray, FloatArray
@@ -197,9 +214,11 @@ class EquilibriumProblem:
         return fn
 
     def bordered_evaluator(self) -> Any:
-        """Fused evaluator of the bordered Newton system (dense problems with a CasADi
-        trace; None otherwise), built once and cached; see
-        :meth:`continuation.system.System.bordered_evaluator`."""
+        """Fused evaluator of the bordered Newton system, built once and cached.
+
+        Dense problems with a CasADi trace; None otherwise. See
+        :meth:`continuation.system.System.bordered_evaluator`.
+        """
         ev = self.__dict__.get("_bordered", False)
         if ev is False:
             make = getattr(self.system, "bordered_evaluator", None)
@@ -210,10 +229,11 @@ class EquilibriumProblem:
         return ev
 
     def step_kernel(self) -> Any:
-        """The compiled pseudo-arclength step of this problem
-        (:class:`continuation._kernel.StepKernel`: dense, CasADi trace, a few states, a
-        short tape, Numba installed; :func:`continuation._tape.step_kernel_for`), built
-        once and cached; None otherwise."""
+        """The compiled pseudo-arclength step of this problem, built once and cached.
+
+        :class:`continuation._kernel.StepKernel` (dense, CasADi trace, a few states, a short tape,
+        Numba installed; :func:`continuation._tape.step_kernel_for`); None otherwise.
+        """
         k = self.__dict__.get("_step_kernel", False)
         if k is False:
             from ._tape import step_kernel_for
@@ -288,18 +308,43 @@ class ProblemHooks(Protocol):
         eigenvalues. Not so for augmented (codim-2) problems, whose Jacobian is not the
         linearisation of the flow.
     sparse : bool
-        (default False) ``G_z`` is a SciPy sparse matrix: the BLAS thread count is left
-        alone and the sparse linear algebra is used.
+        (default False) ``G_z`` is a SciPy sparse matrix: the sparse linear algebra is
+        used and BLAS is held to one thread (:mod:`continuation._threads`). A problem
+        whose ``jacobian`` returns a sparse matrix must set it.
     state_names : tuple of str
         (default ``system.state_names``, else ``z0, z1, ...``) Names of the unknowns.
     params : Params
         (optional) All parameter values; stored on the branch.
     system : object
         (optional) The underlying system (``state_names``, ``period``).
+    exact_jacobian : bool
+        (default False) ``G_z`` and ``G_p`` are exact derivatives (automatic
+        differentiation, not finite differences): the PALC step then predicts its
+        final Newton iterate (Newton converges quadratically next to a regular point).
+        A problem claiming it must pass :func:`check_problem` at a tight tolerance.
     """
 
     jacobian_is_stability: bool
     sparse: bool
+    exact_jacobian: bool
+
+    def accept(self, z: FloatArray, p: float) -> None:
+        """Called by the driver after every accepted row ``(z, p)``, the start included.
+
+        It runs after the step's special points were located and before the ``progress`` callback.
+        For problems with a moving reference (the phase condition of periodic orbits). Must not
+        change ``G`` at ``(z, p)`` itself beyond what re-anchoring the reference implies. Fallback:
+        nothing.
+        """
+        ...
+
+    def relabel(self, specials: Sequence[SpecialPoint]) -> tuple[SpecialPoint, ...]:
+        """Called by the driver once on the finished branch's special points.
+
+        They come labelled ``F1``, ``H1``, ``BP1``... in branch order; the hook may rename them,
+        change their kind, add data or drop spurious ones. Fallback: unchanged.
+        """
+        ...
 
     def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
         """``(G (N,), G_z (N, N) dense or sparse, G_p (N,))`` in one evaluation.
@@ -311,27 +356,35 @@ class ProblemHooks(Protocol):
     def linearizer(
         self,
     ) -> Callable[[FloatArray, float], tuple[FloatArray, Any, FloatArray]] | None:
-        """A fast evaluator ``(z, p) -> (G, G_z, G_p)`` with the values of
-        :meth:`linearize` (built once; None: use :meth:`linearize`). May be cached in
-        the instance ``__dict__`` as ``_linearizer``."""
+        """A fast evaluator ``(z, p) -> (G, G_z, G_p)`` with the values of :meth:`linearize`.
+
+        Built once; None: use :meth:`linearize`. May be cached in the instance ``__dict__`` as
+        ``_linearizer``.
+        """
         ...
 
     def bordered_evaluator(self) -> BorderedEvaluatorLike | None:
-        """The fused evaluator of the bordered Newton system (dense problems; built
-        once; None: no fused path). May be cached in the instance ``__dict__`` as
-        ``_bordered``. The corrector then runs one compiled call and one LAPACK
-        ``gesv`` per Newton iteration (:func:`continuation.algorithms.corrector.correct`)."""
+        """The fused evaluator of the bordered Newton system (dense problems; built once).
+
+        None: no fused path. May be cached in the instance ``__dict__`` as ``_bordered``. The
+        corrector then runs one compiled call and one LAPACK ``gesv`` per Newton iteration
+        (:func:`continuation.algorithms.corrector.correct`).
+        """
         ...
 
     def step_kernel(self) -> Any:
-        """The compiled pseudo-arclength step (:class:`continuation._kernel.StepKernel`)
-        or None. Used by :class:`~continuation.algorithms.palc.PALC` with
-        ``kernel=True``; a step the kernel does not accept is redone in Python."""
+        """The compiled pseudo-arclength step (:class:`continuation._kernel.StepKernel`) or None.
+
+        Used by :class:`~continuation.algorithms.palc.PALC` with ``kernel=True``; a step the kernel
+        does not accept is redone in Python.
+        """
         ...
 
     def difference(self, z1: FloatArray, z2: FloatArray) -> FloatArray:
-        """``z1 - z2``, shape ``(N,)``, with periodic unknowns reduced modulo their
-        period (closed-loop detection and distances). Fallback: ``z1 - z2``."""
+        """``z1 - z2``, shape ``(N,)``, with periodic unknowns reduced modulo their period.
+
+        Used by closed-loop detection and distances. Fallback: ``z1 - z2``.
+        """
         ...
 
 
@@ -343,10 +396,24 @@ def jacobian_is_stability(problem: Any) -> bool:
 
 
 def exact_jacobian(problem: Any) -> bool:
-    """``problem.exact_jacobian`` (default False): ``G_z`` and ``G_p`` are exact
-    derivatives (automatic differentiation, not finite differences), so that Newton's
-    method converges quadratically next to a regular solution."""
+    """``problem.exact_jacobian`` (default False): ``G_z`` and ``G_p`` are exact.
+
+    Exact: automatic differentiation, not finite differences, so that Newton's method converges
+    quadratically next to a regular solution.
+    """
     return bool(getattr(problem, "exact_jacobian", False))
+
+
+def accept_hook(problem: Any) -> Callable[[FloatArray, float], None] | None:
+    """``problem.accept`` (called after every accepted row), or None."""
+    fn = getattr(problem, "accept", None)
+    return fn if callable(fn) else None
+
+
+def relabel(problem: Any, specials: Sequence[SpecialPoint]) -> tuple[SpecialPoint, ...]:
+    """``problem.relabel(specials)`` if the problem has it, else ``specials``."""
+    fn = getattr(problem, "relabel", None)
+    return tuple(specials) if not callable(fn) else tuple(fn(tuple(specials)))
 
 
 def is_sparse(problem: Any) -> bool:
@@ -406,8 +473,11 @@ def difference(problem: Any) -> Callable[[FloatArray, FloatArray], FloatArray] |
 
 
 def has_periodic_states(problem: Any) -> bool:
-    """``problem.difference`` may differ from ``z1 - z2``: the problem has one and its
-    system does not declare all periods zero (``system.period``)."""
+    """``problem.difference`` may differ from ``z1 - z2``.
+
+    True when the problem has one and its system does not declare all periods zero
+    (``system.period``).
+    """
     if difference(problem) is None:
         return False
     period = getattr(getattr(problem, "system", None), "period", None)
@@ -415,16 +485,20 @@ def has_periodic_states(problem: Any) -> bool:
 
 
 def record_function(problem: Any) -> Callable[[FloatArray, float], Mapping[str, float]] | None:
-    """``problem.record``, or None when it is :class:`EquilibriumProblem`'s (always
-    empty, so not worth a call per row)."""
+    """``problem.record``, or None when it is :class:`EquilibriumProblem`'s.
+
+    That one is always empty, so not worth a call per row.
+    """
     if getattr(type(problem), "record", None) is EquilibriumProblem.record:
         return None
     return problem.record  # type: ignore[no-any-return]
 
 
 def state_names(problem: Any, n: int) -> tuple[str, ...]:
-    """Names of the ``n`` unknowns: ``problem.state_names``, else
-    ``problem.system.state_names``, else ``("z0", ..., "z{n-1}")``."""
+    """Names of the ``n`` unknowns.
+
+    ``problem.state_names``, else ``problem.system.state_names``, else ``("z0", ..., "z{n-1}")``.
+    """
     names = getattr(problem, "state_names", None)
     if names is None and hasattr(problem, "system"):
         names = getattr(problem.system, "state_names", None)
@@ -447,8 +521,10 @@ __all__ = [
     "ContinuationProblem",
     "EquilibriumProblem",
     "ProblemHooks",
+    "accept_hook",
     "bordered_evaluator",
     "difference",
+    "exact_jacobian",
     "has_linearize",
     "has_periodic_states",
     "is_sparse",
@@ -457,6 +533,7 @@ __all__ = [
     "linearizer",
     "param_values",
     "record_function",
+    "relabel",
     "state_names",
     "step_kernel",
 ]

@@ -44,8 +44,11 @@ log = logging.getLogger(__name__)
 def eig_function(
     problem: Any, settings: ContinuationSettings, rightmost: bool = False
 ) -> Callable[[PointInfo], Any]:
-    """Eigenvalues at a point (cached on it); ``rightmost``: on the sparse path, the
-    ``n_eigs`` of largest real part as well as those nearest the shift."""
+    """Eigenvalues at a point (cached on it).
+
+    ``rightmost``: on the sparse path, the ``n_eigs`` of largest real part as well as those
+    nearest the shift.
+    """
     det = settings.detect
     if jacobian_is_stability(problem):
         eig_tol, imag_tol = det.eig_tol, det.imag_tol
@@ -144,6 +147,7 @@ class SparseEigs:
         return apply
 
     def __call__(self, pt: PointInfo) -> ComplexArray:
+        """The ``k`` eigenvalues of ``pt.Gz`` nearest ``sigma``, NaN-padded to shape ``(n,)``."""
         out = sparse_eigs_near(
             pt.Gz,
             self.k,
@@ -166,9 +170,11 @@ class SparseEigs:
 
 
 def with_rightmost(J: Any, near: ComplexArray, k: int) -> ComplexArray:
-    """``near`` together with the ``k`` eigenvalues of ``J`` of largest real part
-    (ARPACK ``which="LR"``, relative tolerance 1e-12), duplicates (within 1e-9 relative)
-    dropped; ``near`` alone if ARPACK fails."""
+    """``near`` together with the ``k`` eigenvalues of ``J`` of largest real part.
+
+    ARPACK ``which="LR"``, relative tolerance 1e-12; duplicates (within 1e-9 relative)
+    dropped; ``near`` alone if ARPACK fails.
+    """
     try:
         lr = spla.eigs(csc_matrix(J), k=k, which="LR", return_eigenvectors=False, tol=1e-12)
     except (spla.ArpackNoConvergence, ValueError, RuntimeError):
@@ -183,8 +189,11 @@ def with_rightmost(J: Any, near: ComplexArray, k: int) -> ComplexArray:
 def run_checked(
     problem: Any, settings: ContinuationSettings, run_all: Callable[[bool], Branch]
 ) -> Branch:
-    """``run_all(False)``, and again with the rightmost eigenvalues if the sparse
-    stability check finds unstable ones the shift missed (see :func:`missed_unstable`)."""
+    """``run_all(False)``, again with the rightmost eigenvalues if some were missed.
+
+    Again if the sparse stability check finds unstable ones the shift missed (see
+    :func:`missed_unstable`).
+    """
     br = run_all(False)
     missed = missed_unstable(problem, br, settings)
     if missed and br.status is not Status.INTERRUPTED:

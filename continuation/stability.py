@@ -100,8 +100,10 @@ _GEEV = la.get_lapack_funcs("geev", (np.zeros(1),))
 
 
 def _dense_eigvals(J: Any) -> ComplexArray:
-    """All eigenvalues of a dense real matrix (LAPACK ``dgeev`` called directly, which
-    avoids the per-call overhead of ``numpy.linalg.eigvals`` on small matrices)."""
+    """All eigenvalues of a dense real matrix (LAPACK ``dgeev`` called directly).
+
+    This avoids the per-call overhead of ``numpy.linalg.eigvals`` on small matrices.
+    """
     flat = J.ravel(order="K")
     if not float(flat.dot(flat)) < np.inf and not np.all(np.isfinite(J)):
         raise np.linalg.LinAlgError("Jacobian contains NaN or inf")

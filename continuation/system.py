@@ -576,9 +576,12 @@ class System:
         return self._ca
 
     def _point(self, name: str, x: Any, p: Any) -> tuple[FloatArray, ...] | None:
-        """``name`` in ``{"f", "jac", "dfdp"}`` at one point through a buffered evaluator
-        of this thread (dense outputs, column-major), or None when ``x`` or ``p`` do not
-        have the function's sizes (the caller then lets CasADi report the error)."""
+        """``name`` in ``{"f", "jac", "dfdp"}`` at one point, or None.
+
+        Through a buffered evaluator of this thread (dense outputs, column-major); None when
+        ``x`` or ``p`` do not have the function's sizes (the caller then lets CasADi report
+        the error).
+        """
         assert self._ca is not None
         per = _POINT_FNS.get(self)
         if per is None:

@@ -1,5 +1,7 @@
-"""Public type aliases of the continuation engine (array shapes are given in the
-docstrings that use them)."""
+"""Public type aliases of the continuation engine.
+
+Array shapes are given in the docstrings that use them.
+"""
 
 from __future__ import annotations
 

@@ -12,7 +12,7 @@ import pytest  # noqa: E402
 from helpers import brusselator, cstr, fold_normal_form, hopf_normal_form, periodic_sine  # noqa: E402
 
 from continuation.api import continue_equilibria  # noqa: E402
-from continuation.branch import Branch, SpecialKind  # noqa: E402
+from continuation.branch import Branch, SpecialKind, SpecialPoint  # noqa: E402
 from continuation.equilibria import solve_equilibrium, unique_equilibria  # noqa: E402
 from continuation.errors import ConvergenceError  # noqa: E402
 from continuation.events import Event  # noqa: E402
@@ -228,3 +228,37 @@ def test_sort_and_count_eigenvalues():
         nr = int(np.sum((v.real > 1e-10) & (np.abs(v.imag) <= 1e-8 * np.maximum(1, abs(v)))))
         npairs = int(np.sum((v.real > 1e-10) & (v.imag > 1e-8 * np.maximum(1, abs(v)))))
         assert count_unstable(v) == count_unstable(s) == (nr, npairs)
+
+
+@pytest.mark.parametrize("cycles", [True, False])
+def test_load_version_1_cycle_points(cstr_branch, tmp_path, cycles):
+    """Version-1 files stored PD/NS of cycle branches as ``user`` points: they load as
+    the ``pd``/``ns`` kinds (found by kind and by label); a user event named "PD" on a
+    branch without periods stays a user point."""
+    import dataclasses
+    import json
+
+    br = cstr_branch
+    pts = tuple(
+        SpecialPoint(SpecialKind.USER, 1, float(br.p[1]), br.x[1], True, (0.0, 1.0), label=lab)
+        for lab in ("PD", "NS")
+    )
+    records = {**br.records, "T": np.ones(len(br))} if cycles else dict(br.records)
+    old = dataclasses.replace(br, special_points=pts, records=records)
+    js = old.save(tmp_path / "old").with_suffix(".json")
+    meta = json.loads(js.read_text())
+    assert meta["version"] == 2
+    js.write_text(json.dumps({**meta, "version": 1}))
+    new = Branch.load(js.with_suffix(".npz"))
+    if cycles:
+        assert [s.kind for s in new.special_points] == [
+            SpecialKind.PERIOD_DOUBLING,
+            SpecialKind.NEIMARK_SACKER,
+        ]
+        assert new.find("pd") == new.find("PD") and len(new.find("ns")) == 1
+    else:
+        assert all(s.kind is SpecialKind.USER for s in new.special_points)
+        assert new.find("pd") == () and len(new.find("PD")) == 1
+    # version 2 round trip keeps the kinds as written
+    again = Branch.load(new.save(tmp_path / "new"))
+    assert [s.kind for s in again.special_points] == [s.kind for s in new.special_points]

@@ -11,7 +11,15 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from continuation import ContinuationSettings, Status, System, _jit, continue_equilibria, simulate
+from continuation import (
+    ContinuationSettings,
+    SpecialKind,
+    Status,
+    System,
+    _jit,
+    continue_equilibria,
+    simulate,
+)
 from continuation.bvp import CollocationMesh, solve_connection
 from continuation.periodic import (
     PeriodicOrbitProblem,
@@ -281,6 +289,7 @@ def test_rossler_period_doubling_against_shooting():
     br = continue_periodic(s, orb, P, "c", ContinuationSettings(ds=0.05, ds_max=0.1,
                            max_steps=40, p_max=3.0))  # fmt: skip
     (pd,) = br.find("PD")
+    assert br.find("pd") == (pd,) and pd.kind is SpecialKind.PERIOD_DOUBLING
     assert pd.located and pd.data["mu"] == pytest.approx(-1.0, abs=1e-8)
     assert pd.p == pytest.approx(2.83, abs=0.01)
     # independent: the cycle at c_PD by shooting (Newton on x(T) - x(0) with the
@@ -353,6 +362,7 @@ def test_neimark_sacker_and_branch_point_of_cycles_closed_form():
     br = continue_periodic(s, orb, {"p": 0.5}, "p", ContinuationSettings(ds=0.05, ds_max=0.1,
                            max_steps=60, p_max=2.5))  # fmt: skip
     (ns,) = br.find("NS")
+    assert br.find("ns") == (ns,) and ns.kind is SpecialKind.NEIMARK_SACKER
     assert ns.located and ns.p == pytest.approx(1.0, abs=1e-8)
     assert ns.data["theta"] == pytest.approx(0.6 * np.pi, abs=1e-6)
     bpc = br.find("bp")

@@ -88,8 +88,9 @@ class StepState:
 
 
 class StepOutcome(NamedTuple):
-    """Result of one attempted step (immutable; a named tuple, cheap to create on the
-    hot path of small problems).
+    """Result of one attempted step.
+
+    Immutable; a named tuple, cheap to create on the hot path of small problems.
 
     Attributes
     ----------
@@ -115,11 +116,13 @@ class StepOutcome(NamedTuple):
 def adapt_ds(
     ds: float, outcome: StepOutcome, settings: ContinuationSettings, *, grow_iters: int = 3
 ) -> float:
-    """Next step length, the engine's one step-size rule: ``ds * grow`` after an easy
-    step (``<= grow_iters`` iterations), ``ds`` after a harder one, capped at
-    ``ds_max``; ``ds * shrink`` after a failure (:data:`RETRY` for a step the driver
-    refuses after the algorithm accepted it). Never below zero; the caller compares
-    with ``ds_min``."""
+    """Next step length, the engine's one step-size rule.
+
+    ``ds * grow`` after an easy step (``<= grow_iters`` iterations), ``ds`` after a harder
+    one, capped at ``ds_max``; ``ds * shrink`` after a failure (:data:`RETRY` for a step the
+    driver refuses after the algorithm accepted it). Never below zero; the caller compares
+    with ``ds_min``.
+    """
     if outcome.converged:
         if outcome.newton_iters <= grow_iters:
             return min(ds * settings.grow, settings.ds_max)

@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -168,13 +169,15 @@ def _accepted(
     ratio: Callable[[], float],
     backward_error: Callable[[], float],
 ) -> bool:
-    """The corrector's convergence test (see :func:`correct`), shared by its dense and
-    sparse iterations. ``rn``: ``max |r|`` now, ``rn_prev`` before the last step;
-    ``dn = max |du|`` of the correction at the current point and ``dn_ok`` its
-    componentwise test; ``step``/``step_ok`` the same of the last step taken; ``hi`` the
+    """The corrector's convergence test (see :func:`correct`).
+
+    Shared by its dense and sparse iterations. ``rn``: ``max |r|`` now, ``rn_prev`` before
+    the last step; ``dn = max |du|`` of the correction at the current point and ``dn_ok``
+    its componentwise test; ``step``/``step_ok`` the same of the last step taken; ``hi`` the
     upper bound of :func:`_step_bounds`; ``ratio()`` gives :func:`_step_ratio` of the
-    correction and ``backward_error()`` :func:`_backward_error` at the current point,
-    both evaluated only when the clause needing them is reached."""
+    correction and ``backward_error()`` :func:`_backward_error` at the current point, both
+    evaluated only when the clause needing them is reached.
+    """
     return bool(
         (rn <= tol and (dn_ok or step_ok))
         # stalled in the noise of an ill-conditioned solve (see correct's docstring)
@@ -196,9 +199,11 @@ def _accepted(
 
 
 def _give_up(it: int, max_iter: int, rn: float, rn0: float, tol: float) -> str:
-    """Why the corrector stops before taking step ``it + 1`` (empty: go on): the
-    iteration limit, or divergence (residual ``1e4`` times its initial value or ``tol``
-    after two iterations). Shared by both iterations of :func:`correct`."""
+    """Why the corrector stops before taking step ``it + 1`` (empty: go on).
+
+    The iteration limit, or divergence (residual ``1e4`` times its initial value or ``tol``
+    after two iterations). Shared by both iterations of :func:`correct`.
+    """
     if it >= max_iter:
         return "max_iter reached"
     if it >= 2 and rn > 1e4 * max(rn0, tol):
@@ -284,11 +289,13 @@ def _correct_fused(
     u, r, M, nv = ev.u, ev.r, ev.M, ev.norms
     run = getattr(ev, "run", ev)  # (the compiled call itself, without the wrapper)
     gn = mm = math.nan  # max |f| and sum M_ij^2 of the last evaluation, when known
-    rt = getattr(ev, "rt", None)
-    own_rt = rt is None  # an evaluator without the two-column buffer: copy r into one
-    if own_rt:
+    rt_ev: FloatArray | None = getattr(ev, "rt", None)
+    own_rt = rt_ev is None  # an evaluator without the two-column buffer: copy r into one
+    if rt_ev is None:
         rt = np.zeros((n + 1, 2), order="F")
         rt[n, 1] = 1.0
+    else:
+        rt = rt_ev
     u[:] = u_pred
     ev.c[:] = c  # (ev.set_border, inlined: the hot path of small problems)
     ev.h[0] = float(c.dot(u_ref)) + sigma
@@ -325,8 +332,8 @@ def _correct_fused(
         dn = abs(float(du[_idamax(du)]))
         dn_ok = dn <= lo or (dn <= hi and _step_ok(du, u_pred, u_ref, a, step_tol))
         if _accepted(rn, rn_prev, dn, dn_ok, step, step_ok, it, exact, tol, step_tol, hi,
-                     lambda du=du: _step_ratio(du, u_pred, u_ref, a),
-                     lambda u=u: _backward_error(M, r, u)):  # fmt: skip
+                     partial(_step_ratio, du, u_pred, u_ref, a),
+                     partial(_backward_error, M, r, u)):  # fmt: skip
             lin = ev.lin()
             lu: BorderedLU | None = BorderedLU.from_dense_factors(f_lu, f_piv)
             t_raw: FloatArray | None = x[:, 1]
@@ -516,8 +523,8 @@ def correct(
         dn = _inf_norm(du)
         dn_ok = dn <= lo or (dn <= hi and _step_ok(du, u_pred, u_ref, a, step_tol))
         if _accepted(rn, rn_prev, dn, dn_ok, step, step_ok, it, exact, tol, step_tol, hi,
-                     lambda du=du: _step_ratio(du, u_pred, u_ref, a),
-                     lambda J=lin[1], Gp=lin[2], r=r, u=u: _backward_error(J, r, u, Gp, c),
+                     partial(_step_ratio, du, u_pred, u_ref, a),
+                     partial(_backward_error, lin[1], r, u, lin[2], c),
                      ):  # fmt: skip
             if dense:
                 lu = BorderedLU.from_dense_factors(f_lu, f_piv)

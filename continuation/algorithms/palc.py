@@ -171,6 +171,7 @@ class PALC(ContinuationAlgorithm):
         d_prev = state.prev_d
         if (
             d_prev is not None
+            and state.prev_tau is not None
             and not state.retries
             and self.predictor == "hermite"
             and float(c.dot(state.prev_tau)) >= _COS_HERMITE
@@ -246,8 +247,10 @@ class PALC(ContinuationAlgorithm):
     def _kernel_step(
         self, kern: Any, problem: Any, state: StepState, settings: ContinuationSettings
     ) -> tuple[StepState, StepOutcome] | None:
-        """:meth:`step` as one compiled call; None when the kernel did not accept the
-        step (the Python step then runs and decides)."""
+        """:meth:`step` as one compiled call; None when the kernel did not accept the step.
+
+        The Python step then runs and decides.
+        """
         a = state.point
         ds = state.ds
         guarded = ds > settings.ds_min * (1 + 1e-12)

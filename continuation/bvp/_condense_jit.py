@@ -40,8 +40,11 @@ HAGER_ITERATIONS = 2
 
 @_jit
 def _lu_solve(lu: Any, piv: Any, x: Any, trans: bool) -> None:  # pragma: no cover - compiled
-    """``x <- A^{-1} x`` (``A^{-T} x`` with ``trans``) in place, ``P A = L U`` in ``lu``
-    (unit lower ``L``), ``piv`` the row interchanges in LAPACK's order."""
+    """``x <- A^{-1} x`` (``A^{-T} x`` with ``trans``) in place.
+
+    ``P A = L U`` in ``lu`` (unit lower ``L``), ``piv`` the row interchanges in LAPACK's
+    order.
+    """
     b = lu.shape[0]
     if not trans:
         for k in range(b):  # apply P
@@ -81,8 +84,10 @@ def _lu_solve(lu: Any, piv: Any, x: Any, trans: bool) -> None:  # pragma: no cov
 
 @_jit
 def _lu_inplace(lu: Any, piv: Any) -> tuple[float, float, bool]:  # pragma: no cover
-    """LU with partial pivoting of ``lu`` (b, b) in place, interchanges in ``piv``;
-    returns ``(log|det|, sign of det, singular)``."""
+    """LU with partial pivoting of ``lu`` (b, b) in place, interchanges in ``piv``.
+
+    Returns ``(log|det|, sign of det, singular)``.
+    """
     b = lu.shape[0]
     lg = 0.0
     sg = 1.0
@@ -119,8 +124,10 @@ def _lu_inplace(lu: Any, piv: Any) -> tuple[float, float, bool]:  # pragma: no c
 
 @_jit
 def solve_many(K: Any, R: Any, X: Any) -> bool:  # pragma: no cover - compiled
-    """``X[j] = K_j^{-1} R[j]`` for ``K (N, b, b)`` (overwritten by its LU factors),
-    ``R, X (N, b, k)``; False if a block is singular."""
+    """``X[j] = K_j^{-1} R[j]``; False if a block is singular.
+
+    ``K (N, b, b)`` is overwritten by its LU factors; ``R, X (N, b, k)``.
+    """
     N, b, k = R.shape
     piv = np.empty(b, dtype=np.int64)
     col = np.empty(b)
@@ -179,10 +186,12 @@ def _inv_norm1(lu: Any, piv: Any, x: Any, y: Any) -> float:  # pragma: no cover 
 def factor_blocks(
     A: Any, Asr: Any, Ars: Any, piv: Any, W: Any, U: Any, cond: Any, logdet: Any, sign: Any
 ) -> None:  # pragma: no cover - compiled
-    """Factorise the blocks ``A (N, b, b)`` in place and fill ``piv (N, b)``, ``W (N, b,
-    wc)``, ``U (N, wr, wc)``, ``cond``, ``logdet``, ``sign`` (``(N,)`` each) from
-    ``Asr (N, b, wc)`` and ``Ars (N, wr, b)`` (module doc). ``A`` holds ``L`` and ``U``
-    on return."""
+    """Factorise the blocks ``A (N, b, b)`` in place.
+
+    Fills ``piv (N, b)``, ``W (N, b, wc)``, ``U (N, wr, wc)``, ``cond``, ``logdet``,
+    ``sign`` (``(N,)`` each) from ``Asr (N, b, wc)`` and ``Ars (N, wr, b)`` (module doc).
+    ``A`` holds ``L`` and ``U`` on return.
+    """
     N, b, _ = A.shape
     wc = Asr.shape[2]
     wr = Ars.shape[1]
@@ -250,9 +259,12 @@ def solve_pre(
     Bm: Any, rows_s: Any, rest_r: Any, LU: Any, piv: Any, Ars: Any, rs_rows: Any,
     ys: Any, br: Any,
 ) -> None:  # pragma: no cover - compiled  # fmt: skip
-    """The forward half of a condensed solve (``trans="N"``): ``ys[j] = A_j^{-1}
-    b_s[j]`` and the reduced right-hand side ``br = b_r - sum_j A_rs,j ys[j]`` (``br``
-    has ``n_r + 1`` rows, the last one the padding slot), for ``Bm (size, k)``."""
+    """The forward half of a condensed solve (``trans="N"``).
+
+    ``ys[j] = A_j^{-1} b_s[j]`` and the reduced right-hand side ``br = b_r - sum_j A_rs,j
+    ys[j]`` (``br`` has ``n_r + 1`` rows, the last one the padding slot), for ``Bm (size,
+    k)``.
+    """
     N, b = rows_s.shape
     k = Bm.shape[1]
     nr = rest_r.size
@@ -281,8 +293,10 @@ def solve_pre(
 def solve_post(
     ys: Any, W: Any, xr: Any, sr_cols: Any, cols_s: Any, rest_c: Any, out: Any
 ) -> None:  # pragma: no cover - compiled
-    """The backward half: ``x_s[j] = ys[j] - W_j x_r[sr_cols[j]]`` (padding column
-    ``n_r``: zero) scattered with ``x_r`` into ``out (size, k)``."""
+    """The backward half: ``x_s[j] = ys[j] - W_j x_r[sr_cols[j]]``.
+
+    The padding column ``n_r`` is zero; scattered with ``x_r`` into ``out (size, k)``.
+    """
     N, b, k = ys.shape
     nr = rest_c.size
     wc = W.shape[2]
@@ -303,8 +317,10 @@ def solve_post(
 def factor(
     A: np.ndarray, Asr: np.ndarray, Ars: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(piv, W, U, cond, logdet, sign)`` of the blocks; ``A`` is overwritten by its
-    LU factors (see :func:`factor_blocks` for the shapes)."""
+    """``(piv, W, U, cond, logdet, sign)`` of the blocks.
+
+    ``A`` is overwritten by its LU factors (see :func:`factor_blocks` for the shapes).
+    """
     N, b, _ = A.shape
     wc, wr = Asr.shape[2], Ars.shape[1]
     piv = np.zeros((N, b), dtype=np.int64)

@@ -346,20 +346,23 @@ class ConnectionFunctions:
         self._bG = _Buffered(self.G)
         # collocation rows and stage unknowns of each interval: the linear solves of
         # Newton and of the driver condense the stages (continuation.bvp.condense)
-        stage_cols = np.array(_stage_columns(N, m)).reshape(N, m)
-        cols_s = (stage_cols[:, :, None] * n + np.arange(n)).reshape(N, m * n)
+        stage_grid = np.array(_stage_columns(N, m)).reshape(N, m)
+        cols_s = (stage_grid[:, :, None] * n + np.arange(n)).reshape(N, m * n)
         rows_s = np.arange(N * m * n).reshape(N, m * n)
         self.condenser = StageCondenser(rows_s, cols_s)
         # The Jacobians cost most of the construction (about 0.8 s of 1 s for the ship);
         # a residual-only user (finite differences of G in a model coefficient) never
         # needs them, so they are built on first use.
-        self._graph = (fns, layout, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T,
-                       mesh.D, n_par, w, P)  # fmt: skip
+        self._graph: tuple[Any, ...] | None = (
+            fns, layout, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T, mesh.D, n_par,
+            w, P,
+        )  # fmt: skip
         self._jac: dict[str, Any] | None = None
 
     def _jacobians(self) -> dict[str, Any]:
         if self._jac is not None:
             return self._jac
+        assert self._graph is not None  # (dropped only once the Jacobians are built)
         (fns, layout, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T, D, n_par,
          w, P) = self._graph  # fmt: skip
         # Collocation rows: Jacobian assembled from the mapped df/dx and df/dp of the
@@ -523,7 +526,7 @@ class _Buffered:
         return outs
 
 
-_CACHE: weakref.WeakKeyDictionary[Any, dict[ConnectionLayout, ConnectionFunctions]] = (
+_CACHE: weakref.WeakKeyDictionary[Any, dict[tuple[ConnectionLayout, bool], ConnectionFunctions]] = (
     weakref.WeakKeyDictionary()
 )
 

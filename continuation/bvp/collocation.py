@@ -117,7 +117,8 @@ class CollocationMesh:
     n_intervals: int
     degree: int
     T: float
-    nodes: FloatArray = field(default=None, repr=False)  # type: ignore[assignment]
+    # None: Gauss-Legendre nodes, set in __post_init__
+    nodes: FloatArray = field(default=None, repr=False)  # type: ignore[arg-type]
 
     def __post_init__(self) -> None:
         if isinstance(self.n_intervals, bool) or not isinstance(

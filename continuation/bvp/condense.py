@@ -308,7 +308,7 @@ class StageCondenser:
             except ValueError:
                 st = None
             self._cache[key] = st
-        return st
+        return st if isinstance(st, _Structure) else None
 
     def factor(self, M: Any) -> CondensedLU | None:
         """Condensed factorisation of the square CSC ``M``, or None (use a general LU).

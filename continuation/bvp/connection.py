@@ -203,7 +203,7 @@ class HeteroclinicProblem:
     saddle_from: FloatArray
     saddle_to: FloatArray | None = None
     shift: FloatArray | None = None
-    mesh: CollocationMesh | None = None  # type: ignore[assignment]
+    mesh: CollocationMesh = None  # type: ignore[assignment]  # None: set in __post_init__
     T: float | None = None
     vary: str | None = None
     phase: str | PinPhase = "integral"

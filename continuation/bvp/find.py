@@ -164,10 +164,12 @@ _ADAMS_MAX_STIFFNESS = 1e3
 
 
 def _manifold_method(system: Any, lam_m: Any, lam_p: Any) -> str | None:
-    """``"cvodes_adams"`` where both saddles' spectra ``lam_m``, ``lam_p`` (eigenvalues
-    of the Jacobians there) are non-stiff (ratio at most :data:`_ADAMS_MAX_STIFFNESS`),
-    else None (the simulator's default: BDF, or SciPy's DOP853 without a CasADi
-    trace)."""
+    """``"cvodes_adams"`` where both saddles' spectra are non-stiff, else None.
+
+    The spectra ``lam_m``, ``lam_p`` are the eigenvalues of the Jacobians there; non-stiff:
+    ratio at most :data:`_ADAMS_MAX_STIFFNESS`. None: the simulator's default (BDF, or
+    SciPy's DOP853 without a CasADi trace).
+    """
     if not getattr(system, "has_casadi", False):
         return None
     lam = np.concatenate((np.asarray(lam_m), np.asarray(lam_p)))
@@ -188,10 +190,11 @@ def _manifold_to_return(
     t_max: float,
     method: str | None = None,
 ) -> tuple[FloatArray, FloatArray, bool]:
-    """Branch ``branch`` of ``W^u(x_m)`` sampled every ``t_max / 1000``, integrated in
-    segments until the window of :func:`cut_at_closest_approach` has closed
-    (:class:`_ReturnWatch`) or to ``t_max``; ``(t, x, complete)`` of shapes (K,),
-    (K, n), and False where the integration failed before the window closed.
+    """Branch ``branch`` of ``W^u(x_m)`` sampled every ``t_max / 1000``.
+
+    Integrated in segments until the window of :func:`cut_at_closest_approach` has closed
+    (:class:`_ReturnWatch`) or to ``t_max``; ``(t, x, complete)`` of shapes (K,), (K, n),
+    and False where the integration failed before the window closed.
 
     Segments are 100 samples long until the window opens. Inside it, where the orbit
     at distance ``d`` from ``x_+`` leaves at most at the rate ``mu`` of the fastest
@@ -373,7 +376,8 @@ def find_connection(
     if T is not None:
         mesh = CollocationMesh(n_intervals, degree, T_used)
     kw: dict[str, Any] = {"saddle_to": x_p} if shift is None else {"shift": shift}
-    prob = HeteroclinicProblem(system, params, free, saddle_from=x_m, mesh=mesh, phase=phase, **kw)
+    names = (free,) if isinstance(free, str) else tuple(free)
+    prob = HeteroclinicProblem(system, params, names, saddle_from=x_m, mesh=mesh, phase=phase, **kw)
     t_cut = float(t[k])
     reach = float(np.max(np.linalg.norm(x[: k + 1] - x_m, axis=1)))
     note = (

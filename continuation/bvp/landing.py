@@ -271,7 +271,7 @@ class LandingProblem:
     start: Any
     saddle: FloatArray
     shift: Any = None
-    mesh: CollocationMesh | None = None  # type: ignore[assignment]
+    mesh: CollocationMesh = None  # type: ignore[assignment]  # None: set in __post_init__
     T: float | None = None
     s: float = 0.0
     start_name: str = "s"
@@ -495,8 +495,10 @@ class LandingProblem:
 
     # ------------------------------------------------------------------ starting data
     def initial_vector(self, guess: Any) -> FloatArray:
-        """``z`` from a guess: a :class:`~continuation.bvp.landing_solve.LandingResult`,
-        a ``(t, x)`` pair, an object with ``t`` and ``x``/``y``, or an (K, n) array.
+        """``z`` from a guess.
+
+        A :class:`~continuation.bvp.landing_solve.LandingResult`, a ``(t, x)`` pair, an
+        object with ``t`` and ``x``/``y``, or an (K, n) array.
 
         The guess is read in its own time from its start (``t[0]``); where it is shorter
         than ``T`` it is held at its last value. A bare array is taken as equally

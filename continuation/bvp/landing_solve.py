@@ -31,7 +31,7 @@ import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -338,6 +338,17 @@ class ContinuedLanding:
             raise ValueError("the problem has a fixed start point: nothing to continue in")
         self.problem = problem
 
+    #: ``G_z`` is a SciPy sparse (CSC) matrix (:class:`~continuation.problem.ProblemHooks`).
+    sparse = True
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the ``N`` unknowns, ``z0, z1, ...``.
+
+        The landing's ``state_names`` are those of the system's states, not of ``z``.
+        """
+        return tuple(f"z{k}" for k in range(self.n_unknowns))
+
     @property
     def free(self) -> str:
         """The continuation parameter: the start parameter's name."""
@@ -377,7 +388,7 @@ def continue_landing(
     result: LandingResult,
     settings: ContinuationSettings | None = None,
     *,
-    direction: str = "forward",
+    direction: Literal["forward", "backward", "both"] = "forward",
     throw: bool = False,
     progress: Callable[[Any], None] | None = None,
 ) -> Any:

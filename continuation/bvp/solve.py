@@ -17,7 +17,7 @@ import logging
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -28,7 +28,7 @@ from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
 from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, extended_problem, refined_problem
-from .connection import HeteroclinicProblem, _replace_fast
+from .connection import HeteroclinicProblem, PinPhase, _replace_fast
 from .result import ConnectionResult, ErrorEstimates
 from .simplified import JacobianCache, simplified_newton
 
@@ -467,6 +467,7 @@ def _adapt_once(
     changes: dict[str, Any] = {"mesh": new_mesh}
     if pin is not None:
         at = float(new_mesh.nodes[pin[1]])
+        assert isinstance(prob.phase, PinPhase)  # (a pinned layout has a pin phase)
         changes["phase"] = dataclasses.replace(prob.phase, at=at)
     if prob.layout.pin is None:
         changes["reference"] = X
@@ -563,6 +564,17 @@ class ContinuedConnection:
     #: differentiation): see :func:`~continuation.problem.exact_jacobian`.
     exact_jacobian = True
 
+    #: ``G_z`` is a SciPy sparse (CSC) matrix (:class:`~continuation.problem.ProblemHooks`).
+    sparse = True
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the ``N`` unknowns, ``z0, z1, ...``.
+
+        The connection's ``state_names`` are those of the system's states, not of ``z``.
+        """
+        return tuple(f"z{k}" for k in range(self.n_unknowns))
+
     @property
     def free(self) -> str:
         """The continuation parameter (``problem.vary``)."""
@@ -610,7 +622,7 @@ def continue_connection(
     settings: ContinuationSettings | None = None,
     *,
     algorithm: Any = None,
-    direction: str = "forward",
+    direction: Literal["forward", "backward", "both"] = "forward",
     events: Sequence[Any] = (),
     throw: bool = False,
     progress: Callable[[Any], None] | None = None,

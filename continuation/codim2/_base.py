@@ -54,6 +54,8 @@ class AugmentedProblem:
     sparse: bool | None = None
     z0: FloatArray | None = field(default=None, repr=False)
     p0: float | None = None
+    _i1: int = field(init=False, repr=False)
+    _i2: int = field(init=False, repr=False)
 
     kind: ClassVar[str] = ""
     n_extra: ClassVar[int] = 0
@@ -140,7 +142,7 @@ class AugmentedProblem:
 
     def param_vector(self, z: FloatArray, p: float) -> FloatArray:
         """Full parameter vector at ``(z, p)``, shape ``(m,)``."""
-        return param_vector(self.params.values, self.p1(z), float(p), self._i1, self._i2)  # type: ignore[attr-defined]
+        return param_vector(self.params.values, self.p1(z), float(p), self._i1, self._i2)
 
     def params_at(self, z: FloatArray, p: float) -> Params:
         """Named parameters at ``(z, p)``."""
@@ -154,8 +156,10 @@ class AugmentedProblem:
         return np.zeros(self.n + 1)
 
     def _memo(self, tag: str, z: FloatArray, p: float, fn: Any) -> Any:
-        """``fn()`` cached on ``(tag, z, p)`` (the driver evaluates several test
-        functions at the same point)."""
+        """``fn()`` cached on ``(tag, z, p)``.
+
+        The driver evaluates several test functions at the same point.
+        """
         key = (tag, np.asarray(z, dtype=float).tobytes(), float(p))
         cache: dict[Any, Any] = self._memo_cache  # type: ignore[attr-defined]
         if key not in cache:

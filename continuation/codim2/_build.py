@@ -110,7 +110,7 @@ def hopf_recipe(n: int, x: Any, z: Any, f: Any, J: Any, c: Any, vo: _VecOps) -> 
 
 @dataclass(frozen=True)
 class AugmentedFunctions:
-    """Compiled residual of one augmented system and its derivatives.
+    r"""Compiled residual of one augmented system and its derivatives.
 
     All callables take ``(z, p2, P, c)``: ``z`` shape ``(N,)``, ``p2`` scalar,
     ``P`` shape ``(m,)`` (full parameter vector), ``c`` shape ``(n+1,)``

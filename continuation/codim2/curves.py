@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from ..branch import SpecialKind
 from ..settings import ContinuationSettings, DetectionSettings, NewtonSettings
 from ._base import AugmentedProblem
 from .fold import FoldProblem
@@ -50,7 +51,13 @@ _PREFIX = "codim2:"
 #: ``Event.continuity`` of the codim-2 test functions that get a continuity check (the
 #: factor used for branch points on a branch)
 _CONTINUITY = {"zh": 10.0, "hh": 10.0}
-_KIND = {"bt": "bt", "cusp": "cusp", "zh": "zh", "gh": "gh", "hh": "hh"}
+_KIND = {
+    "bt": SpecialKind.BOGDANOV_TAKENS,
+    "cusp": SpecialKind.CUSP,
+    "zh": SpecialKind.ZERO_HOPF,
+    "gh": SpecialKind.GENERALIZED_HOPF,
+    "hh": SpecialKind.DOUBLE_HOPF,
+}
 _LABEL = {"bt": "BT", "cusp": "CP", "zh": "ZH", "gh": "GH", "hh": "HH"}
 
 
@@ -300,6 +307,8 @@ def _one_direction(
 
     pieces: list[Any] = []
     prob, z, p = problem, problem.z0, problem.p0
+    if p is None:
+        raise ValueError("`problem` has no start point (p0): build it with from_state")
     ds = abs(settings.ds)
     steps_left = settings.max_steps
     status, message = Status.MAX_STEPS, ""

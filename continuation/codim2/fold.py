@@ -169,7 +169,7 @@ class FoldProblem(AugmentedProblem):
         rest = np.delete(eigs, k0)
         return {
             "bt": float(np.trace(adj)),
-            "cusp": float(v @ adj @ self.functions.bvv(x, Pv, v) / max(v @ v, 1e-300)),
+            "cusp": float(v @ adj @ self.functions.bvv(x, Pv, v) / max(float(v @ v), 1e-300)),
             "zh": _pair_sum_product(rest),
         }
 

@@ -1,6 +1,6 @@
-"""Time-domain tools: simulation, unstable manifolds, fates and global bifurcations.
+r"""Time-domain tools: simulation, unstable manifolds, fates and global bifurcations.
 
-Simulation of :math:`\\dot x = f(x, p)` (:mod:`.simulate`, the loop; :mod:`.integrators`,
+Simulation of :math:`\dot x = f(x, p)` (:mod:`.simulate`, the loop; :mod:`.integrators`,
 the CVODES and SciPy back-ends; :mod:`.events`, events and Poincare sections;
 :mod:`.trajectory`, the result and its files); local analysis of saddles
 (:mod:`.saddles`); their one-dimensional unstable manifolds (:mod:`.manifolds`); where a

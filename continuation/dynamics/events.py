@@ -251,7 +251,8 @@ def _locate(
         t = brentq(ha, ta, tb, xtol=xtol, rtol=1e-15)
     except ValueError:  # pragma: no cover - the interpolant matches h at both ends
         t = 0.5 * (ta + tb)
-    t_prev = g_prev = None
+    t_prev: float | None = None  # the previous iterate (None: none yet)
+    g_prev = 0.0
     for it in range(60):
         xt = exact(t)
         gt = g(t, xt)

@@ -48,6 +48,11 @@ from .saddles import REFINE_NEWTON, n_unstable_of, refine_equilibrium
 log = logging.getLogger(__name__)
 
 
+def _at(fn: Callable[[Any, Any], Any], pv: Any) -> Callable[[Any], Any]:
+    """``z -> fn(z, pv)`` (the parameter vector bound now)."""
+    return lambda z: fn(z, pv)
+
+
 def fate_label(fate: Any) -> Hashable:
     """The label used to compare fates: ``Fate.label``, or the value itself."""
     if isinstance(fate, Fate):
@@ -314,8 +319,8 @@ class EquilibriumTracker:
         out = []
         for j, x0 in enumerate(guess):
             res = newton(
-                lambda z, pv=pv: self.system.f(z, pv),
-                lambda z, pv=pv: self.system.jacobian(z, pv),
+                _at(self.system.f, pv),
+                _at(self.system.jacobian, pv),
                 x0,
                 self.newton,
             )

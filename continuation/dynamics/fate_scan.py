@@ -213,8 +213,9 @@ class _ScanState:
         return None
 
     def _shorter_orbit(self, K: int, m: int) -> bool:
-        r"""Are returns ``K`` and ``K - m`` close only because the map converges onto an
-        orbit of ``j | m`` returns (e.g. a 1-cycle with a negative multiplier)?
+        r"""Are returns ``K`` and ``K - m`` close only because the map converges onto a cycle?
+
+        A cycle of ``j | m`` returns, e.g. a 1-cycle with a negative multiplier.
 
         Near a 1-cycle with multiplier :math:`\mu \in (-1, 0)` the returns alternate,
         :math:`x_k - x^* \propto \mu^k`, so :math:`|x_k - x_{k-2}|` falls below ``tol``

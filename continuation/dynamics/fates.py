@@ -235,8 +235,10 @@ class Fate:
         return self.kind is not FateKind.UNDECIDED
 
     def first_visit(self, name: str | None = None, *, shifted: bool = False) -> SaddleVisit | None:
-        """The first visit (of the saddle ``name``, if given; at a nonzero shift if
-        ``shifted``), or ``None``."""
+        """The first visit, or ``None``.
+
+        Of the saddle ``name``, if given; at a nonzero shift if ``shifted``.
+        """
         for v in self.visits:
             if name is not None and v.name != name:
                 continue

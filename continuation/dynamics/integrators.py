@@ -127,8 +127,11 @@ def sigint_recorded() -> Iterator[None]:
 
 
 def sigints_counted() -> int:
-    """SIGINTs counted by :func:`sigint_recorded` so far (compare two readings taken
-    inside one block: a difference is an interrupt, even one a CasADi call lost)."""
+    """SIGINTs counted by :func:`sigint_recorded` so far.
+
+    Compare two readings taken inside one block: a difference is an interrupt, even one a
+    CasADi call lost.
+    """
     return _Sigints.count
 
 

@@ -262,6 +262,7 @@ def unstable_manifold(
                 fate = classify(x0)
                 traj = getattr(fate, "trajectory", None)
             else:
+                assert sim is not None  # (built above when classify is None)
                 fate = None
                 traj = sim.run(
                     x0, (0.0, t_max), events=events, dt=dt, dense=dense, progress=progress

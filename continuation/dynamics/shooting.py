@@ -293,6 +293,7 @@ class ReturnMap:
         return x
 
     def __call__(self, y: FloatArray) -> tuple[FloatArray, float, Trajectory]:
+        """The return ``P(y)`` on the section, its time and the trajectory to it."""
         sec = PoincareSection(
             self.state, self.section, direction=self.direction, name="ret", terminal=True
         )
@@ -412,7 +413,9 @@ def shoot_orbit(
 
     # ---- 1. transient, in chunks
     sec = PoincareSection(i, section, direction=direction or 0, name="sec")
-    x, t_now, hits_t, hits_x = x0, 0.0, [], []
+    x, t_now = x0, 0.0
+    hits_t: list[float] = []
+    hits_x: list[FloatArray] = []
     y_prev: FloatArray | None = None
     converged = False
     last: Trajectory | None = None

@@ -120,7 +120,7 @@ class Trajectory:
     status: Status = Status.SUCCESS
     message: str = ""
     state_names: tuple[str, ...] = ()
-    period: FloatArray | None = None
+    period: FloatArray = None  # type: ignore[assignment]  # None: zeros, set in __post_init__
     terminal_event: str | None = None
     xdot: FloatArray | None = None
     params: FloatArray | None = None

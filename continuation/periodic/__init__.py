@@ -1,5 +1,4 @@
-r"""Periodic orbits: orthogonal collocation, Floquet multipliers, continuation and the
-bifurcations of cycles.
+r"""Periodic orbits: collocation, Floquet multipliers, continuation, bifurcations of cycles.
 
 * :class:`PeriodicOrbitProblem` -- the collocation system (Gauss-Legendre, degree
   ``m``, ``N`` intervals on ``[0, 1]``, period unknown, integral phase condition,

@@ -1,5 +1,6 @@
-r"""Compiled kernel of the periodic collocation system
-(:class:`~continuation.periodic.collocation.CollocationLayout`).
+r"""Compiled kernel of the periodic collocation system.
+
+See :class:`~continuation.periodic.collocation.CollocationLayout`.
 
 From the unknowns ``X`` (``(M, n)``, ``M = N (m + 1) + 1`` points), the period ``T``
 and ``f``, ``f_x``, ``df/dp`` at the ``N m`` stage points, one call fills
@@ -66,9 +67,11 @@ def linearize(
     ref: Any, dref: Any, w: Any, stage_points: Any, Bc: Any, const_vals: Any,
     order: Any, slot_of: Any, G: Any, vals: Any, data: Any, Gp: Any,
 ) -> None:  # pragma: no cover - compiled  # fmt: skip
-    """``G``, the CSC values ``data`` of ``dG/dz`` and ``Gp`` (module doc); ``vals``
-    receives the unordered values, its first ``Bc.size`` entries the blocks ``B``
-    (``(N, m, m + 1, n, n)`` flattened). ``slot_of`` (empty: none) sums duplicates."""
+    """``G``, the CSC values ``data`` of ``dG/dz`` and ``Gp`` (module doc).
+
+    ``vals`` receives the unordered values, its first ``Bc.size`` entries the blocks ``B``
+    (``(N, m, m + 1, n, n)`` flattened). ``slot_of`` (empty: none) sums duplicates.
+    """
     residual(X, T, F, D, e, h, shift, ref, dref, w, stage_points, G)
     n = X.shape[1]
     N = h.shape[0]

@@ -1,5 +1,6 @@
-r"""Compiled kernel of the deflation of the trivial Floquet multiplier
-(:func:`continuation.periodic.floquet.floquet`).
+r"""Compiled kernel of the deflation of the trivial Floquet multiplier.
+
+See :func:`continuation.periodic.floquet.floquet`.
 
 For the transfer matrices ``Phi_j`` (``n x n``) and ``f_j = f(x_j)`` at the mesh nodes,
 one call builds the Householder frames :math:`Q_j = [f_j/|f_j|, Q_j^\perp]`
@@ -81,8 +82,10 @@ def _deflate(Phi: Any, F: Any, C: Any) -> tuple[float, float, float]:  # pragma:
 
 
 def deflate(Phi: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, float, float, float]:
-    """``(C (N, n-1, n-1), sum ln|r_j|, sign of prod r_j, eps)`` (module doc), for
-    ``Phi (N, n, n)`` and ``F (N, n)``."""
+    """``(C (N, n-1, n-1), sum ln|r_j|, sign of prod r_j, eps)`` (module doc).
+
+    For ``Phi (N, n, n)`` and ``F (N, n)``.
+    """
     N, n, _ = Phi.shape
     C = np.empty((N, n - 1, n - 1))
     log_r, sign_r, eps = _deflate(

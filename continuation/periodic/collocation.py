@@ -62,10 +62,12 @@ def _cache_of(system: Any, name: str) -> dict[Any, Any]:
 
 
 def _point_functions(system: Any, free: int | None) -> tuple[Any, Any]:
-    """``f`` and ``(f, f_x, f_p)`` of one point as dense SX functions, built once per
-    system and free parameter (kept beside the system: every mesh and every
+    """``f`` and ``(f, f_x, f_p)`` of one point as dense SX functions.
+
+    Built once per system and free parameter (kept beside the system: every mesh and every
     problem of a branch shares them; ``free`` not None: ``f_p`` is the one column
-    ``df/dp_free``, by forward differentiation, instead of all ``n_par`` columns)."""
+    ``df/dp_free``, by forward differentiation, instead of all ``n_par`` columns).
+    """
     import casadi as ca
 
     cache = _cache_of(system, "fns")
@@ -127,8 +129,10 @@ class StageEvaluator:
                               _Buffered(ab, K, n, m, (n, n * n, n * self.n_p)), False]  # fmt: skip
 
     def _upgrade(self) -> None:
-        """Switch ``f, f_x, f_p`` to the compiled function once it is available
-        (:func:`continuation.casadi_compile.compiled_soon`; a large model only)."""
+        """Switch ``f, f_x, f_p`` to the compiled function once it is available.
+
+        See :func:`continuation.casadi_compile.compiled_soon` (a large model only).
+        """
         buf = _BUFFERS[self]
         point = _point_functions(self.system, self.free)[1]
         fn = compiled_soon(point)
@@ -326,8 +330,10 @@ class CollocationLayout:
         return np.concatenate([np.asarray(X, dtype=float).reshape(-1), [float(T)]])
 
     def blocks(self, X: FloatArray, T: float, J: FloatArray) -> FloatArray:
-        r"""Collocation Jacobian blocks ``B[j, k, l] = D[k,l]/h_j I - [l = k+1] T f_x``,
-        shape ``(N, m, m + 1, n, n)`` (``J``: ``f_x`` at the stages, ``(N m, n, n)``)."""
+        r"""Collocation Jacobian blocks ``B[j, k, l] = D[k,l]/h_j I - [l = k+1] T f_x``.
+
+        Shape ``(N, m, m + 1, n, n)`` (``J``: ``f_x`` at the stages, ``(N m, n, n)``).
+        """
         N, m, n = self.N, self.m, self.n
         B = self._B_const.copy()  # D[k,l]/h_j I, the same at every evaluation
         Js = J.reshape(N, m, n, n)
@@ -336,9 +342,11 @@ class CollocationLayout:
         return B
 
     def kernel_args(self) -> tuple[Any, ...]:
-        """The layout's constant arrays in the order of the compiled kernel
-        (:mod:`continuation.periodic._collocation_jit`): ``D, e, h, weights,
-        stage_points, B_const (flat), const_vals, order, slot_of (empty: none)``."""
+        """The layout's constant arrays in the order of the compiled kernel.
+
+        See :mod:`continuation.periodic._collocation_jit`: ``D, e, h, weights, stage_points,
+        B_const (flat), const_vals, order, slot_of (empty: none)``.
+        """
         args = self.__dict__.get("_kernel_args")
         if args is None:
             mesh = self.mesh
@@ -371,8 +379,11 @@ class CollocationLayout:
         ref: FloatArray,
         dref: FloatArray,
     ) -> FloatArray:
-        """``G`` (see module doc); ``F`` is ``f`` at the stages ``(N m, n)``, ``ref`` and
-        ``dref`` the reference orbit and its ``tau``-derivative at the stages."""
+        """``G`` (see module doc).
+
+        ``F`` is ``f`` at the stages ``(N m, n)``, ``ref`` and ``dref`` the reference orbit
+        and its ``tau``-derivative at the stages.
+        """
         N, m, n = self.N, self.m, self.n
         m1 = m + 1
         D, e, h = self.mesh.D, self.mesh.e, self.mesh.h
@@ -416,7 +427,7 @@ def monodromy_factors(layout: CollocationLayout, B: FloatArray, stages: bool = F
     K = B[:, :, 1:].transpose(0, 1, 3, 2, 4).reshape(N, m * n, m * n)
     R = B[:, :, 0].reshape(N, m * n, n)
     kern = compiled(_CONDENSE_KERNELS)
-    X = None
+    X: np.ndarray | None = None
     if kern is not None:  # block LU and solves in one compiled call
         X = np.empty((N, m * n, n))
         if not kern.solve_many(np.array(K), np.ascontiguousarray(R), X):

@@ -7,10 +7,12 @@ cycles (see :mod:`continuation.periodic.floquet`):
 
 * ``LPC`` -- fold of cycles: the driver's fold (kind ``fold``, relabelled ``LPC1``...);
 * ``BPC`` -- branch point of cycles: the driver's branch point (kind ``bp``, ``BPC1``);
-* ``PD`` -- period doubling, a located zero of :math:`\prod (\mu_i + 1)` (a user-kind
-  point named ``"PD"``); :func:`switch_period_doubling` starts the doubled branch;
+* ``PD`` -- period doubling, a located zero of :math:`\prod (\mu_i + 1)` (kind
+  ``pd``, labelled ``"PD"``; ``br.find("pd")``); :func:`switch_period_doubling` starts
+  the doubled branch;
 * ``NS`` -- Neimark-Sacker, a located zero of :math:`\prod_{i<j} (\mu_i \mu_j - 1)`
-  with a complex pair on the unit circle (named ``"NS"``; neutral saddles dropped).
+  with a complex pair on the unit circle (kind ``ns``, labelled ``"NS"``; neutral
+  saddles dropped).
 
 All carry the driver's ``located`` flag and ``bracket``. The driver's Hopf test is
 switched off on cycle branches (its eigenvalues are Floquet exponents). PD and NS, like
@@ -49,7 +51,6 @@ from ..params import Params
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
 from ..typing import FloatArray
-from .floquet import is_neimark_sacker
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
 from .problem import PeriodicOrbitProblem, error_estimate
 
@@ -174,32 +175,6 @@ def adapt_mesh(
         new = orbit.mesh.equidistributed(X, n_intervals)
         orbit = solve_orbit(orbit.on_mesh(new), free, newton, fix_period=fix_period)
     return orbit
-
-
-def _relabel(
-    specials: Sequence[SpecialPoint], prob: PeriodicOrbitProblem
-) -> tuple[SpecialPoint, ...]:
-    out = []
-    count = {"LPC": 0, "BPC": 0}
-    for sp in specials:
-        if sp.kind == SpecialKind.FOLD:
-            count["LPC"] += 1
-            sp = dataclasses.replace(sp, label=f"LPC{count['LPC']}")
-        elif sp.kind == SpecialKind.BRANCH_POINT:
-            count["BPC"] += 1
-            sp = dataclasses.replace(sp, label=f"BPC{count['BPC']}")
-        elif sp.kind == SpecialKind.USER and sp.label == "NS":
-            ok, theta = is_neimark_sacker(prob.floquet(sp.x, sp.p).multipliers)
-            if not ok:
-                log.info("NS test zero at p=%.8g is a neutral saddle: not reported", sp.p)
-                continue
-            sp = dataclasses.replace(sp, data={**sp.data, "theta": theta})
-        elif sp.kind == SpecialKind.USER and sp.label == "PD":
-            mu = prob.floquet(sp.x, sp.p).multipliers
-            k = int(np.argmin(np.abs(mu + 1.0)))
-            sp = dataclasses.replace(sp, data={**sp.data, "mu": float(mu[k].real)})
-        out.append(sp)
-    return tuple(out)
 
 
 def continue_periodic(
@@ -421,14 +396,16 @@ def _continue_once(
     error_tol: float | None = None,
     previous: PeriodicOrbit | None = None,
 ) -> Branch:
-    """One driver run on one mesh (PD/NS/T_max events, phase reference per step);
+    """One driver run on one mesh (PD/NS/T_max events, phase reference per step).
+
     ``fix_period``: the start is corrected at its period rather than its parameter;
     ``period_sign`` (+1/-1): the branch leaves the start with the period growing /
     shrinking (0: by the sign of ``settings.ds`` in the parameter); ``previous``: the
     cycle of the row before ``orb`` on the branch being continued, whose secant
     ``orb - previous`` (on ``orb``'s mesh) the first tangent follows instead (the
     direction of a restart is then right at folds and where the parameter hardly
-    moves); ``error_tol``: a terminal event where the error estimate rises through it."""
+    moves); ``error_tol``: a terminal event where the error estimate rises through it.
+    """
     prob = PeriodicOrbitProblem.from_orbit(orb, free)
     T_col = prob.layout.T_col
     evs: list[Event] = []
@@ -449,18 +426,14 @@ def _continue_once(
         evs.append(Event(_ERR_EVENT, margin, direction="down", terminal=True, slope=False))
     evs.extend(events)
 
-    def accept(bp: Any) -> None:
-        prob.accept(np.asarray(bp.x), float(bp.p))
-        if progress is not None:
-            progress(bp)
-
-    br = continue_branch(
+    # the driver runs prob.accept after every accepted row and prob.relabel on the
+    # special points (the hooks of continuation.problem.ProblemHooks)
+    return continue_branch(
         prob, prob.reference, orb.param(free), settings=settings, events=evs,
-        throw=throw, progress=accept, start_fixed=T_col if fix_period else None,
+        throw=throw, progress=progress, start_fixed=T_col if fix_period else None,
         start_orient=(_period_orient(prob, period_sign) if previous is None
                       else _secant_orient(prob, orb, previous, free)),
     )  # fmt: skip
-    return dataclasses.replace(br, special_points=_relabel(br.special_points, prob))
 
 
 @dataclass(frozen=True, eq=False)
@@ -526,9 +499,10 @@ def _continue_segments(
     error_tol: float | None = None,
     max_intervals: int = 400,
 ) -> Branch:
-    """Segments of ``every`` steps with an equidistributed mesh each (see
-    :func:`continue_periodic`), merged into one branch; with ``error_tol`` the number
-    of intervals grows where the error estimate of a segment's last cycle exceeds it.
+    """Segments of ``every`` steps, each on an equidistributed mesh, merged into one branch.
+
+    See :func:`continue_periodic`; with ``error_tol`` the number of intervals grows where
+    the error estimate of a segment's last cycle exceeds it.
 
     Each segment after the first starts from the last cycle interpolated onto the
     equidistributed mesh; the driver's start correction (at fixed parameter) solves it
@@ -627,8 +601,10 @@ def _truncated(br: Branch, k: int, status: Status, message: str) -> Branch:
 
 
 def _limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
-    r"""The branch ended where its period grows without bound and its parameter has
-    come within its own error of the limit, or None while it has not.
+    r"""The end of a branch whose period grows without bound, or None.
+
+    The branch ended where its period grows without bound and its parameter has come within
+    its own error of the limit; None while it has not.
 
     Near a homoclinic or heteroclinic orbit of saddles ``p = p^* + c e^{-T/b}``. Where
     the period grew over the last ``n_tail`` rows and the parameter moved one way (or
@@ -706,8 +682,10 @@ def _limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
 def _refined_intervals(
     orb: PeriodicOrbit, error: float, error_tol: float | None, max_intervals: int
 ) -> int | None:
-    """Number of intervals for the next segment (None: keep), from the error estimate
-    ``error`` of ``orb`` (order ``m + 1`` in the interval length)."""
+    """Number of intervals for the next segment (None: keep).
+
+    From the error estimate ``error`` of ``orb`` (order ``m + 1`` in the interval length).
+    """
     N = orb.mesh.n_intervals
     if error_tol is None or not math.isfinite(error) or error <= error_tol or N >= max_intervals:
         return None
@@ -726,11 +704,13 @@ def _refine_start(
     rounds: int = 4,
     fix_period: bool = False,
 ) -> PeriodicOrbit:
-    """The start cycle on a mesh whose error estimate is within ``error_tol`` (at most
-    ``max_intervals`` intervals, ``rounds`` refinements by :func:`_refined_intervals`),
-    so that the first segment's rows are not left above the tolerance; a refinement
-    that does not converge keeps the cycle as it was (the driver's start correction
-    and the message report what follows)."""
+    """The start cycle on a mesh whose error estimate is within ``error_tol``.
+
+    At most ``max_intervals`` intervals, ``rounds`` refinements by
+    :func:`_refined_intervals`, so that the first segment's rows are not left above the
+    tolerance; a refinement that does not converge keeps the cycle as it was (the driver's
+    start correction and the message report what follows).
+    """
     for _ in range(rounds):
         n_new = _refined_intervals(orb, error_estimate(orb.mesh, orb.X), error_tol, max_intervals)
         if n_new is None:
@@ -744,8 +724,11 @@ def _refine_start(
 
 
 def _merge_segments(segs: list[Branch]) -> Branch:
-    """One branch from consecutive segments (the first row of each later segment, the
-    previous segment's last cycle on the new mesh, is dropped)."""
+    """One branch from consecutive segments.
+
+    The first row of each later segment, the previous segment's last cycle on the new mesh,
+    is dropped.
+    """
     rows: dict[str, list[Any]] = {k: [] for k in ("p", "x", "eig", "nun", "ds", "it")}
     recs: dict[str, list[float]] = {}
     specials: list[SpecialPoint] = []
@@ -775,8 +758,10 @@ def _merge_segments(segs: list[Branch]) -> Branch:
                  for x in rows["x"]]  # fmt: skip
     ev = [e for e in rows["eig"] if e.size]
     width = max((e.shape[1] for e in ev), default=0)
-    eig = np.vstack([np.pad(e, ((0, 0), (0, width - e.shape[1])), constant_values=np.nan)
-                     for e in rows["eig"]]) if width else np.zeros((base + 1, 0))  # fmt: skip
+    eig: np.ndarray = (
+        np.vstack([np.pad(e, ((0, 0), (0, width - e.shape[1])), constant_values=np.nan)
+                   for e in rows["eig"]]) if width else np.zeros((base + 1, 0))
+    )  # fmt: skip
     count = {"LPC": 0, "BPC": 0}
     relabelled = []
     for sp in specials:
@@ -827,7 +812,8 @@ def _finish(
     specials = tuple(s for s in specials if s.label != _ERR_EVENT)
     out = []
     for sp in specials:
-        if sp.kind == SpecialKind.USER and sp.label in ("PD", "NS") and sp.located:
+        floquet = (SpecialKind.PERIOD_DOUBLING, SpecialKind.NEIMARK_SACKER)
+        if sp.kind in floquet and sp.located:
             err = special_problem(br, sp).floquet(sp.x, sp.p).trivial_error
             if err > TRIVIAL_TOL:
                 log.warning("%s at %s=%.8g: multipliers unreliable (%.3g); reported as "
@@ -878,8 +864,10 @@ def _finish(
 
 
 def _state_ranges(br: Branch) -> FloatArray:
-    """Largest ``max - min`` of a state over the cycle at each row, shape ``(len(br),)``
-    (1 where no state moves, so that the ratio stays the absolute estimate)."""
+    """Largest ``max - min`` of a state over the cycle at each row, shape ``(len(br),)``.
+
+    1 where no state moves, so that the ratio stays the absolute estimate.
+    """
     rec = br.records
     names = problem_at(br, 0).system.state_names
     r = np.max(np.vstack([rec[f"max_{s}"] - rec[f"min_{s}"] for s in names]), axis=0)
@@ -910,7 +898,7 @@ def special_problem(branch: Branch, sp: SpecialPoint) -> PeriodicOrbitProblem:
     unknowns and the smaller collocation residual at ``sp``.
     """
     x = np.asarray(sp.x, dtype=float)
-    cands = []
+    cands: list[PeriodicOrbitProblem] = []
     for k in (sp.index, min(sp.index + 1, len(branch) - 1)):
         prob = problem_at(branch, max(k, 0))
         if prob.n_unknowns == x.size and all(prob is not q for q in cands):
@@ -1018,11 +1006,13 @@ class PeriodLimit:
 def _log_fit(
     p: FloatArray, T: FloatArray, b_fixed: float | None = None
 ) -> tuple[float, float, float]:
-    """Fit ``p = p* + c exp(-T / b)`` (i.e. ``T = a - b ln|p - p*|``); returns
-    ``(p*, b, rms of the fit in p)``. For fixed ``b`` the fit is linear in ``(p*, c)``;
-    ``b`` is found by a bounded scalar search on ``ln b``. Where that search ends on a
-    bound or the rows agree to ``1e-10`` relative (``b`` is not determined by the rows),
-    the fit with ``b = b_fixed`` is returned, with ``b`` as NaN."""
+    """Fit ``p = p* + c exp(-T / b)`` (i.e. ``T = a - b ln|p - p*|``).
+
+    Returns ``(p*, b, rms of the fit in p)``. For fixed ``b`` the fit is linear in ``(p*,
+    c)``; ``b`` is found by a bounded scalar search on ``ln b``. Where that search ends on a
+    bound or the rows agree to ``1e-10`` relative (``b`` is not determined by the rows), the
+    fit with ``b = b_fixed`` is returned, with ``b`` as NaN.
+    """
     Tn = T - float(np.min(T))  # exponentials in (0, 1]: no overflow
 
     def lsq(lb: float) -> tuple[float, float, float]:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..algorithms.corrector import correct
-from ..branch import Branch, SpecialPoint
+from ..branch import Branch, SpecialKind, SpecialPoint
 from ..bvp.collocation import CollocationMesh
 from ..errors import ConvergenceError
 from ..settings import ContinuationSettings, NewtonSettings
@@ -34,7 +34,7 @@ from .problem import PeriodicOrbitProblem
 def _pd_point(branch: Branch, which: Any) -> SpecialPoint:
     if isinstance(which, SpecialPoint):
         return which
-    pds = branch.find("PD")
+    pds = branch.find(SpecialKind.PERIOD_DOUBLING)
     if isinstance(which, int) and 0 <= which < len(pds):
         return pds[which]
     raise ValueError(f"`which` must be a PD point or its index among {len(pds)}, got {which!r}")
@@ -64,7 +64,7 @@ def switch_period_doubling(
     branch : Branch
         A cycle branch of :func:`~continuation.periodic.continuation.continue_periodic`.
     which : int or SpecialPoint
-        The PD point (index among ``branch.find("PD")`` or the point).
+        The PD point (index among ``branch.find("pd")`` or the point).
     amplitude : float
         ``epsilon``: size of the step along ``w`` (scaled to ``max |w| = 1``).
     newton : NewtonSettings, optional
@@ -129,9 +129,11 @@ def continue_period_doubled(
     amplitude: float = 1e-2,
     **kwargs: Any,
 ) -> Branch:
-    """The branch of doubled cycles from a PD point, continued away from it (the sign
-    of ``settings.ds`` follows the side of :func:`switch_period_doubling`). Other
-    keywords go to :func:`~continuation.periodic.continuation.continue_periodic`."""
+    """The branch of doubled cycles from a PD point, continued away from it.
+
+    The sign of ``settings.ds`` follows the side of :func:`switch_period_doubling`. Other
+    keywords go to :func:`~continuation.periodic.continuation.continue_periodic`.
+    """
     orb, side = switch_period_doubling(branch, which, amplitude=amplitude)
     settings = settings if settings is not None else ContinuationSettings()
     if side != 0.0:

@@ -116,10 +116,11 @@ def grouped(factors: FloatArray, groups: int = GROUPS) -> FloatArray:
 
 
 def dominance_basis(factors: FloatArray) -> FloatArray | None:
-    r"""A start for :func:`periodic_eigenvalues`: an orthonormal ``Q`` whose first ``k``
-    columns span the invariant subspace of the ``k`` eigenvalues of largest modulus of
-    the explicitly formed product (real and imaginary parts of the eigenvectors, by
-    decreasing modulus, orthonormalised in that order), for every ``k``.
+    r"""A start for :func:`periodic_eigenvalues`: an orthonormal ``Q``.
+
+    Its first ``k`` columns span the invariant subspace of the ``k`` eigenvalues of largest
+    modulus of the explicitly formed product (real and imaginary parts of the eigenvectors,
+    by decreasing modulus, orthonormalised in that order), for every ``k``.
 
     The dominant invariant subspaces of the formed product are accurate even where its
     small eigenvalues have lost all digits, so the iteration starts next to its fixed
@@ -267,8 +268,8 @@ def floquet(
         c = C[:, 0, 0]
         lg = float(np.sum(np.log(np.maximum(np.abs(c), 5e-324))))
         sg = float(np.prod(np.where(c >= 0, 1.0, -1.0)))
-        mu1 = np.array([sg * math.exp(min(lg, 709.0))], dtype=complex)
-        return FloquetResult(mu1, complex(trivial), max(abs(trivial - 1.0), eps))
+        mu_1 = np.array([sg * math.exp(min(lg, 709.0))], dtype=complex)
+        return FloquetResult(mu_1, complex(trivial), max(abs(trivial - 1.0), eps))
     Cg = grouped(C)
     Q_start = dominance_basis(Cg)
     if Q_start is None and memo is not None:
@@ -277,15 +278,14 @@ def floquet(
     if memo is not None:
         memo["Q"] = Q
     if not ok:
-        mu = np.linalg.eigvals(monodromy(Cg))
+        mu = np.asarray(np.linalg.eigvals(monodromy(Cg)), dtype=complex)
     mu = mu[np.argsort(-np.abs(mu), kind="stable")]
     return FloquetResult(np.asarray(mu, dtype=complex), complex(trivial),
                          max(abs(trivial - 1.0), eps))  # fmt: skip
 
 
 def exponents(mu: ComplexArray, imag_tol: float = 1e-8) -> ComplexArray:
-    r"""Floquet exponents per period, :math:`\ln|\mu| + i \arg\mu`, for the driver's
-    stability count.
+    r"""Floquet exponents per period, :math:`\ln|\mu| + i \arg\mu` (the driver's stability count).
 
     Real multipliers (``|Im mu| <= imag_tol |mu|``), negative ones included, give real
     exponents :math:`\ln|\mu|`, so that ``Re > 0`` counts each multiplier outside the
@@ -316,9 +316,11 @@ def ns_test(mu: ComplexArray) -> float:
 
 
 def is_neimark_sacker(mu: ComplexArray, tol: float = 1e-3) -> tuple[bool, float]:
-    """At a zero of :func:`ns_test`: a complex pair on the unit circle? Returns
-    ``(True, theta)`` with the pair's argument ``theta`` in ``(0, pi)``, or
-    ``(False, nan)`` (a neutral saddle: real ``mu``, ``1/mu``)."""
+    """At a zero of :func:`ns_test`: a complex pair on the unit circle?
+
+    Returns ``(True, theta)`` with the pair's argument ``theta`` in ``(0, pi)``, or
+    ``(False, nan)`` (a neutral saddle: real ``mu``, ``1/mu``).
+    """
     mu = np.asarray(mu, dtype=complex)
     best = math.inf
     theta = math.nan

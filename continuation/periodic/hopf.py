@@ -33,8 +33,11 @@ from .orbit import PeriodicOrbit
 
 
 def _multilinear(system: Any) -> tuple[Any, Any]:
-    """``B(x, P, u, v)`` and ``C(x, P, u, v, w)`` (second and third derivatives of
-    ``f`` applied to real directions), from the CasADi trace, or by central differences."""
+    """``B(x, P, u, v)`` and ``C(x, P, u, v, w)``, from the CasADi trace or differences.
+
+    The second and third derivatives of ``f`` applied to real directions, from the CasADi
+    trace, or by central differences.
+    """
     cache = system.__dict__.setdefault("_periodic_multilinear", {})
     if "B" in cache:
         return cache["B"], cache["C"]

@@ -8,30 +8,36 @@ driver :func:`~continuation.driver.continue_branch` continues it.
 The phase condition's reference orbit is the previous accepted point: it is held in
 a small mutable slot of the (otherwise frozen) problem and replaced by
 :meth:`PeriodicOrbitProblem.accept` after every accepted row
-(:func:`~continuation.periodic.continuation.continue_periodic` does this through the
-driver's ``progress`` callback, which runs after the step's special points were
-located, so every point of one step uses the same reference).
+(the driver's ``accept`` hook, :class:`~continuation.problem.ProblemHooks`, which
+runs after the step's special points were located, so every point of one step uses
+the same reference); the driver's ``relabel`` hook names the special points as those
+of cycles (:meth:`PeriodicOrbitProblem.relabel`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import dataclasses
+import logging
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 
 from .._jit import compiled
+from ..branch import SpecialKind, SpecialPoint
 from ..bvp.collocation import CollocationMesh
 from ..linalg import csc_with_data
 from ..params import Params
 from ..typing import ComplexArray, FloatArray
 from .collocation import CollocationLayout, StageEvaluator, monodromy_factors
-from .floquet import FloquetResult, exponents, floquet, ns_test, pd_test
+from .floquet import FloquetResult, exponents, floquet, is_neimark_sacker, ns_test, pd_test
 from .orbit import PeriodicOrbit
 
 #: Number of points whose Floquet multipliers :meth:`PeriodicOrbitProblem.floquet` keeps.
 FLOQUET_MEMO = 4
+
+log = logging.getLogger(__name__)
 
 
 def error_estimate(mesh: CollocationMesh, X: FloatArray) -> float:
@@ -124,6 +130,7 @@ class PeriodicOrbitProblem:
     winding: tuple[int, ...]
     reference: FloatArray
     _slot: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
+    _shift: FloatArray = field(init=False, repr=False)
 
     #: The Jacobian is a SciPy sparse (CSC) matrix: the driver's sparse solvers (a
     #: dense Jacobian was measured 10x slower in the driver even for 400 unknowns).
@@ -172,8 +179,11 @@ class PeriodicOrbitProblem:
 
     @property
     def exact_jacobian(self) -> bool:
-        """The derivatives are exact where the system has a CasADi trace (else the
-        system's finite differences): :func:`~continuation.problem.exact_jacobian`."""
+        """The derivatives are exact where the system has a CasADi trace.
+
+        Else they are the system's finite differences:
+        :func:`~continuation.problem.exact_jacobian`.
+        """
         return bool(getattr(self.system, "has_casadi", False))
 
     @property
@@ -208,6 +218,40 @@ class PeriodicOrbitProblem:
         self._slot["dref"] = self.mesh.derivative(X)
         self._slot["cache"] = None
 
+    def relabel(self, specials: Sequence[SpecialPoint]) -> tuple[SpecialPoint, ...]:
+        """The special points as points of cycles (the driver calls this once per branch).
+
+        Folds become ``LPC1, LPC2, ...``, branch points ``BPC1, ...``; the zeros of the
+        events ``"PD"``/``"NS"`` become the kinds ``pd`` (with the multiplier ``mu``
+        next to ``-1``) and ``ns`` (with the angle ``theta`` of the pair on the unit
+        circle); an NS zero without such a pair (a neutral saddle) is dropped.
+        """
+        out = []
+        count = {"LPC": 0, "BPC": 0}
+        for sp in specials:
+            if sp.kind == SpecialKind.FOLD:
+                count["LPC"] += 1
+                sp = dataclasses.replace(sp, label=f"LPC{count['LPC']}")
+            elif sp.kind == SpecialKind.BRANCH_POINT:
+                count["BPC"] += 1
+                sp = dataclasses.replace(sp, label=f"BPC{count['BPC']}")
+            elif sp.kind == SpecialKind.USER and sp.label == "NS":
+                ok, theta = is_neimark_sacker(self.floquet(sp.x, sp.p).multipliers)
+                if not ok:
+                    log.info("NS test zero at p=%.8g is a neutral saddle: not reported", sp.p)
+                    continue
+                sp = dataclasses.replace(
+                    sp, kind=SpecialKind.NEIMARK_SACKER, data={**sp.data, "theta": theta}
+                )
+            elif sp.kind == SpecialKind.USER and sp.label == "PD":
+                mu = self.floquet(sp.x, sp.p).multipliers
+                k = int(np.argmin(np.abs(mu + 1.0)))
+                sp = dataclasses.replace(
+                    sp, kind=SpecialKind.PERIOD_DOUBLING, data={**sp.data, "mu": float(mu[k].real)}
+                )
+            out.append(sp)
+        return tuple(out)
+
     # ------------------------------------------------------------------ evaluation
     def _stages(self, z: FloatArray, p: float, full: bool) -> Any:
         lay = self.layout
@@ -229,7 +273,7 @@ class PeriodicOrbitProblem:
             G = np.empty(self.layout.n_unknowns)
             kern.residual(X, T, F, D, e, h, self._shift, s["ref"], s["dref"], w, sp_, G)
             return G
-        return self.layout.residual(X, T, F, self._shift, s["ref"], s["dref"])  # type: ignore[attr-defined]
+        return self.layout.residual(X, T, F, self._shift, s["ref"], s["dref"])
 
     def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
         """``(G, dG/dz (CSC), dG/dp)`` in one evaluation of ``f, f_x, f_p``."""
@@ -250,7 +294,7 @@ class PeriodicOrbitProblem:
             B = vals[: args[5].size].reshape(lay.N, lay.m, lay.m + 1, lay.n, lay.n)
             self._slot["cache"] = (z.copy(), float(p), B, F)
             return G, csc_with_data(lay._template, data), Gp
-        G = lay.residual(X, T, F, self._shift, s["ref"], s["dref"])  # type: ignore[attr-defined]
+        G = lay.residual(X, T, F, self._shift, s["ref"], s["dref"])
         B = lay.blocks(X, T, J)
         Gz = lay.assemble(B, F, s["dref"])
         Gp = np.zeros(lay.n_unknowns)
@@ -278,8 +322,10 @@ class PeriodicOrbitProblem:
         return B, F
 
     def floquet(self, z: FloatArray, p: float) -> FloquetResult:
-        """Floquet multipliers of the cycle ``z`` by condensation of the collocation
-        blocks (:func:`~continuation.periodic.collocation.monodromy_factors`)."""
+        """Floquet multipliers of the cycle ``z`` by condensation of the collocation blocks.
+
+        See :func:`~continuation.periodic.collocation.monodromy_factors`.
+        """
         key = (np.asarray(z, dtype=float).tobytes(), float(p))
         # a few points: the driver asks for the multipliers at a row, at the row moved
         # along its tangent (the events' slopes) and at the row again (records), in turn

@@ -35,6 +35,7 @@ class SerialExecutor(cf.Executor):
     """Runs each task at ``submit`` in the calling process (a finished future back)."""
 
     def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> cf.Future:
+        """Run ``fn(*args, **kwargs)`` now; a finished future with its result or error."""
         fut: cf.Future = cf.Future()
         fut.set_running_or_notify_cancel()
         try:

@@ -40,7 +40,7 @@ import threading
 from collections import deque
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Generic, TypeVar
+from typing import Generic, TypeVar, cast
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -195,7 +195,7 @@ class ForkedTasks(Generic[T, R]):
         for pid, path in self._kids:
             with contextlib.suppress(ChildProcessError):
                 os.waitpid(pid, 0)
-            self.finished.update(_read_records(path))
+            self.finished.update(cast("dict[int, R]", _read_records(path)))
         self._kids = []
 
     def _cleanup(self) -> None:

@@ -114,8 +114,11 @@ class CrossingTangents:
 def abe_roots(
     d2G: SecondDerivative, u: FloatArray, q1: FloatArray, q2: FloatArray, psi: FloatArray
 ) -> tuple[tuple[float, float, float], FloatArray, FloatArray]:
-    """ABE coefficients and the two root directions (``theta``-unit, as combinations of
-    the ``theta``-orthonormal ``q1, q2``)."""
+    """ABE coefficients and the two root directions.
+
+    The directions are ``theta``-unit, as combinations of the ``theta``-orthonormal ``q1,
+    q2``.
+    """
     D = [d2G(u, q1, q1), d2G(u, q1, q2), d2G(u, q2, q2)]
     if not all(np.all(np.isfinite(d)) for d in D):
         raise Failure(Status.NONFINITE, "non-finite second derivatives at the branch point")

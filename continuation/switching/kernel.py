@@ -39,8 +39,10 @@ KERNEL_GAP = 0.1
 
 
 class Failure(Exception):
-    """Not a simple branch point (or not computable there): ``status`` and ``message``
-    for the failed result."""
+    """Not a simple branch point (or not computable there).
+
+    Carries ``status`` and ``message`` for the failed result.
+    """
 
     def __init__(self, status: Status, message: str) -> None:
         super().__init__(message)
@@ -54,8 +56,11 @@ def dense(Gz: Any) -> FloatArray:
 
 
 def w_orthonormal(a: FloatArray, b: FloatArray, w: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Gram-Schmidt of ``a, b`` (shape (N + 1,)) in the ``theta`` inner product with
-    weights ``w``; raises :class:`Failure` (``SINGULAR``) when ``b`` is parallel to ``a``."""
+    """Gram-Schmidt of ``a, b`` (shape (N + 1,)) in the ``theta`` inner product.
+
+    With weights ``w``; raises :class:`Failure` (``SINGULAR``) when ``b`` is parallel to
+    ``a``.
+    """
     a = a / theta_norm(a, w)
     b = b - float((w * a).dot(b)) * a
     nb = theta_norm(b, w)

@@ -62,9 +62,12 @@ def _fd_second_derivative(problem: Any) -> SecondDerivative:
 
 
 def second_derivative(problem: Any) -> tuple[SecondDerivative, str]:
-    """``(u, a, b) -> D^2G(u)[a, b]`` (all shape (N + 1,), result shape (N,)) and its
-    source, ``"casadi"`` or ``"finite differences"`` (the fallback when the problem is
-    not an EquilibriumProblem of a traced system or CasADi cannot trace it twice)."""
+    """``(u, a, b) -> D^2G(u)[a, b]`` and its source.
+
+    All shape (N + 1,), result shape (N,). The source: ``"casadi"`` or ``"finite
+    differences"`` (the fallback when the problem is not an EquilibriumProblem of a traced
+    system or CasADi cannot trace it twice).
+    """
     system = getattr(problem, "system", None)
     if isinstance(problem, EquilibriumProblem) and getattr(system, "has_casadi", False):
         try:

@@ -66,10 +66,11 @@ def offset_direction(
 
 
 class OrientedStart(ContinuationAlgorithm):
-    """Wraps an algorithm so that the start tangent points along ``+orient`` when
-    ``settings.ds > 0`` and along ``-orient`` otherwise (instead of the sign rule on
-    ``dp/ds``, which cannot tell the halves of a crossing branch apart where it is
-    vertical, e.g. at a pitchfork)."""
+    """An algorithm whose start tangent points along ``+orient`` (``-orient`` for ``ds < 0``).
+
+    Instead of the sign rule on ``dp/ds``, which cannot tell the halves of a crossing branch
+    apart where it is vertical, e.g. at a pitchfork.
+    """
 
     def __init__(self, inner: ContinuationAlgorithm, orient: FloatArray) -> None:
         self.inner = inner
@@ -79,6 +80,7 @@ class OrientedStart(ContinuationAlgorithm):
     def init(
         self, problem: Any, z0: FloatArray, p0: float, settings: ContinuationSettings
     ) -> StepState:
+        """The inner algorithm's start state, its tangent turned along ``orient`` (``ds > 0``)."""
         state = self.inner.init(problem, z0, p0, settings)
         pt = state.point
         target = self.orient if settings.ds > 0 else -self.orient
@@ -99,6 +101,7 @@ class OrientedStart(ContinuationAlgorithm):
     def step(
         self, problem: Any, state: StepState, settings: ContinuationSettings
     ) -> tuple[StepState, StepOutcome]:
+        """One step of the inner algorithm."""
         return self.inner.step(problem, state, settings)
 
     def __repr__(self) -> str:
@@ -114,8 +117,10 @@ def start_point(
     w: FloatArray,
     newton: NewtonSettings,
 ) -> tuple[FloatArray | None, str]:
-    """Solve ``G(u) = 0, <phi2, u - u*>_theta = sign a S`` from ``u* + sign a t_new``;
-    returns ``(u, "")`` or ``(None, reason)``."""
+    """Solve ``G(u) = 0, <phi2, u - u*>_theta = sign a S`` from ``u* + sign a t_new``.
+
+    Returns ``(u, "")`` or ``(None, reason)``.
+    """
     u_star = np.append(ct.z, ct.p)
     phi2, S = offset_direction(ct, t_new, w)
     u_pred = u_star + sign * amplitude * t_new

@@ -70,8 +70,9 @@ def _check_crossing(
     br: Branch, ct: CrossingTangents, t_new: FloatArray, w: FloatArray, k0: int, side: float,
     amplitude: float,
 ) -> tuple[bool, int, float]:  # fmt: skip
-    r"""Did the run from row ``k0`` (on the ``side`` half) through the branch point stay on
-    the crossing branch?
+    r"""Did the run from row ``k0`` through the branch point stay on the crossing branch?
+
+    The run is the one on the ``side`` half of the crossing branch.
 
     Walks from row ``k0`` towards the branch point (decreasing row numbers for
     ``side = +1``) and checks every row within ``4 amplitude`` of ``u*`` and the first
@@ -178,9 +179,11 @@ def _resolve_point(branch: Branch, point: SpecialPoint | str) -> SpecialPoint:
 
 
 def _reference_tangent(branch: Branch, point: SpecialPoint, w: FloatArray) -> FloatArray:
-    """Direction of the current branch at the point: the chord of the two rows around
-    it (the tangent the locator stored is ill-determined exactly at a branch point,
-    where the bordered matrix is singular)."""
+    """Direction of the current branch at the point: the chord of the two rows around it.
+
+    The tangent the locator stored is ill-determined exactly at a branch point, where the
+    bordered matrix is singular.
+    """
     i = int(point.index)
     if 0 <= i and i + 1 < len(branch):
         chord = _delta(branch.problem, branch.x[i + 1], branch.p[i + 1], branch.x[i], branch.p[i])
@@ -231,12 +234,14 @@ def _row_abe_scale(problem: Any, branch: Branch, point: SpecialPoint, w: FloatAr
 
 
 def _orient(t: FloatArray, sign_ds: float) -> FloatArray:
-    """``t`` with ``sign(dp/ds) = sign_ds``; if ``t`` is (numerically) vertical, with its
-    largest state component positive: the first of the components within a relative
-    ``1e-3`` of the largest magnitude, so that mirror-symmetric problems (an
-    antisymmetric kernel vector has two largest components of opposite sign, told apart
-    only by round-off or by the point's own asymmetry, ~1e-5) are oriented the same way
-    on every machine."""
+    """``t`` with ``sign(dp/ds) = sign_ds``.
+
+    If ``t`` is (numerically) vertical, with its largest state component positive: the first
+    of the components within a relative ``1e-3`` of the largest magnitude, so that mirror-
+    symmetric problems (an antisymmetric kernel vector has two largest components of
+    opposite sign, told apart only by round-off or by the point's own asymmetry, ~1e-5) are
+    oriented the same way on every machine.
+    """
     if abs(float(t[-1])) > 1e-6:
         return t if t[-1] * sign_ds > 0 else -t
     mag = np.abs(t[:-1])

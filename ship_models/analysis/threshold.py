@@ -412,9 +412,9 @@ def cycle_bifurcations(
             continue
         if sp.kind == SpecialKind.FOLD:
             lpc.append(float(sp.p))
-        elif sp.kind == SpecialKind.USER and sp.label == "PD":
+        elif sp.kind == SpecialKind.PERIOD_DOUBLING:
             pd.append(float(sp.p))
-        elif sp.kind == SpecialKind.USER and sp.label == "NS":
+        elif sp.kind == SpecialKind.NEIMARK_SACKER:
             ns.append(float(sp.p))
     return CycleBifurcations(
         tuple(sorted(pd)), tuple(sorted(lpc)), tuple(sorted(ns)), float(cb.lost_stability_at),
