@@ -92,7 +92,8 @@ subroutine pvls
 end subroutine pvls
 """
 
-AB_F90 = """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
+AB_F90 = (
+    """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
   implicit none
   integer, intent(in) :: ndim, icp(*), ijac
   double precision, intent(in) :: u(ndim), par(*)
@@ -118,9 +119,12 @@ subroutine stpnt(ndim, u, par, t)
   par(1:3) = (/ 0d0, 14d0, 3d0 /)
   u(1:2) = 0d0
 end subroutine stpnt
-""" + _EMPTY_ROUTINES
+"""
+    + _EMPTY_ROUTINES
+)
 
-BRU_F90 = """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
+BRU_F90 = (
+    """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
   implicit none
   integer, intent(in) :: ndim, icp(*), ijac
   double precision, intent(in) :: u(ndim), par(*)
@@ -143,7 +147,9 @@ subroutine stpnt(ndim, u, par, t)
   par(1:2) = (/ 1.5d0, 3d0 /)
   u(1:2) = (/ 1.5d0, 2d0 /)
 end subroutine stpnt
-""" + _EMPTY_ROUTINES
+"""
+    + _EMPTY_ROUTINES
+)
 
 COMMON = {"NCOL": 4, "ISW": 1, "IPLT": 0, "NBC": 0, "NINT": 0, "MXBF": 10, "IID": 0,
           "ITMX": 8, "NWTN": 3, "JAC": 1, "IADS": 1, "NPR": 1000}  # fmt: skip
@@ -194,38 +200,128 @@ RHS: dict[str, Callable[..., Any]] = {"ab": _ab_rhs, "bru": _bru_rhs}
 
 DEMOS = {
     "ab": Demo(
-        name="ab", fortran=AB_F90, state_names=("u1", "u2"), param_names=("D", "B", "beta"),
-        params0={"D": 0.0, "B": 14.0, "beta": 3.0}, x0=(0.0, 0.0), free="D",
-        equilibria={**COMMON, "NDIM": 2, "NPAR": 3, "IPS": 1, "IRS": 0, "ILP": 1, "ICP": [1],
-                    "NTST": 50, "ISP": 1, "NMX": 400, "IAD": 3, "ITNW": 5, "EPSL": 1e-7,
-                    "EPSU": 1e-7, "EPSS": 1e-5, "DS": 0.1, "DSMIN": 0.001, "DSMAX": 0.05,
-                    "UZSTOP": {1: 0.25}},
-        periodic={**COMMON, "NDIM": 2, "NPAR": 3, "IPS": 2, "ILP": 0, "ICP": [1, 11],
-                  "NTST": 70, "ISP": 1, "NMX": 500, "IAD": 3, "ITNW": 5, "EPSL": 1e-7,
-                  "EPSU": 1e-7, "EPSS": 1e-5, "DS": 0.01, "DSMIN": 0.001, "DSMAX": 0.5,
-                  "THL": {11: 0.0}, "UZR": {1: [0.17, 0.22]},
-                  "UZSTOP": {1: 0.25, 11: 200.0}},
+        name="ab",
+        fortran=AB_F90,
+        state_names=("u1", "u2"),
+        param_names=("D", "B", "beta"),
+        params0={"D": 0.0, "B": 14.0, "beta": 3.0},
+        x0=(0.0, 0.0),
+        free="D",
+        equilibria={
+            **COMMON,
+            "NDIM": 2,
+            "NPAR": 3,
+            "IPS": 1,
+            "IRS": 0,
+            "ILP": 1,
+            "ICP": [1],
+            "NTST": 50,
+            "ISP": 1,
+            "NMX": 400,
+            "IAD": 3,
+            "ITNW": 5,
+            "EPSL": 1e-7,
+            "EPSU": 1e-7,
+            "EPSS": 1e-5,
+            "DS": 0.1,
+            "DSMIN": 0.001,
+            "DSMAX": 0.05,
+            "UZSTOP": {1: 0.25},
+        },
+        periodic={
+            **COMMON,
+            "NDIM": 2,
+            "NPAR": 3,
+            "IPS": 2,
+            "ILP": 0,
+            "ICP": [1, 11],
+            "NTST": 70,
+            "ISP": 1,
+            "NMX": 500,
+            "IAD": 3,
+            "ITNW": 5,
+            "EPSL": 1e-7,
+            "EPSU": 1e-7,
+            "EPSS": 1e-5,
+            "DS": 0.01,
+            "DSMIN": 0.001,
+            "DSMAX": 0.5,
+            "THL": {11: 0.0},
+            "UZR": {1: [0.17, 0.22]},
+            "UZSTOP": {1: 0.25, 11: 200.0},
+        },
         checks=(0.17, 0.22),
         eq_settings={"ds": 0.05, "ds_max": 0.05, "p_min": 0.0, "p_max": 0.25},
-        bk_settings={"ds": 0.01, "ds_min": 1e-3, "ds_max": 0.5, "p_min": 0.0, "p_max": 0.25,
-                     "max_steps": 500},
-        tol=1e-7, adapt_every=3, period_max=200.0, detect=False,
+        bk_settings={
+            "ds": 0.01,
+            "ds_min": 1e-3,
+            "ds_max": 0.5,
+            "p_min": 0.0,
+            "p_max": 0.25,
+            "max_steps": 500,
+        },
+        tol=1e-7,
+        adapt_every=3,
+        period_max=200.0,
+        detect=False,
     ),
     "bru": Demo(
-        name="bru", fortran=BRU_F90, state_names=("x", "y"), param_names=("A", "B"),
-        params0={"A": 1.5, "B": 3.0}, x0=(1.5, 2.0), free="B",
-        equilibria={**COMMON, "NDIM": 2, "NPAR": 2, "IPS": 1, "IRS": 0, "ILP": 1, "ICP": [2],
-                    "NTST": 40, "ISP": 1, "NMX": 100, "IAD": 0, "ITNW": 7, "EPSL": 1e-10,
-                    "EPSU": 1e-10, "EPSS": 1e-8, "DS": 0.02, "DSMIN": 1e-4, "DSMAX": 0.05,
-                    "UZSTOP": {2: 4.0}},
-        periodic={**COMMON, "NDIM": 2, "NPAR": 2, "IPS": 2, "ILP": 1, "ICP": [2, 11],
-                  "NTST": 40, "ISP": 2, "NMX": 500, "IAD": 0, "ITNW": 7, "EPSL": 1e-10,
-                  "EPSU": 1e-10, "EPSS": 1e-8, "DS": 0.02, "DSMIN": 1e-4, "DSMAX": 0.1,
-                  "UZR": {2: [4.0, 4.9]}, "UZSTOP": {2: 5.0}},
+        name="bru",
+        fortran=BRU_F90,
+        state_names=("x", "y"),
+        param_names=("A", "B"),
+        params0={"A": 1.5, "B": 3.0},
+        x0=(1.5, 2.0),
+        free="B",
+        equilibria={
+            **COMMON,
+            "NDIM": 2,
+            "NPAR": 2,
+            "IPS": 1,
+            "IRS": 0,
+            "ILP": 1,
+            "ICP": [2],
+            "NTST": 40,
+            "ISP": 1,
+            "NMX": 100,
+            "IAD": 0,
+            "ITNW": 7,
+            "EPSL": 1e-10,
+            "EPSU": 1e-10,
+            "EPSS": 1e-8,
+            "DS": 0.02,
+            "DSMIN": 1e-4,
+            "DSMAX": 0.05,
+            "UZSTOP": {2: 4.0},
+        },
+        periodic={
+            **COMMON,
+            "NDIM": 2,
+            "NPAR": 2,
+            "IPS": 2,
+            "ILP": 1,
+            "ICP": [2, 11],
+            "NTST": 40,
+            "ISP": 2,
+            "NMX": 500,
+            "IAD": 0,
+            "ITNW": 7,
+            "EPSL": 1e-10,
+            "EPSU": 1e-10,
+            "EPSS": 1e-8,
+            "DS": 0.02,
+            "DSMIN": 1e-4,
+            "DSMAX": 0.1,
+            "UZR": {2: [4.0, 4.9]},
+            "UZSTOP": {2: 5.0},
+        },
         checks=(4.0, 4.9),
         eq_settings={"ds": 0.02, "ds_max": 0.05, "p_min": 2.5, "p_max": 4.0},
         bk_settings={"ds": 0.02, "ds_min": 1e-4, "ds_max": 0.1, "p_max": 5.0, "max_steps": 500},
-        tol=1e-10, adapt_every=0, period_max=None, detect=True,
+        tol=1e-10,
+        adapt_every=0,
+        period_max=None,
+        detect=True,
     ),
 }
 

@@ -64,9 +64,7 @@ def main() -> int:
         prof.disable()
         stats = pstats.Stats(prof).stats  # type: ignore[attr-defined]
         for label, key in PARTS.items():
-            parts[label] = sum(
-                v[3] for k, v in stats.items() if f"{Path(k[0]).name}:{k[2]}" == key
-            )
+            parts[label] = sum(v[3] for k, v in stats.items() if f"{Path(k[0]).name}:{k[2]}" == key)
     res = {
         "start_cycle_s": t_start,
         "branch_s": t_branch,

@@ -68,14 +68,21 @@ def main(argv: list[str] | None = None) -> int:
         for d, t in zip(deg, tc.thresholds, strict=True)
     ]  # fmt: skip
     doc = {
-        "machine": {"processor": platform.processor() or platform.machine(),
-                    "cpus": os.cpu_count(), "load_before": load0,
-                    "load_after": os.getloadavg()[0]},  # fmt: skip
+        "machine": {
+            "processor": platform.processor() or platform.machine(),
+            "cpus": os.cpu_count(),
+            "load_before": load0,
+            "load_after": os.getloadavg()[0],
+        },  # fmt: skip
         "courses_deg": deg.tolist(),
         "workers": args.workers,
         "heteroclinic_line": {"wall_s": t_line, "cpu_s": c_line, "status": curve.status.name},
-        "threshold_curve": {"wall_s": t_th, "cpu_s": c_th, "status": tc.status.name,
-                            "message": tc.message},  # fmt: skip
+        "threshold_curve": {
+            "wall_s": t_th,
+            "cpu_s": c_th,
+            "status": tc.status.name,
+            "message": tc.message,
+        },  # fmt: skip
         "per_course": rows,
         "target_wall_s": 30.0,
     }

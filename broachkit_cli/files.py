@@ -35,6 +35,7 @@ def __getattr__(name: str) -> Any:
         return getattr(atomic, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
+
 #: File present in a step folder while the step runs (removed when it finished).
 INCOMPLETE_MARKER = ".incomplete"
 

@@ -208,12 +208,16 @@ def sensitivity_context(results: Mapping[str, Any]) -> dict[str, Any] | None:
             ("coefficients differentiated", differentiated_text(s)),
         ],
         "dominant": [
-            (d["key"], _fmt(d["sigma_Fn"]),
-             "n/a" if d["share"] is None else f"{100 * d['share']:.0f} %")  # fmt: skip
+            (
+                d["key"],
+                _fmt(d["sigma_Fn"]),
+                "n/a" if d["share"] is None else f"{100 * d['share']:.0f} %",
+            )  # fmt: skip
             for d in s["dominant"]
         ],
-        "elasticities": [(e["key"], e["status"], _fmt(e["elasticity"]))
-                         for e in s["elasticities"]],  # fmt: skip
+        "elasticities": [
+            (e["key"], e["status"], _fmt(e["elasticity"])) for e in s["elasticities"]
+        ],  # fmt: skip
     }
 
 
@@ -273,10 +277,14 @@ def intact_stability_context(name: str = "purse_seiner") -> dict[str, Any] | Non
             ("windage area A (hull and topside only, a lower bound)", f"{_fmt(r['A_wind'])} m^2"),
             ("windage lever Z", f"{_fmt(r['Z_wind'])} m"),
             ("steady wind lever lw1 / gust lever lw2", f"{_fmt(w.lw1)} / {_fmt(w.lw2)} m"),
-            ("steady heel phi0 (limit)", f"{_fmt(math.degrees(w.phi0))} "
-             f"({_fmt(math.degrees(w.phi0_limit))}) deg"),
-            ("roll to windward phi1 (T by the Code's formula)",
-             f"{_fmt(math.degrees(w.phi1))} deg (T = {_fmt(w.T_roll)} s)"),
+            (
+                "steady heel phi0 (limit)",
+                f"{_fmt(math.degrees(w.phi0))} ({_fmt(math.degrees(w.phi0_limit))}) deg",
+            ),
+            (
+                "roll to windward phi1 (T by the Code's formula)",
+                f"{_fmt(math.degrees(w.phi1))} deg (T = {_fmt(w.T_roll)} s)",
+            ),
             ("areas a, b", f"{_fmt(w.area_a)}, {_fmt(w.area_b)} m rad"),
             ("largest windage area that passes (same Z)", f"{_fmt(r['A_wind_limit'])} m^2"),
         ],  # fmt: skip

@@ -44,6 +44,7 @@ from .bvp import (
     find_connection,
     solve_connection,
 )
+
 # periodic orbits (collocation, Floquet multipliers, cycle bifurcations)
 from .periodic import continue_from_hopf, continue_periodic, periodic_orbit_from_hopf
 

@@ -101,9 +101,7 @@ try:  # pragma: no cover - exercised through the import
     # SciPy's LAPACK, called from compiled code through named symbols (not baked-in
     # addresses), so that the compiled functions can be cached on disk
     for _name in ("dgetrf", "dgetrs", "dgeev"):
-        _llvm.add_symbol(
-            "broachkit_" + _name, _cython_address("scipy.linalg.cython_lapack", _name)
-        )
+        _llvm.add_symbol("broachkit_" + _name, _cython_address("scipy.linalg.cython_lapack", _name))
     _vp = _nbt.voidptr
     _dgetrf = _nbt.ExternalFunction("broachkit_dgetrf", _nbt.void(*([_vp] * 6)))
     _dgetrs = _nbt.ExternalFunction("broachkit_dgetrs", _nbt.void(*([_vp] * 9)))
@@ -737,9 +735,7 @@ def _lazy(name: str, make: Any) -> property:
 def _lu_of(pt: KernelPoint) -> BorderedLU:
     n1 = pt._k.n + 1
     o = pt._k.offsets
-    lu = BorderedLU.from_dense_factors(
-        pt._out[o[6] : o[7]].reshape((n1, n1), order="F"), pt._piv
-    )
+    lu = BorderedLU.from_dense_factors(pt._out[o[6] : o[7]].reshape((n1, n1), order="F"), pt._piv)
     # (ctau > 0: det [Gz Gp; (w o tau)^T] has the sign of det M; 2.0: not computed yet)
     lu._sign = 2.0 if pt._bp_sign is None else pt._bp_sign
     return lu

@@ -258,9 +258,7 @@ def _builder_key(waves: WaveForceBuilder | None) -> Any:
     return waves
 
 
-def resolve_vessel(
-    vessel: VesselData, *, waves: WaveForceBuilder | None = None
-) -> VesselModelData:
+def resolve_vessel(vessel: VesselData, *, waves: WaveForceBuilder | None = None) -> VesselModelData:
     """Cached :func:`build_vessel_model` (keyed by the vessel's name and coefficients
     and the wave-force builder)."""
     meta = tuple(sorted((k, str(v)) for k, v in vessel.meta.items()))  # wave_forces, offsets
@@ -333,9 +331,7 @@ def _memo_call(name: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> 
     return memo.get(key, lambda: cached_call(name, fn, *args, **kwargs))
 
 
-def _memo_fit(
-    fun: Callable[[Any], Any], u_max: float, knot_spacing: float, **kwargs: Any
-) -> Any:
+def _memo_fit(fun: Callable[[Any], Any], u_max: float, knot_spacing: float, **kwargs: Any) -> Any:
     memo = _MEMO.get()
     if memo is None:
         return fit_resistance(fun, u_max, knot_spacing, **kwargs)
@@ -522,9 +518,7 @@ def build_vessel_model(
                 )
             )
         validity.append(
-            ValidityRange(
-                "resistance spline fit", "u", 0.0, rfit.u_max, "resistance.Fn_max_fit"
-            )
+            ValidityRange("resistance spline fit", "u", 0.0, rfit.u_max, "resistance.Fn_max_fit")
         )
 
     # ---- propeller -------------------------------------------------------------
@@ -544,7 +538,10 @@ def build_vessel_model(
         kt_err = float("nan")
         validity.append(
             ValidityRange(
-                f"K_T curve ({c.status}: {c.source})", "J", c.x_range[0], c.x_range[1],
+                f"K_T curve ({c.status}: {c.source})",
+                "J",
+                c.x_range[0],
+                c.x_range[1],
                 "range of the measured K_T(J)",
             )  # fmt: skip
         )
@@ -562,7 +559,9 @@ def build_vessel_model(
             validity.append(
                 ValidityRange(
                     f"K_T (Wageningen B{Z}-{AE:.2f}, P/D {PD:.3g}, full polynomial)",
-                    "J", 0.0, J_zero,
+                    "J",
+                    0.0,
+                    J_zero,
                     "K_T >= 0 (Oosterveld & van Oossanen 1975 fit open-water data; beyond, "
                     "a windmilling propeller: a monotone C2 continuation, assumed)",
                 )  # fmt: skip
@@ -577,7 +576,9 @@ def build_vessel_model(
             validity.append(
                 ValidityRange(
                     f"K_T (quadratic fit of the B{Z}-{AE:.2f} P/D {PD:.3g} polynomial)",
-                    "J", 0.0, min(J_fit, J_zero),
+                    "J",
+                    0.0,
+                    min(J_fit, J_zero),
                     f"fitted on J <= {J_fit}; B-series K_T = 0 at J = {J_zero:.3f}",
                 )  # fmt: skip
             )
@@ -603,8 +604,13 @@ def build_vessel_model(
             else:
                 t_curve = spl
             validity.append(
-                ValidityRange(f"{name}(u) curve ({cv.source})", "u", 0.0, cv.x_range[1],
-                              "speed range of the measured curve")  # fmt: skip
+                ValidityRange(
+                    f"{name}(u) curve ({cv.source})",
+                    "u",
+                    0.0,
+                    cv.x_range[1],
+                    "speed range of the measured curve",
+                )  # fmt: skip
             )
     propeller = None
     if kt_curve is not None or w_curve is not None or t_curve is not None:

@@ -86,9 +86,7 @@ def _as_vessel(
     return resolve_vessel(vessel, waves=waves)
 
 
-def rebuilt_data(
-    template: VesselModelData, data: VesselModelData | VesselData
-) -> VesselModelData:
+def rebuilt_data(template: VesselModelData, data: VesselModelData | VesselData) -> VesselModelData:
     """``data`` resolved with ``template``'s wave-force builder (VesselModelData as is)."""
     if isinstance(data, VesselModelData):
         return data

@@ -624,9 +624,7 @@ class VesselData(Mapping[str, Coefficient]):
             ("hull_type", HULL_TYPES),
         ):
             if key in meta and meta[key] not in allowed:
-                raise VesselFileError(
-                    f"`vessel.{key}` must be one of {allowed}, got {meta[key]!r}"
-                )
+                raise VesselFileError(f"`vessel.{key}` must be one of {allowed}, got {meta[key]!r}")
         curves = dict(self.curves)
         if meta.get("resistance_method") == "table" and "resistance" not in curves:
             raise VesselFileError(
@@ -758,18 +756,14 @@ class VesselData(Mapping[str, Coefficient]):
                 default_unit = next(iter(_UNITS[SCHEMA[sec][name].dim]))
                 unit = coeffs[key].unit if key in coeffs else default_unit
                 coeffs[key] = Coefficient(float(val), unit, "user override", "measured")
-        return VesselData(
-            self.name, self.meta, coeffs, self.path, self.uncertainties, self.curves
-        )
+        return VesselData(self.name, self.meta, coeffs, self.path, self.uncertainties, self.curves)
 
     def with_estimates(self, estimates: Mapping[str, Coefficient]) -> VesselData:
         """A copy with estimated coefficients added (existing keys are kept)."""
         coeffs = dict(self.coefficients)
         for key, c in estimates.items():
             coeffs.setdefault(key, c)
-        return VesselData(
-            self.name, self.meta, coeffs, self.path, self.uncertainties, self.curves
-        )
+        return VesselData(self.name, self.meta, coeffs, self.path, self.uncertainties, self.curves)
 
     def summary(self) -> list[tuple[str, float, str, str, str]]:
         """Rows ``(key, value, unit, status, source)`` sorted by key."""

@@ -36,6 +36,7 @@ FN_CHI = 0.3
 #: Collocation error tolerance of the cycles (states in their own units).
 CYCLE_ERROR_TOL = 1e-5
 
+
 def _panels(cb: Any, x: np.ndarray, xlabel: str, mark: float, mark_label: str, path: Path) -> None:
     fig = new_figure((7.0, 5.0))
     ax = fig.subplots(2, 2)
@@ -133,10 +134,14 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         "max_roll_deg": float(np.degrees(np.max(cb.max_roll))),
         "vanishing_angle_deg": float(np.degrees(capsize_angle(model))),
         "fn_branch": {"status": cb.status.name, "rows": len(cb.p), "seconds": t_fn},
-        "chi_c_branch": {"Fn": FN_CHI, "status": cc.status.name, "message": cc.message,
-                         "chi_c_limit_deg": math.degrees(cc.limit),
-                         "chi_c_lost_stability_deg": math.degrees(cc.lost_stability_at),
-                         "max_roll_deg": float(np.degrees(np.max(cc.max_roll)))},  # fmt: skip
+        "chi_c_branch": {
+            "Fn": FN_CHI,
+            "status": cc.status.name,
+            "message": cc.message,
+            "chi_c_limit_deg": math.degrees(cc.limit),
+            "chi_c_lost_stability_deg": math.degrees(cc.lost_stability_at),
+            "max_roll_deg": float(np.degrees(np.max(cc.max_roll))),
+        },  # fmt: skip
         "seconds": time.perf_counter() - t0,
     }
     summary = _no_nan(summary)

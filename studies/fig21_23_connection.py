@@ -122,8 +122,13 @@ def compute(
         [
             ["bvp", conn.Fn, conn.Fn, conn.Fn, t_bvp],
             ["bisection", bis.Fn, bis.bracket[0], bis.bracket[1], bis.elapsed],
-            ["paper (measured coefficients)", 0.5 * (PAPER_FN[0] + PAPER_FN[1]),
-             PAPER_FN[0], PAPER_FN[1], math.nan],
+            [
+                "paper (measured coefficients)",
+                0.5 * (PAPER_FN[0] + PAPER_FN[1]),
+                PAPER_FN[0],
+                PAPER_FN[1],
+                math.nan,
+            ],
         ],
         meta={"chi_c_deg": CHI_C_DEG, "source": "Umeda (1999) Figs. 14-15 for the paper row"},
     )

@@ -210,10 +210,14 @@ def _critical_10(r: Mapping[str, Any]) -> Finding:
     band = _get(r, "sensitivity", "band")
     if band:  # the sensitivity step ran: its linear uncertainty band and the paper's place
         nums += (
-            ("uncertainty band of the connection's Fn (linear)",
-             f"[{_fmt(band[0])}, {_fmt(band[1])}]"),  # fmt: skip
-            ("the paper's value inside that band",
-             "yes" if _get(r, "sensitivity", "paper_inside_band") else "no"),  # fmt: skip
+            (
+                "uncertainty band of the connection's Fn (linear)",
+                f"[{_fmt(band[0])}, {_fmt(band[1])}]",
+            ),  # fmt: skip
+            (
+                "the paper's value inside that band",
+                "yes" if _get(r, "sensitivity", "paper_inside_band") else "no",
+            ),  # fmt: skip
         )
     inside = bvp is not None and lo is not None and lo - 1e-5 <= bvp <= hi + 1e-5
     in_paper = bvp is not None and PAPER_FN_10DEG[0] <= bvp <= PAPER_FN_10DEG[1]
@@ -338,28 +342,37 @@ def _transient(r: Mapping[str, Any]) -> Finding:
                                    "capsize to port"))  # fmt: skip
 
 
-
 # ---------------------------------------------------------------- the periodic motion
 def _cycle_end(r: Mapping[str, Any]) -> Finding:
     cy = r.get("cycles")
     if not cy:
         return _not_run("cycles")
     fit, bvp = cy.get("Fn_fit_log"), cy.get("Fn_bvp")
-    lost, roll, vanish = cy.get("Fn_lost_stability"), cy.get("max_roll_deg"), cy.get(
-        "vanishing_angle_deg")
+    lost, roll, vanish = (
+        cy.get("Fn_lost_stability"),
+        cy.get("max_roll_deg"),
+        cy.get("vanishing_angle_deg"),
+    )
     nums = (
         ("Fn* from the period's blow-up, T = a - b ln(Fn* - Fn)", _fmt(fit, ".8f")),
         ("Fn* of the connecting orbit (collocation)", _fmt(bvp, ".8f")),
         ("the cycle loses stability at Fn", _fmt(lost, ".6f")),
-        ("largest roll on the cycles (deg) / angle of vanishing stability (deg)",
-         f"{_fmt(roll, '.1f')} / {_fmt(vanish, '.1f')}"),  # fmt: skip
+        (
+            "largest roll on the cycles (deg) / angle of vanishing stability (deg)",
+            f"{_fmt(roll, '.1f')} / {_fmt(vanish, '.1f')}",
+        ),  # fmt: skip
     )
     ok = (fit is not None and bvp is not None and abs(fit - bvp) <= 1e-4
           and roll is not None and vanish is not None and roll < vanish)  # fmt: skip
-    return Finding(nums, *_verdict(
-        ok, "the cycle's period limit and the connection disagree (or the cycle capsizes)",
-        "the harmonic motion (the ship overtaken by waves) ends where its period blows up, "
-        "at the heteroclinic bifurcation: a third method, independent of the paper's two"))
+    return Finding(
+        nums,
+        *_verdict(
+            ok,
+            "the cycle's period limit and the connection disagree (or the cycle capsizes)",
+            "the harmonic motion (the ship overtaken by waves) ends where its period blows up, "
+            "at the heteroclinic bifurcation: a third method, independent of the paper's two",
+        ),
+    )
 
 
 CLAIMS: tuple[Claim, ...] = (

@@ -67,12 +67,18 @@ def summarise(sens: Any, band: Any, *, top: int = TOP) -> dict[str, Any]:
         "coverage": band.coverage,
         "band": [lo, hi],
         "paper_Fn": list(PAPER_FN_BRACKET),
-        "paper_inside_band": bool(band.contains(PAPER_FN_BRACKET[0])
-                                  and band.contains(PAPER_FN_BRACKET[1])),  # fmt: skip
+        "paper_inside_band": bool(
+            band.contains(PAPER_FN_BRACKET[0]) and band.contains(PAPER_FN_BRACKET[1])
+        ),  # fmt: skip
         "dominant": dom,
         "elasticities": [
-            {"key": e.key, "status": e.status, "value": e.value, "unit": e.unit,
-             "elasticity": e.elasticity}  # fmt: skip
+            {
+                "key": e.key,
+                "status": e.status,
+                "value": e.value,
+                "unit": e.unit,
+                "elasticity": e.elasticity,
+            }  # fmt: skip
             for e in rows[:top]
         ],
         "n_coefficients": len(sens.entries),

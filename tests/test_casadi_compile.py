@@ -26,7 +26,7 @@ def cache(tmp_path, monkeypatch):
 def _fn(c: float) -> ca.Function:
     x = ca.SX.sym("x", 3)
     p = ca.SX.sym("p", 2)
-    y = ca.vertcat(ca.sin(x[0]) * p[0] + c, x[1] * x[2] - p[1], ca.exp(-x[0] ** 2) * x[2])
+    y = ca.vertcat(ca.sin(x[0]) * p[0] + c, x[1] * x[2] - p[1], ca.exp(-(x[0] ** 2)) * x[2])
     return ca.Function("f", [x, p], [y])
 
 

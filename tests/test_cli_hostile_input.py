@@ -188,8 +188,10 @@ def test_every_command_refuses_or_accepts_sanely(argv, capsys, probes):
         (["critical-curve", "--chi-c=0:1e308:1e-308"], "--chi-c"),
         (["critical-curve", "--workers", "0"], "--workers"),
         (["sweep", "courses", "--chi-c", "0:1:1e-12", "--out", "OUT"], "--chi-c"),
-        (["sweep", "surface", "--h-over-lambda", "0.02:0.1:99999999999", "--out", "OUT"],
-         "--h-over-lambda"),
+        (
+            ["sweep", "surface", "--h-over-lambda", "0.02:0.1:99999999999", "--out", "OUT"],
+            "--h-over-lambda",
+        ),
         (["sweep", "boundary", "--positions", "99999999999", "--out", "OUT"], "--positions"),
         (["sensitivity", "--curve", "0:30:1e-15"], "--curve"),
     ],

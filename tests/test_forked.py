@@ -89,7 +89,7 @@ def test_an_error_in_a_child_surfaces_in_the_parent():
 
 
 def test_unpicklable_results_are_computed_in_the_parent():
-    with ForkedTasks(lambda k: (lambda: k), range(4), children=2) as run:
+    with ForkedTasks(lambda k: lambda: k, range(4), children=2) as run:
         out = run.results()
     assert [out[k]() for k in range(4)] == [0, 1, 2, 3]
 

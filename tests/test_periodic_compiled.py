@@ -16,11 +16,13 @@ compiled_mod = importlib.import_module("continuation.casadi_compile")
 
 
 def _rhs(x, p, ops):
-    return ops.stack([
-        p[0] - (p[1] + 1) * x[0] + x[0] ** 2 * x[1] + ops.sin(x[2]),
-        p[1] * x[0] - x[0] ** 2 * x[1],
-        ops.exp(-x[0]) * x[2] - p[0],
-    ])
+    return ops.stack(
+        [
+            p[0] - (p[1] + 1) * x[0] + x[0] ** 2 * x[1] + ops.sin(x[2]),
+            p[1] * x[0] - x[0] ** 2 * x[1],
+            ops.exp(-x[0]) * x[2] - p[0],
+        ]
+    )
 
 
 def _system() -> System:

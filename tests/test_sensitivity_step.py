@@ -62,7 +62,10 @@ def test_step_writes_tornado_and_summary_with_the_band(tmp_path: Path) -> None:
     assert s["sigma_linear"] == pytest.approx(sig, rel=1e-12)
     assert s["band"] == pytest.approx([FN - 1.96 * sig, FN + 1.96 * sig], rel=1e-12)
     assert [d["key"] for d in s["dominant"]] == [
-        "hydrodynamics.wave_surge_scale", "propulsion.w_P", "hydrodynamics.m_x"]
+        "hydrodynamics.wave_surge_scale",
+        "propulsion.w_P",
+        "hydrodynamics.m_x",
+    ]
     assert sum(d["share"] for d in s["dominant"]) == pytest.approx(1.0, rel=1e-12)
     # 0.3247 > 0.30 + 1.96 * 0.0072: outside
     assert s["paper_inside_band"] is False
@@ -103,7 +106,8 @@ def test_step_is_in_the_main_job() -> None:
     from broachkit_cli.commands.reproduce import STUDY_STEPS
 
     assert ("sensitivity", "sensitivity") == next(
-        (k, m) for k, _, m in STUDY_STEPS if k == "sensitivity")
+        (k, m) for k, _, m in STUDY_STEPS if k == "sensitivity"
+    )
 
 
 def test_main_job_keys_cover_every_uncertainty() -> None:

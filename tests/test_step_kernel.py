@@ -77,8 +77,18 @@ def test_linearisation_tape_values_and_pattern():
     x, pv = np.array([1.1, 2.7]), np.array([1.5, 3.1])
     u = np.r_[x, pv[k]]
     f, nz = np.zeros(2), np.zeros(rows.size)
-    K._run_tape(tape.op, tape.ia, tape.ib, tape.io, tape.consts, np.zeros(tape.n_work), u,
-                np.array([1.5, -99.0]), f, nz)  # fmt: skip  (p[k] is read from u)
+    K._run_tape(
+        tape.op,
+        tape.ia,
+        tape.ib,
+        tape.io,
+        tape.consts,
+        np.zeros(tape.n_work),
+        u,
+        np.array([1.5, -99.0]),
+        f,
+        nz,
+    )  # fmt: skip  (p[k] is read from u)
     top = np.zeros((2, 3))
     top[rows, cols] = nz
     np.testing.assert_allclose(f, s.f(x, pv), rtol=1e-15)

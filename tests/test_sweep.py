@@ -233,6 +233,7 @@ def test_ctrl_c_cancels_pending_and_a_resume_redoes_nothing(tmp_path):
         [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
     t0 = time.monotonic()
+
     def finished() -> int:  # checkpoints written (not the temporary ".name.tmp-*" files)
         return sum(not f.name.startswith(".") for f in ck.glob("*.json"))
 

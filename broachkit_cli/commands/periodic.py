@@ -85,8 +85,9 @@ def compute(model: Any, params: Any, shooting: bool) -> tuple[dict[str, Any], An
         "status": "SUCCESS",
         "T": float(orbit.T),
         "waves_per_period": float(orbit.X[0, i_xi] - orbit.X[-1, i_xi]),
-        "multipliers": [{"re": float(m.real), "im": float(m.imag), "abs": float(abs(m))}
-                        for m in mu],  # fmt: skip
+        "multipliers": [
+            {"re": float(m.real), "im": float(m.imag), "abs": float(abs(m))} for m in mu
+        ],  # fmt: skip
         "trivial_multiplier_error": float(fl.trivial_error),
         "stable": n_unstable == 0,
         "n_unstable": n_unstable,

@@ -130,8 +130,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         nargs="+",
         default=None,
         metavar="STEP",
-        help="run only these steps (demo, " + ", ".join(k for k, _, _ in STUDY_STEPS)
-        + "; optional: " + ", ".join(k for k, _, _ in OPTIONAL_STEPS) + ")",
+        help="run only these steps (demo, "
+        + ", ".join(k for k, _, _ in STUDY_STEPS)
+        + "; optional: "
+        + ", ".join(k for k, _, _ in OPTIONAL_STEPS)
+        + ")",
     )
     parser.add_argument(
         "--studies",

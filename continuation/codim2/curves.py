@@ -96,9 +96,7 @@ def codim2_events(problem: AugmentedProblem, names: Sequence[str] | None = None)
     # scaled-adjugate tests (bt, cusp) are not checked: in stiff problems their
     # round-off floor near the zero exceeds the continuity bound (l1 has poles instead,
     # see _is_pole)
-    return tuple(
-        Event(_PREFIX + n, make(n), continuity=_CONTINUITY.get(n)) for n in chosen
-    )
+    return tuple(Event(_PREFIX + n, make(n), continuity=_CONTINUITY.get(n)) for n in chosen)
 
 
 def _is_pole(branch: Any, problem: AugmentedProblem, name: str, sp: Any) -> bool:

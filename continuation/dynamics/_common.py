@@ -26,7 +26,6 @@ def state_period(system: Any, n: int) -> FloatArray:
     return np.zeros(n) if per is None else np.asarray(per, dtype=float).reshape(n)
 
 
-
 def check_scale(n: int, scale: Any) -> FloatArray:
     """State scales ``(n,)`` of the distances (default ones); ValueError unless positive."""
     if scale is None:

@@ -341,4 +341,3 @@ def _adapt_event(ev: Any, p: FloatArray) -> SimEvent | PoincareSection:
     raise ValueError(
         f"`events` entries must be SimEvent, PoincareSection or Event objects, got {type(ev)}"
     )
-

@@ -329,4 +329,3 @@ class _ScanState:
             status=status if status is not Status.SUCCESS else Status.SUCCESS,
             message=msg,
         )
-

@@ -285,5 +285,4 @@ def passage_side(fate: Fate, name: str | None = None, *, shifted: bool = False) 
     return 0 if v is None else int(v.side)
 
 
-
 __all__ = ["Fate", "FateKind", "KnownEquilibrium", "SaddleVisit", "passage_side"]

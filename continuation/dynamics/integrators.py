@@ -139,8 +139,6 @@ class _IntegrationFailure(Exception):
     """Raised by a backend when the integrator fails on an interval."""
 
 
-
-
 def _scaled_ode(system: Any, n: int, n_params: int) -> ca.Function:
     """The time-scaled right-hand side ``T f(x, p)`` as a CasADi DAE function.
 
@@ -288,4 +286,3 @@ class _ScipyBackend:
         if self.method in ("Radau", "BDF", "LSODA"):
             kw["jac"] = self.jac
         return cls(self.fun, t0, np.array(x0, dtype=float), t1, **kw)
-

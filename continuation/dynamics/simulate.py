@@ -504,7 +504,6 @@ def simulate(
     return traj
 
 
-
 __all__ = [
     "METHODS",
     "EventHits",

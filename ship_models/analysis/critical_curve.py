@@ -133,9 +133,7 @@ class CriticalCurve:
             "exists": [bool(e) for e in self.exists],
             "reasons": list(self.reasons),
             "error": [None if not np.isfinite(e) else float(e) for e in self.error],
-            "folds": [
-                {"chi_c_deg": math.degrees(c), "Fn": float(f)} for c, f in self.folds
-            ],
+            "folds": [{"chi_c_deg": math.degrees(c), "Fn": float(f)} for c, f in self.folds],
             "end_chi_c_deg": _deg_or_none(self.end_chi_c),
             "end_Fn": None if not math.isfinite(self.end_Fn) else float(self.end_Fn),
             "crest_end_chi_c_deg": _deg_or_none(self.crest_end_chi_c),
@@ -487,8 +485,10 @@ def critical_curve(
             r = None  # solved before the fold was re-located below it: no boundary there
         if r is None:
             if status is Status.INTERRUPTED or not math.isfinite(end_chi):
-                reasons[k] = "not computed" if status is Status.INTERRUPTED else (
-                    "not reached by the branch"
+                reasons[k] = (
+                    "not computed"
+                    if status is Status.INTERRUPTED
+                    else ("not reached by the branch")
                 )
                 if status is not Status.INTERRUPTED:
                     first_bad = first_bad or (branch.status if branch is not None else None)

@@ -625,6 +625,7 @@ def capsizing_threshold(
         return smp if smp.outcome in (CAPSIZE, SURVIVE) else None
 
     try:
+
         def search(a: float, b: float) -> Any:
             return lowest_fate(
                 decided, a, b, is_target=lambda smp: smp.outcome == CAPSIZE,

@@ -270,8 +270,6 @@ def _entry(k: str, res: _Residuals, lam: FloatArray, m: VesselModel, conn: Criti
                             _kind(k, raw), q, sig)  # fmt: skip
 
 
-
-
 def resolve_at(
     conn: CriticalFn,
     model: VesselModel,

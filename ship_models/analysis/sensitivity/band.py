@@ -177,8 +177,6 @@ def _draw(rng: np.random.Generator, e: SensitivityEntry, scale: float) -> float:
     return float(e.value)
 
 
-
-
 def dominant(band: UncertaintyBand, n: int = 3) -> list[str]:
     """Keys of the ``n`` largest contributions to the band's width."""
     return [k for k, _ in band.contributions[:n]]

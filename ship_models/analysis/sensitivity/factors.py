@@ -51,7 +51,6 @@ NUMERICAL_KEYS = frozenset(
 _KT = ("propulsion.K_T0", "propulsion.K_T1", "propulsion.K_T2")
 
 
-
 @dataclass(frozen=True)
 class _FactoredWaves:
     """A wave-force model with factors on the lateral force amplitudes."""

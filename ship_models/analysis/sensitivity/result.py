@@ -115,8 +115,6 @@ def _sort_key(e: SensitivityEntry) -> tuple[int, float]:
     return (0, -abs(e.elasticity))
 
 
-
-
 def linear_prediction(sens: Sensitivity, changes: Mapping[str, float]) -> float:
     """``Fn* + sum dFn*/dtheta (theta - theta_0)`` for ``{key: new value}``."""
     out = sens.Fn

@@ -15,7 +15,6 @@ from continuation.sweep import SweepResult, file_digest, run_sweep
 log = logging.getLogger(__name__)
 
 
-
 #: Sudden-change Fn offsets from the heteroclinic Fn: the first bisection bracket, and a
 #: wider one tried when the first does not bracket the switch (as the Fig. 16-23 study).
 BRACKET_OFFSETS = ((-0.004, 0.003), (-0.03, 0.01))
@@ -95,8 +94,6 @@ def _orbit(key: dict[str, Any]) -> Any:
 
 def _finite(v: float) -> float | None:
     return float(v) if math.isfinite(v) else None
-
-
 
 
 _RUN_OPTIONS = ("store", "backend", "workers", "scheduler", "progress", "retry_failed")

@@ -173,6 +173,14 @@ def surface_sweep(
                         "status": v.get("status", "FAILED"),
                         "message": v.get("message", "")})  # fmt: skip
     return SurfaceSweep(
-        float(chi_c_deg), hs, ls, Fn, Fs, tuple(reasons), res, tuple(checks), check_res,
+        float(chi_c_deg),
+        hs,
+        ls,
+        Fn,
+        Fs,
+        tuple(reasons),
+        res,
+        tuple(checks),
+        check_res,
         tuple(ths),
     )

@@ -18,7 +18,6 @@ from continuation.typing import FloatArray
 log = logging.getLogger(__name__)
 
 
-
 @dataclass(frozen=True)
 class SurgeThreshold:
     """Critical Fn of the uncoupled surge model (``chi_c = 0``) at one wave.
