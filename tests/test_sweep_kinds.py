@@ -27,9 +27,11 @@ def _run(capsys, argv):
 @pytest.mark.parametrize(
     ("kind", "extra"),
     [
-        ("boundary", ["--chi-c", "10", "--positions", "1", "--no-map", "--tol", "1e-3"]),
-        ("boundary", ["--chi-c", "10", "--positions", "1", "--no-map", "--tol", "1e-3",
-                      "--method", "bvp"]),
+        # (the plain boundary also runs in the default suite in tests/test_sweep_cli.py)
+        pytest.param("boundary", ["--chi-c", "10", "--positions", "1", "--no-map", "--tol",
+                                  "1e-3"], marks=pytest.mark.slow),
+        pytest.param("boundary", ["--chi-c", "10", "--positions", "1", "--no-map", "--tol",
+                                  "1e-3", "--method", "bvp"], marks=pytest.mark.slow),
         ("courses", ["--chi-c", "10", "--tol", "1e-3"]),
         ("surface", ["--chi-c", "10", "--h-over-lambda", PAPER_H, "--lambda-over-l", "1.5",
                      "--check", "1", "--thresholds", "1"]),
