@@ -475,6 +475,16 @@ def _fn_limit(model: Any) -> float:
     return 1.0
 
 
+#: Lateral states that vanish on the surge plane of a symmetric ship.
+LATERAL = ("v", "r", "phi", "p_roll", "delta")
+
+
+def _lateral_at_rest(model: Any, saddle: Any) -> bool:
+    """The saddle on the surge plane (all lateral states zero, heading on the course)."""
+    names = [n for n in LATERAL if n in model.state_names]
+    return bool(names) and all(abs(float(saddle.x[model.state_index(n)])) < 1e-12 for n in names)
+
+
 #: Fraction of the rudder limit at which the crest saddle counts as saturated.
 RUDDER_SATURATED = 0.95
 
@@ -612,6 +622,14 @@ def capsizing_threshold(
         return result(status=Status.NO_SOLUTION,
                       message=f"no crest saddle in Fn [{lo:.4f}, {hi:.4f}] at chi_c = "
                               f"{math.degrees(chi):.4g} deg: {first_error}")  # fmt: skip
+    if chi == 0.0 and _lateral_at_rest(m, start):
+        # head-on following waves: the lateral motions are not excited (the surge plane is
+        # invariant), so nothing capsizes; the connection is the surf-riding threshold
+        return result(status=Status.NO_SOLUTION,
+                      message="chi_c = 0: the lateral motions are not excited (the crest "
+                              "saddle lies on the invariant surge plane), so the ship cannot "
+                              "capsize; the heteroclinic Fn is the surf-riding threshold "
+                              "there")  # fmt: skip
     if _rudder_saturated(m, start):
         return result(status=Status.REJECTED,
                       message=f"the rudder is at its limit at the crest saddle (chi_c = "
