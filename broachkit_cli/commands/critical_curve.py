@@ -196,9 +196,9 @@ def _run(args: argparse.Namespace) -> int:
         "method": "bvp-continuation",
         "H_over_lambda": params["H_over_lambda"],
         "lambda_over_L": params["lambda_over_L"],
-        "elapsed_s": elapsed,
         **curve.to_json(),
         **(tc.to_json() if tc is not None else {}),
+        "elapsed_s": elapsed,  # the whole computation: the line and the thresholds
     }
     if out is not None:
         write_atomic(out / "critical_curve.csv", curve.to_csv)
