@@ -145,7 +145,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     for name, d in th.items():
         cols[f"Fn_{name}"] = np.array(d["Fn_curve"])
     save_csv(out / "critical_curve_diffraction.csv", cols,
-             meta={"quantity": "heteroclinic Fn (the capsizing threshold up to 25 deg for "
+             meta={"quantity": "heteroclinic Fn (the capsizing threshold up to 28 deg for "
                    "the strips' model)"})  # fmt: skip
     with figure_style():
         fig = new_figure((10.0, 4.0))

@@ -71,7 +71,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 QUANTITY = (
     "derivatives of the heteroclinic Fn (the connection, by one adjoint solve); they are the "
     "capsizing threshold's where its mechanism is heteroclinic (`broachkit critical`: the "
-    "default vessel up to 25 deg), not beyond"
+    "default vessel up to 28 deg), not beyond"
 )
 
 
