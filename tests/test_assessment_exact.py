@@ -209,7 +209,10 @@ def test_criterion_sensitivity_signs_and_uncertainty_scaling():
     rows = {r.key: r for r in criterion_sensitivity("purse_seiner", 0.35, st, sc, keys=keys)}
     ws, mx = rows[keys[0]], rows[keys[1]]
     assert ws.dC_dtheta > 0 and mx.dC_dtheta < 0
-    assert ws.sigma == pytest.approx(0.1 * ws.value)  # 10 % relative in the vessel file
+    from ship_models.vessel import load_vessel
+
+    rel = load_vessel("purse_seiner").uncertainties[keys[0]].value  # relative, in the file
+    assert ws.sigma == pytest.approx(rel * ws.value)
     assert ws.dC_sigma == pytest.approx(ws.sigma * ws.dC_dtheta)
 
 

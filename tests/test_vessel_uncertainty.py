@@ -33,7 +33,8 @@ def test_default_vessel_uncertainties_are_stated_and_sourced():
     for key, u in v.uncertainties.items():
         assert u.source.strip(), key
         # none is presented as a published accuracy: every one is an explicit assumption
-        assert u.source.startswith("assumed:"), key
+        # or a type B estimate derived in this project (GUM 4.3.7), which says how
+        assert u.source.startswith(("assumed:", "type B (GUM")), key
         assert v.coefficients.get(key, Coefficient(0, "-", "x", "estimated")).status != "given"
     resolved = build_vessel_model(v).vessel
     # relative uncertainty: fraction of the (estimated) value, in its unit
