@@ -168,7 +168,8 @@ def _run(args: argparse.Namespace) -> int:
     from ship_models.analysis.threshold_curve import threshold_curve
 
     deg = parse_courses(str(args.chi_c))
-    finite("--threshold-step", args.threshold_step, low=0.0, high=90.0, unit="deg")
+    if args.threshold_step != 0:  # 0: no threshold (the help's promise)
+        finite("--threshold-step", args.threshold_step, low=0.0, high=90.0, unit="deg")
     th_deg = threshold_courses(deg, args.threshold_step)
     all_deg = np.union1d(deg, th_deg)
     workers = check_workers(args.workers)
