@@ -306,11 +306,10 @@ def load_model(vessel: str) -> Any:
 
 
 def fn_limit(model: Any) -> float:
-    """Largest Fn the model is valid for: the vessel's R(u) fit range (or 1)."""
-    vessel = getattr(model, "vessel", None)
-    if vessel is not None and hasattr(vessel, "has") and vessel.has("resistance.Fn_max_fit"):
-        return float(vessel.get("resistance.Fn_max_fit"))
-    return 1.0
+    """Largest Fn the model is valid for (:func:`ship_models.analysis.fn_window.fn_limit`)."""
+    from ship_models.analysis.fn_window import fn_limit as limit
+
+    return limit(model)
 
 
 def check_fn(model: Any, name: str, value: float) -> float:

@@ -86,15 +86,9 @@ def _not_a_connection(res: Any) -> str:
 
 def _evidence(model: Any, params: Any, Fn: float, d: float, t_max: float) -> dict[str, Any]:
     """The upslope branch's fates at ``Fn -+ d`` (one fate each)."""
-    from ship_models.analysis.critical_bisection import _FateAt
-    from ship_models.analysis.fixed_points import find_fixed_point
-    from ship_models.analysis.threshold import CAPSIZE, SURVIVE, sample_of
+    from ship_models.analysis.threshold import CAPSIZE, SURVIVE, fates_at
 
-    start = find_fixed_point(model, params.replace(Fn=Fn - d), "crest")
-    fate_at = _FateAt(model, params.replace(Fn=Fn - d), start, "upslope", {"t_max": t_max},
-                      "final")  # fmt: skip
-    below = sample_of(Fn - d, fate_at(Fn - d))
-    above = sample_of(Fn + d, fate_at(Fn + d))
+    below, above = fates_at(model, params, [Fn - d, Fn + d], t_max=t_max)
     return {
         "distance": d,
         "below": below.to_json(),

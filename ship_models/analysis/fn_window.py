@@ -68,6 +68,15 @@ class FnWindow:
         return self.exists and isinstance(Fn, (int, float)) and self.Fn_lo <= Fn <= self.Fn_hi
 
 
+def fn_limit(model: Any) -> float:
+    """Largest Fn the model is valid for: the vessel's R(u) fit range
+    (``resistance.Fn_max_fit``), or 1 without one."""
+    vessel = getattr(model, "vessel", None)
+    if vessel is not None and hasattr(vessel, "has") and vessel.has("resistance.Fn_max_fit"):
+        return float(vessel.get("resistance.Fn_max_fit"))
+    return 1.0
+
+
 def surf_riding_window(model: Any, params: Any = None, *, n_grid: int = 400) -> FnWindow:
     r"""The ``Fn`` interval with surf-riding equilibria, for the wave of ``params``.
 
@@ -117,4 +126,4 @@ def surf_riding_window(model: Any, params: Any = None, *, n_grid: int = 400) -> 
     return FnWindow(f_lo, f_hi, x_max, x_min, c)
 
 
-__all__ = ["FN_SEARCH", "FnWindow", "surf_riding_window"]
+__all__ = ["FN_SEARCH", "FnWindow", "fn_limit", "surf_riding_window"]

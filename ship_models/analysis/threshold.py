@@ -62,7 +62,7 @@ from continuation.status import Status
 from .critical_bisection import _FateAt
 from .critical_result import CriticalFn
 from .fixed_points import find_fixed_point
-from .fn_window import surf_riding_window
+from .fn_window import fn_limit, surf_riding_window
 from .manifold import ShipFate
 from .outcomes import ShipOutcome
 from .params import course, ship_model, ship_params
@@ -352,6 +352,17 @@ def sample_of(Fn: float, fate: ShipFate | None) -> FateSample:
     return FateSample(float(Fn), out, str(fate.label), float(fate.t), fate.returns, fate.drift)
 
 
+def fates_at(
+    model: Any, params: Any, Fn: list[float], *, t_max: float = 1200.0
+) -> list[FateSample]:
+    """The upslope branch's fate at each ``Fn`` (the crest saddle tracked by Newton from
+    the first), e.g. the evidence of a heteroclinic Fn at ``Fn -+ 0.002``."""
+    par = ship_params(model, params)
+    start = find_fixed_point(model, par.replace(Fn=Fn[0]), "crest")
+    fate_at = _FateAt(model, par.replace(Fn=Fn[0]), start, "upslope", {"t_max": t_max}, "final")
+    return [sample_of(f, fate_at(f)) for f in Fn]
+
+
 class _Fates:
     """Memoised upslope fates as a function of ``Fn`` (the saddle tracked by Newton)."""
 
@@ -467,14 +478,6 @@ def _mechanism(
     return "torus breakdown", f"the overtaken cycle has a Neimark-Sacker point at {first:.5f}"
 
 
-def _fn_limit(model: Any) -> float:
-    """Largest Fn of the vessel's resistance fit (1 without one)."""
-    vessel = getattr(model, "vessel", None)
-    if vessel is not None and hasattr(vessel, "has") and vessel.has("resistance.Fn_max_fit"):
-        return float(vessel.get("resistance.Fn_max_fit"))
-    return 1.0
-
-
 #: Lateral states that vanish on the surge plane of a symmetric ship.
 LATERAL = ("v", "r", "phi", "p_roll", "delta")
 
@@ -577,7 +580,7 @@ def capsizing_threshold(
         err_h = float(heteroclinic.error) if heteroclinic.error is not None else math.nan
     elif Fn_heteroclinic is not None:
         Fn_h, err_h = (float(v) for v in Fn_heteroclinic)
-    fn_limit = _fn_limit(m)
+    top_fit = fn_limit(m)
     lo_w = window.Fn_lo if window.exists else 0.05
     hi_w = window.Fn_hi if window.exists else 0.6
     if math.isfinite(Fn_h):
@@ -662,7 +665,7 @@ def capsizing_threshold(
                 break  # no crest saddle lower down: the branch capsizes from its start
             found = search(new_lo, lo + cfg.coarse_step)
             lo = new_lo
-        top = min(hi_w, fn_limit)
+        top = min(hi_w, top_fit)
         if found.bracket is None and Fn_range is None and hi < top - cfg.coarse_step:
             # nothing capsizes up to just above the connection (gentle waves): the
             # threshold, if any, lies higher in the window where the crest saddle exists
@@ -775,5 +778,6 @@ __all__ = [
     "ThresholdSettings",
     "capsizing_threshold",
     "cycle_bifurcations",
+    "fates_at",
     "sample_of",
 ]
