@@ -109,3 +109,14 @@ def test_fn_window_has_surf_riding_equilibria_inside_and_none_outside(
     assert n_eq(w.Fn_hi - 1e-4) >= 2 and n_eq(w.Fn_hi + 1e-3) == 0
     if w.Fn_lo > 0.01:  # not clipped at the search's lower end
         assert n_eq(w.Fn_lo + 1e-4) >= 2 and n_eq(w.Fn_lo - 1e-3) == 0
+
+
+def test_critical_curve_without_thresholds(capsys):
+    """``--threshold-step 0``: the heteroclinic line only, as the option's help says."""
+    import json
+
+    from broachkit_cli.main import main
+
+    assert main(["critical-curve", "--chi-c", "0:2", "--threshold-step", "0", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert "threshold" not in doc and len(doc["Fn"]) == 3
