@@ -1,5 +1,10 @@
 r"""CasADi construction of the collocation residual of a connecting orbit, built once.
 
+One core for every orbit that ends at a saddle: a *connection* (it starts at a saddle
+too, with a phase condition) and a *landing* (:mod:`continuation.bvp.landing`: it starts
+at a given point ``x_0``, which fixes the time shift, so there is no phase condition).
+The two differ only in their start condition (:attr:`ConnectionLayout.start_point`).
+
 :func:`build_connection_functions` turns a :class:`~continuation.system.System`
 and an unknown-vector :class:`ConnectionLayout` into compiled ``ca.Function`` s
 
@@ -38,6 +43,15 @@ banded). Equations, in this order::
 ``A_pm = df/dx(x_pm, P)``; ``x_+ = x_- + shift`` when the end point is the start
 point shifted by a period. The Riccati blocks make the projection boundary
 conditions smooth functions of the unknowns (see :mod:`continuation.bvp.connection`).
+
+A landing layout (``start_point=True``) has no ``x_-``, no ``R_-`` and no phase row;
+its end equilibrium ``x_e`` is the ``x_to`` block with ``x_+ = x_e + shift``, and the
+start rows ``x(0) - x_0 = 0`` (``n``) come after continuity::
+
+    w = [ vec(X),  x_e (n),  vec(R_+),  unknown parameters (q = k_+) ]
+    collocation, continuity, start (n), f(x_e, P) = 0 (n), Riccati (+), boundary (+)
+
+The numeric inputs after ``w`` and ``P`` are :meth:`ConnectionLayout.data_names`.
 """
 
 from __future__ import annotations
@@ -78,6 +92,10 @@ class ConnectionLayout:
     pin : tuple of int or None
         ``(state index, mesh node index)`` of a pinned-value phase condition, or
         None for the integral phase condition.
+    start_point : bool
+        The orbit starts at a given point ``x_0`` (a landing): ``k_minus = 0``, no
+        ``x_-``, no phase condition; ``x_to`` is the end equilibrium ``x_e`` and the
+        end point ``x_e + shift``.
     """
 
     n: int
@@ -88,6 +106,14 @@ class ConnectionLayout:
     k_plus: int
     unknown_param_index: tuple[int, ...]
     pin: tuple[int, int] | None
+    start_point: bool = False
+
+    def __post_init__(self) -> None:
+        if self.start_point and (self.k_minus or self.pin is not None or self.separate_to):
+            raise ValueError(
+                "a start-point layout has no start saddle, no phase condition and its end "
+                "equilibrium as the `x_to` block (k_minus=0, pin=None, separate_to=False)"
+            )
 
     @property
     def n_points(self) -> int:
@@ -103,8 +129,8 @@ class ConnectionLayout:
         n, km, kp = self.n, self.k_minus, self.k_plus
         return [
             ("orbit", n * self.n_points),
-            ("x_from", n),
-            ("x_to", n if self.separate_to else 0),
+            ("x_from", 0 if self.start_point else n),
+            ("x_to", n if self.separate_to or self.start_point else 0),
             ("R_minus", (n - km) * km),
             ("R_plus", (n - kp) * kp),
             ("params", len(self.unknown_param_index)),
@@ -122,6 +148,33 @@ class ConnectionLayout:
     def n_unknowns(self) -> int:
         """Length of ``w``."""
         return sum(s for _, s in self._sizes())
+
+    @property
+    def start_rows(self) -> slice:
+        """Rows of the start condition ``x(0) - x_0`` in ``G`` (a start-point layout)."""
+        if not self.start_point:
+            raise ValueError("a connection layout has no start-point rows")
+        a = self.n * (self.n_stages + self.n_intervals)
+        return slice(a, a + self.n)
+
+    def data_names(self) -> tuple[str, ...]:
+        """Names of the numeric inputs of ``G`` after ``w`` and ``P``."""
+        if self.start_point:
+            return ("h", "T", "Qp", "shift", "x0")
+        return ("h", "T", "Qm", "Qp", "shift", "ref", "dref", "pin")
+
+    def stage_blocks(self) -> tuple[np.ndarray, np.ndarray]:
+        """Collocation rows and stage unknowns of each interval, two ``(N, m n)`` arrays.
+
+        The rows of interval ``j`` involve only its own stage values besides the mesh
+        nodes: the blocks that :class:`~continuation.bvp.condense.StageCondenser`
+        eliminates.
+        """
+        n, N, m = self.n, self.n_intervals, self.degree
+        stage = np.array(_stage_columns(N, m)).reshape(N, m)
+        cols = (stage[:, :, None] * n + np.arange(n)).reshape(N, m * n)
+        rows = np.arange(N * m * n).reshape(N, m * n)
+        return rows, cols
 
 
 def _stage_columns(N: int, m: int) -> list[int]:
@@ -247,12 +300,14 @@ class ConnectionFunctions:
     """Compiled residual and Jacobians of one :class:`ConnectionLayout` (see module doc).
 
     Build with :func:`build_connection_functions`, which caches per system and layout.
+    Every function is built on first use from one expression graph.
 
     Attributes
     ----------
     layout : ConnectionLayout
-    G, G_w, G_P : casadi.Function
-        Residual, Jacobian in ``w`` (sparse) and Jacobian in ``P`` (sparse).
+    G, G_w, G_P, G_all : casadi.Function
+        Residual, Jacobian in ``w`` (sparse), Jacobian in ``P`` (sparse), and all three
+        in one function; their inputs are ``w, P`` and :meth:`ConnectionLayout.data_names`.
     n_equations : int
     """
 
@@ -268,14 +323,18 @@ class ConnectionFunctions:
 
         w = ca.MX.sym("w", layout.n_unknowns)
         P = ca.MX.sym("P", n_par)
-        h = ca.MX.sym("h", N)
-        T = ca.MX.sym("T")
-        Qm = ca.MX.sym("Qm", n, n)
-        Qp = ca.MX.sym("Qp", n, n)
-        shift = ca.MX.sym("shift", n)
-        ref = ca.MX.sym("ref", n, N * m)
-        dref = ca.MX.sym("dref", n, N * m)
-        pin = ca.MX.sym("pin")
+        data = {
+            "h": ca.MX.sym("h", N),
+            "T": ca.MX.sym("T"),
+            "Qm": ca.MX.sym("Qm", n, n),
+            "Qp": ca.MX.sym("Qp", n, n),
+            "shift": ca.MX.sym("shift", n),
+            "ref": ca.MX.sym("ref", n, N * m),
+            "dref": ca.MX.sym("dref", n, N * m),
+            "pin": ca.MX.sym("pin"),
+            "x0": ca.MX.sym("x0", n),
+        }
+        h, T, shift = data["h"], data["T"], data["shift"]
 
         # effective parameter vector: unknown parameters come from w
         upar = w[sl["params"]]
@@ -286,8 +345,12 @@ class ConnectionFunctions:
             P_eff = P
 
         X = ca.reshape(w[sl["orbit"]], n, M)
-        x_from = w[sl["x_from"]]
-        x_to = w[sl["x_to"]] if layout.separate_to else x_from + shift
+        if layout.start_point:
+            x_from = None
+            x_to = w[sl["x_to"]] + shift
+        else:
+            x_from = w[sl["x_from"]]
+            x_to = w[sl["x_to"]] if layout.separate_to else x_from + shift
 
         stage_cols = _stage_columns(N, m)
         Xs = X[:, stage_cols]
@@ -302,39 +365,46 @@ class ConnectionFunctions:
         colloc = ca.mtimes(X, Dbig) / ca.repmat(h_rep * T, n, 1) - F
         cont = ca.mtimes(X, Cbig)
 
-        eqs = [ca.vec(cont), f_fun(x_from, P_eff)]
-        if layout.separate_to:
-            eqs.append(f_fun(x_to, P_eff))
+        eqs = [ca.vec(cont)]
+        if x_from is None:  # a landing: the start point, then its end equilibrium
+            eqs += [X[:, 0] - data["x0"], f_fun(w[sl["x_to"]], P_eff)]
+        else:
+            eqs.append(f_fun(x_from, P_eff))
+            if layout.separate_to:
+                eqs.append(f_fun(x_to, P_eff))
         km, kp = layout.k_minus, layout.k_plus
         if km > 0:
+            assert x_from is not None  # (k_minus = 0 in a start-point layout)
             A_m = jac_fun(x_from, P_eff)
             Rm = ca.reshape(w[sl["R_minus"]], n - km, km)
-            ric, Y = _riccati(A_m, Qm, km, Rm)
+            ric, Y = _riccati(A_m, data["Qm"], km, Rm)
             if km < n:
                 eqs.append(ca.vec(ric))
             eqs.append(ca.mtimes(Y.T, X[:, 0] - x_from))
         if kp > 0:
             A_p = jac_fun(x_to, P_eff)
             Rp = ca.reshape(w[sl["R_plus"]], n - kp, kp)
-            ric, Y = _riccati(A_p, Qp, kp, Rp)
+            ric, Y = _riccati(A_p, data["Qp"], kp, Rp)
             if kp < n:
                 eqs.append(ca.vec(ric))
             eqs.append(ca.mtimes(Y.T, X[:, M - 1] - x_to))
-        if layout.pin is None:
+        if layout.start_point:
+            phase = None
+        elif layout.pin is None:
             b_rep = ca.DM(np.tile(mesh.b, N)).T  # (1, N m)
             wq = h_rep * b_rep
-            phase = ca.sum2(ca.sum1((Xs - ref) * dref) * wq)
+            phase = ca.sum2(ca.sum1((Xs - data["ref"]) * data["dref"]) * wq)
         else:
             i_state, i_node = layout.pin
-            phase = X[i_state, i_node * (m + 1)] - pin
+            phase = X[i_state, i_node * (m + 1)] - data["pin"]
         g_rest = ca.vertcat(*eqs)
-        g = ca.vertcat(ca.vec(colloc), g_rest, phase)
+        g = ca.vertcat(ca.vec(colloc), g_rest, *([] if phase is None else [phase]))
         if g.shape[0] != layout.n_unknowns:
             raise ValueError(
                 f"internal count mismatch: {g.shape[0]} equations for {layout.n_unknowns} unknowns"
             )
-        inputs = [w, P, h, T, Qm, Qp, shift, ref, dref, pin]
-        names = ["w", "P", "h", "T", "Qm", "Qp", "shift", "ref", "dref", "pin"]
+        names = ["w", "P", *layout.data_names()]
+        inputs = [w, P, *(data[k] for k in names[2:])]
         self.G = ca.Function("G", inputs, [g], names, ["G"])
         # small systems: the functions are expanded to SX (one flat instruction list,
         # about half the evaluation time of the MX graph with its mapped calls)
@@ -346,105 +416,91 @@ class ConnectionFunctions:
         self._bG = _Buffered(self.G)
         # collocation rows and stage unknowns of each interval: the linear solves of
         # Newton and of the driver condense the stages (continuation.bvp.condense)
-        stage_grid = np.array(_stage_columns(N, m)).reshape(N, m)
-        cols_s = (stage_grid[:, :, None] * n + np.arange(n)).reshape(N, m * n)
-        rows_s = np.arange(N * m * n).reshape(N, m * n)
-        self.condenser = StageCondenser(rows_s, cols_s)
+        self.condenser = StageCondenser(*layout.stage_blocks())
         # The Jacobians cost most of the construction (about 0.8 s of 1 s for the ship);
         # a residual-only user (finite differences of G in a model coefficient) never
-        # needs them, so they are built on first use.
-        self._graph: tuple[Any, ...] | None = (
-            fns, layout, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T, mesh.D, n_par,
-            w, P,
-        )  # fmt: skip
-        self._jac: dict[str, Any] | None = None
+        # needs them, so each is built on first use.
+        self._graph = (fns, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T, mesh.D,
+                       n_par, w, P)  # fmt: skip
+        self._jac: dict[str, Any] = {}
 
-    def _jacobians(self) -> dict[str, Any]:
-        if self._jac is not None:
-            return self._jac
-        assert self._graph is not None  # (dropped only once the Jacobians are built)
-        (fns, layout, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T, D, n_par,
-         w, P) = self._graph  # fmt: skip
-        # Collocation rows: Jacobian assembled from the mapped df/dx and df/dp of the
-        # system (exact, one evaluation of each per collocation point). Other rows: AD.
-        # The integral phase row is dense in the orbit unknowns; a dense row defeats the
-        # column colouring of a forward-mode Jacobian, so it is differentiated on its own
-        # (one reverse sweep).
-        Jc_w, Jc_P = _collocation_jacobian(fns, layout, Xs, P_eff, h_rep, T, D, n_par)
-        Jw = ca.vertcat(Jc_w, ca.jacobian(g_rest, w), ca.jacobian(phase, w))
-        Jp = ca.vertcat(Jc_P, ca.jacobian(g_rest, P), ca.jacobian(phase, P))
-        G_w = ca.Function("G_w", inputs, [Jw], names, ["G_w"])
-        G_P = ca.Function("G_P", inputs, [Jp], names, ["G_P"])
-        G_all = ca.Function("G_all", inputs, [g, Jw, Jp], names, ["G", "G_w", "G_P"])
-        if self._expand:
-            G_w, G_P, G_all = G_w.expand(), G_P.expand(), G_all.expand()
-        spw, spp = G_w.sparsity_out(0), G_P.sparsity_out(0)
-        w_pattern = (np.array(spw.row(), dtype=np.int32),
-                     np.array(spw.colind(), dtype=np.int32), spw.shape)  # fmt: skip
-        p_pattern = (np.array(spp.row(), dtype=np.int32),
-                     np.array(spp.colind(), dtype=np.int32), spp.shape)  # fmt: skip
-        # CSC templates: every Jacobian shares their (canonical) index arrays, so the
-        # driver recognises the pattern and SciPy's format checks run once
-        w_template = _template(w_pattern)
-        p_template = _template(p_pattern)
-        w_template.condensed_lu = self.condenser.factor
-        self._jac = {
-            "G_w": G_w,
-            "G_P": G_P,
-            "G_all": G_all,
-            "w_pattern": w_pattern,
-            "p_pattern": p_pattern,
-            "w_template": w_template,
-            "p_template": p_template,
-            "bGw": _Buffered(G_w),
-            "bGP": _Buffered(G_P),
-            "bAll": _Buffered(G_all),
-        }
-        self._graph = None
-        return self._jac
+    def _expressions(self) -> tuple[Any, Any]:
+        """The Jacobian expressions ``(dG/dw, dG/dP)`` (built once)."""
+        if "expr" not in self._jac:
+            (fns, _, _, _, g_rest, phase, Xs, P_eff, h_rep, T, D, n_par, w, P) = self._graph
+            # Collocation rows: Jacobian assembled from the mapped df/dx and df/dp of
+            # the system (exact, one evaluation of each per collocation point). Other
+            # rows: AD. The integral phase row is dense in the orbit unknowns; a dense
+            # row defeats the column colouring of a forward-mode Jacobian, so it is
+            # differentiated on its own (one reverse sweep).
+            Jc_w, Jc_P = _collocation_jacobian(fns, self.layout, Xs, P_eff, h_rep, T, D, n_par)
+            last = [] if phase is None else [phase]
+            Jw = ca.vertcat(Jc_w, ca.jacobian(g_rest, w), *(ca.jacobian(r, w) for r in last))
+            Jp = ca.vertcat(Jc_P, ca.jacobian(g_rest, P), *(ca.jacobian(r, P) for r in last))
+            self._jac["expr"] = (Jw, Jp)
+        return self._jac["expr"]  # type: ignore[no-any-return]
+
+    def _function(self, name: str) -> tuple[ca.Function, _Buffered]:
+        """``G_w``, ``G_P``, ``G_all`` (G, G_w, G_P) or ``G_gw`` (G, G_w), built once."""
+        hit = self._jac.get(name)
+        if hit is None:
+            _, inputs, names, g, *_ = self._graph
+            Jw, Jp = self._expressions()
+            outs = {"G_w": ([Jw], ["G_w"]), "G_P": ([Jp], ["G_P"]),
+                    "G_all": ([g, Jw, Jp], ["G", "G_w", "G_P"]),
+                    "G_gw": ([g, Jw], ["G", "G_w"])}[name]  # fmt: skip
+            fn = ca.Function(name, inputs, outs[0], names, outs[1])
+            if self._expand:
+                fn = fn.expand()
+            hit = (fn, _Buffered(fn))
+            self._jac[name] = hit
+        return hit
+
+    def _template_of(self, which: str, name: str | None = None, out: int = 0) -> sp.csc_matrix:
+        """CSC template of ``dG/dw`` (``"w"``) or ``dG/dP`` (``"p"``), one per layout.
+
+        Read from output ``out`` of function ``name`` (default ``G_w`` / ``G_P``), the one
+        about to be evaluated (all of them share the pattern). Every Jacobian shares the
+        template's (canonical) index arrays, so the driver recognises the pattern and
+        SciPy's format checks run once.
+        """
+        key = which + "_template"
+        if key not in self._jac:
+            fn = self._function(name or ("G_w" if which == "w" else "G_P"))[0]
+            spw = fn.sparsity_out(out)
+            pattern = (np.array(spw.row(), dtype=np.int32),
+                       np.array(spw.colind(), dtype=np.int32), spw.shape)  # fmt: skip
+            template = _template(pattern)
+            if which == "w":
+                template.condensed_lu = self.condenser.factor
+            self._jac[which + "_pattern"] = pattern
+            self._jac[key] = template
+        return self._jac[key]  # type: ignore[no-any-return]
 
     @property
     def G_w(self) -> ca.Function:  # noqa: N802 (the paper's symbol)
         """Jacobian in ``w`` (built on first use)."""
-        return self._jacobians()["G_w"]
+        return self._function("G_w")[0]
 
     @property
     def G_P(self) -> ca.Function:  # noqa: N802
         """Jacobian in ``P`` (built on first use)."""
-        return self._jacobians()["G_P"]
+        return self._function("G_P")[0]
 
     @property
     def G_all(self) -> ca.Function:  # noqa: N802
         """Residual and both Jacobians in one function (built on first use)."""
-        return self._jacobians()["G_all"]
+        return self._function("G_all")[0]
 
     @property
     def _w_pattern(self) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
-        return self._jacobians()["w_pattern"]
+        self._template_of("w")
+        return self._jac["w_pattern"]  # type: ignore[no-any-return]
 
     @property
     def _p_pattern(self) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
-        return self._jacobians()["p_pattern"]
-
-    @property
-    def _w_template(self) -> sp.csc_matrix:
-        return self._jacobians()["w_template"]
-
-    @property
-    def _p_template(self) -> sp.csc_matrix:
-        return self._jacobians()["p_template"]
-
-    @property
-    def _bGw(self) -> _Buffered:
-        return self._jacobians()["bGw"]
-
-    @property
-    def _bGP(self) -> _Buffered:
-        return self._jacobians()["bGP"]
-
-    @property
-    def _bAll(self) -> _Buffered:
-        return self._jacobians()["bAll"]
+        self._template_of("p")
+        return self._jac["p_pattern"]  # type: ignore[no-any-return]
 
     def flat_args(self, args: list[Any]) -> list[FloatArray]:
         """The inputs as contiguous float vectors (matrices column-major), sizes checked.
@@ -452,7 +508,8 @@ class ConnectionFunctions:
         Parameters
         ----------
         args : list
-            ``[w, P, h, T, Qm, Qp, shift, ref, dref, pin]`` as arrays or scalars.
+            ``[w, P, *layout.data_names()]`` as arrays or scalars (a connection:
+            ``[w, P, h, T, Qm, Qp, shift, ref, dref, pin]``).
 
         Returns
         -------
@@ -485,16 +542,25 @@ class ConnectionFunctions:
 
     def jacobian(self, args: list[Any]) -> sp.csc_matrix:
         """``dG/dw`` as SciPy CSC, shape ``(n_eq, n_eq)``."""
-        return csc_with_data(self._w_template, self._bGw(self._flat(args))[0])
+        template = self._template_of("w")
+        return csc_with_data(template, self._function("G_w")[1](self._flat(args))[0])
+
+    def residual_jacobian(self, args: list[Any]) -> tuple[FloatArray, sp.csc_matrix]:
+        """``(G, dG/dw)`` in one evaluation."""
+        template = self._template_of("w", "G_gw", 1)
+        g, jw = self._function("G_gw")[1](self._flat(args))
+        return g, csc_with_data(template, jw)
 
     def linearize(self, args: list[Any]) -> tuple[FloatArray, sp.csc_matrix, sp.csc_matrix]:
         """``(G, dG/dw, dG/dP)`` in one evaluation."""
-        g, jw, jp = self._bAll(self._flat(args))
-        return g, csc_with_data(self._w_template, jw), csc_with_data(self._p_template, jp)
+        tw, tp = self._template_of("w", "G_all", 1), self._template_of("p", "G_all", 2)
+        g, jw, jp = self._function("G_all")[1](self._flat(args))
+        return g, csc_with_data(tw, jw), csc_with_data(tp, jp)
 
     def param_jacobian(self, args: list[Any]) -> sp.csc_matrix:
         """``dG/dP`` as SciPy CSC, shape ``(n_eq, n_params)``."""
-        return csc_with_data(self._p_template, self._bGP(self._flat(args))[0])
+        template = self._template_of("p")
+        return csc_with_data(template, self._function("G_P")[1](self._flat(args))[0])
 
 
 def _template(pattern: tuple[np.ndarray, np.ndarray, tuple[int, int]]) -> sp.csc_matrix:

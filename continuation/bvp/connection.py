@@ -223,25 +223,9 @@ class HeteroclinicProblem:
                 "(write rhs(x, p, ops) with ops functions)"
             )
         n = system.n_states
-        # params
-        params = self.params
-        if not isinstance(params, Params):
-            params = Params(system.param_names, system.check_params(params, "params"))
-        if params.names != system.param_names:
-            raise ValueError(
-                f"`params` names {params.names} do not match the system's {system.param_names}"
-            )
+        params = _as_params(system, self.params)
         object.__setattr__(self, "params", params)
-        # unknown parameters
-        unk = self.free
-        unk = (unk,) if isinstance(unk, str) else tuple(str(u) for u in unk)
-        for u in unk:
-            if u not in system.param_names:
-                raise ValueError(
-                    f"`free` names unknown parameter {u!r}; valid names are {system.param_names}"
-                )
-        if len(set(unk)) != len(unk):
-            raise ValueError(f"`free` must be unique, got {unk}")
+        unk = _solved_names(system, self.free)
         object.__setattr__(self, "free", unk)
         if self.vary is not None:
             if self.vary not in system.param_names:
@@ -256,7 +240,7 @@ class HeteroclinicProblem:
         if (self.saddle_to is None) == (self.shift is None):
             raise ValueError("give exactly one of `saddle_to` and `shift`")
         if self.shift is not None:
-            shift = self._check_shift(self.shift)
+            shift = _shift_vector(system, self.shift)
             object.__setattr__(self, "shift", shift)
             x_to = x_from + shift
             separate = False
@@ -300,20 +284,12 @@ class HeteroclinicProblem:
             raise ValueError("`saddle_from` has no unstable direction: no orbit can leave it")
         if ns_p == 0:
             raise ValueError("the end equilibrium has no stable direction: no orbit can reach it")
-        if self.mesh is None:
-            if self.T is None:
-                raise ValueError(
-                    "give `T=` (the truncation interval) or `mesh=`; there is no default "
-                    "T (find_connection picks T from the saddles' eigenvalues)"
-                )
-            object.__setattr__(
-                self, "mesh", CollocationMesh(DEFAULT_N_INTERVALS, DEFAULT_DEGREE, self.T)
-            )
-        if not isinstance(self.mesh, CollocationMesh):
-            raise ValueError(f"`mesh` must be a CollocationMesh, got {type(self.mesh).__name__}")
-        if self.T is not None and abs(float(self.T) - self.mesh.T) > 1e-12 * self.mesh.T:
-            raise ValueError(f"`T` = {self.T!r} disagrees with `mesh.T` = {self.mesh.T!r}")
-        object.__setattr__(self, "T", self.mesh.T)
+        mesh = _resolve_mesh(
+            self.mesh, self.T, "give `T=` (the truncation interval) or `mesh=`; there is no "
+            "default T (find_connection picks T from the saddles' eigenvalues)"
+        )  # fmt: skip
+        object.__setattr__(self, "mesh", mesh)
+        object.__setattr__(self, "T", mesh.T)
         # phase
         pin = None
         if isinstance(self.phase, PinPhase):
@@ -363,43 +339,6 @@ class HeteroclinicProblem:
             ref = ref.copy()
             ref.setflags(write=False)
             object.__setattr__(self, "reference", ref)
-
-    def _check_shift(self, shift: Any) -> FloatArray:
-        system = self.system
-        n = system.n_states
-        if isinstance(shift, Mapping):
-            vec = np.zeros(n)
-            for k, v in shift.items():
-                vec[system.state_index(k)] = float(v)
-        elif np.ndim(shift) == 0:
-            if float(shift) != 0.0:
-                raise ValueError(
-                    f"a scalar `shift` must be 0 (a homoclinic orbit), got {shift!r}; give a "
-                    "mapping such as {'theta': 2 * pi} for a shift by periods"
-                )
-            vec = np.zeros(n)
-        else:
-            vec = np.asarray(shift, dtype=float).reshape(-1)
-            if vec.shape != (n,):
-                raise ValueError(f"`shift` must have shape ({n},), got {vec.shape}")
-        if not np.all(np.isfinite(vec)):
-            raise ValueError(f"`shift` must be finite, got {vec}")
-        period = np.asarray(system.period, dtype=float)
-        for i in np.flatnonzero(vec):
-            if period[i] <= 0:
-                raise ValueError(
-                    f"`shift` is nonzero on state {system.state_names[i]!r}, which is not "
-                    "periodic (declare it with System(..., periodic={...}))"
-                )
-            ratio = vec[i] / period[i]
-            if abs(ratio - round(ratio)) > 1e-9 * max(1.0, abs(ratio)):
-                raise ValueError(
-                    f"`shift` of state {system.state_names[i]!r} is {vec[i]}, not a whole "
-                    f"multiple of its period {period[i]}"
-                )
-        # a zero shift is a homoclinic orbit, x_+ = x_-
-        vec.setflags(write=False)
-        return vec
 
     # ------------------------------------------------------------------ structure
     @property
@@ -691,6 +630,81 @@ class HeteroclinicProblem:
             z=np.array(z, dtype=float),
             problem=self,
         )
+
+
+def _as_params(system: Any, params: Any) -> Params:
+    """``params`` as :class:`Params` of ``system`` (a small local coercion; see issue 24)."""
+    if not isinstance(params, Params):
+        params = Params(system.param_names, system.check_params(params, "params"))
+    if params.names != system.param_names:
+        raise ValueError(
+            f"`params` names {params.names} do not match the system's {system.param_names}"
+        )
+    return params
+
+
+def _solved_names(system: Any, free: Any) -> tuple[str, ...]:
+    """The names of the solved parameters (``free``) as a tuple, checked."""
+    unk = (free,) if isinstance(free, str) else tuple(str(u) for u in free)
+    for u in unk:
+        if u not in system.param_names:
+            raise ValueError(
+                f"`free` names unknown parameter {u!r}; valid names are {system.param_names}"
+            )
+    if len(set(unk)) != len(unk):
+        raise ValueError(f"`free` must be unique, got {unk}")
+    return unk
+
+
+def _resolve_mesh(mesh: Any, T: float | None, missing: str) -> CollocationMesh:
+    """The mesh of a problem given ``mesh`` or ``T`` (then the default intervals/degree)."""
+    if mesh is None:
+        if T is None:
+            raise ValueError(missing)
+        mesh = CollocationMesh(DEFAULT_N_INTERVALS, DEFAULT_DEGREE, T)
+    if not isinstance(mesh, CollocationMesh):
+        raise ValueError(f"`mesh` must be a CollocationMesh, got {type(mesh).__name__}")
+    if T is not None and abs(float(T) - mesh.T) > 1e-12 * mesh.T:
+        raise ValueError(f"`T` = {T!r} disagrees with `mesh.T` = {mesh.T!r}")
+    return mesh
+
+
+def _shift_vector(system: Any, shift: Any) -> FloatArray:
+    """The end shift ``x_+ - x_e`` as a vector: whole periods of periodic states only."""
+    n = system.n_states
+    if isinstance(shift, Mapping):
+        vec = np.zeros(n)
+        for k, v in shift.items():
+            vec[system.state_index(k)] = float(v)
+    elif np.ndim(shift) == 0:
+        if float(shift) != 0.0:
+            raise ValueError(
+                f"a scalar `shift` must be 0 (a homoclinic orbit), got {shift!r}; give a "
+                "mapping such as {'theta': 2 * pi} for a shift by periods"
+            )
+        vec = np.zeros(n)
+    else:
+        vec = np.asarray(shift, dtype=float).reshape(-1)
+        if vec.shape != (n,):
+            raise ValueError(f"`shift` must have shape ({n},), got {vec.shape}")
+    if not np.all(np.isfinite(vec)):
+        raise ValueError(f"`shift` must be finite, got {vec}")
+    period = np.asarray(system.period, dtype=float)
+    for i in np.flatnonzero(vec):
+        if period[i] <= 0:
+            raise ValueError(
+                f"`shift` is nonzero on state {system.state_names[i]!r}, which is not "
+                "periodic (declare it with System(..., periodic={...}))"
+            )
+        ratio = vec[i] / period[i]
+        if abs(ratio - round(ratio)) > 1e-9 * max(1.0, abs(ratio)):
+            raise ValueError(
+                f"`shift` of state {system.state_names[i]!r} is {vec[i]}, not a whole "
+                f"multiple of its period {period[i]}"
+            )
+    # a zero shift is a homoclinic orbit, x_+ = x_-
+    vec.setflags(write=False)
+    return vec
 
 
 def _guess_times(T_g: float, mesh: CollocationMesh) -> FloatArray:

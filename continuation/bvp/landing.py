@@ -32,6 +32,9 @@ computation of connecting orbits in dynamical systems", IMA J. Numer. Anal.
 :func:`~continuation.bvp.landing_solve.solve_landing` estimates it by a re-solve on a
 longer interval, extended at the end only (the start is a point, not a saddle).
 
+The landing is a connection whose start condition differs: it is discretised by the
+connections' collocation core (:class:`~continuation.bvp.casadi_backend.ConnectionLayout`
+with ``start_point=True``, the same residual, Jacobians, condensation and caches).
 Unknowns and equations (``M = N (m + 1) + 1`` points, ``k = dim W^u(x_e)``)::
 
     w = [ vec(X) (n M),  x_e (n),  vec(R) ((n-k) k),  solved parameters (q = k) ]
@@ -43,182 +46,31 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from ..linalg import csc_with_data
 from ..params import Params
 from ..typing import FloatArray
-from .casadi_backend import (
-    _Buffered,
-    _collocation_jacobian,
-    _continuity_matrix,
-    _derivative_matrix,
-    _riccati,
-    _stage_columns,
-    _template,
-    _to_dm,
-)
+from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
-from .condense import StageCondenser
 from .connection import (
-    DEFAULT_DEGREE,
-    DEFAULT_N_INTERVALS,
+    _as_params,
     _as_trajectory,
     _count,
+    _mesh_changes,
     _refine_equilibrium,
+    _resolve_mesh,
     _schur_basis,
+    _shift_vector,
+    _solved_names,
 )
 
 #: Relative step of the central difference of ``x_0(s)`` when no derivative is given.
 FD_STEP = 1e-5
-
-
-@dataclass(frozen=True)
-class LandingLayout:
-    """Sizes and positions of the unknowns of a discretised landing orbit.
-
-    Attributes
-    ----------
-    n, n_intervals, degree : int
-        State dimension, ``N`` and ``m`` of the mesh.
-    k_plus : int
-        ``dim W^u(x_e)``: end conditions (and solved parameters).
-    unknown_param_index : tuple of int
-        Positions of the solved parameters in the full parameter vector.
-    """
-
-    n: int
-    n_intervals: int
-    degree: int
-    k_plus: int
-    unknown_param_index: tuple[int, ...]
-
-    @property
-    def n_points(self) -> int:
-        """``M = N (m + 1) + 1``."""
-        return self.n_intervals * (self.degree + 1) + 1
-
-    @property
-    def n_stages(self) -> int:
-        """``N m`` collocation points."""
-        return self.n_intervals * self.degree
-
-    def slices(self) -> dict[str, slice]:
-        """Slices of the blocks ``orbit``, ``x_eq``, ``R``, ``params`` in ``w``."""
-        n, k = self.n, self.k_plus
-        sizes = [("orbit", n * self.n_points), ("x_eq", n), ("R", (n - k) * k),
-                 ("params", len(self.unknown_param_index))]  # fmt: skip
-        out, pos = {}, 0
-        for name, size in sizes:
-            out[name] = slice(pos, pos + size)
-            pos += size
-        return out
-
-    @property
-    def n_unknowns(self) -> int:
-        """Length of ``w``."""
-        return self.slices()["params"].stop
-
-    @property
-    def start_rows(self) -> slice:
-        """Rows of the start condition ``x(0) - x_0`` in ``G``."""
-        a = self.n * (self.n_stages + self.n_intervals)
-        return slice(a, a + self.n)
-
-
-class LandingFunctions:
-    """Compiled residual ``G(w, P, h, T, Q, shift, x0)`` and Jacobian ``G_w`` of a layout."""
-
-    def __init__(self, system: Any, layout: LandingLayout) -> None:
-        fns = system.casadi_functions()
-        f_fun, jac_fun = fns["f"], fns["jac"]
-        n, N, m, k = layout.n, layout.n_intervals, layout.degree, layout.k_plus
-        M, n_par = layout.n_points, system.n_params
-        sl = layout.slices()
-        mesh = CollocationMesh(N, m, 1.0)
-        w = ca.MX.sym("w", layout.n_unknowns)
-        P = ca.MX.sym("P", n_par)
-        h = ca.MX.sym("h", N)
-        T = ca.MX.sym("T")
-        Q = ca.MX.sym("Q", n, n)
-        shift = ca.MX.sym("shift", n)
-        x0 = ca.MX.sym("x0", n)
-        upar = w[sl["params"]]
-        pos = {i: j for j, i in enumerate(layout.unknown_param_index)}
-        P_eff = ca.vertcat(*[upar[pos[i]] if i in pos else P[i] for i in range(n_par)])
-        X = ca.reshape(w[sl["orbit"]], n, M)
-        x_eq = w[sl["x_eq"]]
-        x_to = x_eq + shift
-        Xs = X[:, _stage_columns(N, m)]
-        E = sp.kron(sp.eye(N), np.ones((1, m)), format="csc")
-        h_rep = ca.mtimes(h.T, _to_dm(E))
-        F = f_fun.map("fmap", "serial", N * m, [1], [])(Xs, P_eff)
-        colloc = (
-            ca.mtimes(X, _to_dm(_derivative_matrix(N, m, mesh.D))) / ca.repmat(h_rep * T, n, 1) - F
-        )
-        cont = ca.mtimes(X, _to_dm(_continuity_matrix(N, m, mesh.e)))
-        ric, Y = _riccati(jac_fun(x_to, P_eff), Q, k, ca.reshape(w[sl["R"]], n - k, k))
-        rest = [ca.vec(cont), X[:, 0] - x0, f_fun(x_eq, P_eff)]
-        if k < n:
-            rest.append(ca.vec(ric))
-        rest.append(ca.mtimes(Y.T, X[:, M - 1] - x_to))
-        g_rest = ca.vertcat(*rest)
-        g = ca.vertcat(ca.vec(colloc), g_rest)
-        if g.shape[0] != layout.n_unknowns:  # pragma: no cover - counting checked before
-            raise ValueError(f"internal count mismatch: {g.shape[0]} != {layout.n_unknowns}")
-        Jc_w, _ = _collocation_jacobian(fns, layout, Xs, P_eff, h_rep, T, mesh.D, n_par)  # type: ignore[arg-type]
-        Jw = ca.vertcat(Jc_w, ca.jacobian(g_rest, w))
-        inputs = [w, P, h, T, Q, shift, x0]
-        names = ["w", "P", "h", "T", "Q", "shift", "x0"]
-        G = ca.Function("G", inputs, [g], names, ["G"])
-        G_all = ca.Function("G_all", inputs, [g, Jw], names, ["G", "G_w"])
-        spw = G_all.sparsity_out(1)
-        self.template = _template(
-            (np.array(spw.row(), dtype=np.int32), np.array(spw.colind(), dtype=np.int32),
-             spw.shape)
-        )  # fmt: skip
-        stage = np.array(_stage_columns(N, m)).reshape(N, m)
-        cols_s = (stage[:, :, None] * n + np.arange(n)).reshape(N, m * n)
-        rows_s = np.arange(N * m * n).reshape(N, m * n)
-        self.template.condensed_lu = StageCondenser(rows_s, cols_s).factor
-        self.sizes = tuple(int(G.nnz_in(i)) for i in range(G.n_in()))
-        self._G, self._all = _Buffered(G), _Buffered(G_all)
-
-    def _flat(self, args: list[Any]) -> list[FloatArray]:
-        out = [np.ascontiguousarray(np.asarray(a, dtype=float).ravel(order="F")) for a in args]
-        for v, size in zip(out, self.sizes, strict=True):
-            if v.size != size:  # pragma: no cover - shapes are the problem's own
-                raise ValueError(f"landing input has {v.size} entries, expected {size}")
-        return out
-
-    def residual(self, args: list[Any]) -> FloatArray:
-        """``G``, shape ``(N_w,)``."""
-        return self._G(self._flat(args))[0]
-
-    def linearize(self, args: list[Any]) -> tuple[FloatArray, sp.csc_matrix]:
-        """``(G, dG/dw)``."""
-        g, jw = self._all(self._flat(args))
-        return g, csc_with_data(self.template, jw)
-
-
-_FUNCTIONS: dict[tuple[int, LandingLayout], tuple[Any, LandingFunctions]] = {}
-
-
-def _functions(system: Any, layout: LandingLayout) -> LandingFunctions:
-    key = (id(system), layout)
-    hit = _FUNCTIONS.get(key)
-    if hit is None or hit[0] is not system:
-        if len(_FUNCTIONS) > 32:
-            _FUNCTIONS.clear()
-        hit = (system, LandingFunctions(system, layout))
-        _FUNCTIONS[key] = hit
-    return hit[1]
 
 
 StartFn = Callable[[float], Any]
@@ -277,7 +129,7 @@ class LandingProblem:
     start_name: str = "s"
     start_derivative: StartFn | None = field(default=None, repr=False)
     bases: FloatArray | None = field(default=None, repr=False)
-    layout: LandingLayout = field(init=False, repr=False)
+    layout: ConnectionLayout = field(init=False, repr=False)
     _cache: dict[float, FloatArray] = field(init=False, repr=False, default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -288,19 +140,10 @@ class LandingProblem:
                 "(write rhs(x, p, ops) with ops functions)"
             )
         n = system.n_states
-        params = self.params
-        if not isinstance(params, Params):
-            params = Params(system.param_names, system.check_params(params, "params"))
-        if params.names != system.param_names:
-            raise ValueError(f"`params` names {params.names} are not {system.param_names}")
+        params = _as_params(system, self.params)
         object.__setattr__(self, "params", params)
-        unk = (self.free,) if isinstance(self.free, str) else tuple(str(u) for u in self.free)
-        for u in unk:
-            if u not in system.param_names:
-                raise ValueError(
-                    f"`free` names unknown parameter {u!r}; valid names are {system.param_names}"
-                )
-        if len(set(unk)) != len(unk) or not unk:
+        unk = _solved_names(system, self.free)
+        if not unk:
             raise ValueError(f"`free` must be one or more distinct parameters, got {unk}")
         object.__setattr__(self, "free", unk)
         try:
@@ -320,7 +163,8 @@ class LandingProblem:
         x_eq = system.check_state(self.saddle, "saddle")
         x_eq = _refine_equilibrium(system, x_eq, pvec, "saddle")
         object.__setattr__(self, "saddle", x_eq)
-        shift = _shift_vector(system, self.shift)
+        shift = np.zeros(n) if self.shift is None else _shift_vector(system, self.shift)
+        shift.setflags(write=False)
         object.__setattr__(self, "shift", shift)
         A = system.jacobian(x_eq + shift, pvec)
         ev = np.linalg.eigvals(A)
@@ -337,17 +181,9 @@ class LandingProblem:
             )
         if ns == 0:
             raise ValueError("the equilibrium has no stable direction: no orbit can land on it")
-        if self.mesh is None:
-            if self.T is None:
-                raise ValueError("give `T=` (the length of the orbit) or `mesh=`")
-            object.__setattr__(
-                self, "mesh", CollocationMesh(DEFAULT_N_INTERVALS, DEFAULT_DEGREE, self.T)
-            )
-        if not isinstance(self.mesh, CollocationMesh):
-            raise ValueError(f"`mesh` must be a CollocationMesh, got {type(self.mesh).__name__}")
-        if self.T is not None and abs(float(self.T) - self.mesh.T) > 1e-12 * self.mesh.T:
-            raise ValueError(f"`T` = {self.T!r} disagrees with `mesh.T` = {self.mesh.T!r}")
-        object.__setattr__(self, "T", self.mesh.T)
+        mesh = _resolve_mesh(self.mesh, self.T, "give `T=` (the length of the orbit) or `mesh=`")
+        object.__setattr__(self, "mesh", mesh)
+        object.__setattr__(self, "T", mesh.T)
         if self.bases is None:
             Q, k = _schur_basis(A, "unstable")
         else:
@@ -356,11 +192,18 @@ class LandingProblem:
                 raise ValueError(f"`bases` must be an ({n}, {n}) array, got {Q.shape}")
             k = nu
         object.__setattr__(self, "bases", Q)
-        object.__setattr__(
-            self, "layout",
-            LandingLayout(n, self.mesh.n_intervals, self.mesh.degree, int(k),
-                          tuple(system.param_index(u) for u in unk)),
-        )  # fmt: skip
+        layout = ConnectionLayout(
+            n=n,
+            n_intervals=mesh.n_intervals,
+            degree=mesh.degree,
+            separate_to=False,
+            k_minus=0,
+            k_plus=int(k),
+            unknown_param_index=tuple(system.param_index(u) for u in unk),
+            pin=None,
+            start_point=True,
+        )
+        object.__setattr__(self, "layout", layout)
 
     # ------------------------------------------------------------------ start point
     def x0(self, s: float | None = None) -> FloatArray:
@@ -395,9 +238,9 @@ class LandingProblem:
 
     # ------------------------------------------------------------------ structure
     @property
-    def functions(self) -> LandingFunctions:
+    def functions(self) -> ConnectionFunctions:
         """The compiled functions of this layout (cached per system and layout)."""
-        return _functions(self.system, self.layout)
+        return build_connection_functions(self.system, self.layout)
 
     @property
     def n_unknowns(self) -> int:
@@ -411,11 +254,7 @@ class LandingProblem:
 
     def replace(self, **changes: Any) -> LandingProblem:
         """A copy with some fields changed (a new ``mesh`` brings its ``T``)."""
-        if "mesh" in changes and "T" not in changes:
-            changes["T"] = None
-        elif "T" in changes and "mesh" not in changes and changes["T"] is not None:
-            changes["mesh"] = self.mesh.with_T(float(changes["T"]))
-        new = dataclasses.replace(self, **changes)
+        new = dataclasses.replace(self, **_mesh_changes(self, changes))  # type: ignore[arg-type]
         if callable(self.start) and new.start is self.start:
             new._cache.update(self._cache)
         return new
@@ -430,9 +269,9 @@ class LandingProblem:
             raise ValueError(f"`X` must have shape ({lay.n_points}, {lay.n}), got {X.shape}")
         z = np.zeros(lay.n_unknowns)
         z[sl["orbit"]] = X.reshape(-1)
-        z[sl["x_eq"]] = self.saddle if x_eq is None else x_eq
+        z[sl["x_to"]] = self.saddle if x_eq is None else x_eq
         if R is not None:
-            z[sl["R"]] = np.asarray(R, dtype=float).reshape(-1, order="F")
+            z[sl["R_plus"]] = np.asarray(R, dtype=float).reshape(-1, order="F")
         vals = [self.params[u] for u in self.free] if values is None else values
         z[sl["params"]] = np.asarray(vals, dtype=float)
         return z
@@ -446,9 +285,9 @@ class LandingProblem:
         k = lay.k_plus
         return {
             "X": z[sl["orbit"]].reshape(lay.n_points, lay.n),
-            "x_eq": z[sl["x_eq"]],
-            "x_end": z[sl["x_eq"]] + self.shift,
-            "R": z[sl["R"]].reshape((lay.n - k, k), order="F"),
+            "x_eq": z[sl["x_to"]],
+            "x_end": z[sl["x_to"]] + self.shift,
+            "R": z[sl["R_plus"]].reshape((lay.n - k, k), order="F"),
             "params": dict(zip(self.free, z[sl["params"]].tolist(), strict=True)),
         }
 
@@ -472,7 +311,7 @@ class LandingProblem:
 
     def jacobian(self, z: FloatArray, s: float | None = None) -> sp.csc_matrix:
         """Exact ``dG/dz`` (CSC), shape ``(N_z, N_z)``."""
-        return self.functions.linearize(self._args(z, s))[1]
+        return self.functions.residual_jacobian(self._args(z, s))[1]
 
     def dp(self, z: FloatArray, s: float | None = None) -> FloatArray:
         """``dG/ds = -dx_0/ds`` on the start rows, shape ``(N_z,)``."""
@@ -482,7 +321,7 @@ class LandingProblem:
 
     def linearize(self, z: FloatArray, s: float | None = None) -> tuple[Any, Any, FloatArray]:
         """``(G, dG/dz, dG/ds)``."""
-        g, J = self.functions.linearize(self._args(z, s))
+        g, J = self.functions.residual_jacobian(self._args(z, s))
         return g, J, self.dp(z, s)
 
     def record(self, z: FloatArray, s: float | None = None) -> dict[str, float]:
@@ -531,34 +370,4 @@ class LandingProblem:
         return new, new.pack(parts["X"], parts["x_eq"], list(parts["params"].values()))
 
 
-def _shift_vector(system: Any, shift: Any) -> FloatArray:
-    n = system.n_states
-    if shift is None:
-        vec = np.zeros(n)
-    elif isinstance(shift, Mapping):
-        vec = np.zeros(n)
-        for k, v in shift.items():
-            vec[system.state_index(k)] = float(v)
-    else:
-        vec = np.asarray(shift, dtype=float).reshape(-1)
-        if vec.shape != (n,):
-            raise ValueError(f"`shift` must have shape ({n},), got {vec.shape}")
-    if not np.all(np.isfinite(vec)):
-        raise ValueError(f"`shift` must be finite, got {vec}")
-    period = np.asarray(system.period, dtype=float)
-    for i in np.flatnonzero(vec):
-        if period[i] <= 0:
-            raise ValueError(
-                f"`shift` is nonzero on state {system.state_names[i]!r}, which is not periodic"
-            )
-        r = vec[i] / period[i]
-        if abs(r - round(r)) > 1e-9 * max(1.0, abs(r)):
-            raise ValueError(
-                f"`shift` of state {system.state_names[i]!r} is {vec[i]}, not a whole multiple "
-                f"of its period {period[i]}"
-            )
-    vec.setflags(write=False)
-    return vec
-
-
-__all__ = ["LandingFunctions", "LandingLayout", "LandingProblem"]
+__all__ = ["LandingProblem"]
