@@ -23,19 +23,31 @@ The mesh itself is adapted as in AUTO-07p (Doedel et al.): the nodes equidistrib
 :math:`h_j^{m+1} |x^{(m+1)}|`, the local error of collocation of degree ``m``, with
 :math:`x^{(m+1)}` from differences of the piecewise-constant ``m``-th derivative
 (:meth:`CollocationMesh.equidistributed`).
+
+:func:`controlled` is the one loop (adapt, halve, lengthen) behind both
+:func:`~continuation.bvp.solve.solve_connection` and
+:func:`~continuation.bvp.landing_solve.solve_landing`: a landing differs only in how its
+problem is re-solved (:class:`Resolves`) and in being lengthened at its end only (its
+start is a point, not a saddle).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from ..status import Status
 from ..typing import FloatArray
 from .collocation import CollocationMesh
+from .result import ErrorEstimates
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -100,12 +112,16 @@ class ConnectionAccuracy:
         return float(self.atol + self.rtol * abs(value))
 
 
-def extended_mesh(mesh: CollocationMesh, T_factor: float) -> tuple[CollocationMesh, float, int]:
+def extended_mesh(
+    mesh: CollocationMesh, T_factor: float, start: bool = True
+) -> tuple[CollocationMesh, float, int]:
     """The mesh on ``[0, T_factor T]`` with the same resolution, and its offset.
 
     The old nodes (in ``t``) are shifted by ``off = (T_factor - 1) T / 2``; on each side
     ``ceil(off / h_end)`` intervals of about the end interval's length ``h_end`` are
     added (at most ``ceil((T_factor - 1) N / 2)`` per side, the mean resolution).
+    With ``start=False`` (an orbit from a given point) all of ``(T_factor - 1) T`` is
+    added at the end (at most ``ceil((T_factor - 1) N)`` intervals) and ``off = 0``.
 
     Returns
     -------
@@ -117,12 +133,17 @@ def extended_mesh(mesh: CollocationMesh, T_factor: float) -> tuple[CollocationMe
     """
     T = mesh.T
     tn = mesh.nodes * T
-    off = 0.5 * (T_factor - 1.0) * T
-    cap = max(1, int(math.ceil(0.5 * (T_factor - 1.0) * mesh.n_intervals)))
-    k0 = min(cap, max(1, int(math.ceil(off / (tn[1] - tn[0]) - 1e-9))))
+    sides = 2 if start else 1
+    off = (T_factor - 1.0) * T / sides  # added on each extended side
+    cap = max(1, int(math.ceil((T_factor - 1.0) * mesh.n_intervals / sides)))
     k1 = min(cap, max(1, int(math.ceil(off / (tn[-1] - tn[-2]) - 1e-9))))
-    left = np.linspace(-off, 0.0, k0 + 1)[:-1]
     right = T + np.linspace(0.0, off, k1 + 1)[1:]
+    if not start:
+        nodes = np.concatenate((tn, right)) / (T + off)
+        nodes[-1] = 1.0
+        return CollocationMesh(nodes.size - 1, mesh.degree, T + off, nodes), 0.0, 0
+    k0 = min(cap, max(1, int(math.ceil(off / (tn[1] - tn[0]) - 1e-9))))
+    left = np.linspace(-off, 0.0, k0 + 1)[:-1]
     T2 = T + 2.0 * off
     nodes = (np.concatenate((left, tn, right)) + off) / T2
     nodes[0], nodes[-1] = 0.0, 1.0
@@ -139,30 +160,48 @@ def _linear_flow(A: FloatArray, d: FloatArray, s: FloatArray, unstable: bool) ->
     return np.real((V[None, :, :] * np.exp(np.outer(s, lam))[:, None, :]) @ c)
 
 
+def extended_orbit(
+    system: Any,
+    pvec: FloatArray,
+    mesh: CollocationMesh,
+    x: FloatArray,
+    mesh2: CollocationMesh,
+    off: float,
+    x_from: FloatArray | None,
+    x_to: FloatArray,
+) -> FloatArray:
+    """The orbit ``x`` (on ``mesh``) at the points of ``mesh2``, shape ``(M2, n)``.
+
+    The old interval sits at ``[off, off + T]`` of the new one. Before it the orbit is
+    continued backwards along the unstable eigenspace of the start saddle ``x_from``,
+    after it forwards along the stable eigenspace of the end saddle ``x_to`` (the
+    linearised flow, exact to first order in the distance); ``x_from`` None: nothing is
+    added before (``off = 0``).
+    """
+    s = mesh2.t - off
+    T = mesh.T
+    out = mesh.interpolate(x, np.clip(s, 0.0, T) / T)
+    lo, hi = s < 0.0, s > T
+    if np.any(lo) and x_from is not None:
+        A = np.asarray(system.jacobian(x_from, pvec), dtype=float)
+        out[lo] = x_from + _linear_flow(A, x[0] - x_from, s[lo], True)
+    if np.any(hi):
+        A = np.asarray(system.jacobian(x_to, pvec), dtype=float)
+        out[hi] = x_to + _linear_flow(A, x[-1] - x_to, s[hi] - T, False)
+    return out
+
+
 def extended_guess(
     result: Any, mesh2: CollocationMesh, off: float
 ) -> tuple[FloatArray, FloatArray]:
     """``(t, x)`` on ``mesh2``: the orbit in the middle, linear flows at the saddles outside.
 
-    Before ``t = 0`` the orbit is continued backwards along the unstable eigenspace
-    of the start saddle, after ``T`` forwards along the stable eigenspace of the end
-    saddle (the linearised flow, exact to first order in the distance).
+    See :func:`extended_orbit`.
     """
-    prob = result.problem
-    system = prob.system
     pvec = np.array(result.params.values, dtype=float)
-    t2 = mesh2.t
-    s = t2 - off
-    T = result.mesh.T
-    x = result.interpolate(np.clip(s, 0.0, T))
-    lo, hi = s < 0.0, s > T
-    if np.any(lo):
-        A = np.asarray(system.jacobian(result.x_from, pvec), dtype=float)
-        x[lo] = result.x_from + _linear_flow(A, result.x[0] - result.x_from, s[lo], True)
-    if np.any(hi):
-        A = np.asarray(system.jacobian(result.x_to, pvec), dtype=float)
-        x[hi] = result.x_to + _linear_flow(A, result.x[-1] - result.x_to, s[hi] - T, False)
-    return t2, x
+    x = extended_orbit(result.problem.system, pvec, result.mesh, result.x, mesh2, off,
+                       result.x_from, result.x_to)  # fmt: skip
+    return mesh2.t, x
 
 
 def extended_problem(result: Any, T_factor: float) -> tuple[Any, tuple[FloatArray, FloatArray]]:
@@ -181,4 +220,206 @@ def refined_problem(result: Any) -> Any:
     return result.problem.replace(mesh=result.problem.mesh.refined(), reference=None)
 
 
-__all__ = ["ConnectionAccuracy", "extended_mesh", "extended_problem", "refined_problem"]
+@dataclass(frozen=True)
+class Resolves:
+    """How :func:`controlled` re-solves a result (each returns a new result).
+
+    Attributes
+    ----------
+    adapt : callable
+        ``adapt(result)``: one equidistribution of the mesh and a solve on it.
+    refine : callable
+        ``refine(result)``: the solve on the mesh with every interval halved.
+    extend : callable
+        ``extend(result, T_factor)``: the solve on ``[0, T_factor T]`` at the same
+        resolution.
+    keep_on_adapt_failure : bool
+        When an adaptation solve fails: True keeps the last result and goes on to the
+        estimates (a landing), False returns the failure (a connection).
+    """
+
+    adapt: Callable[[Any], Any]
+    refine: Callable[[Any], Any]
+    extend: Callable[[Any, float], Any]
+    keep_on_adapt_failure: bool = False
+
+
+def _changes(a: Any, b: Any, safety: float) -> dict[str, float]:
+    return {u: safety * abs(b.params[u] - a.params[u]) for u in a.free}
+
+
+def _worst(est: dict[str, float], tol: dict[str, float]) -> str | None:
+    bad = [u for u in est if not est[u] <= tol[u]]
+    return max(bad, key=lambda u: est[u] / max(tol[u], 1e-300)) if bad else None
+
+
+def _adapted(
+    result: Any,
+    rounds: int,
+    how: Resolves,
+    progress: Callable[[Any], None] | None,
+    keep: Callable[[Any], None],
+) -> Any:
+    """``rounds`` equidistribution solves; stop when the nodes no longer move."""
+    for _ in range(rounds):
+        old = result.mesh.nodes
+        new = how.adapt(result)
+        if new.success:
+            keep(new)
+        if progress is not None:
+            progress(new)
+        if not new.success:
+            return result if how.keep_on_adapt_failure else new
+        result = new
+        h = np.minimum(np.diff(old), np.diff(result.mesh.nodes))
+        move = np.abs(result.mesh.nodes - old)
+        if np.all(move[1:-1] <= 0.1 * np.minimum(h[:-1], h[1:])):
+            break
+    return result
+
+
+def controlled(
+    result: Any,
+    acc: ConnectionAccuracy,
+    how: Resolves,
+    rounds: int | None = None,
+    progress: Callable[[Any], None] | None = None,
+    keep: Callable[[Any], None] = lambda r: None,
+    first_rounds: int | None = None,
+) -> Any:
+    r"""Adapt, refine and lengthen until both estimates meet ``acc``.
+
+    1. ``rounds`` (default ``acc.adapt_rounds``; ``first_rounds`` on the starting mesh)
+       equidistribution solves, fewer once the nodes stop moving.
+    2. Discretisation estimate ``safety |p(2N) - p(N)|``; above ``atol + rtol |p|`` the
+       halved mesh becomes the mesh (at most ``max_refinements`` times), back to 1.
+    3. Truncation estimate ``safety |p(T_factor T) - p(T)|``; above the tolerance the
+       longer problem is adopted (at most ``max_extensions`` times) and 1-3 repeat.
+
+    Parameters
+    ----------
+    result : ConnectionResult or LandingResult
+        A converged solve (``success``, ``params``, ``free``, ``mesh``, ``message``).
+    acc : ConnectionAccuracy
+    how : Resolves
+        The re-solves of this kind of orbit.
+    rounds, first_rounds : int, optional
+    progress : callable, optional
+        Called with every intermediate result.
+    keep : callable
+        Called with every converged result that may be returned (an interrupted
+        caller returns the last).
+
+    Returns
+    -------
+    result
+        The solution on the last adapted mesh with ``errors`` set: ``SUCCESS``,
+        ``DISCRETISATION_ERROR`` or ``TRUNCATION_ERROR`` (the message names the
+        parameter, the estimate, the tolerance and what to change), or the failed
+        adaptation solve.
+    """
+    rounds = acc.adapt_rounds if rounds is None else rounds
+    for n_ext in range(acc.max_extensions + 1):
+        # ---- discretisation: adapt, halve, compare; double the intervals if needed
+        for n_ref in range(acc.max_refinements + 1):
+            k = rounds if (n_ext or n_ref or first_rounds is None) else first_rounds
+            result = _adapted(result, k, how, progress, keep)
+            if not result.success:
+                return result
+            tol = {u: acc.tolerance(result.params[u]) for u in result.free}
+            fine = how.refine(result)
+            if progress is not None:
+                progress(fine)
+            if not fine.success:
+                return dataclasses.replace(
+                    result,
+                    status=Status.DISCRETISATION_ERROR,
+                    message=(
+                        f"{Status.DISCRETISATION_ERROR.value} The re-solve on the halved mesh "
+                        f"({fine.mesh.n_intervals} intervals) failed: {fine.message}"
+                    ),
+                )
+            e_d = _changes(result, fine, acc.safety)
+            bad = _worst(e_d, tol)
+            if bad is None:
+                break
+            if n_ref == acc.max_refinements:
+                return dataclasses.replace(
+                    result,
+                    status=Status.DISCRETISATION_ERROR,
+                    message=(
+                        f"discretisation error of {bad} estimated {e_d[bad]:.2e} > tolerance "
+                        f"{tol[bad]:.2e} after {acc.max_refinements} doublings of the mesh "
+                        f"({result.mesh.n_intervals} intervals, degree {result.mesh.degree}):"
+                        " raise `max_refinements`, the degree or the starting intervals, or "
+                        "loosen rtol/atol"
+                    ),
+                    errors=ErrorEstimates(
+                        e_d, {u: math.nan for u in e_d}, tol, fine.mesh.n_intervals
+                    ),
+                )
+            log.info(
+                "discretisation estimate %.2e > %.2e: %d intervals",
+                e_d[bad],
+                tol[bad],
+                fine.mesh.n_intervals,
+            )
+            result = fine
+            keep(fine)
+        # ---- truncation: same resolution on a longer interval
+        long = how.extend(result, acc.T_factor)
+        if progress is not None:
+            progress(long)
+        if not long.success:
+            return dataclasses.replace(
+                result,
+                status=Status.TRUNCATION_ERROR,
+                message=(
+                    f"{Status.TRUNCATION_ERROR.value} The re-solve on T = {long.mesh.T:.6g}"
+                    f" failed ({long.message}): the truncation error cannot be estimated; "
+                    "check the saddles and the guess, or try a different T"
+                ),
+                errors=ErrorEstimates(
+                    e_d, {u: math.nan for u in e_d}, tol, fine.mesh.n_intervals, long.mesh.T
+                ),
+            )
+        e_T = _changes(result, long, acc.safety)
+        errors = ErrorEstimates(e_d, e_T, tol, fine.mesh.n_intervals, long.mesh.T)
+        bad = _worst(e_T, tol)
+        if bad is None:
+            return dataclasses.replace(
+                result,
+                status=Status.SUCCESS,
+                message=(
+                    f"{result.message}; error estimates within tolerance "
+                    + ", ".join(f"{u}: {e_d[u]:.1e} (mesh) + {e_T[u]:.1e} (T)" for u in e_d)
+                ),
+                errors=errors,
+            )
+        if n_ext == acc.max_extensions:
+            return dataclasses.replace(
+                result,
+                status=Status.TRUNCATION_ERROR,
+                message=(
+                    f"truncation error of {bad} estimated {e_T[bad]:.2e} > tolerance "
+                    f"{tol[bad]:.2e} at T = {result.mesh.T:.6g} (after {acc.max_extensions} "
+                    f"extensions): give a longer T (about {long.mesh.T * acc.T_factor:.4g}) "
+                    "or raise `max_extensions`, or loosen rtol/atol"
+                ),
+                errors=errors,
+            )
+        log.info("truncation estimate %.2e > %.2e: T = %.6g", e_T[bad], tol[bad], long.mesh.T)
+        result = long
+        keep(long)
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+__all__ = [
+    "ConnectionAccuracy",
+    "Resolves",
+    "controlled",
+    "extended_mesh",
+    "extended_orbit",
+    "extended_problem",
+    "refined_problem",
+]

@@ -1,8 +1,9 @@
 r"""Solve a landing orbit (:class:`~continuation.bvp.landing.LandingProblem`) and continue it.
 
 * :func:`solve_landing` -- damped Newton on the collocation system, mesh
-  equidistribution, and the error estimates of the solved parameters as for
-  connections (:class:`~continuation.bvp.accuracy.ConnectionAccuracy`):
+  equidistribution, and the error estimates of the solved parameters by the
+  connections' own loop (:func:`~continuation.bvp.accuracy.controlled`, settings
+  :class:`~continuation.bvp.accuracy.ConnectionAccuracy`):
   discretisation by a re-solve on the mesh with every interval halved, truncation by a
   re-solve on ``[0, T_factor T]`` (extended at the end only, the added part guessed by
   the linearised flow onto the equilibrium). ``SUCCESS`` only when both are within
@@ -27,7 +28,6 @@ stable manifold ``u = p - y^2 / 3``, so the orbit from ``(s, c)`` lands on it fo
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -41,7 +41,7 @@ from ..params import Params
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
 from ..typing import FloatArray
-from .accuracy import ConnectionAccuracy, _linear_flow
+from .accuracy import ConnectionAccuracy, Resolves, controlled, extended_mesh, extended_orbit
 from .collocation import CollocationMesh
 from .landing import LandingProblem
 from .result import ErrorEstimates
@@ -174,38 +174,28 @@ def _refined(result: LandingResult, settings: NewtonSettings) -> LandingResult:
 def extended_landing(result: LandingResult, T_factor: float) -> tuple[LandingProblem, FloatArray]:
     """The problem on ``[0, T_factor T]`` (same nodes, end intervals added) and its ``z``.
 
-    Beyond ``T`` the guess is the linearised flow from ``x(T)`` onto the equilibrium
-    along its stable eigenspace (exact to first order in the end distance).
+    :func:`~continuation.bvp.accuracy.extended_mesh` with ``start=False`` (the start is a
+    point, not a saddle); beyond ``T`` the guess is the linearised flow from ``x(T)``
+    onto the equilibrium along its stable eigenspace (exact to first order in the end
+    distance).
     """
     prob = result.problem
-    mesh = prob.mesh
-    T = mesh.T
-    tn = mesh.nodes * T
-    ext = (T_factor - 1.0) * T
-    cap = max(1, int(math.ceil((T_factor - 1.0) * mesh.n_intervals)))
-    k = min(cap, max(1, int(math.ceil(ext / (tn[-1] - tn[-2]) - 1e-9))))
-    T2 = T + ext
-    nodes = np.concatenate((tn, T + np.linspace(0.0, ext, k + 1)[1:])) / T2
-    nodes[-1] = 1.0
-    mesh2 = CollocationMesh(nodes.size - 1, mesh.degree, T2, nodes)
+    mesh2, off, _ = extended_mesh(prob.mesh, T_factor, start=False)
     new = prob.replace(mesh=mesh2)
-    t2 = mesh2.t
-    x = mesh.interpolate(result.x, np.clip(t2 / T, 0.0, 1.0))
-    hi = t2 > T
     pvec = np.array(result.params.values, dtype=float)
-    A = np.asarray(prob.system.jacobian(result.x_eq, pvec), dtype=float)
-    x[hi] = result.x_eq + _linear_flow(A, result.x[-1] - result.x_eq, t2[hi] - T, False)
+    x = extended_orbit(prob.system, pvec, prob.mesh, result.x, mesh2, off, None, result.x_eq)
     parts = prob.unpack(result.z)
     return new, new.pack(x, parts["x_eq"], list(parts["params"].values()))
 
 
-def _change(a: LandingResult, b: LandingResult, safety: float) -> dict[str, float]:
-    return {u: safety * abs(b.value(u) - a.value(u)) for u in a.free}
-
-
-def _worst(est: dict[str, float], tol: dict[str, float]) -> str | None:
-    bad = [u for u in est if not est[u] <= tol[u]]
-    return max(bad, key=lambda u: est[u] / max(tol[u], 1e-300)) if bad else None
+def _resolves(settings: NewtonSettings) -> Resolves:
+    """The re-solves of a landing for :func:`~continuation.bvp.accuracy.controlled`."""
+    return Resolves(
+        adapt=lambda r: _adapt(r, settings),
+        refine=lambda r: _refined(r, settings),
+        extend=lambda r, f: _plain(*extended_landing(r, f), settings),
+        keep_on_adapt_failure=True,
+    )
 
 
 def solve_landing(
@@ -256,78 +246,14 @@ def solve_landing(
     settings = DEFAULT_NEWTON if newton is None else newton
     if not isinstance(settings, NewtonSettings):
         raise ValueError(f"`newton` must be a NewtonSettings, got {type(settings).__name__}")
-    say = progress or (lambda r: None)
     result = _plain(problem, problem.initial_vector(guess), settings)
-    say(result)
+    if progress is not None:
+        progress(result)
     if acc.estimate and result.success:
-        result = _controlled(result, acc, settings, say)
+        result = controlled(result, acc, _resolves(settings), progress=progress)
     if throw and not result.success:
         raise ConvergenceError(result.message)
     return result
-
-
-def _controlled(result: LandingResult, acc: ConnectionAccuracy, settings: NewtonSettings,
-                say: Callable[[LandingResult], None]) -> LandingResult:  # fmt: skip
-    e_d: dict[str, float] = {}
-    for n_ext in range(acc.max_extensions + 1):
-        for n_ref in range(acc.max_refinements + 1):
-            for _ in range(acc.adapt_rounds):
-                new = _adapt(result, settings)
-                say(new)
-                if not new.success:
-                    break
-                result = new
-            tol = {u: acc.tolerance(result.value(u)) for u in result.free}
-            fine = _refined(result, settings)
-            say(fine)
-            if not fine.success:
-                return dataclasses.replace(
-                    result, status=Status.DISCRETISATION_ERROR,
-                    message=f"the re-solve on the halved mesh failed: {fine.message}",
-                )  # fmt: skip
-            e_d = _change(result, fine, acc.safety)
-            bad = _worst(e_d, tol)
-            if bad is None:
-                break
-            if n_ref == acc.max_refinements:
-                return dataclasses.replace(
-                    result, status=Status.DISCRETISATION_ERROR,
-                    message=(f"discretisation error of {bad} estimated {e_d[bad]:.2e} > "
-                             f"tolerance {tol[bad]:.2e} after {acc.max_refinements} doublings "
-                             f"({result.mesh.n_intervals} intervals)"),
-                    errors=ErrorEstimates(e_d, {u: math.nan for u in e_d}, tol,
-                                          fine.mesh.n_intervals),
-                )  # fmt: skip
-            result = fine
-        prob_long, z_long = extended_landing(result, acc.T_factor)
-        long = _plain(prob_long, z_long, settings)
-        say(long)
-        if not long.success:
-            return dataclasses.replace(
-                result, status=Status.TRUNCATION_ERROR,
-                message=(f"the re-solve on T = {prob_long.mesh.T:.6g} failed ({long.message}): "
-                         "the truncation error cannot be estimated"),
-                errors=ErrorEstimates(e_d, {u: math.nan for u in e_d}, tol,
-                                      2 * result.mesh.n_intervals, prob_long.mesh.T),
-            )  # fmt: skip
-        e_T = _change(result, long, acc.safety)
-        errors = ErrorEstimates(e_d, e_T, tol, 2 * result.mesh.n_intervals, long.mesh.T)
-        bad = _worst(e_T, tol)
-        if bad is None:
-            return dataclasses.replace(
-                result, status=Status.SUCCESS, errors=errors,
-                message=(f"{result.message}; error estimates within tolerance "
-                         + ", ".join(f"{u}: {e_d[u]:.1e} (mesh) + {e_T[u]:.1e} (T)"
-                                     for u in e_d)),
-            )  # fmt: skip
-        if n_ext == acc.max_extensions:
-            return dataclasses.replace(
-                result, status=Status.TRUNCATION_ERROR, errors=errors,
-                message=(f"truncation error of {bad} estimated {e_T[bad]:.2e} > tolerance "
-                         f"{tol[bad]:.2e} at T = {result.T:.6g}: give a longer T"),
-            )  # fmt: skip
-        result = long
-    raise AssertionError("unreachable")  # pragma: no cover
 
 
 class ContinuedLanding:

@@ -27,9 +27,9 @@ from ..newton import NewtonResult, newton
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
 from ..typing import FloatArray
-from .accuracy import ConnectionAccuracy, extended_problem, refined_problem
+from .accuracy import ConnectionAccuracy, Resolves, controlled, extended_problem, refined_problem
 from .connection import HeteroclinicProblem, PinPhase, _replace_fast
-from .result import ConnectionResult, ErrorEstimates
+from .result import ConnectionResult
 from .simplified import JacobianCache, simplified_newton
 
 log = logging.getLogger(__name__)
@@ -257,16 +257,14 @@ def solve_connection(
             first = 0 if _already_adapted(guess, prob) else rounds
             last = [result]
             try:
-                result = _controlled(
+                result = controlled(
                     result,
                     accuracy,
+                    _resolves(settings, method, store),
                     rounds,
-                    settings,
-                    method,
                     progress,
                     last.append,
                     first,
-                    store,
                 )
             except KeyboardInterrupt:
                 result = last[-1]
@@ -301,149 +299,20 @@ def _plain(
     return _finish(prob, _newton_solve(prob, z0, settings, method, store), settings, method, store)
 
 
-def _changes(a: ConnectionResult, b: ConnectionResult, safety: float) -> dict[str, float]:
-    return {u: safety * abs(b.params[u] - a.params[u]) for u in a.free}
+def _resolves(
+    settings: NewtonSettings, method: str, store: dict[Any, JacobianCache] | None
+) -> Resolves:
+    """The re-solves of a connection for :func:`~continuation.bvp.accuracy.controlled`."""
 
+    def extend(result: ConnectionResult, T_factor: float) -> ConnectionResult:
+        prob_long, guess_long = extended_problem(result, T_factor)
+        return _plain(prob_long, guess_long, settings, method, store)
 
-def _worst(est: dict[str, float], tol: dict[str, float]) -> str | None:
-    bad = [u for u in est if not est[u] <= tol[u]]
-    return max(bad, key=lambda u: est[u] / max(tol[u], 1e-300)) if bad else None
-
-
-def _adapted(
-    result: ConnectionResult,
-    rounds: int,
-    settings: NewtonSettings,
-    method: str,
-    progress: Callable[[ConnectionResult], None] | None,
-    keep: Callable[[ConnectionResult], None],
-    store: dict[Any, JacobianCache] | None = None,
-) -> ConnectionResult:
-    """``rounds`` equidistribution solves; stop when the nodes no longer move."""
-    for _ in range(rounds):
-        old = result.mesh.nodes
-        new = _adapt_once(result, settings, method, store)
-        if new.success:
-            keep(new)
-        if progress is not None:
-            progress(new)
-        if not new.success:
-            return new
-        result = new
-        h = np.minimum(np.diff(old), np.diff(result.mesh.nodes))
-        move = np.abs(result.mesh.nodes - old)
-        if np.all(move[1:-1] <= 0.1 * np.minimum(h[:-1], h[1:])):
-            break
-    return result
-
-
-def _controlled(
-    result: ConnectionResult,
-    acc: ConnectionAccuracy,
-    rounds: int,
-    settings: NewtonSettings,
-    method: str,
-    progress: Callable[[ConnectionResult], None] | None,
-    keep: Callable[[ConnectionResult], None],
-    first_rounds: int | None = None,
-    store: dict[Any, JacobianCache] | None = None,
-) -> ConnectionResult:
-    """Adapt, refine and lengthen until both estimates meet ``acc`` (see solve_connection).
-
-    ``first_rounds``: adaptation rounds on the starting mesh (default ``rounds``).
-    """
-    for n_ext in range(acc.max_extensions + 1):
-        # ---- discretisation: adapt, halve, compare; double the intervals if needed
-        for n_ref in range(acc.max_refinements + 1):
-            k = rounds if (n_ext or n_ref or first_rounds is None) else first_rounds
-            result = _adapted(result, k, settings, method, progress, keep, store)
-            if not result.success:
-                return result
-            tol = {u: acc.tolerance(result.params[u]) for u in result.free}
-            fine = _plain(refined_problem(result), result, settings, method, store)
-            if progress is not None:
-                progress(fine)
-            if not fine.success:
-                return _with_status(
-                    result,
-                    Status.DISCRETISATION_ERROR,
-                    f"{Status.DISCRETISATION_ERROR.value} The re-solve on the halved mesh "
-                    f"({fine.mesh.n_intervals} intervals) failed: {fine.message}",
-                )
-            e_d = _changes(result, fine, acc.safety)
-            bad = _worst(e_d, tol)
-            if bad is None:
-                break
-            if n_ref == acc.max_refinements:
-                return dataclasses.replace(
-                    result,
-                    status=Status.DISCRETISATION_ERROR,
-                    message=(
-                        f"discretisation error of {bad} estimated {e_d[bad]:.2e} > tolerance "
-                        f"{tol[bad]:.2e} after {acc.max_refinements} doublings of the mesh "
-                        f"({result.mesh.n_intervals} intervals, degree {result.mesh.degree}):"
-                        " raise `max_refinements`, the degree or the starting intervals, or "
-                        "loosen rtol/atol"
-                    ),
-                    errors=ErrorEstimates(
-                        e_d, {u: math.nan for u in e_d}, tol, fine.mesh.n_intervals
-                    ),
-                )
-            log.info(
-                "discretisation estimate %.2e > %.2e: %d intervals",
-                e_d[bad],
-                tol[bad],
-                fine.mesh.n_intervals,
-            )
-            result = fine
-            keep(fine)
-        # ---- truncation: same resolution on a longer interval
-        prob_long, guess_long = extended_problem(result, acc.T_factor)
-        long = _plain(prob_long, guess_long, settings, method, store)
-        if progress is not None:
-            progress(long)
-        if not long.success:
-            return dataclasses.replace(
-                result,
-                status=Status.TRUNCATION_ERROR,
-                message=(
-                    f"{Status.TRUNCATION_ERROR.value} The re-solve on T = {prob_long.mesh.T:.6g}"
-                    f" failed ({long.message}): the truncation error cannot be estimated; "
-                    "check the saddles and the guess, or try a different T"
-                ),
-                errors=ErrorEstimates(
-                    e_d, {u: math.nan for u in e_d}, tol, fine.mesh.n_intervals, prob_long.mesh.T
-                ),
-            )
-        e_T = _changes(result, long, acc.safety)
-        errors = ErrorEstimates(e_d, e_T, tol, fine.mesh.n_intervals, long.mesh.T)
-        bad = _worst(e_T, tol)
-        if bad is None:
-            return dataclasses.replace(
-                result,
-                status=Status.SUCCESS,
-                message=(
-                    f"{result.message}; error estimates within tolerance "
-                    + ", ".join(f"{u}: {e_d[u]:.1e} (mesh) + {e_T[u]:.1e} (T)" for u in e_d)
-                ),
-                errors=errors,
-            )
-        if n_ext == acc.max_extensions:
-            return dataclasses.replace(
-                result,
-                status=Status.TRUNCATION_ERROR,
-                message=(
-                    f"truncation error of {bad} estimated {e_T[bad]:.2e} > tolerance "
-                    f"{tol[bad]:.2e} at T = {result.mesh.T:.6g} (after {acc.max_extensions} "
-                    f"extensions): give a longer T (about {long.mesh.T * acc.T_factor:.4g}) "
-                    "or raise `max_extensions`, or loosen rtol/atol"
-                ),
-                errors=errors,
-            )
-        log.info("truncation estimate %.2e > %.2e: T = %.6g", e_T[bad], tol[bad], long.mesh.T)
-        result = long
-        keep(long)
-    raise AssertionError("unreachable")  # pragma: no cover
+    return Resolves(
+        adapt=lambda r: _adapt_once(r, settings, method, store),
+        refine=lambda r: _plain(refined_problem(r), r, settings, method, store),
+        extend=extend,
+    )
 
 
 def _with_status(result: ConnectionResult, status: Status, message: str) -> ConnectionResult:
