@@ -67,7 +67,7 @@ import scipy.sparse as sp
 from ..casadi_compile import compilation_allowed, compiled
 from ..linalg import csc_with_data
 from ..typing import FloatArray
-from .collocation import CollocationMesh
+from .collocation import CollocationMesh, stage_points, stage_unknowns
 from .condense import StageCondenser
 
 
@@ -171,14 +171,8 @@ class ConnectionLayout:
         eliminates.
         """
         n, N, m = self.n, self.n_intervals, self.degree
-        stage = np.array(_stage_columns(N, m)).reshape(N, m)
-        cols = (stage[:, :, None] * n + np.arange(n)).reshape(N, m * n)
-        rows = np.arange(N * m * n).reshape(N, m * n)
-        return rows, cols
-
-
-def _stage_columns(N: int, m: int) -> list[int]:
-    return [j * (m + 1) + k for j in range(N) for k in range(1, m + 1)]
+        rows = np.arange(N * m * n).reshape(N, m * n)  # the collocation rows come first
+        return rows, stage_unknowns(n, N, m)
 
 
 def _derivative_matrix(N: int, m: int, D: FloatArray) -> sp.csc_matrix:
@@ -352,8 +346,7 @@ class ConnectionFunctions:
             x_from = w[sl["x_from"]]
             x_to = w[sl["x_to"]] if layout.separate_to else x_from + shift
 
-        stage_cols = _stage_columns(N, m)
-        Xs = X[:, stage_cols]
+        Xs = X[:, stage_points(N, m).tolist()]
         # h repeated for each stage: (1, N m)
         E = sp.kron(sp.eye(N), np.ones((1, m)), format="csc")
         h_rep = ca.mtimes(h.T, _to_dm(E))

@@ -83,6 +83,39 @@ def _uniform(n: int) -> FloatArray:
     return np.linspace(0.0, 1.0, n + 1)
 
 
+@functools.lru_cache(maxsize=32)
+def _leading(m: int) -> FloatArray:
+    """``m!`` times the leading coefficients of the Lagrange basis on ``(0, c_1..c_m)``."""
+    local = np.concatenate(([0.0], _gauss_tableau(m)[0]))
+    lead = np.array(
+        [1.0 / np.prod([local[l] - local[i] for i in range(m + 1) if i != l]) for l in range(m + 1)]
+    ) * float(np.prod(np.arange(1, m + 1)))
+    lead.setflags(write=False)
+    return lead
+
+
+def stage_points(n_intervals: int, degree: int) -> np.ndarray:
+    """Indices ``j (m + 1) + k`` (``k = 1..m``) of the collocation points, shape ``(N m,)``.
+
+    The points of every discretisation on a :class:`CollocationMesh` are ordered
+    interval by interval (:attr:`CollocationMesh.tau`); the unknowns of connections,
+    landings and periodic orbits hold their values point-major, ``z[q n + i]``.
+    """
+    m1 = degree + 1
+    return np.array([j * m1 + k for j in range(n_intervals) for k in range(1, m1)])
+
+
+def stage_unknowns(n: int, n_intervals: int, degree: int) -> np.ndarray:
+    """Positions of the stage unknowns of each interval in ``z``, shape ``(N, m n)``.
+
+    Row ``j`` lists ``q n + i`` for the ``m`` collocation points ``q`` of interval ``j``
+    (``z`` point-major, see :func:`stage_points`): the columns that the stage
+    condensation (:class:`~continuation.bvp.condense.StageCondenser`) eliminates.
+    """
+    stage = stage_points(n_intervals, degree).reshape(n_intervals, degree)
+    return (stage[:, :, None] * n + np.arange(n)).reshape(n_intervals, degree * n)
+
+
 @dataclass(frozen=True, eq=False)
 class CollocationMesh:
     r"""A collocation mesh on :math:`[0, 1]` with ``n_intervals`` intervals, degree ``m``.
@@ -294,18 +327,20 @@ class CollocationMesh:
         dX = (self.D @ blocks) / self.h[:, None, None]
         return dX.reshape(-1, X.shape[1])
 
+    @property
+    def leading(self) -> FloatArray:
+        """``m!`` times the leading Lagrange coefficients, shape ``(m + 1,)``.
+
+        The ``m``-th ``tau``-derivative of the polynomial of interval ``j`` is
+        ``leading @ X_j / h_j^m`` (``X_j`` its ``m + 1`` values, :meth:`highest_derivative`).
+        """
+        return _leading(self.degree)
+
     def highest_derivative(self, X: FloatArray) -> FloatArray:
         """The (constant) ``m``-th ``tau``-derivative of each interval polynomial, shape (N, n)."""
         X = np.asarray(X, dtype=float)
         m = self.degree
-        local = np.concatenate(([0.0], self.c))
-        # leading coefficient of the Lagrange basis times m!
-        lead = np.array(
-            [
-                1.0 / np.prod([local[l] - local[i] for i in range(m + 1) if i != l])
-                for l in range(m + 1)
-            ]
-        ) * float(np.prod(np.arange(1, m + 1)))
+        lead = self.leading
         m1 = m + 1
         blocks = X[: self.n_intervals * m1].reshape(self.n_intervals, m1, -1)  # (N, m+1, n)
         return (lead @ blocks) / self.h[:, None] ** m
@@ -382,4 +417,4 @@ class CollocationMesh:
         )
 
 
-__all__ = ["CollocationMesh", "MAX_DEGREE"]
+__all__ = ["CollocationMesh", "MAX_DEGREE", "stage_points", "stage_unknowns"]

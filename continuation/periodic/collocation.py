@@ -43,7 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._jit import compiled
-from ..bvp.collocation import CollocationMesh
+from ..bvp.collocation import CollocationMesh, stage_points, stage_unknowns
 from ..bvp.condense import KERNELS as _CONDENSE_KERNELS
 from ..bvp.condense import StageCondenser
 from ..casadi_compile import compiled_soon, settled
@@ -255,7 +255,7 @@ class CollocationLayout:
         self.n_unknowns = n * self.M + 1
         m1 = m + 1
         # stage point indices (N m,) in interval order
-        self.stage_points = np.array([j * m1 + k for j in range(N) for k in range(1, m1)])
+        self.stage_points = stage_points(N, m)
         # block pattern of the collocation rows: (N, m, m+1, n, n)
         j, k, l, i, ii = np.meshgrid(
             np.arange(N), np.arange(m), np.arange(m1), np.arange(n), np.arange(n), indexing="ij"
@@ -311,11 +311,10 @@ class CollocationLayout:
         indptr = np.searchsorted(ukey // size, np.arange(size + 1)).astype(np.int32)
         template = sp.csc_matrix((np.ones(ukey.size), indices, indptr), shape=(size, size))
         template.has_canonical_format  # noqa: B018  (flag checked once, shared)
-        # stage condensation: collocation rows and stage unknowns of interval j
-        base = np.arange(N)[:, None] * m1 * n
-        rows_s = base + np.arange(m * n)[None, :]
-        cols_s = base + n + np.arange(m * n)[None, :]
-        self.condenser = StageCondenser(rows_s, cols_s)
+        # stage condensation: collocation rows (interleaved with continuity) and stage
+        # unknowns of interval j
+        rows_s = np.arange(N)[:, None] * m1 * n + np.arange(m * n)[None, :]
+        self.condenser = StageCondenser(rows_s, stage_unknowns(n, N, m))
         template.condensed_lu = self.condenser.factor
         self._template = template
 

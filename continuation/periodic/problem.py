@@ -62,15 +62,10 @@ class _ErrorWeights:
         self.N, self.m1 = N, m + 1
         if N < 3:
             return
-        local = np.concatenate(([0.0], mesh.c))
         # m-th derivative of the interval polynomial: lead_l / h_j^m times X_{j,l}
-        # (leading Lagrange coefficients times m!, as CollocationMesh.highest_derivative)
-        lead = np.array(
-            [1.0 / np.prod([local[k] - local[i] for i in range(m + 1) if i != k])
-             for k in range(m + 1)]
-        ) * float(np.prod(np.arange(1, m + 1)))  # fmt: skip
+        # (CollocationMesh.leading, as CollocationMesh.highest_derivative)
         h = mesh.h
-        self.w = lead[None, :] / (h**m)[:, None]  # (N, m+1)
+        self.w = mesh.leading[None, :] / (h**m)[:, None]  # (N, m+1)
         mids = 0.5 * (mesh.nodes[:-1] + mesh.nodes[1:])
         # periodic differences (the cycle closes on itself)
         mp = np.concatenate([[mids[-1] - 1.0], mids, [mids[0] + 1.0]])
