@@ -48,12 +48,13 @@ import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..params import Params
+from ..status import Status
 from ..typing import FloatArray
 from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
@@ -68,6 +69,9 @@ from .connection import (
     _shift_vector,
     _solved_names,
 )
+
+if TYPE_CHECKING:
+    from .landing_solve import LandingResult
 
 #: Relative step of the central difference of ``x_0(s)`` when no derivative is given.
 FD_STEP = 1e-5
@@ -331,6 +335,38 @@ class LandingProblem:
         out["end_distance"] = float(np.linalg.norm(parts["X"][-1] - parts["x_end"]))
         out["riccati_norm"] = float(np.max(np.abs(parts["R"]))) if parts["R"].size else 0.0
         return out
+
+    def to_result(
+        self,
+        z: FloatArray,
+        s: float | None = None,
+        *,
+        status: Status = Status.SUCCESS,
+        message: str = "",
+        newton_iters: int = 0,
+        residual_norm: float | None = None,
+    ) -> LandingResult:
+        """Wrap ``z`` (at start parameter ``s``) as a :class:`LandingResult`."""
+        from .landing_solve import LandingResult
+
+        parts = self.unpack(z)
+        if residual_norm is None:
+            residual_norm = float(np.max(np.abs(self.residual(z, s))))
+        return LandingResult(
+            params=self.params.with_vector(self.param_vector(z)),
+            free=self.free,
+            s=self.s if s is None else float(s),
+            t=self.mesh.t,
+            x=np.array(parts["X"]),
+            x_eq=np.array(parts["x_end"]),
+            residual_norm=float(residual_norm),
+            mesh=self.mesh,
+            status=status,
+            message=message or status.value,
+            newton_iters=int(newton_iters),
+            z=np.array(z, dtype=float),
+            problem=self,
+        )
 
     # ------------------------------------------------------------------ starting data
     def initial_vector(self, guess: Any) -> FloatArray:

@@ -36,7 +36,6 @@ from typing import Any, Literal
 import numpy as np
 
 from ..errors import ConvergenceError
-from ..newton import NewtonResult, newton
 from ..params import Params
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
@@ -45,6 +44,7 @@ from .accuracy import ConnectionAccuracy, Resolves, controlled, extended_mesh, e
 from .collocation import CollocationMesh
 from .landing import LandingProblem
 from .result import ErrorEstimates
+from .solve import _finish, _newton_solve
 
 DEFAULT_NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=True)
 
@@ -117,43 +117,13 @@ class LandingResult:
         return float(np.linalg.norm(self.x[-1] - self.x_eq))
 
 
-def _to_result(prob: LandingProblem, z: FloatArray, status: Status, message: str,
-               iters: int, rn: float | None = None) -> LandingResult:  # fmt: skip
-    parts = prob.unpack(z)
-    if rn is None:
-        rn = float(np.max(np.abs(prob.residual(z))))
-    return LandingResult(
-        params=prob.params.with_vector(prob.param_vector(z)), free=prob.free, s=prob.s,
-        t=prob.mesh.t, x=np.array(parts["X"]), x_eq=np.array(parts["x_end"]),
-        residual_norm=float(rn), mesh=prob.mesh, status=status, message=message,
-        newton_iters=int(iters), z=np.array(z), problem=prob,
-    )  # fmt: skip
-
-
-def _newton(prob: LandingProblem, z0: FloatArray, settings: NewtonSettings) -> NewtonResult:
-    return newton(prob.residual, prob.jacobian, z0, settings)
-
-
 def _plain(prob: LandingProblem, z0: FloatArray, settings: NewtonSettings) -> LandingResult:
-    """One Newton solve, then a rebase (Schur basis at the solution) and a polish."""
-    res = _newton(prob, z0, settings)
-    if not res.converged:
-        return _to_result(prob, res.z, res.status, res.message, res.iterations, res.residual_norm)
-    try:
-        new, z = prob.rebased(res.z)
-    except ValueError as exc:
-        return _to_result(prob, res.z, Status.NEWTON_FAILED,
-                          f"converged, but not a valid landing: {exc}", res.iterations)  # fmt: skip
-    iters = res.iterations
-    rn = float(np.max(np.abs(new.residual(z))))
-    if rn > settings.tol:
-        res2 = _newton(new, z, settings)
-        iters += res2.iterations
-        if not res2.converged:
-            return _to_result(new, res2.z, res2.status, res2.message, iters)
-        z, rn = res2.z, res2.residual_norm
-    msg = f"converged in {iters} Newton iterations (|G|={rn:.2e})"
-    return _to_result(new, z, Status.SUCCESS, msg, iters, rn)
+    """One Newton solve, then a rebase (Schur basis at the solution) and a polish.
+
+    The connections' own steps (:func:`continuation.bvp.solve._finish`).
+    """
+    res = _newton_solve(prob, z0, settings)
+    return _finish(prob, res, settings, what="landing")  # type: ignore[no-any-return]
 
 
 def _adapt(result: LandingResult, settings: NewtonSettings) -> LandingResult:
@@ -368,7 +338,7 @@ def landing_at(branch: Any, index: int) -> LandingResult:
         raise ValueError(f"`index` {index} out of range for a branch of {n} points")
     z, s = np.asarray(branch.x[index], dtype=float), float(branch.p[index])
     new, z = prob.replace(s=s).rebased(z, s)
-    return _to_result(new, z, Status.SUCCESS, f"branch row {index}", 0)
+    return new.to_result(z, s, message=f"branch row {index}")
 
 
 __all__ = [

@@ -47,14 +47,29 @@ def _store_key(prob: HeteroclinicProblem) -> tuple[Any, ...]:
     return (prob.layout, float(mesh.T), np.asarray(mesh.nodes, dtype=float).tobytes())
 
 
+def _value(prob: Any) -> float | None:
+    """The value of the continuation parameter ``vary`` of a problem (None: none).
+
+    A landing has no ``vary`` (it is continued in its start parameter, which its
+    methods default to).
+    """
+    vary = getattr(prob, "vary", None)
+    return None if vary is None else float(prob.params[vary])
+
+
 def _newton_solve(
-    prob: HeteroclinicProblem,
+    prob: Any,
     z0: FloatArray,
     settings: NewtonSettings,
     method: str = "newton",
     store: dict[Any, JacobianCache] | None = None,
 ) -> NewtonResult:
-    p = prob.params[prob.vary] if prob.vary is not None else None
+    """Newton (or its simplified forms, ``method``) on ``prob.residual(z, p) = 0``.
+
+    ``prob`` is a :class:`HeteroclinicProblem` or a
+    :class:`~continuation.bvp.landing.LandingProblem` (the same collocation core).
+    """
+    p = _value(prob)
 
     def res(z: FloatArray) -> FloatArray:
         return prob.residual(z, p)
@@ -76,14 +91,19 @@ def _newton_solve(
 
 
 def _finish(
-    prob: HeteroclinicProblem,
+    prob: Any,
     res: NewtonResult,
     settings: NewtonSettings,
     method: str = "newton",
     store: dict[Any, JacobianCache] | None = None,
-) -> ConnectionResult:
-    """Rebase at a converged solution (one more Newton if needed) and wrap as a result."""
-    p = prob.params[prob.vary] if prob.vary is not None else None
+    what: str = "connection",
+) -> Any:
+    """Rebase at a converged solution (one more Newton if needed) and wrap as a result.
+
+    ``prob``: a connection or a landing (``what`` names it in the messages); the result
+    is its ``to_result``.
+    """
+    p = _value(prob)
     if not res.converged:
         return prob.to_result(
             res.z,
@@ -101,7 +121,7 @@ def _finish(
             p,
             status=Status.NEWTON_FAILED,
             newton_iters=res.iterations,
-            message=f"converged, but the solution is not a valid connection: {exc}",
+            message=f"converged, but the solution is not a valid {what}: {exc}",
         )
     rn = float(np.max(np.abs(new.residual(z, p))))
     iters = res.iterations
@@ -232,7 +252,7 @@ def solve_connection(
             prob, _newton_solve(prob, z0, settings, method, store), settings, method, store
         )
     except KeyboardInterrupt:
-        p = prob.params[prob.vary] if prob.vary is not None else None
+        p = _value(prob)
         result = prob.to_result(
             z0,
             p,
