@@ -717,7 +717,7 @@ def build_vessel_model(
             est[key] = _est(
                 prime[name],
                 "-",
-                "analogy: the ratio to the drift derivative of the same equation of "
+                "analogy: the ratio to the drift derivative (about G) of the same equation of "
                 f"{SON_NOMOTO_SOURCE} (ship_models.hydro.heel){out}",
             )
         else:
