@@ -89,3 +89,17 @@ def test_the_vessel_option_feeds_the_equations() -> None:
 def test_unknown_method_is_refused_by_name() -> None:
     with pytest.raises(VesselFileError, match="heel_derivatives_method"):
         _with_method("hirano")
+
+
+@pytest.mark.slow
+def test_heel_estimate_study_quick_path() -> None:
+    """studies/heel_estimate.py --quick: the estimate moves the crest fold at the paper's
+    Fn by about a degree but leaves the 10 deg threshold within its error estimate."""
+    from studies.heel_estimate import evaluate
+
+    zero = evaluate("none", quick=True)[0]
+    est = evaluate("son_nomoto_ratio", quick=True)[0]
+    assert est["N_phi_prime"] < 0.0 == zero["N_phi_prime"]
+    assert 0.3 < zero["crest_fold_deg"] - est["crest_fold_deg"] < 3.0
+    assert zero["mechanism"] == est["mechanism"] == "heteroclinic"
+    assert abs(est["Fn_threshold"] - zero["Fn_threshold"]) <= est["error"] + zero["error"]
