@@ -86,6 +86,20 @@ def test_the_vessel_option_feeds_the_equations() -> None:
     assert d.vessel.coefficient("hydrodynamics.N_phi_prime").status == "assumed"
 
 
+def test_leaving_the_reference_hull_form_is_logged_once(caplog) -> None:  # type: ignore[no-untyped-def]
+    from ship_models.estimation import build_vessel_model
+    from ship_models.validity import reset_reports
+
+    reset_reports()
+    v = _with_method("son_nomoto_ratio")
+    with caplog.at_level("WARNING", logger="ship_models.validity"):
+        build_vessel_model(v)
+        build_vessel_model(v)
+    hits = [r.getMessage() for r in caplog.records if "Son & Nomoto" in r.getMessage()]
+    assert len(hits) == 1
+    assert "L/B = 4.539" in hits[0] and "valid 5.167..8.612" in hits[0]
+
+
 def test_unknown_method_is_refused_by_name() -> None:
     with pytest.raises(VesselFileError, match="heel_derivatives_method"):
         _with_method("hirano")

@@ -43,9 +43,12 @@ height :math:`z_H` (Umeda 1999 Eq. 10 as modelled here). In the primes of
 ``Y'_phi = a_Y Y'_v``, ``N'_phi = a_N N'_v``, ``K'_phi = -a_K (z_H/d) Y'_v``.
 
 This is an ANALOGY, not a regression: it assumes the heeled hull's lift scales with
-its drift lift as on the container ship. Its validity range is that hull's form
-(:data:`SON_NOMOTO_HULL`); a fishing vessel (L/B ~ 4.5) lies outside it in L/B, and
-:func:`son_nomoto_heel_derivatives` says so in the returned ``outside`` list.
+its drift lift as on the container ship. Its validity range is taken as +-25 % about
+that hull's L/B, B/d and C_b (:data:`SON_NOMOTO_HULL`, :data:`SON_NOMOTO_BAND`; an
+assumption, since one hull defines no range); a fishing vessel (L/B ~ 4.5) lies
+outside it in L/B: :func:`son_nomoto_heel_derivatives` says so in the returned
+``outside`` list, and :func:`ship_models.estimation.build_vessel_model` logs it once
+(:mod:`ship_models.validity`).
 """
 
 from __future__ import annotations
@@ -64,6 +67,17 @@ SON_NOMOTO: dict[str, float] = {
 
 #: Form of the hull behind :data:`SON_NOMOTO` (L/B, B/d, C_b of SR 108).
 SON_NOMOTO_HULL: dict[str, float] = {"L/B": 175.0 / 25.4, "B/d": 25.4 / 8.5, "C_b": 0.559}
+
+#: Relative band about :data:`SON_NOMOTO_HULL` taken as the analogy's validity range
+#: (an assumption: one hull defines no range; +-25 % keeps to ships of that form).
+SON_NOMOTO_BAND = 0.25
+
+
+def son_nomoto_validity() -> dict[str, tuple[float, float]]:
+    """Validity range ``(low, high)`` of each hull-form ratio for the analogy."""
+    b = SON_NOMOTO_BAND
+    return {k: (v * (1.0 - b), v * (1.0 + b)) for k, v in SON_NOMOTO_HULL.items()}
+
 
 SON_NOMOTO_SOURCE = (
     "Son & Nomoto (1981), On the coupled motion of steering and rolling of a high-speed "
@@ -128,10 +142,10 @@ def son_nomoto_heel_derivatives(
             raise ValueError(f"`{name}` must be negative (a stable drift force), got {val}")
     a_Y, a_N, a_K = son_nomoto_ratios()
     outside = []
+    rng = son_nomoto_validity()
     for key, val in (("L/B", L_over_B), ("B/d", B_over_d), ("C_b", C_b)):
-        ref = SON_NOMOTO_HULL[key]
-        if abs(val / ref - 1.0) > 0.25:
-            outside.append(f"{key} {val:.3g} (SR 108: {ref:.3g})")
+        if not rng[key][0] <= val <= rng[key][1]:
+            outside.append(f"{key} {val:.3g} (SR 108: {SON_NOMOTO_HULL[key]:.3g})")
     return HeelDerivatives(
         Y_phi_prime=a_Y * Y_v_prime,
         N_phi_prime=a_N * N_v_prime,
@@ -142,9 +156,11 @@ def son_nomoto_heel_derivatives(
 
 __all__ = [
     "SON_NOMOTO",
+    "SON_NOMOTO_BAND",
     "SON_NOMOTO_HULL",
     "SON_NOMOTO_SOURCE",
     "HeelDerivatives",
     "son_nomoto_heel_derivatives",
     "son_nomoto_ratios",
+    "son_nomoto_validity",
 ]
