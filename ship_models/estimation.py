@@ -58,6 +58,13 @@ from .forces import ShipForces
 from .hydro.added_mass import lewis_sway_added_mass, soding_surge_added_mass
 from .hydro.curves import Polynomial1D, interpolating_spline
 from .hydro.diffraction import taylor_diffraction_ratio
+from .hydro.heel import (
+    SON_NOMOTO_BAND,
+    SON_NOMOTO_SOURCE,
+    HeelDerivatives,
+    son_nomoto_heel_derivatives,
+    son_nomoto_validity,
+)
 from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
@@ -83,6 +90,7 @@ from .hydro.upright import check_particulars
 from .hydro.upright import hydrostatics as offsets_hydrostatics
 from .hydro.waves import strip_waves
 from .validity import ValidityRange
+from .validity import report as report_validity
 from .vessel import Coefficient, VesselData, VesselFileError
 
 log = logging.getLogger(__name__)
@@ -691,16 +699,55 @@ def build_vessel_model(
         prime = derivatives_about_g(prime, a_ref / L)
         if J_zz_given:
             J_zz = J_zz + a_ref**2 * m_y  # parallel axes, no added-mass cross term
+    heel_est: HeelDerivatives | None = None
+    if v.heel_derivatives_method == "son_nomoto_ratio":
+        z_H_over_d = v.get("roll.z_H_over_d") + zeta_G / d_m  # lateral force below G
+        form = {"L/B": L / B, "B/d": B / d_m, "C_b": C_b}
+        heel_est = son_nomoto_heel_derivatives(
+            prime["Y_v_prime"],
+            prime["N_v_prime"],
+            z_H_over_d,
+            L_over_B=form["L/B"],
+            B_over_d=form["B/d"],
+            C_b=form["C_b"],
+        )
+        for key, (lo, hi) in son_nomoto_validity().items():
+            report_validity(
+                v.name,
+                ValidityRange(
+                    "heel derivatives (Son & Nomoto 1981 ratios, an analogy)",
+                    key,
+                    lo,
+                    hi,
+                    f"+-{SON_NOMOTO_BAND:.0%} of the container ship SR 108's {key}",
+                ),
+                form[key],
+                "this hull",
+            )
     for name in ("Y_phi_prime", "N_phi_prime", "K_phi_prime"):
         key = f"hydrodynamics.{name}"
         if v.has(key):
             prime[name] = v.get(key)
+        elif heel_est is not None:
+            prime[name] = float(getattr(heel_est, name))
+            out = (
+                "; outside its hull form: " + ", ".join(heel_est.outside)
+                if heel_est.outside
+                else ""
+            )
+            est[key] = _est(
+                prime[name],
+                "-",
+                "analogy: the ratio to the drift derivative (about G) of the same equation of "
+                f"{SON_NOMOTO_SOURCE} (ship_models.hydro.heel){out}",
+            )
         else:
             prime[name] = 0.0
             est[key] = _est(
                 0.0,
                 "-",
-                "heel-induced hydrodynamic force neglected (no regression for this hull form)",
+                "heel-induced hydrodynamic force neglected (no regression for this hull form; "
+                "vessel.heel_derivatives_method = 'son_nomoto_ratio' gives an analogy estimate)",
                 "assumed",
             )
     if v.has("rudder.f_alpha"):

@@ -80,6 +80,13 @@ RESISTANCE_METHODS = ("holtrop", "table")
 #: polynomial, cubic in J) or ``"curve"`` (the ``[curves] K_T`` table or polynomial).
 PROPELLER_METHODS = ("bseries_quadratic", "bseries", "curve")
 
+#: Heel-derivative estimates selectable by ``[vessel] heel_derivatives_method``:
+#: ``"none"`` (default; Y_phi = N_phi = K_phi = 0 unless given) or
+#: ``"son_nomoto_ratio"`` (the ratios of Son & Nomoto's 1981 captive-tested container
+#: ship applied to the hull's drift derivatives, an analogy:
+#: :mod:`ship_models.hydro.heel`).
+HEEL_METHODS = ("none", "son_nomoto_ratio")
+
 #: Hull types known to ``[vessel] hull_type`` (sets the validity range of the
 #: regressions, e.g. Holtrop & Mennen's Fn range for trawlers).
 HULL_TYPES = ("fishing_vessel", "merchant")
@@ -621,6 +628,7 @@ class VesselData(Mapping[str, Coefficient]):
         for key, allowed in (
             ("resistance_method", RESISTANCE_METHODS),
             ("propeller_method", PROPELLER_METHODS),
+            ("heel_derivatives_method", HEEL_METHODS),
             ("hull_type", HULL_TYPES),
         ):
             if key in meta and meta[key] not in allowed:
@@ -652,6 +660,11 @@ class VesselData(Mapping[str, Coefficient]):
     def propeller_method(self) -> str:
         """The selected open-water propeller model (``[vessel] propeller_method``)."""
         return str(self.meta.get("propeller_method", PROPELLER_METHODS[0]))
+
+    @property
+    def heel_derivatives_method(self) -> str:
+        """The selected heel-derivative estimate (``[vessel] heel_derivatives_method``)."""
+        return str(self.meta.get("heel_derivatives_method", HEEL_METHODS[0]))
 
     @property
     def wave_surge_model(self) -> str:
@@ -916,6 +929,7 @@ def load_vessel(path_or_name: str | Path) -> VesselData:
 __all__ = [
     "BREAKING_STEEPNESS",
     "Coefficient",
+    "HEEL_METHODS",
     "HULL_TYPES",
     "PROPELLER_METHODS",
     "RESISTANCE_METHODS",

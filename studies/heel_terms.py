@@ -2,10 +2,11 @@
 
 The paper's model has the heel-induced hydrodynamic sway force, yaw and roll moments
 (``Y_phi(u) phi``, ``N_phi(u) phi``, ``K_phi(u) phi``), measured for its ship by
-circular-motion tests (its refs. 2, 14). No estimate of them for this hull could be
-read here from a citable text (neither the paper's refs. 22-25 nor a regression for
-fishing vessels), so the default vessel keeps them at zero (status ``assumed``) and
-this study measures, instead of guessing them, how much they could matter: each prime
+circular-motion tests (its refs. 2, 14). No regression of them for this hull form
+could be read here from a citable text (neither the paper's refs. 22-25 nor one for
+fishing vessels), so the default vessel keeps them at zero (status ``assumed``; the one
+cited analogy estimate readable here, Son & Nomoto's 1981 ratios, is an option compared
+in ``studies/heel_estimate.py``) and this study measures how much they could matter: each prime
 (``Y'_phi = Y_phi / (rho/2 L d u^2)``, ``N'_phi = N_phi / (rho/2 L^2 d u^2)``,
 ``K'_phi = K_phi / (rho/2 L d^2 u^2)``, as in ``ship_models.vessel.SCHEMA``) is set
 to each value of a symmetric grid and
