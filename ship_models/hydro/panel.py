@@ -82,6 +82,7 @@ from continuation.typing import FloatArray
 
 from .hull import HullForm
 from .mesh import check_wetted_mesh, mesh_volume, offsets_panels
+from .mesh_hull import MeshHull, wetted_panels
 from .offsets import OffsetsError, OffsetsHull, hull_from_offsets, offsets_of_hull
 from .waves import WaveStrips, strip_waves
 
@@ -151,10 +152,16 @@ class PanelTable:
 def hull_mesh(hull: HullForm, *, nx: int = 40, nz: int = 8) -> tuple[FloatArray, FloatArray]:
     """The wetted-hull panels of a strip hull (checked closed and outward).
 
-    An :class:`~ship_models.hydro.offsets.OffsetsHull` is panelled directly; another
+    A :class:`~ship_models.hydro.mesh_hull.MeshHull` gives its own mesh clipped at the
+    calm waterline (triangles; ``nx``, ``nz`` unused). An
+    :class:`~ship_models.hydro.offsets.OffsetsHull` is panelled directly; another
     hull (the form-parameter strips) is first written as a table of offsets (81
     stations, 41 waterlines, :func:`~ship_models.hydro.offsets.offsets_of_hull`).
     """
+    if isinstance(hull, MeshHull):  # the hull's own closed mesh, clipped at the waterline
+        V, F = wetted_panels(hull)
+        check_wetted_mesh(V, F, source=hull.mesh_source)
+        return V, F
     if not isinstance(hull, OffsetsHull):
         table = offsets_of_hull(hull, 81, 41)
         hull = hull_from_offsets(
@@ -586,7 +593,8 @@ class PanelWaveBuilder:
     def __call__(self, inputs: WaveInputs) -> PanelWaves:
         strips = strip_waves(inputs)
         mesh_file = mesh_path(inputs.vessel)
-        if mesh_file is not None:  # the design tool's mesh, checked against the hull
+        if mesh_file is not None and not isinstance(inputs.hull, MeshHull):
+            # a panel mesh beside the offsets: the design tool's, checked against the hull
             V, F = read_hull_mesh(mesh_file, L=inputs.hull.L, volume=inputs.hull.volume)
         else:
             V, F = hull_mesh(inputs.hull, nx=self.nx, nz=self.nz)
