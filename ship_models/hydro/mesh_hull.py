@@ -376,7 +376,7 @@ def horizontal_cylinder_mesh(
     Zg = np.broadcast_to(np.append(ring_z, ring_z[0]), Xg.shape)
     V, T = _grid_mesh(Xg, Yg, Zg)
     parts_V, parts_T, nv = [V], [T], V.shape[0]
-    for x, flip in ((xs[0], False), (xs[-1], True)):
+    for x, flip in ((xs[0], True), (xs[-1], False)):
         c = np.array([[x, 0.0, z_axis]])
         ring = np.stack([np.full(n_around, x), ring_y, ring_z], axis=1)
         parts_V.append(np.concatenate([c, ring]))

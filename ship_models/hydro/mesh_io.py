@@ -231,14 +231,14 @@ def clean_closed_mesh(
     uniq, counts = np.unique(und, axis=0, return_counts=True)
     if np.any(counts == 1):
         a, b = uniq[np.argmax(counts == 1)]
-        mid = 0.5 * (V[a] + V[b])
+        mid = 0.5 * (V[a] + V[b]) + 0.0  # no -0
         raise MeshError(
             f"{name} is open: a free edge (a hole) at x = {mid[0]:.4g}, y = {mid[1]:.4g}, "
             f"z = {mid[2]:.4g} m; the hull must be a closed surface (bottom, sides, ends, deck)"
         )
     if np.any(counts > 2):
         a, b = uniq[np.argmax(counts > 2)]
-        mid = 0.5 * (V[a] + V[b])
+        mid = 0.5 * (V[a] + V[b]) + 0.0  # no -0
         raise MeshError(
             f"{name} is not a surface: an edge of {int(counts.max())} faces at x = "
             f"{mid[0]:.4g}, y = {mid[1]:.4g}, z = {mid[2]:.4g} m"
@@ -246,7 +246,7 @@ def clean_closed_mesh(
     _, dcount = np.unique(e, axis=0, return_counts=True)
     if np.any(dcount > 1):
         d = np.unique(e, axis=0)[np.argmax(dcount > 1)]
-        mid = 0.5 * (V[d[0]] + V[d[1]])
+        mid = 0.5 * (V[d[0]] + V[d[1]]) + 0.0
         raise MeshError(
             f"{name} has inconsistent normals: neighbouring faces are wound in opposite "
             f"senses (e.g. at x = {mid[0]:.4g}, y = {mid[1]:.4g}, z = {mid[2]:.4g} m)"
