@@ -42,6 +42,7 @@ names that origin (:func:`derivatives_about_g`).
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import inspect
 import logging
@@ -63,6 +64,7 @@ from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
 from .hydro.mesh_hull import MeshHull, hull_from_mesh
+from .hydro.mesh_io import is_wetted_surface, read_mesh_file
 from .hydro.offsets import OffsetsError, OffsetsHull, hull_from_offsets, read_offsets
 from .hydro.propeller import (
     Propeller,
@@ -148,9 +150,28 @@ def hull_mesh_path(v: VesselData) -> Path | None:
 
 
 def mesh_is_hull(v: VesselData) -> bool:
-    """Whether ``[vessel] hull_mesh`` is the hull (no ``hull_offsets``: strips,
-    hydrostatics, GZ and panels from the mesh) rather than the panel mesh only."""
-    return hull_mesh_path(v) is not None and offsets_path(v) is None
+    """Whether ``[vessel] hull_mesh`` is the hull (strips, hydrostatics, GZ and panels
+    from the mesh) rather than the panel mesh only.
+
+    The mesh is the hull unless the file also names ``hull_offsets`` or the mesh is a
+    wetted surface only (open, its free edges on the waterline: what panel codes use),
+    which serves the panel method beside the offsets or the particulars.
+    """
+    p = hull_mesh_path(v)
+    if p is None or offsets_path(v) is not None:
+        return False
+    if not p.is_file():
+        return True  # refused with the file's name when the hull is built
+    try:
+        stat = p.stat()
+        return not _wetted_only(str(p), stat.st_mtime_ns, stat.st_size)
+    except OffsetsError:
+        return True  # unreadable: refused in one line when the hull is built
+
+
+@functools.lru_cache(maxsize=32)
+def _wetted_only(path: str, mtime_ns: int, size: int) -> bool:
+    return is_wetted_surface(*read_mesh_file(path))
 
 
 def mesh_hull(v: VesselData) -> MeshHull:
@@ -406,11 +427,12 @@ def _file_wave_builder(vessel: VesselData) -> WaveForceBuilder:
     """The builder named by ``[vessel] wave_forces`` (default: Froude-Krylov strips)."""
     name = str(vessel.meta.get("wave_forces", WAVE_FORCE_MODELS[0]))
     if name == "froude_krylov_strips":
-        if vessel.meta.get("hull_mesh") and vessel.meta.get("hull_offsets"):
+        if vessel.meta.get("hull_mesh") and not mesh_is_hull(vessel):
             raise VesselFileError(
-                "`vessel.hull_mesh` is used by the panel method only: set `vessel.wave_forces` "
-                "to 'panel_fk_diffraction' or 'panel_fk' (the strips use the offsets or the "
-                "particulars)"
+                "`vessel.hull_mesh` is used by the panel method only (a wetted-surface mesh, "
+                "or a mesh beside `vessel.hull_offsets`): set `vessel.wave_forces` to "
+                "'panel_fk_diffraction' or 'panel_fk' (the strips use the offsets or the "
+                "particulars), or give a closed mesh of the whole hull"
             )
         return strip_waves
     if name in ("panel_fk_diffraction", "panel_fk"):

@@ -191,6 +191,34 @@ def test_wetted_panels_of_a_mesh_hull_are_closed_and_displace_it():
     assert mesh_volume(Vw, np.c_[F, F[:, 2]]) == pytest.approx(hydrostatics(mh).volume, rel=2e-2)
 
 
+def test_panel_froude_krylov_on_the_mesh_equals_its_strips():
+    """Capytaine's Froude-Krylov force on the mesh clipped at the waterline = the strips
+    sliced from the same mesh (no BEM solve): within 1 % (roll 2 %) on 1,600 panels and
+    second order (errors quarter) on refining."""
+    pytest.importorskip("capytaine")
+    from ship_models.hydro.panel import hull_mesh, panel_table
+
+    tab0 = wigley_offsets(L=L, B=B, T=T, D=D, n_stations=41, n_waterlines=11)
+    a = 0.5 / 9.2 * 1.5 * L
+    xi = np.linspace(0.0, 1.0, 64, endpoint=False)
+    errs = []
+    for r in (1, 2):
+        mh = hull_from_mesh(offsets_closed_mesh(tab0, L=L, D=D, d_f=T, d_a=T, refine=r), L=L, D=D)
+        Vw, F = hull_mesh(mh)
+        st = WaveStrips.from_hull(mh, x_G=0.0, zeta_G=-0.16, m22=np.zeros(mh.n_stations),
+                                  z_H=-1.3, rho=1025.0, g=9.80665, n_depth=8)  # fmt: skip
+        tab = panel_table(Vw, F, L=L, x_G=0.0, zeta_G=-0.16, rho=1025.0, g=9.80665,
+                          lambda_over_L=[1.5], chi_deg=[30.0], solve=False,
+                          cache=False)  # fmt: skip
+        ref = np.array([st.forces(s, 8.0, math.radians(30.0), 1 / 9.2, 1.5, lift=False)
+                        for s in xi])  # fmt: skip
+        got = np.array([[-a * np.real(tab.fk[n, 0, 0] * np.exp(2j * np.pi * s))
+                         for n in range(4)] for s in xi])  # fmt: skip
+        errs.append(np.abs(got - ref).max(axis=0) / np.abs(ref).max(axis=0))
+    assert np.all(errs[0] < [0.01, 0.01, 0.01, 0.02]), errs[0]
+    assert np.all(errs[0] / errs[1] > 3.0), errs
+
+
 # ------------------------------------------------------------------ bad input
 def _one_line(exc_info):
     msg = str(exc_info.value)

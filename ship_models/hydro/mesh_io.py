@@ -264,6 +264,28 @@ def clean_closed_mesh(
     return V[used], remap[T]
 
 
+def is_wetted_surface(V: FloatArray, T: IntArray, *, tol: float = 1e-6) -> bool:
+    """Whether a mesh is a wetted surface only: open, with every free edge on ``z = 0``.
+
+    Such a mesh (what panel codes use) serves the panel method but is no hull: it has
+    no topsides for the GZ curve.
+    """
+    V = np.asarray(V, dtype=float)
+    size = float(np.ptp(V, axis=0).max()) or 1.0
+    key = np.round(V / (1e-9 * size)).astype(np.int64)
+    _, inverse = np.unique(key, axis=0, return_inverse=True)
+    T = inverse.reshape(-1)[np.asarray(T)]
+    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
+    e = e[e[:, 0] != e[:, 1]]
+    uniq, counts = np.unique(e, axis=0, return_counts=True)
+    free = uniq[counts == 1]
+    if free.size == 0:
+        return False
+    Vm = np.zeros((int(inverse.max()) + 1, 3))
+    Vm[inverse.reshape(-1)] = V
+    return bool(np.all(np.abs(Vm[free][:, :, 2]) <= tol * size))
+
+
 def write_obj(V: FloatArray, faces: Any, path: str | Path, comment: str = "") -> Path:
     """Write a mesh as Wavefront OBJ (metres, 1-based indices), atomically.
 
@@ -303,6 +325,7 @@ __all__ = [
     "OWN_FORMATS",
     "clean_closed_mesh",
     "enclosed_volume",
+    "is_wetted_surface",
     "read_mesh_file",
     "triangle_areas",
     "write_obj",
