@@ -64,6 +64,7 @@ Capytaine is imported only here, and only when a table is computed (the optional
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
@@ -264,6 +265,63 @@ def panel_table(
         info["cached"] = True
         return PanelTable(lL, np.radians(chis), z["fk"], z["diffraction"], L, info)
     t0 = time.perf_counter()
+    with _one_blas_thread():
+        fk, dif = _solve_table(cpt, V, Fc, lL, chis, L=L, x_G=x_G, zeta_G=zeta_G, rho=rho, g=g,
+                               speed=speed, solve=solve, progress=progress)  # fmt: skip
+    info = {
+        "n_panels": int(Fc.shape[0]),
+        "forward_speed": speed,
+        "seconds": time.perf_counter() - t0,
+        "capytaine": cpt.__version__,
+        "key": key,
+        "cached": False,
+    }
+    if cache and solve:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + f".{os.getpid()}.tmp.npz")
+        np.savez(tmp, fk=fk, diffraction=dif, info=json.dumps(info))
+        tmp.replace(path)  # atomic: a concurrent reader sees all or nothing
+    return PanelTable(lL, np.radians(chis), fk, dif, L, info)
+
+
+def _one_blas_thread() -> contextlib.AbstractContextManager[Any]:
+    """BLAS limited to one thread for the table's small dense algebra.
+
+    The half-hull systems (a few hundred unknowns per symmetry block) are too small to
+    share: on the shared 2-core machine at load 5.7 one 320 x 320 complex LU took 300 ms
+    with two OpenBLAS threads and 9 ms with one, a matrix-vector product 16.5 ms against
+    0.05 ms (``benchmarks/README.md``, panel table). Capytaine's Green function keeps its
+    OpenMP threads.
+    """
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - a project dependency
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def _solve_table(
+    cpt: Any,
+    V: FloatArray,
+    Fc: Any,
+    lL: FloatArray,
+    chis: FloatArray,
+    *,
+    L: float,
+    x_G: float,
+    zeta_G: float,
+    rho: float,
+    g: float,
+    speed: float,
+    solve: bool,
+    progress: Callable[[int, int], None] | None,
+) -> tuple[Any, Any]:
+    """The complex amplitudes ``(fk, diffraction)``, shape ``(4, n_l, n_c)`` each.
+
+    All headings of one frequency are solved in sequence with one influence matrix and
+    its LU decomposition (Capytaine's engine keeps the last ones), so each wavelength
+    costs one Green-function evaluation and one factorisation.
+    """
     mesh = _mesh(cpt, V, Fc)
     body = cpt.FloatingBody(
         mesh=mesh, dofs=cpt.rigid_body_dofs(rotation_center=(x_G, 0.0, zeta_G)), name="hull"
@@ -292,20 +350,7 @@ def panel_table(
                     dif[n, i, j] = sign * shift * complex(res.forces[dof])
         if progress is not None:
             progress(i + 1, lL.size)
-    info = {
-        "n_panels": int(Fc.shape[0]),
-        "forward_speed": speed,
-        "seconds": time.perf_counter() - t0,
-        "capytaine": cpt.__version__,
-        "key": key,
-        "cached": False,
-    }
-    if cache and solve:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + f".{os.getpid()}.tmp.npz")
-        np.savez(tmp, fk=fk, diffraction=dif, info=json.dumps(info))
-        tmp.replace(path)  # atomic: a concurrent reader sees all or nothing
-    return PanelTable(lL, np.radians(chis), fk, dif, L, info)
+    return fk, dif
 
 
 def mesh_path(vessel: Any) -> Path | None:
