@@ -128,7 +128,7 @@ def test_form_parameter_hull_as_a_mesh_gives_the_strip_forces_of_the_offsets(sei
     """The purse seiner's form-parameter hull (trimmed 0.3 m by the stern) as offsets and
     as a closed mesh: the mesh's strips are sliced from it at 81 stations, so they carry
     the slicing's interpolation error on top of the triangles': forces within 0.3 %,
-    volume and waterplane within 0.1 %."""
+    hydrostatics within 0.1 %, GZ within 1 mm."""
     v = seiner.vessel
     g = v.get
     kw = dict(L=g("particulars.L_pp"), B=g("particulars.B"), D=g("particulars.D"),
@@ -140,9 +140,18 @@ def test_form_parameter_hull_as_a_mesh_gives_the_strip_forces_of_the_offsets(sei
     mh = hull_from_mesh((V, Tr), L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"],
                         B=kw["B"], C_b=kw["C_b"], lcb_aft=-kw["lcb"])  # fmt: skip
     a, b = hydrostatics(oh), hydrostatics(mh)
-    for k in ("volume", "A_wp", "I_T"):
+    for k in ("volume", "A_wp", "I_T", "BM", "KB"):
         assert getattr(b, k) == pytest.approx(getattr(a, k), rel=1e-3), k
+    # the mesh's x runs along the trimmed waterline, the table's along the baseline:
+    # the LCBs differ by KB sin(trim) (10 mm here) plus the triangles' O(h^2)
+    trim = (kw["d_a"] - kw["d_f"]) / kw["L"]
+    assert abs(b.lcb - a.lcb) < 1.5 * a.KB * trim
     assert mh.volume == pytest.approx(b.volume, rel=1e-3)  # strips vs exact mesh
+    # GZ at heel with free sinkage and trim: the mesh's own (clipped at the inclined
+    # waterplane) against the offsets' strip sections, within 1 mm (0.6 % of GZ_max)
+    ga = gz_curve(oh, 1.0, heel_step=math.radians(3.0))
+    gb = gz_curve(mh, 1.0, heel_step=math.radians(3.0))
+    np.testing.assert_allclose(gb.gz, ga.gz, atol=1e-3)
     w0 = seiner.forces.waves
     xi = np.linspace(0.0, 1.0, 16, endpoint=False)
     out = []

@@ -55,16 +55,20 @@ class MeshHull(OffsetsHull):
         Outward-wound triangles.
     mesh_source : str
         The file (or text) the mesh comes from.
+    d_mean : float
+        Mean draft (the particulars' ``(d_f + d_a)/2``, else the keel's depth): ``KB``
+        is above the baseline at midship, ``C_b`` on ``L B d_mean``.
     """
 
     vertices: FloatArray = field(default=None, repr=False)  # type: ignore[assignment]
     triangles: IntArray = field(default=None, repr=False)  # type: ignore[assignment]
     mesh_source: str = ""
+    d_mean: float = 0.0
 
     def mesh_hydrostatics(self) -> Hydrostatics:
-        """Upright hydrostatics of the mesh (exact), ``C_b`` on ``L B d``."""
+        """Upright hydrostatics of the mesh (exact), ``C_b`` on ``L B d_mean``."""
         return mesh_hydrostatics(self.vertices, self.triangles, L=self.L, B=self.B,
-                                 d_m=0.5 * (self.d_f + self.d_a))  # fmt: skip
+                                 d_m=self.d_mean or None)  # fmt: skip
 
 
 def section_chords(
@@ -226,6 +230,7 @@ def hull_from_mesh(
     hull = MeshHull(
         strips.L, strips.B, strips.D, strips.x, strips.w, strips.d, strips.b_wl, strips.n_exp,
         dict(strips.info), table, T0, T0, strips.n_gauss, V, T, src,
+        0.5 * (d_f + d_a) if d_f is not None and d_a is not None else T0,
     )  # fmt: skip
     if C_b is not None and B is not None and lcb_aft is not None and d_f is not None:
         assert d_a is not None

@@ -171,7 +171,8 @@ def mesh_hydrostatics(
     Returns
     -------
     Hydrostatics
-        ``KB`` above the keel's lowest point, ``lcb`` and ``lcf`` from the mesh origin
+        ``KB`` above the baseline at midship, i.e. ``z_B + d_m`` (without ``d_m``:
+        above the keel's lowest point), ``lcb`` and ``lcf`` from the mesh origin
         (midship), ``I_L`` about the centre of flotation; exact for the polyhedral hull.
     """
     ci = clipped_integrals(V, T, 0.0, 0.0)
@@ -182,6 +183,7 @@ def mesh_hydrostatics(
     lcf = ci.Cx / ci.A_wp
     I_L = ci.Cxx - ci.A_wp * lcf * lcf
     z_keel = float(V[:, 2].min())
+    KB = float(ci.centre[2]) + (d_m if d_m is not None else -z_keel)
     if L is None or B is None:
         wl = _waterline_points(V, T)
         L = float(np.ptp(wl[:, 0])) if L is None else L
@@ -190,7 +192,7 @@ def mesh_hydrostatics(
     return Hydrostatics(
         volume=ci.volume,
         lcb=float(ci.centre[0]),
-        KB=float(ci.centre[2]) - z_keel,
+        KB=KB,
         BM=I_T / ci.volume,
         A_wp=ci.A_wp,
         lcf=lcf,
