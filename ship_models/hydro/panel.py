@@ -619,9 +619,11 @@ class PanelWaveBuilder:
         Froude-Krylov + diffraction (default) or Froude-Krylov alone.
     nx, nz : int
         Panels along the hull and from keel to waterline (each side) of the mesh made
-        from the hull's offsets; a vessel file naming ``[vessel] hull_mesh`` gives its
-        own mesh instead (:func:`read_hull_mesh`, displacement checked against the
-        hull's within 2 %).
+        from the hull's offsets. A hull given by a closed mesh
+        (:class:`~ship_models.hydro.mesh_hull.MeshHull`) gives that mesh clipped at the
+        waterline; a vessel file naming ``[vessel] hull_mesh`` beside its offsets (or a
+        wetted-surface mesh) gives that mesh instead (:func:`read_hull_mesh`,
+        displacement checked against the hull's within 2 %).
     forward_speed_Fn : float or None
         Capytaine's low-speed option (default: zero speed).
     lambda_over_L, chi_deg : tuple of float
