@@ -60,8 +60,8 @@ class MeshHull(OffsetsHull):
         is above the baseline at midship, ``C_b`` on ``L B d_mean``.
     """
 
-    vertices: FloatArray = field(default=None, repr=False)  # type: ignore[assignment]
-    triangles: IntArray = field(default=None, repr=False)  # type: ignore[assignment]
+    vertices: FloatArray = field(default=None, repr=False)  # type: ignore[arg-type]
+    triangles: IntArray = field(default=None, repr=False)  # type: ignore[arg-type]
     mesh_source: str = ""
     d_mean: float = 0.0
 

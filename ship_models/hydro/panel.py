@@ -160,9 +160,9 @@ def hull_mesh(hull: HullForm, *, nx: int = 40, nz: int = 8) -> tuple[FloatArray,
     stations, 41 waterlines, :func:`~ship_models.hydro.offsets.offsets_of_hull`).
     """
     if isinstance(hull, MeshHull):  # the hull's own closed mesh, clipped at the waterline
-        V, F = wetted_panels(hull)
-        check_wetted_mesh(V, F, source=hull.mesh_source)
-        return V, F
+        V, Ft = wetted_panels(hull)
+        check_wetted_mesh(V, Ft, source=hull.mesh_source)  # type: ignore[arg-type]
+        return V, Ft  # type: ignore[return-value]
     if not isinstance(hull, OffsetsHull):
         table = offsets_of_hull(hull, 81, 41)
         hull = hull_from_offsets(
