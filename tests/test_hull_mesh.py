@@ -60,6 +60,10 @@ def test_box_hydrostatics_and_wall_sided_gz_are_exact_at_any_resolution(n):
     for k, v in exact.items():
         assert getattr(hs, k) == pytest.approx(v, rel=1e-12), k
     assert abs(hs.lcb) < 1e-12 * Lb and abs(hs.lcf) < 1e-12 * Lb
+    # a face lying in the waterplane (deck awash) is the waterplane, not wetted hull
+    awash = mesh_hydrostatics(*box_mesh(Lb, Bb, Db, Db, n))
+    assert awash.A_wp == pytest.approx(Lb * Bb, rel=1e-12)
+    assert awash.volume == pytest.approx(Lb * Bb * Db, rel=1e-12)
     GM = 0.6
     phi_lim = math.atan(2 * min(Tb, Db - Tb) / Bb)  # 31 deg
     gz = mesh_gz_curve(V, Tr, GM, heel_step=math.radians(2.0), phi_max=math.radians(60.0))

@@ -66,14 +66,14 @@ from .upright import Hydrostatics
 
 
 def clip_below(V: FloatArray, T: IntArray, n: FloatArray, h: float) -> FloatArray:
-    """The parts of the triangles where ``n . p <= h``, as triangles ``(m, 3, 3)``.
+    """The parts of the triangles where ``n . p < h``, as triangles ``(m, 3, 3)``.
 
     Winding (hence the outward normal) is kept: a triangle with one vertex below gives
     one triangle, with two below a quadrilateral split in two.
     """
     P = V[T]  # (n_t, 3, 3)
     s = P @ n - h  # (n_t, 3)
-    below = s <= 0.0
+    below = s < 0.0  # a face lying in the plane is the waterplane itself: not hull
     nb = below.sum(axis=1)
     out = [P[nb == 3]]
     for count in (1, 2):
@@ -206,7 +206,7 @@ def _waterline_points(V: FloatArray, T: IntArray, z: float = 0.0) -> FloatArray:
     """Points where the mesh's edges cross the plane ``z`` (the waterline), ``(m, 3)``."""
     e = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
     za, zb = V[e[:, 0], 2] - z, V[e[:, 1], 2] - z
-    m = (za <= 0) != (zb <= 0)
+    m = (za < 0) != (zb < 0)
     t = (za[m] / (za[m] - zb[m]))[:, None]
     return V[e[m, 0]] + t * (V[e[m, 1]] - V[e[m, 0]])
 
