@@ -108,7 +108,9 @@ def section_chords(
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (z[:, None] - za[None, :]) / (zb - za)[None, :]
         y = pts[None, :, 0, 0] + t * (pts[None, :, 1, 0] - pts[None, :, 0, 0])
-    y = np.sort(np.where(inside, y, np.nan), axis=1)
+    y = np.sort(np.where(inside, y, np.nan), axis=1)  # crossings first, NaN after
+    if y.shape[1] % 2:
+        y = np.concatenate([y, np.full((z.size, 1), np.nan)], axis=1)
     n = inside.sum(axis=1)
     name = f"mesh {source}" if source else "mesh"
     if np.any(n % 2):
