@@ -168,6 +168,30 @@ def test_form_parameter_hull_as_a_mesh_gives_the_strip_forces_of_the_offsets(sei
     assert np.all(err < 3e-3), err
 
 
+def test_heeled_equilibrium_keeps_the_displacement_with_free_or_fixed_trim(seiner):
+    """At heel the level (and, optionally, the trim) is solved so that the volume (and
+    the LCB) stay the upright ones; on the fore-aft asymmetric seiner hull the free trim
+    is not zero and moves GZ."""
+    from ship_models.hydro.mesh_hydrostatics import clipped_integrals, mesh_heeled_equilibrium
+
+    g = seiner.vessel.get
+    kw = dict(L=g("particulars.L_pp"), B=g("particulars.B"), D=g("particulars.D"),
+              d_f=g("particulars.d_f"), d_a=g("particulars.d_a"), C_b=g("particulars.C_b"),
+              lcb=-g("particulars.lcb_aft"), C_M=g("hull.C_M"), C_wp=g("hull.C_wp"))  # fmt: skip
+    tab = form_parameter_offsets(**kw, n_stations=41, n_waterlines=21)
+    V, Tr = offsets_closed_mesh(tab, L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"])
+    up = clipped_integrals(V, Tr, 0.0, 0.0)
+    phi = math.radians(40.0)
+    free = mesh_heeled_equilibrium(V, Tr, phi, up.volume, up.centre[0])
+    fixed = mesh_heeled_equilibrium(V, Tr, phi, up.volume, up.centre[0], free_trim=False)
+    assert free.converged and fixed.converged and fixed.theta == 0.0
+    for st in (free, fixed):
+        assert st.volume == pytest.approx(up.volume, rel=1e-10)
+    assert free.x_B == pytest.approx(up.centre[0], abs=1e-9 * kw["L"])
+    assert abs(free.theta) > 1e-4 and abs(fixed.x_B - up.centre[0]) > 1e-3
+    assert abs(free.y_B - fixed.y_B) + abs(free.zeta_B - fixed.zeta_B) > 1e-4
+
+
 # ------------------------------------------------------------------ files
 def test_mesh_files_round_trip_in_every_format(tmp_path):
     V, Tr = offsets_closed_mesh(wigley_offsets(L=L, B=B, T=T, D=D), L=L, D=D, d_f=T, d_a=T)
