@@ -42,6 +42,8 @@ names that origin (:func:`derivatives_about_g`).
 from __future__ import annotations
 
 import contextlib
+import functools
+import hashlib
 import inspect
 import logging
 import pickle
@@ -68,6 +70,8 @@ from .hydro.heel import (
 from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
+from .hydro.mesh_hull import MeshHull, hull_from_mesh
+from .hydro.mesh_io import is_wetted_surface, read_mesh_file
 from .hydro.offsets import OffsetsError, OffsetsHull, hull_from_offsets, read_offsets
 from .hydro.propeller import (
     Propeller,
@@ -142,9 +146,81 @@ def offsets_hull(v: VesselData) -> OffsetsHull:
     return hull
 
 
+def hull_mesh_path(v: VesselData) -> Path | None:
+    """The mesh file named by ``[vessel] hull_mesh`` (relative to the vessel file)."""
+    name = v.meta.get("hull_mesh")
+    if not name:
+        return None
+    p = Path(str(name))
+    if not p.is_absolute() and v.path:
+        p = Path(v.path).parent / p
+    return p
+
+
+def mesh_is_hull(v: VesselData) -> bool:
+    """Whether ``[vessel] hull_mesh`` is the hull (strips, hydrostatics, GZ and panels
+    from the mesh) rather than the panel mesh only.
+
+    The mesh is the hull unless the file also names ``hull_offsets`` or the mesh is a
+    wetted surface only (open, its free edges on the waterline: what panel codes use),
+    which serves the panel method beside the offsets or the particulars.
+    """
+    p = hull_mesh_path(v)
+    if p is None or offsets_path(v) is not None:
+        return False
+    if not p.is_file():
+        return True  # refused with the file's name when the hull is built
+    try:
+        stat = p.stat()
+        return not _wetted_only(str(p), stat.st_mtime_ns, stat.st_size)
+    except OffsetsError:
+        return True  # unreadable: refused in one line when the hull is built
+
+
+@functools.lru_cache(maxsize=32)
+def _wetted_only(path: str, mtime_ns: int, size: int) -> bool:
+    return is_wetted_surface(*read_mesh_file(path))
+
+
+def mesh_hull(v: VesselData) -> MeshHull:
+    """The hull of the vessel's ``[vessel] hull_mesh`` (a closed mesh), checked against
+    the particulars (drafts, C_b, l.c.b., B); VesselFileError naming the problem."""
+    p = hull_mesh_path(v)
+    if p is None:
+        raise VesselFileError("`vessel.hull_mesh`: the vessel has no mesh file")
+    try:
+        if not p.is_file():
+            raise OffsetsError(f"no mesh file {str(p)!r}")
+        digest = hashlib.sha256(p.read_bytes()).hexdigest()  # the key: the file's content
+        return _memo_call(
+            "mesh_hull",
+            _hull_from_mesh_file,
+            str(p),
+            digest,
+            L=v.get("particulars.L_pp"),
+            D=v.get("particulars.D"),
+            d_f=v.get("particulars.d_f"),
+            d_a=v.get("particulars.d_a"),
+            B=v.get("particulars.B"),
+            C_b=v.get("particulars.C_b"),
+            lcb_aft=v.get("particulars.lcb_aft"),
+            n_per_interval=2,
+            n_stations=max(41, int(v.get("hull.n_stations")) + 1),
+        )
+    except OffsetsError as exc:
+        raise VesselFileError(f"`vessel.hull_mesh`: {exc}") from None
+
+
+def _hull_from_mesh_file(path: str, digest: str, **kwargs: Any) -> MeshHull:
+    """:func:`hull_from_mesh` of a file whose content hashes to ``digest`` (cache key)."""
+    return hull_from_mesh(path, **kwargs)
+
+
 def _hull(v: VesselData, C_wp: float) -> HullForm:
     if offsets_path(v) is not None:
         return offsets_hull(v)
+    if mesh_is_hull(v):
+        return mesh_hull(v)
     return parametric_hull(
         L=v.get("particulars.L_pp"),
         B=v.get("particulars.B"),
@@ -359,11 +435,12 @@ def _file_wave_builder(vessel: VesselData) -> WaveForceBuilder:
     """The builder named by ``[vessel] wave_forces`` (default: Froude-Krylov strips)."""
     name = str(vessel.meta.get("wave_forces", WAVE_FORCE_MODELS[0]))
     if name == "froude_krylov_strips":
-        if vessel.meta.get("hull_mesh"):
+        if vessel.meta.get("hull_mesh") and not mesh_is_hull(vessel):
             raise VesselFileError(
-                "`vessel.hull_mesh` is used by the panel method only: set `vessel.wave_forces` "
-                "to 'panel_fk_diffraction' or 'panel_fk' (the strips use the offsets or the "
-                "particulars)"
+                "`vessel.hull_mesh` is used by the panel method only (a wetted-surface mesh, "
+                "or a mesh beside `vessel.hull_offsets`): set `vessel.wave_forces` to "
+                "'panel_fk_diffraction' or 'panel_fk' (the strips use the offsets or the "
+                "particulars), or give a closed mesh of the whole hull"
             )
         return strip_waves
     if name in ("panel_fk_diffraction", "panel_fk"):
@@ -417,6 +494,10 @@ def build_vessel_model(
         oh = offsets_hull(v)
         C_wp = oh.waterplane_area / (L * B)
         est["hull.C_wp"] = _est(C_wp, "-", f"waterplane area of the offsets {offsets_path(v)}")
+    elif mesh_is_hull(v):
+        mh = mesh_hull(v)
+        C_wp = offsets_hydrostatics(mh).A_wp / (L * B)
+        est["hull.C_wp"] = _est(C_wp, "-", f"waterplane area of the mesh {hull_mesh_path(v)}")
     else:
         C_wp = schneekluth_cwp(C_b)
         est["hull.C_wp"] = _est(
@@ -430,8 +511,9 @@ def build_vessel_model(
         S_f = v.get("particulars.S_f")
     else:
         S_f = S_hull
-        est["particulars.S_f"] = _est(S_f, "m^2", "girth integral of the parametric hull")
-    volume = hull.volume
+        est["particulars.S_f"] = _est(S_f, "m^2", "girth integral of the hull's sections")
+    # a mesh hull displaces its exact (polyhedral) volume; the strips agree to the slicing
+    volume = offsets_hydrostatics(hull).volume if isinstance(hull, MeshHull) else hull.volume
     if v.has("loading.mass"):
         mass = v.get("loading.mass")
     else:
@@ -440,7 +522,19 @@ def build_vessel_model(
     x_G = -lcb_aft  # G above B in calm water
 
     # ---- stability ------------------------------------------------------------
-    if v.has("stability.topside_height"):
+    if isinstance(hull, MeshHull):  # the mesh is the watertight envelope
+        topside = v.get("stability.topside_height") if v.has("stability.topside_height") else 0.0
+        if topside != 0.0:
+            raise VesselFileError(
+                f"`stability.topside_height` = {topside:g} m: a hull given by a mesh is its "
+                "own watertight envelope (model enclosed superstructures in the mesh); give 0 "
+                "or leave it out"
+            )
+        if not v.has("stability.topside_height"):
+            est["stability.topside_height"] = _est(
+                0.0, "m", f"the mesh {hull_mesh_path(v)} is the watertight envelope", "assumed"
+            )
+    elif v.has("stability.topside_height"):
         topside = v.get("stability.topside_height")
     else:
         topside = _memo_call("marginal_topside_height", marginal_topside_height, hull, GM)

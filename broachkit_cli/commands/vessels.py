@@ -15,7 +15,8 @@ status and source, including those the estimation pipeline fills (status
 exits with 1 and prints the error, which names the offending field.
 ``hydrostatics`` prints the hull's upright hydrostatics (volume, LCB, KB, BM,
 waterplane area and moments, from its offsets when the file names a
-``[vessel] hull_offsets`` table, else from the form-parameter hull), the GZ curve by
+``[vessel] hull_offsets`` table, from its closed mesh when it names a ``[vessel]
+hull_mesh`` instead, else from the form-parameter hull), the GZ curve by
 direct integration at heel, and the wave-force amplitudes of the vessel's wave-force
 model at its design wave for courses 0-60 deg.
 """
@@ -148,7 +149,7 @@ def hydrostatics_report(name: str) -> dict[str, Any]:
     import numpy as np
 
     from ship_models.contracts import wave_model_name
-    from ship_models.estimation import offsets_path
+    from ship_models.estimation import hull_mesh_path, mesh_is_hull, offsets_path
     from ship_models.hydro.upright import hydrostatics
     from ship_models.registry import get_vessel_data
 
@@ -170,9 +171,16 @@ def hydrostatics_report(name: str) -> dict[str, Any]:
             zip(("X_w", "Y_w", "N_w", "K_w"), np.abs(f).max(axis=0).tolist(), strict=True)
         )
     off = offsets_path(v)
+    mesh = hull_mesh_path(v) if mesh_is_hull(v) else None
+    if off is not None:
+        hull = str(off)
+    elif mesh is not None:
+        hull = f"{mesh} (closed mesh)"
+    else:
+        hull = "form-parameter hull of the particulars"
     return {
         "vessel": v.name,
-        "hull": str(off) if off is not None else "form-parameter hull of the particulars",
+        "hull": hull,
         "hydrostatics": hs.as_dict()
         | {"displacement_t": hs.volume * rho / 1000.0, "KM": hs.KB + hs.BM},
         "gz": {

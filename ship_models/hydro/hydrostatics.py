@@ -313,6 +313,11 @@ def gz_curve(
     phi_max : float
         Largest heel computed (rad); the sine fit needs the full range ``pi``.
 
+    A hull sliced from a closed mesh (:class:`~ship_models.hydro.mesh_hull.MeshHull`)
+    is integrated over the mesh itself, clipped at the inclined waterplane
+    (:func:`~ship_models.hydro.mesh_hydrostatics.mesh_gz_curve`), with no topside
+    extension (the mesh is the watertight envelope).
+
     Raises
     ------
     ValueError
@@ -320,6 +325,17 @@ def gz_curve(
     """
     if not GM > 0:
         raise ValueError(f"`GM` must be positive, got {GM}")
+    if getattr(hull, "triangles", None) is not None:  # a hull given by a closed mesh
+        if topside_height != 0.0:
+            raise ValueError(
+                "a hull given by a mesh is its own watertight envelope: the topside "
+                f"extension must be 0 (got {topside_height:g} m; model the superstructure "
+                "in the mesh instead)"
+            )
+        from .mesh_hydrostatics import mesh_gz_curve
+
+        return mesh_gz_curve(hull.vertices, hull.triangles, GM, heel_step=heel_step,  # type: ignore[attr-defined]
+                             n_terms=n_terms, phi_max=phi_max)  # fmt: skip
     poly = section_polygons(hull, n_side, topside_height)
     A, My, Mz, ch = clipped_moments(poly, 1.0, 0.0, np.zeros(hull.n_stations))
     V0 = float(hull.w @ A)

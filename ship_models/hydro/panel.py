@@ -64,6 +64,7 @@ Capytaine is imported only here, and only when a table is computed (the optional
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
@@ -82,6 +83,7 @@ from continuation.typing import FloatArray
 
 from .hull import HullForm
 from .mesh import check_wetted_mesh, mesh_volume, offsets_panels
+from .mesh_hull import MeshHull, wetted_panels
 from .offsets import OffsetsError, OffsetsHull, hull_from_offsets, offsets_of_hull
 from .waves import WaveStrips, strip_waves
 
@@ -151,10 +153,16 @@ class PanelTable:
 def hull_mesh(hull: HullForm, *, nx: int = 40, nz: int = 8) -> tuple[FloatArray, FloatArray]:
     """The wetted-hull panels of a strip hull (checked closed and outward).
 
-    An :class:`~ship_models.hydro.offsets.OffsetsHull` is panelled directly; another
+    A :class:`~ship_models.hydro.mesh_hull.MeshHull` gives its own mesh clipped at the
+    calm waterline (triangles; ``nx``, ``nz`` unused). An
+    :class:`~ship_models.hydro.offsets.OffsetsHull` is panelled directly; another
     hull (the form-parameter strips) is first written as a table of offsets (81
     stations, 41 waterlines, :func:`~ship_models.hydro.offsets.offsets_of_hull`).
     """
+    if isinstance(hull, MeshHull):  # the hull's own closed mesh, clipped at the waterline
+        V, Ft = wetted_panels(hull)
+        check_wetted_mesh(V, Ft, source=hull.mesh_source)  # type: ignore[arg-type]
+        return V, Ft  # type: ignore[return-value]
     if not isinstance(hull, OffsetsHull):
         table = offsets_of_hull(hull, 81, 41)
         hull = hull_from_offsets(
@@ -257,6 +265,63 @@ def panel_table(
         info["cached"] = True
         return PanelTable(lL, np.radians(chis), z["fk"], z["diffraction"], L, info)
     t0 = time.perf_counter()
+    with _one_blas_thread():
+        fk, dif = _solve_table(cpt, V, Fc, lL, chis, L=L, x_G=x_G, zeta_G=zeta_G, rho=rho, g=g,
+                               speed=speed, solve=solve, progress=progress)  # fmt: skip
+    info = {
+        "n_panels": int(Fc.shape[0]),
+        "forward_speed": speed,
+        "seconds": time.perf_counter() - t0,
+        "capytaine": cpt.__version__,
+        "key": key,
+        "cached": False,
+    }
+    if cache and solve:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + f".{os.getpid()}.tmp.npz")
+        np.savez(tmp, fk=fk, diffraction=dif, info=json.dumps(info))
+        tmp.replace(path)  # atomic: a concurrent reader sees all or nothing
+    return PanelTable(lL, np.radians(chis), fk, dif, L, info)
+
+
+def _one_blas_thread() -> contextlib.AbstractContextManager[Any]:
+    """BLAS limited to one thread for the table's small dense algebra.
+
+    The half-hull systems (a few hundred unknowns per symmetry block) are too small to
+    share: on the shared 2-core machine at load 5.7 one 320 x 320 complex LU took 300 ms
+    with two OpenBLAS threads and 9 ms with one, a matrix-vector product 16.5 ms against
+    0.05 ms (``benchmarks/README.md``, panel table). Capytaine's Green function keeps its
+    OpenMP threads.
+    """
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - a project dependency
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def _solve_table(
+    cpt: Any,
+    V: FloatArray,
+    Fc: Any,
+    lL: FloatArray,
+    chis: FloatArray,
+    *,
+    L: float,
+    x_G: float,
+    zeta_G: float,
+    rho: float,
+    g: float,
+    speed: float,
+    solve: bool,
+    progress: Callable[[int, int], None] | None,
+) -> tuple[Any, Any]:
+    """The complex amplitudes ``(fk, diffraction)``, shape ``(4, n_l, n_c)`` each.
+
+    All headings of one frequency are solved in sequence with one influence matrix and
+    its LU decomposition (Capytaine's engine keeps the last ones), so each wavelength
+    costs one Green-function evaluation and one factorisation.
+    """
     mesh = _mesh(cpt, V, Fc)
     body = cpt.FloatingBody(
         mesh=mesh, dofs=cpt.rigid_body_dofs(rotation_center=(x_G, 0.0, zeta_G)), name="hull"
@@ -285,20 +350,7 @@ def panel_table(
                     dif[n, i, j] = sign * shift * complex(res.forces[dof])
         if progress is not None:
             progress(i + 1, lL.size)
-    info = {
-        "n_panels": int(Fc.shape[0]),
-        "forward_speed": speed,
-        "seconds": time.perf_counter() - t0,
-        "capytaine": cpt.__version__,
-        "key": key,
-        "cached": False,
-    }
-    if cache and solve:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + f".{os.getpid()}.tmp.npz")
-        np.savez(tmp, fk=fk, diffraction=dif, info=json.dumps(info))
-        tmp.replace(path)  # atomic: a concurrent reader sees all or nothing
-    return PanelTable(lL, np.radians(chis), fk, dif, L, info)
+    return fk, dif
 
 
 def mesh_path(vessel: Any) -> Path | None:
@@ -567,9 +619,11 @@ class PanelWaveBuilder:
         Froude-Krylov + diffraction (default) or Froude-Krylov alone.
     nx, nz : int
         Panels along the hull and from keel to waterline (each side) of the mesh made
-        from the hull's offsets; a vessel file naming ``[vessel] hull_mesh`` gives its
-        own mesh instead (:func:`read_hull_mesh`, displacement checked against the
-        hull's within 2 %).
+        from the hull's offsets. A hull given by a closed mesh
+        (:class:`~ship_models.hydro.mesh_hull.MeshHull`) gives that mesh clipped at the
+        waterline; a vessel file naming ``[vessel] hull_mesh`` beside its offsets (or a
+        wetted-surface mesh) gives that mesh instead (:func:`read_hull_mesh`,
+        displacement checked against the hull's within 2 %).
     forward_speed_Fn : float or None
         Capytaine's low-speed option (default: zero speed).
     lambda_over_L, chi_deg : tuple of float
@@ -586,7 +640,8 @@ class PanelWaveBuilder:
     def __call__(self, inputs: WaveInputs) -> PanelWaves:
         strips = strip_waves(inputs)
         mesh_file = mesh_path(inputs.vessel)
-        if mesh_file is not None:  # the design tool's mesh, checked against the hull
+        if mesh_file is not None and not isinstance(inputs.hull, MeshHull):
+            # a panel mesh beside the offsets: the design tool's, checked against the hull
             V, F = read_hull_mesh(mesh_file, L=inputs.hull.L, volume=inputs.hull.volume)
         else:
             V, F = hull_mesh(inputs.hull, nx=self.nx, nz=self.nz)

@@ -66,8 +66,14 @@ def hydrostatics(hull: HullForm) -> Hydrostatics:
         I_L = \int 2 b_{wl} (x - LCF)^2 dx, \quad BM = I_T/\nabla
 
     (strip quadrature of the hull's stations; for an :class:`OffsetsHull` the section
-    integrals are exact for the bilinear surface).
+    integrals are exact for the bilinear surface). A hull sliced from a closed mesh
+    (:class:`~ship_models.hydro.mesh_hull.MeshHull`) gives the mesh's own hydrostatics,
+    integrated exactly over the clipped polyhedron
+    (:func:`~ship_models.hydro.mesh_hydrostatics.mesh_hydrostatics`).
     """
+    own = getattr(hull, "mesh_hydrostatics", None)
+    if callable(own):
+        return own()  # type: ignore[no-any-return]
     V = hull.volume
     A_wp = hull.waterplane_area
     lcf = float(hull.w @ (hull.x * 2.0 * hull.b_wl)) / A_wp
