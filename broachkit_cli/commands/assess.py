@@ -1,12 +1,13 @@
 """``broachkit assess``: IMO second-generation surf-riding/broaching criteria, Level 1 and 2.
 
-Level 1 and Level 2 of MSC.1/Circ.1627 2.6 for one vessel at its service Froude
-number, Level 2 both with Melnikov's threshold (the criterion as written) and with the
-exact threshold of the same surge equation (a connecting orbit continued over the wave
-cases), the operational limit Fn where C reaches R_SR, and with ``--out DIR`` the
-figures and the JSON (:mod:`ship_models.assessment`). The exact threshold runs as
-tasks of the sweep engine, on local processes (default), a Dask ``LocalCluster``
-(``--workers N``) or a running scheduler (``--scheduler``), as ``broachkit sweep``.
+Level 1 and Level 2 of the MSC.1/Circ.1627 surf-riding/broaching criterion for one
+vessel at its service Froude number, Level 2 both with Melnikov's threshold (the
+criterion's method) and with the exact threshold of the same surge equation (a
+connecting orbit continued over the wave cases), the operational limit Fn where C
+reaches R_SR, and with ``--out DIR`` the figures and the JSON
+(:mod:`ship_models.assessment`). The exact threshold runs as tasks of the sweep
+engine, on local processes (default), a Dask ``LocalCluster`` (``--workers N``) or a
+running scheduler (``--scheduler``), as ``broachkit sweep``.
 The scatter table ``W2`` (IACS Rec. 34, North Atlantic) is not shipped: give it with
 ``--scatter FILE`` (``docs/imo_assessment.md``); without it, C is given per sea state.
 """

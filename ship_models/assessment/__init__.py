@@ -1,9 +1,10 @@
 """IMO second-generation intact stability criteria for surf-riding/broaching.
 
-Level 1 and Level 2 of the Interim Guidelines MSC.1/Circ.1627 (2020), section 2.6
-(Explanatory Notes MSC.1/Circ.1652, 2023), on the vessels of broachkit, and beyond the
-standard: Level 2 with the exact surf-riding threshold of the same surge equation and
-the operational limit ``Fn``. Modules:
+Level 1 and Level 2 of the surf-riding/broaching criterion of the Interim Guidelines
+MSC.1/Circ.1627 (2020; Explanatory Notes MSC.1/Circ.1652, 2023; the criterion's own
+text could not be checked, see :mod:`~ship_models.assessment.standard`), on the
+vessels of broachkit, and beyond the standard: Level 2 with the exact surf-riding
+threshold of the same surge equation and the operational limit ``Fn``. Modules:
 
 * :mod:`~ship_models.assessment.standard`: the criterion's numbers (data file with
   sources) and the user's scatter table;

@@ -150,7 +150,7 @@ class Assessment:
                 "reason": self.level1.reason,
             },
             "level2": {
-                "melnikov": l2(self.level2_melnikov, "Melnikov (MSC.1/Circ.1627 2.6.3)"),
+                "melnikov": l2(self.level2_melnikov, "Melnikov (MSC.1/Circ.1627 Level 2)"),
                 "exact": l2(self.level2_exact, "exact heteroclinic connection (broachkit)"),
             },
             "threshold_comparison": self.comparison(),
