@@ -109,3 +109,21 @@ def test_cli_assess_runs_the_exact_grid_on_a_dask_cluster(tmp_path, capsys, swep
     with np.load(out / "assessment_grids.npz") as z:
         assert np.array_equal(z["Fn_cr_exact"], Fn)
     assert again["level2"]["exact"]["C_sea_state_max"] == doc["level2"]["exact"]["C_sea_state_max"]
+
+
+@pytest.mark.parametrize("lam", [1.05, 2.875])
+def test_error_estimate_covers_the_fixed_mesh_at_the_column_ends(lam):
+    """The rows of a column are solved on the mesh adapted at its middle steepness; at
+    the ends that mesh's error (up to a few 1e-6 in Fn here) exceeded the old estimate
+    (collocation at the start plus spline). Against cold adapted solves, no slack."""
+    from ship_models.assessment.exact import surf_riding_connection
+
+    st = load_standard()
+    surge = SurgeModel("purse_seiner")
+    g = exact_threshold_grid(surge, np.array([lam]), st.steepness)
+    assert g.complete and g.column_status[0] == "ok"
+    for j in (0, st.steepness.size - 1):
+        cold = surf_riding_connection(surge, float(st.steepness[j]), lam)
+        assert cold.success
+        err = abs(g.Fn_cr[0, j] - cold.value("Fn"))
+        assert err <= g.error[0, j] + cold.error("Fn"), (j, err, g.error[0, j])
