@@ -7,7 +7,8 @@ across the whole grid from one start. The two start each column from a different
 neighbour, so they agree cell by cell within the sum of their error estimates (an
 independent check of those estimates), not to rounding. The same tasks give the same
 table on every backend: in this process, and on a Dask ``LocalCluster`` through
-``broachkit assess --workers 2`` (as ``tests/test_sweep.py``, 2 worker processes).
+``broachkit assess --workers 1`` (a Dask ``LocalCluster`` of one worker process, as
+``tests/test_sweep.py`` does with two; one task here).
 """
 
 from __future__ import annotations
@@ -93,7 +94,7 @@ def test_cli_assess_runs_the_exact_grid_on_a_dask_cluster(tmp_path, capsys, swep
     pytest.importorskip("distributed")
     std = _small_standard(tmp_path / "small.toml")
     out = tmp_path / "out"
-    argv = ["assess", "--fn-service", "0.33", "--standard", str(std), "--workers", "2",
+    argv = ["assess", "--fn-service", "0.33", "--standard", str(std), "--workers", "1",
             "--out", str(out), "--json"]  # fmt: skip
     assert main(argv) == 0
     doc = json.loads(capsys.readouterr().out)
