@@ -98,7 +98,7 @@ def test_cli_assess_runs_the_exact_grid_on_a_dask_cluster(tmp_path, capsys, swep
             "--out", str(out), "--json"]  # fmt: skip
     assert main(argv) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["exact_grid"]["engine"].startswith("sweep (dask, 1 tasks")
+    assert doc["exact_grid"]["engine"].startswith("sweep (dask, 1 task of")
     assert doc["exact_grid"]["complete"]
     with np.load(out / "assessment_grids.npz") as z:
         Fn, err = z["Fn_cr_exact"], z["Fn_cr_exact_error"]
@@ -128,3 +128,9 @@ def test_error_estimate_covers_the_fixed_mesh_at_the_column_ends(lam):
         assert cold.success
         err = abs(g.Fn_cr[0, j] - cold.value("Fn"))
         assert err <= g.error[0, j] + cold.error("Fn"), (j, err, g.error[0, j])
+
+
+def test_cli_assess_bad_worker_count_is_one_line(capsys):
+    assert main(["assess", "--fn-service", "0.33", "--no-exact", "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "--workers" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

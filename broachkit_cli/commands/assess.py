@@ -169,7 +169,9 @@ def run(args: argparse.Namespace) -> int:
             "lambda_over_L": _floats("--broaching-lambda", args.broaching_lambda, 0.2, 10.0),
             "H_over_lambda": _floats("--broaching-steepness", args.broaching_steepness, 0.0, 1 / 7),
         }
-    sweep = _sweep_options(args, out) if args.exact else None
+    sweep = _sweep_options(args, out)  # checked also with --no-exact
+    if not args.exact:
+        sweep = None
     with StatusLine(enabled=not args.json) as status:
         a = assess(
             model, args.Fn, scatter=scatter, standard=standard, exact=args.exact,

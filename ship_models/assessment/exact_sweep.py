@@ -192,7 +192,8 @@ def exact_threshold_sweep(
         err[i0 : i0 + n] = _nan_none(v["error"])
         status[i0 : i0 + n] = list(v["column_status"])
         steps += int(v["steps"])
-    engine = f"sweep ({res.backend}, {len(keys)} tasks of {columns_per_task} wavelengths)"
+    tasks = f"{len(keys)} task{'s' if len(keys) != 1 else ''}"
+    engine = f"sweep ({res.backend}, {tasks} of {columns_per_task} wavelengths)"
     return ExactGrid(lam, s, Fn, err, status, steps, time.perf_counter() - t0, engine)
 
 
