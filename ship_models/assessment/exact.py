@@ -310,8 +310,11 @@ def _column(
     err[inside] = _spline_error(s, Fn, spline, steepness[inside])
     mesh_err, checked = _mesh_error(br)
     err[inside] += mesh_err
-    if not checked:
-        status += "; mesh error at the column's ends not estimated (a re-solve failed)"
+    if not checked:  # the estimate is incomplete: not an "ok" column
+        status = (
+            "error estimate incomplete: the mesh error at a column end could not be "
+            f"estimated (a re-solve failed); {status}"
+        )
     return out, err, len(br), status
 
 
@@ -352,9 +355,10 @@ def _mesh_error(br: Any) -> tuple[float, bool]:
     :func:`continuation.bvp.solve_connection` does (re-solve on the halved mesh and on
     ``1.5 T``, each change times 2), on the row's mesh as it is. The larger of the two
     ends is returned for the whole column: the start mesh fits the start best, so the
-    error grows with the distance from it (checked against cold adapted solves over the
-    standard grid, ``tests/test_assessment_exact.py``). When a row's estimate fails,
-    the next row inwards is tried (three at most per end).
+    error grows with the distance from it (checked against cold adapted solves at both
+    ends of a column, ``tests/test_assessment_sweep.py``, and at cells over the
+    standard grid, ``benchmarks/README.md``). When a row's estimate fails, the next row
+    inwards is tried (three at most per end).
 
     Returns
     -------
