@@ -1,12 +1,15 @@
 """``broachkit assess``: IMO second-generation surf-riding/broaching criteria, Level 1 and 2.
 
-Level 1 and Level 2 of MSC.1/Circ.1627 2.6 for one vessel at its service Froude
-number, Level 2 both with Melnikov's threshold (the criterion as written) and with the
-exact threshold of the same surge equation (a connecting orbit continued over the wave
-cases), the operational limit Fn where C reaches R_SR, and with ``--out DIR`` the
-figures and the JSON (:mod:`ship_models.assessment`). The scatter table ``W2`` (IACS
-Rec. 34, North Atlantic) is not shipped: give it with ``--scatter FILE``
-(``docs/imo_assessment.md``); without it, C is given per sea state.
+Level 1 and Level 2 of the MSC.1/Circ.1627 surf-riding/broaching criterion for one
+vessel at its service Froude number, Level 2 both with Melnikov's threshold (the
+criterion's method) and with the exact threshold of the same surge equation (a
+connecting orbit continued over the wave cases), the operational limit Fn where C
+reaches R_SR, and with ``--out DIR`` the figures and the JSON
+(:mod:`ship_models.assessment`). The exact threshold runs as tasks of the sweep
+engine, on local processes (default), a Dask ``LocalCluster`` (``--workers N``) or a
+running scheduler (``--scheduler``), as ``broachkit sweep``.
+The scatter table ``W2`` (IACS Rec. 34, North Atlantic) is not shipped: give it with
+``--scatter FILE`` (``docs/imo_assessment.md``); without it, C is given per sea state.
 """
 
 from __future__ import annotations
@@ -73,6 +76,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="dC/dtheta of the coefficients with a stated uncertainty (needs --scatter)",
     )
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--processes",
+        type=int,
+        default=None,
+        help="exact threshold on N local processes (default: $BROACHKIT_WORKERS, else one "
+        "per core)",
+    )
+    where.add_argument(
+        "--workers", type=int, default=None, help="exact threshold on a Dask LocalCluster of N"
+    )
+    where.add_argument(
+        "--scheduler", default=None, help="exact threshold on a Dask scheduler tcp://HOST:PORT"
+    )
+    where.add_argument(
+        "--serial", action="store_true", help="exact threshold in this process (debugging)"
+    )
     add_out(parser, None, "the figures and assessment.json")
     add_json(parser)
 
@@ -99,6 +119,25 @@ def _floats(name: str, text: str, low: float, high: float) -> list[float]:
     if not parts:
         raise ValueError(f"{name} needs at least one value")
     return [finite(name, t, low=low, high=high) for t in parts]
+
+
+def _sweep_options(args: argparse.Namespace, out: Path | None) -> dict[str, Any]:
+    """Where the exact threshold's tasks run (as ``broachkit sweep``); checkpoints in
+    ``OUT/checkpoints`` with ``--out`` (a rerun resumes)."""
+    from ..options import check_workers
+
+    opts: dict[str, Any] = {"vessel": args.vessel, "progress": False if args.json else None}
+    if out is not None:
+        opts["store"] = out / "checkpoints"
+    if args.scheduler:
+        opts["scheduler"] = args.scheduler
+    elif args.workers is not None:
+        opts.update(backend="dask", workers=check_workers(args.workers, "--workers"))
+    elif args.serial:
+        opts["backend"] = "serial"
+    else:
+        opts.update(backend="processes", workers=check_workers(args.processes, "--processes"))
+    return opts
 
 
 def run(args: argparse.Namespace) -> int:
@@ -130,10 +169,14 @@ def run(args: argparse.Namespace) -> int:
             "lambda_over_L": _floats("--broaching-lambda", args.broaching_lambda, 0.2, 10.0),
             "H_over_lambda": _floats("--broaching-steepness", args.broaching_steepness, 0.0, 1 / 7),
         }
+    sweep = _sweep_options(args, out)  # checked also with --no-exact
+    if not args.exact:
+        sweep = None
     with StatusLine(enabled=not args.json) as status:
         a = assess(
             model, args.Fn, scatter=scatter, standard=standard, exact=args.exact,
-            broaching=broaching, sensitivity=args.sensitivity, progress=status.show,
+            broaching=broaching, sensitivity=args.sensitivity, sweep=sweep,
+            progress=status.show,
         )  # fmt: skip
     doc = a.to_json()
     if out is not None:
@@ -154,6 +197,13 @@ def run(args: argparse.Namespace) -> int:
             f"{100 * cmp_['max_rel_difference']:.2f} % (at lambda/L "
             f"{cmp_['at_lambda_over_L']:.3f}, H/lambda {cmp_['at_H_over_lambda']:.4f}), below "
             f"exact in {100 * cmp_['fraction_melnikov_below_exact']:.0f} % of the cases"
+        )
+    eg = doc.get("exact_grid")
+    if eg is not None:
+        lines.append(
+            f"  exact threshold: {eg['engine']}, {eg['continuation_steps']} continuation "
+            f"steps, {doc['timings_s'].get('exact', float('nan')):.1f} s"
+            + ("" if eg["complete"] else f"; incomplete: {len(eg['columns_not_ok'])} columns")
         )
     if doc["validity"]["outside_resistance_fit"]:
         lines.append(

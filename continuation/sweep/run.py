@@ -220,11 +220,25 @@ def _cell(v: Any) -> Any:
     return v
 
 
-def _progress_bar(enabled: bool | None, total: int, initial: int, desc: str) -> Any:
-    from tqdm.auto import tqdm
+class _NoBar:
+    """The progress bar when there is none: ``update`` and ``close`` do nothing."""
 
+    def update(self, n: int = 1) -> None:
+        """Nothing to show."""
+
+    def close(self) -> None:
+        """Nothing to close."""
+
+
+def _progress_bar(enabled: bool | None, total: int, initial: int, desc: str) -> Any:
     if enabled is None:
         enabled = sys.stderr.isatty()
+    if not enabled:
+        # not a disabled tqdm: tqdm (4.70) starts its monitor thread even for one, and
+        # the thread outlives the bar, so a later fork in this process is refused
+        return _NoBar()
+    from tqdm.auto import tqdm
+
     return tqdm(
         total=total, initial=initial, desc=desc, unit="task", disable=not enabled,
         file=sys.stderr, dynamic_ncols=True, smoothing=0.1,

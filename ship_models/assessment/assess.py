@@ -23,6 +23,7 @@ from ..vessel import load_vessel
 from .broaching import BroachingLevel2, broaching_level2, rebin
 from .criteria import Level1Result, Level2Result, level1, level2, sea_state_weights
 from .exact import ExactGrid, exact_threshold_grid
+from .exact_sweep import exact_threshold_sweep
 from .melnikov import MelnikovGrid, melnikov_grid
 from .sensitivity import criterion_sensitivity
 from .sensitivity import to_json as sensitivity_json
@@ -149,7 +150,7 @@ class Assessment:
                 "reason": self.level1.reason,
             },
             "level2": {
-                "melnikov": l2(self.level2_melnikov, "Melnikov (MSC.1/Circ.1627 2.6.3)"),
+                "melnikov": l2(self.level2_melnikov, "Melnikov (MSC.1/Circ.1627 Level 2)"),
                 "exact": l2(self.level2_exact, "exact heteroclinic connection (broachkit)"),
             },
             "threshold_comparison": self.comparison(),
@@ -183,6 +184,7 @@ class Assessment:
             "exact_grid": (
                 {
                     "complete": self.exact.complete,
+                    "engine": self.exact.engine,
                     "continuation_steps": self.exact.steps,
                     "columns_not_ok": [
                         {"lambda_over_L": float(self.exact.lambda_over_L[i]), "status": s}
@@ -219,6 +221,7 @@ def assess(
     exact: bool = True,
     broaching: dict[str, Any] | None = None,
     sensitivity: bool = False,
+    sweep: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Assessment:
     """Level 1 and Level 2 (Melnikov and exact) for ``vessel`` at service ``Fn``.
@@ -242,8 +245,21 @@ def assess(
     sensitivity : bool
         Also ``dC/dtheta`` (Melnikov's ``C``) for the coefficients with a stated
         uncertainty (:mod:`~ship_models.assessment.sensitivity`; needs ``scatter``).
+    sweep : dict, optional
+        Compute the exact threshold on the sweep engine
+        (:func:`~ship_models.assessment.exact_sweep.exact_threshold_sweep`: local
+        processes, a Dask ``LocalCluster`` or scheduler) with these options:
+        ``backend``, ``workers``, ``scheduler``, ``store``, ``progress``,
+        ``retry_failed``, ``columns_per_task``, and ``vessel`` (the name or file the
+        workers rebuild the model from; default ``vessel`` when that is a name or a
+        file). Default: in this process (:func:`exact_threshold_grid`).
     progress : callable, optional
         Called with one-line progress messages.
+
+    Raises
+    ------
+    ValueError
+        A bad ``Fn``, or ``sweep`` without a vessel name or file for the workers.
     """
     if not (isinstance(Fn, (int, float)) and math.isfinite(Fn) and Fn > 0):
         raise ValueError(f"`Fn` must be a positive number, got {Fn!r}")
@@ -268,12 +284,25 @@ def assess(
     ex, l2e = None, None
     if exact:
         t = time.perf_counter()
-        ex = exact_threshold_grid(
-            model,
-            st.lambda_over_L,
-            st.steepness,
-            progress=lambda i, n: say(f"exact threshold: column {i} of {n}"),
-        )
+        if sweep is not None:
+            run = dict(sweep)
+            ref = run.pop("vessel", None)
+            if ref is None and not isinstance(vessel, SurgeModel):
+                ref = str(vessel)
+            if ref is None:
+                raise ValueError(
+                    "`sweep` needs the vessel's name or file (`sweep['vessel']`) for its "
+                    "workers when `vessel` is a model"
+                )
+            say("exact threshold over the wave cases on the sweep engine")
+            ex = exact_threshold_sweep(ref, st.lambda_over_L, st.steepness, **run)
+        else:
+            ex = exact_threshold_grid(
+                model,
+                st.lambda_over_L,
+                st.steepness,
+                progress=lambda i, n: say(f"exact threshold: column {i} of {n}"),
+            )
         timings["exact"] = time.perf_counter() - t
         l2e = level2(Fn, ex.Fn_cr, W, Hs, Tz, st, scatter)
     br = None

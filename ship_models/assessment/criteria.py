@@ -1,9 +1,12 @@
-r"""Level 1 and Level 2 of the surf-riding/broaching criterion (MSC.1/Circ.1627 2.6).
+r"""Level 1 and Level 2 of the surf-riding/broaching criterion (MSC.1/Circ.1627).
 
-Level 1 (2.6.2): a ship is not vulnerable if ``L >= 200 m`` or ``Fn <= 0.3``
+The section and paragraph numbers of the criterion in MSC.1/Circ.1627 could not be
+checked against its text, so none is cited (see :mod:`~ship_models.assessment.standard`).
+
+Level 1: a ship is not vulnerable if ``L >= 200 m`` or ``Fn <= 0.3``
 (:func:`level1`).
 
-Level 2 (2.6.3): with the critical Froude number ``Fn_cr(lambda_i, s_j)`` of each
+Level 2: with the critical Froude number ``Fn_cr(lambda_i, s_j)`` of each
 regular wave case (Melnikov's, :mod:`~ship_models.assessment.melnikov`, or the exact
 one, :mod:`~ship_models.assessment.exact`),
 
@@ -40,7 +43,7 @@ from .wave_weights import G_STANDARD, wave_case_weights
 
 @dataclass(frozen=True)
 class Level1Result:
-    """Level 1 verdict (2.6.2)."""
+    """Level 1 verdict."""
 
     vulnerable: bool
     reason: str

@@ -21,8 +21,10 @@ Over the grid it is continued, not solved cold (:func:`exact_threshold_grid`):
 3. along each column by pseudo-arclength continuation in ``H/lambda``
    (:func:`continuation.bvp.continue_connection`), the values at the grid steepnesses
    by a cubic spline through the branch rows; its error is estimated by the spline
-   through every other row (twice the spacing: about 16 times the error), reported
-   with the solves' own error estimate.
+   through every other row (twice the spacing: about 16 times the error; the largest
+   difference over the neighbouring row intervals, :func:`_spline_error`), reported
+   with the solves' own error estimates: the column start's, and that of the rows on
+   the start's mesh, estimated at the column's two ends (:func:`_mesh_error`).
 
 In gentle waves the connection ends: the crest saddle meets the stable surf-riding
 point in a saddle-node bifurcation *on* the overtaken orbit (a saddle-node loop, the
@@ -49,7 +51,9 @@ import scipy.integrate as si
 from scipy.interpolate import CubicSpline
 
 from continuation.bvp import (
+    ConnectionAccuracy,
     ConnectionResult,
+    connection_at,
     continue_connection,
     find_connection,
     solve_connection,
@@ -216,13 +220,18 @@ class ExactGrid:
     Fn_cr : ndarray, shape (n_lambda, n_s)
         NaN where the continuation did not reach the cell.
     error : ndarray, shape (n_lambda, n_s)
-        Error estimate: the column start's collocation estimate plus the spline's.
+        Error estimate: the column start's collocation estimate, plus that of the
+        rows on the start's mesh (at the column's ends), plus the spline's.
     column_status : list of str
         ``"ok"`` or why a column is (partly) missing.
     steps : int
         Continuation steps taken in all.
     seconds : float
         Wall time.
+    engine : str
+        Where it was computed: ``"in-process"`` (:func:`exact_threshold_grid`) or
+        the sweep engine's backend and task count
+        (:func:`~ship_models.assessment.exact_sweep.exact_threshold_sweep`).
     """
 
     lambda_over_L: FloatArray
@@ -232,6 +241,7 @@ class ExactGrid:
     column_status: list[str] = field(default_factory=list)
     steps: int = 0
     seconds: float = 0.0
+    engine: str = "in-process"
 
     @property
     def complete(self) -> bool:
@@ -297,10 +307,108 @@ def _column(
     inside = (steepness >= s[0]) & (steepness <= s[-1])
     spline = CubicSpline(s, Fn)
     out[inside] = spline(steepness[inside])
-    coarse = CubicSpline(s[::2], Fn[::2]) if s[::2].size >= 4 else None
-    if coarse is not None:
-        err[inside] = np.abs(coarse(steepness[inside]) - out[inside])
+    err[inside] = _spline_error(s, Fn, spline, steepness[inside])
+    mesh_err, checked = _mesh_error(br)
+    err[inside] += mesh_err
+    if not checked:  # the estimate is incomplete: not an "ok" column
+        status = (
+            "error estimate incomplete: the mesh error at a column end could not be "
+            f"estimated (a re-solve failed); {status}"
+        )
     return out, err, len(br), status
+
+
+#: The estimates of a branch row on its own mesh: no adaptation, no refinement, a
+#: tolerance nothing exceeds (so the estimates are reported, never acted on).
+_ROW_ESTIMATE = ConnectionAccuracy(
+    rtol=1.0, atol=1.0, adapt_rounds=0, max_refinements=0, max_extensions=0
+)
+
+
+def _spline_error(s: FloatArray, Fn: FloatArray, spline: CubicSpline, at: FloatArray) -> FloatArray:
+    """Error estimate of the spline through the branch rows at the points ``at``.
+
+    The spline through every other row (twice the spacing, about 16 times the error)
+    differs from the spline through all rows by about its own error. That difference
+    vanishes at the rows they share, so the estimate at a point is its largest value
+    (sampled at 8 points per row interval) over the row interval holding the point
+    and the two beside it. NaN with fewer than 7 rows (no coarse spline).
+    """
+    if s[::2].size < 4:
+        return np.full(at.shape, np.nan)
+    coarse = CubicSpline(s[::2], Fn[::2])
+    frac = (np.arange(8) + 0.5) / 8.0
+    dense = s[:-1, None] + frac[None, :] * np.diff(s)[:, None]  # (n_rows - 1, 8)
+    per_interval = np.max(np.abs(coarse(dense) - spline(dense)), axis=1)
+    padded = np.concatenate(([0.0], per_interval, [0.0]))
+    local = np.maximum(np.maximum(padded[:-2], padded[1:-1]), padded[2:])
+    k = np.clip(np.searchsorted(s, at, side="right") - 1, 0, s.size - 2)
+    return local[k]
+
+
+def _mesh_error(br: Any) -> tuple[float, bool]:
+    """Error of the column's rows on their fixed mesh, estimated at the column's two ends.
+
+    The rows of a continued connection are solved on the mesh of the column's start
+    (adapted at the start steepness) and carry no error estimates. At the lowest and
+    the highest steepness of the branch the row's own estimates are computed as
+    :func:`continuation.bvp.solve_connection` does (re-solve on the halved mesh and on
+    ``1.5 T``, each change times 2), on the row's mesh as it is. The larger of the two
+    ends is returned for the whole column: the start mesh fits the start best, so the
+    error grows with the distance from it (checked against cold adapted solves at both
+    ends of a column, ``tests/test_assessment_sweep.py``, and at cells over the
+    standard grid, ``benchmarks/README.md``). When a row's estimate fails, the next row
+    inwards is tried (three at most per end).
+
+    Returns
+    -------
+    (float, bool)
+        The error, and whether both ends were estimated.
+    """
+    order = np.argsort(np.asarray(br.p, dtype=float))
+    worst, both = 0.0, True
+    for rows in (order[:3], order[::-1][:3]):
+        for k in rows:
+            row = connection_at(br, int(k))
+            if row.problem is None or not np.isfinite(row.residual_norm):
+                continue
+            fixed = row.problem.replace(vary=None, reference=None)
+            est = solve_connection(fixed, (np.asarray(row.t), np.asarray(row.x)),
+                                   accuracy=_ROW_ESTIMATE)  # fmt: skip
+            if est.status is Status.INTERRUPTED:
+                raise KeyboardInterrupt
+            e = est.error("Fn") if est.success else math.nan
+            if np.isfinite(e):
+                worst = max(worst, e)
+                break
+        else:
+            both = False
+    return worst, both
+
+
+def _first_start(
+    model: SurgeModel, lam: FloatArray, i0: int, s_mid: float
+) -> tuple[ConnectionResult, int]:
+    """A cold start at the middle wavelength, else at the nearest one that has one.
+
+    Raises
+    ------
+    ValueError
+        When no wavelength of ``lam`` gives a connection at ``s_mid`` (the middle one's
+        reason).
+    """
+    first: ValueError | None = None
+    for i in sorted(range(lam.size), key=lambda k: (abs(k - i0), k)):
+        try:
+            res = surf_riding_connection(model, s_mid, float(lam[i]))
+        except ValueError as exc:
+            first = first or exc
+            continue
+        if res.success:
+            return res, i
+        first = first or ValueError(f"no connection at lambda/L = {lam[i]:g}: {res.message}")
+    assert first is not None
+    raise first
 
 
 def exact_threshold_grid(
@@ -322,7 +430,8 @@ def exact_threshold_grid(
         Increasing.
     start : ConnectionResult, optional
         A converged connection of ``model`` to start from (default: found at the middle
-        wavelength and steepness by :func:`surf_riding_connection`).
+        wavelength and steepness by :func:`surf_riding_connection`, or where that has
+        none, at the nearest wavelength that has one).
     ds_max : float, optional
         Largest continuation step (default 1/8 of the steepness range).
     progress : callable, optional
@@ -333,6 +442,12 @@ def exact_threshold_grid(
     ExactGrid
         A ``KeyboardInterrupt`` returns the columns finished so far (the others NaN,
         status ``"interrupted"``).
+
+    Raises
+    ------
+    ValueError
+        For a steepness grid that is not increasing, or when no wavelength has a
+        connection at the middle steepness to start from.
     """
     t0 = time.perf_counter()
     lam = np.asarray(lambda_over_L, dtype=float)
@@ -343,7 +458,7 @@ def exact_threshold_grid(
     i0 = lam.size // 2
     s_mid = float(s[s.size // 2])
     if start is None:
-        start = surf_riding_connection(model, s_mid, float(lam[i0]))
+        start, i0 = _first_start(model, lam, i0, s_mid)
     else:
         s_mid = float(start.params["H_over_lambda"])
         i0 = int(np.argmin(np.abs(lam - float(start.params["lambda_over_L"]))))

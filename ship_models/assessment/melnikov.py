@@ -1,6 +1,6 @@
 r"""The surf-riding threshold of the Level 2 criterion: Melnikov's closed form.
 
-MSC.1/Circ.1627 2.6.3 (Level 2) takes the critical Froude number ``Fn_cr`` of each
+The Level 2 criterion of MSC.1/Circ.1627 takes the critical Froude number ``Fn_cr`` of each
 regular wave from the uncoupled surge equation (the ``chi = 0`` reduction of Umeda
 1999, :class:`ship_models.surge.SurgeModel`), written relative to a wave crest moving at
 the celerity ``c``, :math:`u = c + \dot\xi`:
@@ -28,9 +28,10 @@ the work of the net thrust along it vanishes:
 :math:`I_R = \int R(u(\theta))\,d\theta` (:func:`melnikov_revolutions`; a quadratic in
 ``n`` with exactly one positive root when ``I_R > tau_2 I_2``, Sakai & Umeda 2024,
 arXiv:2407.11601). The critical nominal speed ``u_cr`` is the calm-water speed of that
-``n``: ``T(u_cr; n_cr) = R(u_cr)``, and ``Fn_cr = u_cr / sqrt(g L)``. The circular
-writes ``R`` as a polynomial ``sum_{k=1}^{5} r_k u^k`` so that ``I_R`` has the closed
-form of :func:`resistance_integral_polynomial`; here ``I_R`` is integrated from the
+``n``: ``T(u_cr; n_cr) = R(u_cr)``, and ``Fn_cr = u_cr / sqrt(g L)``. Written with a
+polynomial resistance ``sum_{k=1}^{K} r_k u^k`` (the form the criterion is described
+with; its degree in the circular was not checked against the text), ``I_R`` has the
+closed form of :func:`resistance_integral_polynomial`; here ``I_R`` is integrated from the
 vessel's own resistance curve by Gauss-Legendre quadrature
 (:func:`resistance_integral`, tested against the closed form for polynomials), so that
 Melnikov's threshold and the exact one (:mod:`ship_models.assessment.exact`) belong to
@@ -38,8 +39,10 @@ the same surge equation. For the torque-driven damped pendulum
 ``x'' + alpha x' + sin x = beta`` the same balance is ``beta = 4 alpha / pi``
 (:func:`pendulum_melnikov`).
 
-The paragraph numbers inside 2.6.3 are not cited: the circular's text could not be
-read when this module was written (see ``docs/imo_assessment.md``).
+No section, paragraph or equation number of the circular is cited: its
+surf-riding/broaching text could not be reached (what was checked:
+:mod:`ship_models.assessment.standard`), so the formulas here are those of the papers
+cited, not a transcription of the circular.
 """
 
 from __future__ import annotations
@@ -66,7 +69,7 @@ class ThrustCoefficients:
 
 
 def thrust_coefficients(F: ShipForces) -> ThrustCoefficients:
-    r"""Thrust polynomial of the surge equation (MSC.1/Circ.1627 2.6.3, thrust term).
+    r"""Thrust polynomial of the surge equation (the thrust term of the Level 2 criterion).
 
     From ``T = (1 - t_P) rho n^2 D^4 K_T(J)``, ``K_T = k0 + k1 J + k2 J^2``,
     ``J = (1 - w_P) u / (n D)``:
@@ -84,10 +87,11 @@ def froude_krylov_amplitude(F: ShipForces, lambda_over_L: FloatArray) -> FloatAr
 
     The linear Froude-Krylov surge force of the hull at its calm-water attitude at
     ``chi = 0`` is :math:`X_w = -\rho g a k\,[\sin k\xi_G\int\cos kx\,C\,dx +
-    \cos k\xi_G\int\sin kx\,C\,dx]` (:mod:`ship_models.hydro.waves`; the circular's
-    strip formula :math:`\rho g k (H/2)\sqrt{F_c^2 + F_s^2}` with
-    :math:`F_{c,s} = \sum S(x) e^{-k d(x)/2} \{\sin,\cos\} kx\,\Delta x` approximates
-    the section integral ``C(x)`` by the sectional area ``S`` at half the draft ``d``).
+    \cos k\xi_G\int\sin kx\,C\,dx]` (:mod:`ship_models.hydro.waves`). The strip formula
+    attributed to the criterion (from the literature, not checked against the text of
+    the circular), :math:`\rho g k (H/2)\sqrt{F_c^2 + F_s^2}` with
+    :math:`F_{c,s} = \sum S(x) e^{-k d(x)/2} \{\sin,\cos\} kx\,\Delta x`, approximates
+    the section integral ``C(x)`` by the sectional area ``S`` at half the draft ``d``.
     So ``f = sqrt(X_w(0)^2 + X_w(lambda/4)^2)``; it is evaluated by the vessel's own
     wave model (including ``wave_surge_scale`` and any diffraction factor), so that it
     is the force of the surge model, and divided by ``H``.
@@ -153,9 +157,9 @@ def cos_half_moment(m: int) -> float:
 
 
 def resistance_integral_polynomial(r: FloatArray, c: FloatArray, v0: FloatArray) -> FloatArray:
-    r"""Closed form of ``I_R`` for ``R(u) = sum_{k=1}^{K} r_k u^k`` (the circular's
-    polynomial resistance): binomial expansion of ``(c - v0 cos(theta/2))^k`` and the
-    moments :func:`cos_half_moment`.
+    r"""Closed form of ``I_R`` for ``R(u) = sum_{k=1}^{K} r_k u^k`` (a polynomial
+    resistance, the form the criterion is described with): binomial expansion of
+    ``(c - v0 cos(theta/2))^k`` and the moments :func:`cos_half_moment`.
 
     Parameters
     ----------

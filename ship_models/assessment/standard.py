@@ -1,18 +1,34 @@
 r"""The numbers of the surf-riding/broaching criterion and the user's scatter table.
 
 The IMO second-generation intact stability criteria for surf-riding/broaching
-(Interim Guidelines MSC.1/Circ.1627, 2020, section 2.6; Explanatory Notes
-MSC.1/Circ.1652, 2023) use
+(Interim Guidelines on the Second Generation Intact Stability Criteria,
+MSC.1/Circ.1627, 10 December 2020, chapter 2 "Guidelines on vulnerability criteria";
+Explanatory Notes, MSC.1/Circ.1652, 26 April 2023) use
 
-* Level 1 (2.6.2): not vulnerable if ``L >= 200 m`` or ``Fn <= 0.3``;
-* Level 2 (2.6.3): the wave-case grid of ``lambda/L`` and ``H/lambda``, the limit
-  ``R_SR`` on ``C``, and the sea states of a wave scatter table (IACS Recommendation
-  No. 34, North Atlantic).
+* Level 1: not vulnerable if ``L >= 200 m`` or ``Fn <= 0.3``;
+* Level 2: the wave-case grid of ``lambda/L`` and ``H/lambda``, the limit ``R_SR`` on
+  ``C``, and the sea states of a wave scatter table (IACS Recommendation No. 34,
+  North Atlantic).
 
-The first two come from ``ship_models/data/imo/surf_riding_level2.toml`` (every number
-with its source and status; the text of the circular could not be read when the file
-was written, so each is marked ``assumed``). The scatter table is **not shipped**: no
-citable public copy of IACS Rec. 34 could be reached, so it is a user file read by
+**What was checked against a citable text, and what was not** (searched again on
+2026-12-04). Reached: the title and date of MSC.1/Circ.1627 and the opening of its
+chapters 1 and 2 (the rendering at imorules.com): 1.1.1.1 names the five failure
+modes, 2.1 (Preface) lists the criteria of chapter 2 for dead ship condition,
+excessive acceleration, pure loss of stability, parametric rolling and
+surf-riding/broaching, and 2.2 is the dead ship condition; and the title page of
+MSC.1/Circ.1652 (26 April 2023; approved by MSC 105, prepared by SDC 8). Two papers
+confirm that the Level 2 criterion takes its surf-riding threshold from Melnikov's
+method (Maki, Sakai & Ueta 2024, arXiv:2406.12853; Sakai & Umeda 2024,
+arXiv:2407.11601). **Not reached**: the text of the surf-riding/broaching section
+itself. Its section number (listed last in 2.1, but the number was not seen), every
+paragraph or equation number inside it, and every number of the criterion (Level 1
+``L`` and ``Fn`` limits, ``R_SR``, the wave-case grid, the spectrum's constants) are
+therefore **not verified**: this package cites the section by its subject only, and
+each number is marked ``assumed`` in the data file below.
+
+The numbers come from ``ship_models/data/imo/surf_riding_level2.toml`` (every number
+with its source and status). The scatter table is **not shipped**: no citable public
+copy of IACS Rec. 34 could be reached, so it is a user file read by
 :func:`read_scatter_table` (format in its docstring and in ``docs/imo_assessment.md``).
 """
 
@@ -44,14 +60,14 @@ class StandardValue:
 
 @dataclass(frozen=True)
 class SurfRidingStandard:
-    """The numbers of MSC.1/Circ.1627 2.6 used by the assessment.
+    """The numbers of the MSC.1/Circ.1627 surf-riding/broaching criterion (module doc).
 
     Attributes
     ----------
     L_min, Fn_max : float
-        Level 1 (2.6.2): not vulnerable if ``L >= L_min`` or ``Fn <= Fn_max``.
+        Level 1: not vulnerable if ``L >= L_min`` or ``Fn <= Fn_max``.
     R_SR : float
-        Level 2 (2.6.3): not vulnerable if ``C <= R_SR``.
+        Level 2: not vulnerable if ``C <= R_SR``.
     lambda_over_L : ndarray, shape (n_lambda,)
         Wave-case wavelengths ``lambda_i / L``.
     steepness : ndarray, shape (n_s,)
@@ -196,7 +212,8 @@ def read_scatter_table(path: str | Path) -> ScatterTable:
     (a line ``# source: ...`` names the source), then a header row ``Hs\\Tz`` followed
     by the ``Tz`` class midpoints (s), then one row per ``Hs`` class midpoint (m) with
     the number of occurrences in each ``Tz`` class. Commas separate the fields.
-    IACS Rec. 34 (North Atlantic) as the circular asks is the intended content; it is
+    IACS Rec. 34 (North Atlantic), which the criterion asks for (issue 26; not checked
+    against the circular's text), is the intended content; it is
     not shipped with broachkit.
 
     Raises

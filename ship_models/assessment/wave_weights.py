@@ -1,6 +1,6 @@
 r"""Weights ``w_ij`` of the regular wave cases in one sea state (Longuet-Higgins 1983).
 
-The Level 2 surf-riding criterion (MSC.1/Circ.1627 2.6.3) replaces an irregular sea
+The Level 2 surf-riding criterion (MSC.1/Circ.1627) replaces an irregular sea
 state ``(Hs, Tz)`` by regular waves of local height ``H`` and length ``lambda`` with
 the probability of the joint distribution of local wave height and period of
 M.S. Longuet-Higgins (1983), "On the joint distribution of wave periods and amplitudes
@@ -17,9 +17,10 @@ period ``tau = T / T01`` (``T01 = 2 pi m0 / m1``) and the spectral width
 ``nu = sqrt(m0 m2 / m1^2 - 1)``. For the two-parameter (Bretschneider / ITTC)
 spectrum :math:`S(\omega) \propto \omega^{-5} e^{-B\omega^{-4}}` the moments give
 ``T01 / Tz = sqrt(Gamma(1/2)) / Gamma(3/4) = 1.0864`` and ``nu = 0.4247``
-(:func:`bretschneider_period_ratio`, :func:`spectral_width`; the circular's rounded
-0.425 is this number). The local wavelength follows from the deep-water dispersion
-relation ``lambda = g T^2 / (2 pi)``.
+(:func:`bretschneider_period_ratio`, :func:`spectral_width`; derived here from the
+spectrum, not taken from the circular, whose constants could not be checked against
+its text: see :mod:`ship_models.assessment.standard`). The local wavelength follows
+from the deep-water dispersion relation ``lambda = g T^2 / (2 pi)``.
 
 The cell weight of the wave case ``(lambda_i/L, s_j = H/lambda)`` is the density in
 ``(lambda/L, s)`` times the cell area (midpoint rule), :func:`wave_case_weights`. The
@@ -152,7 +153,7 @@ def wave_case_weights(
     *,
     g: float = G_STANDARD,
 ) -> FloatArray:
-    r"""Weights ``w_ij`` of the wave cases (MSC.1/Circ.1627 2.6.3; midpoint rule of the
+    r"""Weights ``w_ij`` of the wave cases (Level 2; midpoint rule of the
     Longuet-Higgins density over the cell of each grid point).
 
     Parameters
