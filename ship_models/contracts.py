@@ -181,6 +181,14 @@ class VesselModel(Protocol):
         """Index of a state name."""
         ...
 
+    def state_index(self, name: str) -> int:
+        """Index of a state name; ValueError listing the valid names."""
+        ...
+
+    def param_index(self, name: str) -> int:
+        """Index of a parameter name; ValueError listing the valid names."""
+        ...
+
     def check_params(self, params: Any, name: str = "params") -> FloatArray:
         """Parameters as a checked array in ``param_names`` order."""
         ...
