@@ -201,6 +201,10 @@ class VesselModel(Protocol):
         """Jacobian ``df/dx``, shape (n, n)."""
         ...
 
+    def as_params(self, p: Any = None, name: str = "params") -> Params:
+        """Named parameters from a Params, mapping or array (None: the defaults), checked."""
+        ...
+
     def params(self, **values: float) -> Params:
         """Parameters with the model's defaults, some replaced."""
         ...
