@@ -16,7 +16,6 @@ from continuation import (
     SpecialKind,
     Status,
     System,
-    _jit,
     continue_equilibria,
     simulate,
 )
@@ -576,13 +575,15 @@ def test_numpy_only_system():
 
 
 @pytest.mark.parametrize("n", [2, 3, 4])
-def test_compiled_floquet_kernels_match_numpy(n, monkeypatch):
-    # the deflation of the trivial multiplier and the stage solves of the transfer
-    # matrices, compiled, against the NumPy code on the same data (a rotation-like
-    # product with f along the flow, perturbed, so that every block is exercised)
+def test_compiled_floquet_kernels(n):
+    # the deflation of the trivial multiplier (compiled; Numba is required) on transfer
+    # matrices built with a known answer: Phi_j = Q_{j+1} A_j Q_j^T with Q_j orthonormal,
+    # first column f_j / |f_j|, and A_j = [[r_j, b_j], [0, C_j]], so that the trivial
+    # multiplier is prod r_j and the others are the eigenvalues of C_{N-1} ... C_0
+    # (exactly, no coupling to neglect); then the stage solves of the transfer matrices
+    # against NumPy's solver
     import importlib
 
-    import continuation.bvp.condense as cd
     from continuation.bvp import _condense_jit
 
     fq = importlib.import_module("continuation.periodic.floquet")  # (the package exports
@@ -590,31 +591,73 @@ def test_compiled_floquet_kernels_match_numpy(n, monkeypatch):
 
     rng = np.random.default_rng(n)
     N = 12
-    Phi = np.eye(n)[None] + 0.1 * rng.standard_normal((N, n, n))
     f_nodes = rng.standard_normal((N + 1, n))
-    assert _jit.compiled(fq.KERNELS) is not None  # Numba is a dependency: compiled
+    f_nodes[N] = f_nodes[0]  # (a closed cycle)
+    Q = []
+    for j in range(N):
+        q, _ = np.linalg.qr(np.column_stack([f_nodes[j], rng.standard_normal((n, n - 1))]))
+        Q.append(q * np.sign(q[:, 0] @ f_nodes[j]))  # first column +f_j / |f_j|
+    Q.append(Q[0])
+    r = 1.0 + 0.1 * rng.standard_normal(N)
+    C = np.eye(n - 1)[None] + 0.1 * rng.standard_normal((N, n - 1, n - 1))
+    Phi = np.empty((N, n, n))
+    for j in range(N):
+        A = np.zeros((n, n))
+        A[0, 0], A[0, 1:], A[1:, 1:] = r[j], rng.standard_normal(n - 1), C[j]
+        Phi[j] = Q[j + 1] @ A @ Q[j].T
+    prod_C = functools.reduce(lambda acc, c: c @ acc, C, np.eye(n - 1))
     got = fq.floquet(Phi, f_nodes)
-    monkeypatch.setitem(_jit.LOADED, fq.KERNELS, None)
-    ref = fq.floquet(Phi, f_nodes)
-    np.testing.assert_allclose(np.sort_complex(got.multipliers), np.sort_complex(ref.multipliers),
-                               rtol=1e-12, atol=1e-14)  # fmt: skip
-    assert got.trivial == pytest.approx(ref.trivial, rel=1e-12)
-    assert got.trivial_error == pytest.approx(ref.trivial_error, rel=1e-10)
+    np.testing.assert_allclose(np.sort_complex(got.multipliers),
+                               np.sort_complex(np.linalg.eigvals(prod_C)),
+                               rtol=1e-10, atol=1e-12)  # fmt: skip
+    assert got.trivial == pytest.approx(np.prod(r), rel=1e-12)
+    assert got.trivial_error == pytest.approx(abs(np.prod(r) - 1), rel=1e-6)
     K = rng.standard_normal((N, 4 * n, 4 * n)) + 4 * np.eye(4 * n)
     R = rng.standard_normal((N, 4 * n, n))
     X = np.empty_like(R)
-    assert _jit.compiled(cd.KERNELS) is _condense_jit
     assert _condense_jit.solve_many(K.copy(), R, X)
     np.testing.assert_allclose(X, np.linalg.solve(K, R), rtol=1e-12, atol=1e-13)
     K[3, :, 2] = 0.0  # a singular block is reported, not solved
     assert not _condense_jit.solve_many(K.copy(), R, X)
 
 
+def _collocation_residual(prob, s, z, p):
+    """The periodic collocation equations written out interval by interval (the
+    reference of the compiled kernel): ``sum_l D[k,l] X_{j,l} / h_j - T f(X_{j,k+1})``,
+    continuity ``sum_l e_l X_{j,l} - x_{j+1}``, periodicity ``x_N - x_0 - shift`` and
+    the integral phase condition."""
+    lay = prob.layout
+    N, m, n = lay.N, lay.m, lay.n
+    D, e, h = lay.mesh.D, lay.mesh.e, lay.mesh.h
+    X, T = lay.split(z)
+    pv = np.array(prob.params.values)
+    pv[prob.params.index(prob.free)] = p
+    G = np.zeros(lay.n_unknowns)
+    row = 0
+    for j in range(N):
+        Xj = X[j * (m + 1) : (j + 1) * (m + 1) + 1]
+        for k in range(m):
+            G[row : row + n] = sum(D[k, l] * Xj[l] for l in range(m + 1)) / h[j] - T * s.f(
+                Xj[k + 1], pv
+            )
+            row += n
+        G[row : row + n] = sum(e[l] * Xj[l] for l in range(m + 1)) - Xj[m + 1]
+        row += n
+    G[row : row + n] = X[-1] - X[0] - prob._shift
+    Xs = X[lay.stage_points]
+    ref, dref = prob._slot["ref"], prob._slot["dref"]
+    G[row + n] = np.sum(lay.weights[:, None] * (Xs - ref) * dref)
+    return G
+
+
 @pytest.mark.parametrize("case", ["rotation", "rossler"])
-def test_compiled_collocation_matches_numpy(case, monkeypatch):
-    # residual, Jacobian values, dG/dp and the blocks of the compiled collocation
-    # kernel against the layout's NumPy code, at a point off the cycle (every term
-    # nonzero): a rotation orbit (periodicity shift 2 pi) and the 3-state Rossler cycle
+def test_compiled_collocation_kernel(case):
+    # residual, Jacobian, dG/dp and the blocks of the compiled collocation kernel (Numba
+    # is required) at a point off the cycle (every term nonzero): the residual against
+    # the equations written out, the derivatives against central differences of it
+    # (truncation O(eps^2), round-off O(1e-16 / eps) relative: 1e-6 allows both), the
+    # blocks against the layout's B = D/h I - T f_x; a rotation orbit (periodicity shift
+    # 2 pi) and the 3-state Rossler cycle
     import continuation.periodic.problem as pp
 
     if case == "rotation":
@@ -633,16 +676,19 @@ def test_compiled_collocation_matches_numpy(case, monkeypatch):
     prob = pp.PeriodicOrbitProblem.from_orbit(orb, free)
     z = prob.reference * (1 + 1e-3 * np.sin(np.arange(prob.n_unknowns)))
     p = orb.param(free) + 0.01
-    assert _jit.compiled(pp.KERNELS) is not None
-    G1, J1, Gp1 = prob.linearize(z, p)
-    B1, r1 = prob._slot["cache"][2].copy(), prob.residual(z, p)
-    monkeypatch.setitem(_jit.LOADED, pp.KERNELS, None)
-    G0, J0, Gp0 = prob.linearize(z, p)
-    B0, r0 = prob._slot["cache"][2].copy(), prob.residual(z, p)
-    scale = np.max(np.abs(G0))
-    assert np.max(np.abs(G1 - G0)) <= 1e-12 * scale and np.max(np.abs(r1 - r0)) <= 1e-12 * scale
-    assert (J1.indices is J0.indices) and np.max(np.abs(J1.data - J0.data)) <= 1e-14 * np.max(
-        np.abs(J0.data)
-    )
-    np.testing.assert_allclose(Gp1, Gp0, rtol=1e-14, atol=0)
-    np.testing.assert_allclose(B1, B0, rtol=1e-14, atol=0)
+    G, J, Gp = prob.linearize(z, p)
+    B = prob._slot["cache"][2].copy()
+    ref = _collocation_residual(prob, s, z, p)
+    scale = np.max(np.abs(ref))
+    assert np.max(np.abs(G - ref)) <= 1e-12 * scale
+    assert np.max(np.abs(prob.residual(z, p) - ref)) <= 1e-12 * scale
+    eps = 1e-6
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        v = rng.standard_normal(z.size) * np.maximum(np.abs(z), 1.0)
+        fd = (prob.residual(z + eps * v, p) - prob.residual(z - eps * v, p)) / (2 * eps)
+        assert np.linalg.norm(J @ v - fd) <= 1e-6 * np.linalg.norm(fd)
+    fd_p = (prob.residual(z, p + eps) - prob.residual(z, p - eps)) / (2 * eps)
+    assert np.linalg.norm(Gp - fd_p) <= 1e-6 * max(np.linalg.norm(fd_p), 1e-12)
+    X, T, _, _, Jx, _ = prob._stages(z, p, True)
+    np.testing.assert_allclose(B, prob.layout.blocks(X, T, Jx), rtol=1e-14, atol=0)
