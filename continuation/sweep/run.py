@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..atomic import atomic_path
 from ..status import Status
 from .backends import Backend, open_backend
 from .keys import check_key, function_name, source_version, table_order, task_id
@@ -196,13 +197,13 @@ class SweepResult:
         }
 
     def write_csv(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`rows` as CSV (columns in first-appearance order; lists as JSON)."""
+        """Write :meth:`rows` as CSV, atomically (columns in first-appearance order)."""
         rows = self.rows()
         cols: list[str] = []
         for r in rows:
             cols.extend(c for c in r if c not in cols)
         p = Path(path)
-        with p.open("w", newline="") as fh:
+        with atomic_path(p) as tmp, tmp.open("w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(cols)
             for r in rows:
