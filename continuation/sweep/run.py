@@ -28,7 +28,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..atomic import atomic_path
 from ..status import Status
 from .backends import Backend, open_backend
 from .keys import check_key, function_name, source_version, table_order, task_id
@@ -198,6 +197,8 @@ class SweepResult:
 
     def write_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write :meth:`rows` as CSV, atomically (columns in first-appearance order)."""
+        from ..atomic import atomic_path
+
         rows = self.rows()
         cols: list[str] = []
         for r in rows:
