@@ -202,6 +202,30 @@ def brusselator_rd(N: int, D1: float, D2: float) -> System:
     return System(rhs, names, ("A", "B"))
 
 
+def pendulum_loop_returns(I: float, gamma: float) -> float:
+    """+1 if the saddle's unstable manifold of the driven pendulum
+    ``theta'' + gamma theta' + sin(theta) = I`` passes the next saddle (theta + 2 pi),
+    -1 if it falls back (v = 0 first): the sign whose change is the homoclinic orbit
+    (an independent shooting computation, tight tolerances)."""
+    import math
+
+    from scipy.integrate import solve_ivp
+
+    ths = math.pi - math.asin(I)
+    J = np.array([[0.0, 1.0], [-math.cos(ths), -gamma]])
+    w, V = np.linalg.eig(J)
+    v = V[:, int(np.argmax(w.real))].real
+    v = v if v[1] > 0 else -v
+    ev1 = lambda t, x: x[0] - (ths + 2 * math.pi)  # noqa: E731
+    ev1.terminal = True
+    ev2 = lambda t, x: x[1]  # noqa: E731
+    ev2.terminal, ev2.direction = True, -1
+    r = solve_ivp(lambda t, x: [x[1], I - gamma * x[1] - math.sin(x[0])], (0, 200),
+                  np.array([ths, 0.0]) + 1e-9 * v, events=[ev1, ev2], rtol=1e-12,
+                  atol=1e-14, method="DOP853")  # fmt: skip
+    return 1.0 if r.t_events[0].size else -1.0
+
+
 def assert_invariants(br, tol=1e-9):
     """Branch invariants that must hold on every run."""
     prob = br.problem

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import pendulum_loop_returns
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -374,23 +375,7 @@ def test_neimark_sacker_and_branch_point_of_cycles_closed_form():
 def _pendulum_homoclinic(gamma: float) -> float:
     """I at which the saddle's unstable manifold returns to the saddle one turn later
     (an independent shooting + bisection computation)."""
-
-    def arrive(I: float) -> float:
-        ths = math.pi - math.asin(I)
-        J = np.array([[0.0, 1.0], [-math.cos(ths), -gamma]])
-        w, V = np.linalg.eig(J)
-        v = V[:, int(np.argmax(w.real))].real
-        v = v if v[1] > 0 else -v
-        ev1 = lambda t, x: x[0] - (ths + 2 * math.pi)  # noqa: E731
-        ev1.terminal = True
-        ev2 = lambda t, x: x[1]  # noqa: E731
-        ev2.terminal, ev2.direction = True, -1
-        r = solve_ivp(lambda t, x: [x[1], I - gamma * x[1] - math.sin(x[0])], (0, 100),
-                      np.array([ths, 0.0]) + 1e-9 * v, events=[ev1, ev2], rtol=1e-12,
-                      atol=1e-14, method="DOP853")  # fmt: skip
-        return 1.0 if r.t_events[0].size else -1.0
-
-    return brentq(arrive, 0.3, 0.95, xtol=1e-13)
+    return brentq(lambda I: pendulum_loop_returns(I, gamma), 0.3, 0.95, xtol=1e-13)
 
 
 def test_pendulum_rotation_period_blows_up_at_homoclinic():
