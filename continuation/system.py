@@ -343,6 +343,12 @@ class System:
                 raise ValueError(f"`{name}` has names {p.names}, expected {self.param_names}")
             return np.array(p.values, dtype=float)
         if isinstance(p, Mapping):
+            unknown = sorted(set(p) - set(self.param_names))
+            if unknown:
+                raise ValueError(
+                    f"`{name}` names unknown parameter(s) {unknown}; valid names are "
+                    f"{self.param_names}"
+                )
             base = self._defaults
             if base is not None:
                 return np.array(base.replace(**p).values)
