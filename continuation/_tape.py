@@ -157,7 +157,7 @@ def step_kernel_for(problem: Any) -> Any:
     """The compiled step of an :class:`~continuation.problem.EquilibriumProblem`, or None.
 
     :class:`continuation._kernel.StepKernel`; None when sparse, without a CasADi trace, too
-    large, with an unsupported operation, or without Numba.
+    large, or with an unsupported operation.
     """
     if getattr(problem, "sparse", True):
         return None

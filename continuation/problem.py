@@ -229,8 +229,8 @@ class EquilibriumProblem:
     def step_kernel(self) -> Any:
         """The compiled pseudo-arclength step of this problem, built once and cached.
 
-        :class:`continuation._kernel.StepKernel` (dense, CasADi trace, a few states, a short tape,
-        Numba installed; :func:`continuation._tape.step_kernel_for`); None otherwise.
+        :class:`continuation._kernel.StepKernel` (dense, CasADi trace, a few states, a short
+        tape; :func:`continuation._tape.step_kernel_for`); None otherwise.
         """
         k = self.__dict__.get("_step_kernel", False)
         if k is False:

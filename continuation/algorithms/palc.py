@@ -114,8 +114,8 @@ class PALC(ContinuationAlgorithm):
         branch is smooth there, else the tangent; ``"tangent"``: always the tangent.
     kernel : bool
         Run each step as one compiled call where the problem offers one
-        (``problem.step_kernel()``: small dense systems with a CasADi trace, when
-        Numba is installed; :mod:`continuation._kernel`). Same predictor, corrector,
+        (``problem.step_kernel()``: small dense systems with a CasADi trace;
+        :mod:`continuation._kernel`). Same predictor, corrector,
         safeguards, tangent and eigenvalues; any step the kernel does not accept as a
         whole (a rejection, a singular matrix, ...) is redone by the Python step,
         which decides. ``False``: always the Python step.
