@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import pendulum_loop_returns
+from helpers import pendulum_loop_returns, vdp_period
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -186,17 +186,6 @@ def test_adapted_mesh_resolves_a_relaxation_oscillation():
     assert error_estimate(ada.mesh, ada.X) < error_estimate(uni.mesh, uni.X)
 
 
-def _vdp_period_by_simulation(mu: float) -> float:
-    """Independent reference: the time between upward zero crossings of x, by scipy's
-    DOP853 at rtol = atol = 1e-12, after the transient from (2, 0)."""
-    f = lambda t, x: [x[1], mu * (1 - x[0] ** 2) * x[1] - x[0]]  # noqa: E731
-    up = lambda t, x: x[0]  # noqa: E731
-    up.direction = 1
-    r = solve_ivp(f, (0.0, 6 * (3 + 1.7 * mu)), [2.0, 0.0], method="DOP853", rtol=1e-12,
-                  atol=1e-12, events=up)  # fmt: skip
-    return float(np.diff(r.t_events[0])[-1])
-
-
 def test_a_branch_on_too_coarse_a_mesh_says_so_and_error_tol_fixes_it():
     """van der Pol from mu = 1 to 10 (the jumps sharpen as mu grows). On a fixed mesh
     (40 uniform intervals, error_tol=None) the period at mu = 10 is off by more than 1 %,
@@ -209,7 +198,7 @@ def test_a_branch_on_too_coarse_a_mesh_says_so_and_error_tol_fixes_it():
     s, orb = _vdp_orbit(1.0, CollocationMesh(40, 4, 1.0))
     uz = [Event("UZ5", lambda z, p: p - 5.0), Event("UZ10", lambda z, p: p - 10.0)]
     st = ContinuationSettings(p_max=10.0)
-    ref = {"UZ5": _vdp_period_by_simulation(5.0), "UZ10": _vdp_period_by_simulation(10.0)}
+    ref = {"UZ5": vdp_period(5.0), "UZ10": vdp_period(10.0)}
     assert ref["UZ10"] == pytest.approx(19.0784, abs=1e-4)  # tabulated: T(10) = 19.0784
 
     def periods(br):

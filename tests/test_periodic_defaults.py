@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import pendulum_loop_returns
+from helpers import pendulum_loop_returns, vdp_period
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -33,16 +33,6 @@ def _vdp(x, p, ops):
     return ops.stack([x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0]])
 
 
-def _vdp_period(mu: float) -> float:
-    """Time between upward zero crossings of x once settled (DOP853, 1e-12)."""
-    f = lambda t, x: [x[1], mu * (1 - x[0] ** 2) * x[1] - x[0]]  # noqa: E731
-    up = lambda t, x: x[0]  # noqa: E731
-    up.direction = 1
-    r = solve_ivp(f, (0.0, 6 * (3 + 1.7 * mu)), [2.0, 0.0], method="DOP853", rtol=1e-12,
-                  atol=1e-12, events=up)  # fmt: skip
-    return float(np.diff(r.t_events[0])[-1])
-
-
 def test_van_der_pol_periods_at_the_default_settings():
     """From mu = 1 to 10 at the defaults (the start cycle on the default 40 intervals):
     the periods at mu = 5 and 10 within 1e-6 of the simulation (a fixed mesh was
@@ -55,9 +45,9 @@ def test_van_der_pol_periods_at_the_default_settings():
     assert br.status == Status.PARAM_BOUND, br.message
     assert np.all(br.records["error"] <= 1.01e-6)
     got = {sp.label: orbit_at(br, sp).T for sp in br.special_points if sp.label in ("UZ5", "UZ10")}
-    ref10 = _vdp_period(10.0)
+    ref10 = vdp_period(10.0)
     assert ref10 == pytest.approx(19.0784, abs=1e-4)  # tabulated: T(10) = 19.0784
-    assert got["UZ5"] == pytest.approx(_vdp_period(5.0), abs=1e-6)
+    assert got["UZ5"] == pytest.approx(vdp_period(5.0), abs=1e-6)
     assert got["UZ10"] == pytest.approx(ref10, abs=1e-6)
 
 

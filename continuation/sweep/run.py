@@ -222,11 +222,27 @@ def _cell(v: Any) -> Any:
     return v
 
 
-def _progress_bar(enabled: bool | None, total: int, initial: int, desc: str) -> Any:
-    from tqdm.auto import tqdm
+class _NoBar:
+    """The progress bar when it is off.
 
+    No tqdm object, hence no tqdm monitor thread left running in the caller's process
+    (a process that forks later must have one thread).
+    """
+
+    def update(self, n: int = 1) -> None:
+        """Nothing to show."""
+
+    def close(self) -> None:
+        """Nothing to close."""
+
+
+def _progress_bar(enabled: bool | None, total: int, initial: int, desc: str) -> Any:
     if enabled is None:
         enabled = sys.stderr.isatty()
+    if not enabled:
+        return _NoBar()
+    from tqdm.auto import tqdm
+
     return tqdm(
         total=total, initial=initial, desc=desc, unit="task", disable=not enabled,
         file=sys.stderr, dynamic_ncols=True, smoothing=0.1,
