@@ -57,7 +57,6 @@ import logging  # noqa: E402
 import math  # noqa: E402
 import pathlib  # noqa: E402
 import platform  # noqa: E402
-import resource  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
@@ -73,6 +72,7 @@ sys.path.insert(0, str(HERE.parent))
 from benchmarks.connection_demos import DEMOS, Demo, guess_on, manifold_guess  # noqa: E402
 from benchmarks.peers import auto_native as an  # noqa: E402
 from benchmarks.peers.common import PeerUnavailable  # noqa: E402
+from benchmarks.timing import cpu_children, median_time, min_time  # noqa: E402
 
 log = logging.getLogger("connections_vs_auto")
 
@@ -153,46 +153,13 @@ def bk_continue(result: Any, demo: Demo, end: float, ds: float, ds_max: float) -
 CONTINUE_TO = {"kpr": -2.0, "cir": 0.3, "san": 1.0}  # cir: hyperbolic for beta > 0 only
 
 
-def _cpu() -> float:
-    return time.process_time()
-
-
-def _median_time(fn: Callable[[], Any], repeats: int) -> tuple[float, float, Any]:
-    """``(median CPU s, median wall s, result)`` of ``fn`` after one untimed warm-up."""
-    out = fn()  # warm-up (and the result)
-    cpu, wall = [], []
-    for _ in range(repeats):
-        c0, w0 = _cpu(), time.perf_counter()
-        fn()
-        cpu.append(_cpu() - c0)
-        wall.append(time.perf_counter() - w0)
-    return statistics.median(cpu), statistics.median(wall), out
-
-
-def _min_time(fn: Callable[[], Any], repeats: int = 5) -> float:
-    """Least CPU s of ``repeats`` runs of ``fn`` (the selection among candidates: the
-    least time is the least disturbed by other load)."""
-    fn()
-    best = math.inf
-    for _ in range(repeats):
-        c0 = _cpu()
-        fn()
-        best = min(best, _cpu() - c0)
-    return best
-
-
-def _children_cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
-
-
 def _auto_times(fn: Callable[[], an.ChainResult], repeats: int) -> tuple[float, float, float]:
     """``(median CPU s of the child processes, median wall s, AUTO's own Total Time)``."""
     cpu, wall, tot = [], [], []
     for _ in range(repeats):
-        c0 = _children_cpu()
+        c0 = cpu_children()
         r = fn()
-        cpu.append(_children_cpu() - c0)
+        cpu.append(cpu_children() - c0)
         wall.append(r.seconds)
         tot.append(r.auto_seconds)
     return statistics.median(cpu), statistics.median(wall), statistics.median(tot)
@@ -367,13 +334,13 @@ def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
         bk["status"] = "did not reach AUTO's error on any candidate mesh"
         out["broachkit_solve"] = bk
         return out
-    quick = [_min_time(lambda c=c: bk_solve(demo, system, *c)) for c in passing]
+    quick = [min_time(lambda c=c: bk_solve(demo, system, *c)) for c in passing]
     bk["candidates"] = [
         {"N": N, "T": T, "adapt": ad, "seconds": q}
         for (N, T, ad), q in zip(passing, quick, strict=True)
     ]
     N, T, adapt = passing[int(np.argmin(quick))]
-    sec, wall, res = _median_time(lambda: bk_solve(demo, system, N, T, adapt), repeats)
+    sec, wall, res = median_time(lambda: bk_solve(demo, system, N, T, adapt), repeats)
     bk.update(
         N=N,
         T=res.mesh.T,
@@ -466,15 +433,14 @@ def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
         bc["status"] = "did not reach AUTO's error at the end on any candidate mesh"
     else:
         quick = [
-            _min_time(lambda c=c: bk_continue(c[2], demo, end, cc["DS"], cc["DSMAX"]))
-            for c in picks
+            min_time(lambda c=c: bk_continue(c[2], demo, end, cc["DS"], cc["DSMAX"])) for c in picks
         ]
         bc["candidates"] = [
             {"N": c[0], "T": c[2].mesh.T, "adapt": c[1], "seconds": q}
             for c, q in zip(picks, quick, strict=True)
         ]
         NN, adapt_b, start, p_end, v_end, err = picks[int(np.argmin(quick))]
-        sec, wall, br = _median_time(
+        sec, wall, br = median_time(
             lambda: bk_continue(start, demo, end, cc["DS"], cc["DSMAX"]), repeats
         )
         bc.update(

@@ -62,7 +62,6 @@ import math
 import os
 import pathlib
 import platform
-import resource
 import statistics
 import sys
 import tempfile
@@ -78,6 +77,7 @@ sys.path.insert(0, str(HERE.parent))
 
 from benchmarks.peers import auto_native as an  # noqa: E402
 from benchmarks.peers.common import PeerUnavailable  # noqa: E402
+from benchmarks.timing import cpu_children, cpu_self  # noqa: E402
 
 #: Reference meshes: this many times the demo's intervals.
 REF_FACTOR = 4
@@ -326,11 +326,6 @@ DEMOS = {
 }
 
 
-def _children_cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
-
-
 def auto_side(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
     """Build, run the equilibria once, time the periodic continuation from HB1."""
     exe = an.build(demo.fortran, work / "build")
@@ -342,9 +337,9 @@ def auto_side(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
     po = {**demo.periodic, "IRS": hb[0].lab}
     runs, cpu = [], []
     for _ in range(repeats + 1):
-        c0 = _children_cpu()
+        c0 = cpu_children()
         runs.append(an.run_chain(exe, work / "po", [po], fort3=fort8))
-        cpu.append(_children_cpu() - c0)
+        cpu.append(cpu_children() - c0)
     rows = runs[-1].runs[0]
     fine_po = {**po, "NTST": REF_FACTOR * demo.ntst}
     fine = an.run_chain(exe, work / "fine", [fine_po], fort3=fort8).runs[0]
@@ -433,9 +428,9 @@ def bk_side(demo: Demo, repeats: int) -> dict[str, Any]:
     bk_periodic(demo, eq)  # warm-up: CasADi functions built and cached
     wall, cpu = [], []
     for _ in range(repeats):
-        c0, w0 = time.process_time(), time.perf_counter()
+        c0, w0 = cpu_self(), time.perf_counter()
         br = bk_periodic(demo, eq)
-        cpu.append(time.process_time() - c0)
+        cpu.append(cpu_self() - c0)
         wall.append(time.perf_counter() - w0)
     uz = []
     for k in range(len(demo.checks)):

@@ -57,6 +57,8 @@ ROOT = HERE.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from benchmarks.timing import cpu_total  # noqa: E402
+
 VENV_PYTHON = HERE / "_work" / "venv" / "bin" / "python"
 RESULTS = HERE / "results"
 TOOLS = ("broachkit", "scipy-palc", "auto07p-native", "auto07p-ctypes", "bice", "pycont-lite")
@@ -67,13 +69,6 @@ BEGIN, END = "<!-- BEGIN RESULTS -->", "<!-- END RESULTS -->"
 # ============================================================================ worker side
 def _maxrss_kib(who: int = resource.RUSAGE_SELF) -> int:
     return int(resource.getrusage(who).ru_maxrss)  # KiB on Linux
-
-
-def _cpu_s() -> float:
-    """CPU seconds (user + system) of this process and its finished children."""
-    me = resource.getrusage(resource.RUSAGE_SELF)
-    ch = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return me.ru_utime + me.ru_stime + ch.ru_utime + ch.ru_stime
 
 
 def _floor(problem: Any, reps: int) -> dict[str, Any]:
@@ -324,9 +319,9 @@ def worker(
     cpus: list[float] = []
 
     def timed() -> tuple[float, dict[str, Any]]:
-        c0 = _cpu_s()
+        c0 = cpu_total()
         dt, info = runner.run()
-        cpus.append(_cpu_s() - c0)
+        cpus.append(cpu_total() - c0)
         return dt, info
 
     try:

@@ -25,17 +25,15 @@ import json
 import math
 import os
 import platform
-import resource
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-
-def _cpu() -> float:
-    s, c = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return s.ru_utime + s.ru_stime + c.ru_utime + c.ru_stime
+if str(Path(__file__).resolve().parents[1]) not in sys.path:  # (run as a script)
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from benchmarks.timing import cpu_total  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -55,12 +53,12 @@ def main(argv: list[str] | None = None) -> int:
     deg = np.arange(0.0, 44.0 + 1e-9, args.step)
     chi = np.radians(deg)
     load0 = os.getloadavg()[0]
-    t0, c0 = time.perf_counter(), _cpu()
+    t0, c0 = time.perf_counter(), cpu_total()
     curve = critical_curve(chi, model=model, workers=args.workers)
-    t_line, c_line = time.perf_counter() - t0, _cpu() - c0
-    t0, c0 = time.perf_counter(), _cpu()
+    t_line, c_line = time.perf_counter() - t0, cpu_total() - c0
+    t0, c0 = time.perf_counter(), cpu_total()
     tc = threshold_curve(chi, model=model, heteroclinic=curve, workers=args.workers)
-    t_th, c_th = time.perf_counter() - t0, _cpu() - c0
+    t_th, c_th = time.perf_counter() - t0, cpu_total() - c0
     rows = [
         {"chi_c_deg": float(d), "Fn": t.Fn if math.isfinite(t.Fn) else None,
          "mechanism": t.mechanism, "status": t.status.name, "seconds": t.elapsed,

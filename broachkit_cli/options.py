@@ -14,9 +14,12 @@ point (:func:`broachkit_cli.main.main`) prints it and exits with status 2.
 from __future__ import annotations
 
 import argparse
+import logging
 import math
 import os
+import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -415,6 +418,22 @@ def ship_from_args(args: argparse.Namespace) -> tuple[Any, Any]:
     if getattr(args, "Fn", None) is not None:
         changes["Fn"] = check_fn(model, "--fn", args.Fn)
     return model, model.default_params().replace(**changes)
+
+
+def numerical_failure_exit(
+    name: str, run: Callable[[argparse.Namespace], int], args: argparse.Namespace
+) -> int:
+    """``run(args)``; a numerical failure (ContinuationError) is one line on stderr naming
+    the command ``name`` and exit status 1, never a traceback (logged at debug level,
+    shown with ``--verbose``)."""
+    from continuation.errors import ContinuationError
+
+    try:
+        return run(args)
+    except ContinuationError as exc:
+        logging.getLogger(__name__).debug("%s failed", name, exc_info=True)
+        sys.stderr.write(f"broachkit {name}: {exc}\n")
+        return 1
 
 
 def json_safe(obj: Any) -> Any:

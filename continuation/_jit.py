@@ -1,11 +1,11 @@
-"""The engine's optional compiled kernels, imported at their first use.
+"""The engine's compiled kernels, imported at their first use: the one kernel loader.
 
-The kernel modules (``continuation.bvp._condense_jit``,
-``continuation.periodic._collocation_jit``, ``continuation.periodic._floquet_jit``)
+Numba is a hard dependency (``pyproject.toml``): every kernel module is compiled code and
+there is no NumPy twin of it. The kernel modules (``continuation._kernel``, the
+compiled PALC step; ``continuation.bvp._condense_jit``;
+``continuation.periodic._collocation_jit``; ``continuation.periodic._floquet_jit``)
 import Numba, which takes about half a second, so each is imported only when first
-needed; where Numba is missing, :func:`compiled` returns None and the caller takes its
-NumPy path. The outcome is kept per module for the life of the process (tests replace
-an entry of :data:`LOADED` to exercise the NumPy path).
+needed, by :func:`compiled`.
 """
 
 from __future__ import annotations
@@ -13,22 +13,18 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-#: Imported kernel modules by absolute name (None: Numba missing).
-LOADED: dict[str, ModuleType | None] = {}
 
+def compiled(name: str) -> ModuleType:
+    """The kernel module ``name`` (absolute, e.g. ``"continuation.bvp._condense_jit"``).
 
-def compiled(name: str) -> ModuleType | None:
-    """The kernel module ``name``, imported at the first call; None without Numba.
+    Imported at the first call (Python keeps it in ``sys.modules`` afterwards).
 
-    Absolute, e.g. ``"continuation.bvp._condense_jit"``; None when it cannot be imported (no
-    Numba).
+    Raises
+    ------
+    ImportError
+        If Numba is not installed (it is a required dependency).
     """
-    if name not in LOADED:
-        try:
-            LOADED[name] = importlib.import_module(name)
-        except ImportError:  # pragma: no cover - Numba missing: NumPy
-            LOADED[name] = None
-    return LOADED[name]
+    return importlib.import_module(name)
 
 
-__all__ = ["LOADED", "compiled"]
+__all__ = ["compiled"]

@@ -32,7 +32,11 @@ import logging
 import math
 from typing import Any
 
+import llvmlite.binding as _llvm
+import numba
 import numpy as np
+from numba.core import types as _nbt
+from numba.extending import get_cython_function_address as _cython_address
 
 from ._tape import (
     _K_ACOS,
@@ -91,26 +95,14 @@ from .linalg import BorderedLU
 
 log = logging.getLogger(__name__)
 
-numba: Any
-try:  # pragma: no cover - exercised through the import
-    import llvmlite.binding as _llvm
-    import numba
-    from numba.core import types as _nbt
-    from numba.extending import get_cython_function_address as _cython_address
-
-    # SciPy's LAPACK, called from compiled code through named symbols (not baked-in
-    # addresses), so that the compiled functions can be cached on disk
-    for _name in ("dgetrf", "dgetrs", "dgeev"):
-        _llvm.add_symbol("broachkit_" + _name, _cython_address("scipy.linalg.cython_lapack", _name))
-    _vp = _nbt.voidptr
-    _dgetrf = _nbt.ExternalFunction("broachkit_dgetrf", _nbt.void(*([_vp] * 6)))
-    _dgetrs = _nbt.ExternalFunction("broachkit_dgetrs", _nbt.void(*([_vp] * 9)))
-    _dgeev = _nbt.ExternalFunction("broachkit_dgeev", _nbt.void(*([_vp] * 14)))
-    HAVE_NUMBA = True
-except (ImportError, ValueError, AttributeError) as _exc:  # pragma: no cover
-    log.debug("compiled step kernel unavailable: %s", _exc)
-    numba = None
-    HAVE_NUMBA = False
+# SciPy's LAPACK, called from compiled code through named symbols (not baked-in
+# addresses), so that the compiled functions can be cached on disk
+for _name in ("dgetrf", "dgetrs", "dgeev"):
+    _llvm.add_symbol("broachkit_" + _name, _cython_address("scipy.linalg.cython_lapack", _name))
+_vp = _nbt.voidptr
+_dgetrf = _nbt.ExternalFunction("broachkit_dgetrf", _nbt.void(*([_vp] * 6)))
+_dgetrs = _nbt.ExternalFunction("broachkit_dgetrs", _nbt.void(*([_vp] * 9)))
+_dgeev = _nbt.ExternalFunction("broachkit_dgeev", _nbt.void(*([_vp] * 14)))
 
 
 # ----------------------------------------------------------------------------- compiled
@@ -140,494 +132,499 @@ def out_layout(n: int) -> int:
     return _offsets(n)[-1] + n + 1
 
 
-if HAVE_NUMBA:
-    # error_model="numpy": float division by zero and math domain errors give inf/NaN
-    # as in C (CasADi's own virtual machine), not Python exceptions
-    _jit = numba.njit(cache=True, nogil=True, boundscheck=False, error_model="numpy")
-    out_offsets = _jit(_offsets)  # (the same offsets inside the compiled step)
+# error_model="numpy": float division by zero and math domain errors give inf/NaN
+# as in C (CasADi's own virtual machine), not Python exceptions
+_jit = numba.njit(cache=True, nogil=True, boundscheck=False, error_model="numpy")
+out_offsets = _jit(_offsets)  # (the same offsets inside the compiled step)
 
-    @_jit
-    def _run_tape(op, ia, ib, io, consts, w, u, p, f, nz):  # pragma: no cover - compiled
-        """Evaluate a linearisation tape (:func:`linearisation_tape`).
 
-        Inputs ``(u, p)``, outputs ``(f, nz)``. One flat branch chain, the most frequent
-        operations first (a call per operation costs more than the operation).
-        """
-        for k in range(op.size):
-            o = op[k]
-            if o == _K_MUL:
-                w[io[k]] = w[ia[k]] * w[ib[k]]
-            elif o == _K_ADD:
-                w[io[k]] = w[ia[k]] + w[ib[k]]
-            elif o == _K_OUTPUT:
-                if io[k] == 0:
-                    f[ib[k]] = w[ia[k]]
-                else:
-                    nz[ib[k]] = w[ia[k]]
-            elif o == _K_SUB:
-                w[io[k]] = w[ia[k]] - w[ib[k]]
-            elif o == _K_INPUT:
-                if ia[k] == 0:
-                    w[io[k]] = u[ib[k]]
-                else:
-                    w[io[k]] = p[ib[k]]
-            elif o == _K_CONST:
-                w[io[k]] = consts[k]
-            elif o == _K_SQ:
-                x = w[ia[k]]
-                w[io[k]] = x * x
-            elif o == _K_DIV:
-                w[io[k]] = w[ia[k]] / w[ib[k]]
-            elif o == _K_NEG:
-                w[io[k]] = -w[ia[k]]
-            elif o == _K_TWICE:
-                w[io[k]] = 2.0 * w[ia[k]]
-            elif o == _K_FABS:
-                w[io[k]] = abs(w[ia[k]])
-            elif o == _K_FMAX or o == _K_FMIN:  # C fmax/fmin: a NaN operand is ignored
-                x = w[ia[k]]
-                y = w[ib[k]]
-                if x != x:
-                    w[io[k]] = y
-                elif y != y:
-                    w[io[k]] = x
-                elif o == _K_FMAX:
-                    w[io[k]] = x if x >= y else y
-                else:
-                    w[io[k]] = x if x <= y else y
-            elif o == _K_INV:
-                w[io[k]] = 1.0 / w[ia[k]]
-            elif o == _K_SQRT:
-                w[io[k]] = math.sqrt(w[ia[k]])
-            elif o == _K_EXP:
-                w[io[k]] = math.exp(w[ia[k]])
-            elif o == _K_LOG:
-                w[io[k]] = math.log(w[ia[k]])
-            elif o == _K_POW or o == _K_CONSTPOW:
-                w[io[k]] = w[ia[k]] ** w[ib[k]]
-            elif o == _K_SIN:
-                w[io[k]] = math.sin(w[ia[k]])
-            elif o == _K_COS:
-                w[io[k]] = math.cos(w[ia[k]])
-            elif o == _K_TAN:
-                w[io[k]] = math.tan(w[ia[k]])
-            elif o == _K_TANH:
-                w[io[k]] = math.tanh(w[ia[k]])
-            elif o == _K_ASSIGN:
-                w[io[k]] = w[ia[k]]
-            elif o == _K_ASIN:
-                w[io[k]] = math.asin(w[ia[k]])
-            elif o == _K_ACOS:
-                w[io[k]] = math.acos(w[ia[k]])
-            elif o == _K_ATAN:
-                w[io[k]] = math.atan(w[ia[k]])
-            elif o == _K_SINH:
-                w[io[k]] = math.sinh(w[ia[k]])
-            elif o == _K_COSH:
-                w[io[k]] = math.cosh(w[ia[k]])
-            elif o == _K_ASINH:
-                w[io[k]] = math.asinh(w[ia[k]])
-            elif o == _K_ACOSH:
-                w[io[k]] = math.acosh(w[ia[k]])
-            elif o == _K_ATANH:
-                w[io[k]] = math.atanh(w[ia[k]])
-            elif o == _K_SIGN:
-                x = w[ia[k]]
-                w[io[k]] = 1.0 if x > 0.0 else (-1.0 if x < 0.0 else x)
-            elif o == _K_ATAN2:
-                w[io[k]] = math.atan2(w[ia[k]], w[ib[k]])
-            elif o == _K_HYPOT:
-                w[io[k]] = math.hypot(w[ia[k]], w[ib[k]])
-            elif o == _K_COPYSIGN:
-                w[io[k]] = math.copysign(w[ia[k]], w[ib[k]])
-            elif o == _K_LT:
-                w[io[k]] = 1.0 if w[ia[k]] < w[ib[k]] else 0.0
-            elif o == _K_LE:
-                w[io[k]] = 1.0 if w[ia[k]] <= w[ib[k]] else 0.0
-            elif o == _K_EQ:
-                w[io[k]] = 1.0 if w[ia[k]] == w[ib[k]] else 0.0
-            elif o == _K_NE:
-                w[io[k]] = 1.0 if w[ia[k]] != w[ib[k]] else 0.0
-            elif o == _K_NOT:
-                w[io[k]] = 1.0 if w[ia[k]] == 0.0 else 0.0
-            elif o == _K_AND:
-                w[io[k]] = 1.0 if (w[ia[k]] != 0.0 and w[ib[k]] != 0.0) else 0.0
-            elif o == _K_OR:
-                w[io[k]] = 1.0 if (w[ia[k]] != 0.0 or w[ib[k]] != 0.0) else 0.0
-            elif o == _K_IF_ELSE_ZERO:
-                w[io[k]] = w[ib[k]] if w[ia[k]] != 0.0 else 0.0
-            elif o == _K_FLOOR:
-                w[io[k]] = math.floor(w[ia[k]])
-            elif o == _K_CEIL:
-                w[io[k]] = math.ceil(w[ia[k]])
-            elif o == _K_FMOD:
-                w[io[k]] = np.fmod(w[ia[k]], w[ib[k]])
-            elif o == _K_ERF:
-                w[io[k]] = math.erf(w[ia[k]])
-            elif o == _K_LOG1P:
-                w[io[k]] = math.log1p(w[ia[k]])
-            else:  # _K_EXPM1 (tape_of admits no other operation)
-                w[io[k]] = math.expm1(w[ia[k]])
+@_jit
+def _run_tape(op, ia, ib, io, consts, w, u, p, f, nz):  # pragma: no cover - compiled
+    """Evaluate a linearisation tape (:func:`linearisation_tape`).
 
-    @_jit
-    def _linearise(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz, rows, cols, c, h, M, r):
-        """``f``, ``[G_z G_p]`` and the bordered residual at ``u`` (pragma: compiled).
-
-        Writes the non-zeros into the top block of ``M`` (its structural zeros stay 0,
-        its last row is the border ``c``) and ``r = (f, c . u - h)``. Returns
-        ``(max|r|, r . r, max|u|, max|f|, sum M_ij^2)`` (maxima ignore NaN, the sums
-        do not), as the norms output of the CasADi evaluator.
-        """
-        _run_tape(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz)
-        n1 = u.size
-        n = n1 - 1
-        for k in range(nz.size):
-            M[rows[k], cols[k]] = nz[k]
-        s = 0.0
-        un = 0.0
-        for j in range(n1):
-            M[n, j] = c[j]
-            s += c[j] * u[j]
-            v = abs(u[j])
-            if v > un:
-                un = v
-        rr = 0.0
-        rn = 0.0
-        gn = 0.0
-        for i in range(n):
-            v = f[i]
-            r[i] = v
-            rr += v * v
-            v = abs(v)
-            if v > gn:
-                gn = v
-        rn = gn
-        v = s - h
-        r[n] = v
-        rr += v * v
-        if abs(v) > rn:
-            rn = abs(v)
-        mm = 0.0
-        for j in range(n1):
-            for i in range(n1):
-                v = M[i, j]
-                mm += v * v
-        return rn, rr, un, gn, mm
-
-    @_jit
-    def _backward_error(M, r, u):  # pragma: no cover - compiled
-        """``corrector._backward_error`` of the bordered residual ``r`` at ``u``.
-
-        ``max(max_i |G_i| / max_i (|M| |u|)_i, |r_n| / (|M| |u|)_n)``, ``i < n``.
-        """
-        n1 = u.size
-        n = n1 - 1
-        sf = 0.0
-        sb = 0.0
-        for i in range(n1):
-            s = 0.0
-            for j in range(n1):
-                s += abs(M[i, j]) * abs(u[j])
-            if i < n:
-                sf = max(sf, s)
+    Inputs ``(u, p)``, outputs ``(f, nz)``. One flat branch chain, the most frequent
+    operations first (a call per operation costs more than the operation).
+    """
+    for k in range(op.size):
+        o = op[k]
+        if o == _K_MUL:
+            w[io[k]] = w[ia[k]] * w[ib[k]]
+        elif o == _K_ADD:
+            w[io[k]] = w[ia[k]] + w[ib[k]]
+        elif o == _K_OUTPUT:
+            if io[k] == 0:
+                f[ib[k]] = w[ia[k]]
             else:
-                sb = s
-        gf = 0.0
-        for i in range(n):
-            gf = max(gf, abs(r[i]))
-        wf = gf / (sf + 1e-300) if n else 0.0
-        return max(wf, abs(r[n]) / (sb + 1e-300))
+                nz[ib[k]] = w[ia[k]]
+        elif o == _K_SUB:
+            w[io[k]] = w[ia[k]] - w[ib[k]]
+        elif o == _K_INPUT:
+            if ia[k] == 0:
+                w[io[k]] = u[ib[k]]
+            else:
+                w[io[k]] = p[ib[k]]
+        elif o == _K_CONST:
+            w[io[k]] = consts[k]
+        elif o == _K_SQ:
+            x = w[ia[k]]
+            w[io[k]] = x * x
+        elif o == _K_DIV:
+            w[io[k]] = w[ia[k]] / w[ib[k]]
+        elif o == _K_NEG:
+            w[io[k]] = -w[ia[k]]
+        elif o == _K_TWICE:
+            w[io[k]] = 2.0 * w[ia[k]]
+        elif o == _K_FABS:
+            w[io[k]] = abs(w[ia[k]])
+        elif o == _K_FMAX or o == _K_FMIN:  # C fmax/fmin: a NaN operand is ignored
+            x = w[ia[k]]
+            y = w[ib[k]]
+            if x != x:
+                w[io[k]] = y
+            elif y != y:
+                w[io[k]] = x
+            elif o == _K_FMAX:
+                w[io[k]] = x if x >= y else y
+            else:
+                w[io[k]] = x if x <= y else y
+        elif o == _K_INV:
+            w[io[k]] = 1.0 / w[ia[k]]
+        elif o == _K_SQRT:
+            w[io[k]] = math.sqrt(w[ia[k]])
+        elif o == _K_EXP:
+            w[io[k]] = math.exp(w[ia[k]])
+        elif o == _K_LOG:
+            w[io[k]] = math.log(w[ia[k]])
+        elif o == _K_POW or o == _K_CONSTPOW:
+            w[io[k]] = w[ia[k]] ** w[ib[k]]
+        elif o == _K_SIN:
+            w[io[k]] = math.sin(w[ia[k]])
+        elif o == _K_COS:
+            w[io[k]] = math.cos(w[ia[k]])
+        elif o == _K_TAN:
+            w[io[k]] = math.tan(w[ia[k]])
+        elif o == _K_TANH:
+            w[io[k]] = math.tanh(w[ia[k]])
+        elif o == _K_ASSIGN:
+            w[io[k]] = w[ia[k]]
+        elif o == _K_ASIN:
+            w[io[k]] = math.asin(w[ia[k]])
+        elif o == _K_ACOS:
+            w[io[k]] = math.acos(w[ia[k]])
+        elif o == _K_ATAN:
+            w[io[k]] = math.atan(w[ia[k]])
+        elif o == _K_SINH:
+            w[io[k]] = math.sinh(w[ia[k]])
+        elif o == _K_COSH:
+            w[io[k]] = math.cosh(w[ia[k]])
+        elif o == _K_ASINH:
+            w[io[k]] = math.asinh(w[ia[k]])
+        elif o == _K_ACOSH:
+            w[io[k]] = math.acosh(w[ia[k]])
+        elif o == _K_ATANH:
+            w[io[k]] = math.atanh(w[ia[k]])
+        elif o == _K_SIGN:
+            x = w[ia[k]]
+            w[io[k]] = 1.0 if x > 0.0 else (-1.0 if x < 0.0 else x)
+        elif o == _K_ATAN2:
+            w[io[k]] = math.atan2(w[ia[k]], w[ib[k]])
+        elif o == _K_HYPOT:
+            w[io[k]] = math.hypot(w[ia[k]], w[ib[k]])
+        elif o == _K_COPYSIGN:
+            w[io[k]] = math.copysign(w[ia[k]], w[ib[k]])
+        elif o == _K_LT:
+            w[io[k]] = 1.0 if w[ia[k]] < w[ib[k]] else 0.0
+        elif o == _K_LE:
+            w[io[k]] = 1.0 if w[ia[k]] <= w[ib[k]] else 0.0
+        elif o == _K_EQ:
+            w[io[k]] = 1.0 if w[ia[k]] == w[ib[k]] else 0.0
+        elif o == _K_NE:
+            w[io[k]] = 1.0 if w[ia[k]] != w[ib[k]] else 0.0
+        elif o == _K_NOT:
+            w[io[k]] = 1.0 if w[ia[k]] == 0.0 else 0.0
+        elif o == _K_AND:
+            w[io[k]] = 1.0 if (w[ia[k]] != 0.0 and w[ib[k]] != 0.0) else 0.0
+        elif o == _K_OR:
+            w[io[k]] = 1.0 if (w[ia[k]] != 0.0 or w[ib[k]] != 0.0) else 0.0
+        elif o == _K_IF_ELSE_ZERO:
+            w[io[k]] = w[ib[k]] if w[ia[k]] != 0.0 else 0.0
+        elif o == _K_FLOOR:
+            w[io[k]] = math.floor(w[ia[k]])
+        elif o == _K_CEIL:
+            w[io[k]] = math.ceil(w[ia[k]])
+        elif o == _K_FMOD:
+            w[io[k]] = np.fmod(w[ia[k]], w[ib[k]])
+        elif o == _K_ERF:
+            w[io[k]] = math.erf(w[ia[k]])
+        elif o == _K_LOG1P:
+            w[io[k]] = math.log1p(w[ia[k]])
+        else:  # _K_EXPM1 (tape_of admits no other operation)
+            w[io[k]] = math.expm1(w[ia[k]])
 
-    @_jit
-    def _factor_solve(M, r, lu, x, piv, iw, ch):  # pragma: no cover - compiled
-        """LAPACK ``dgetrf`` and ``dgetrs``: what ``dgesv`` does. Returns info.
 
-        ``dgetrf`` of a copy of ``M`` into ``lu`` (1-based ``piv``) and ``dgetrs`` for ``x =
-        M^{-1} [r, e_{N+1}]``.
-        """
-        n1 = r.size
+@_jit
+def _linearise(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz, rows, cols, c, h, M, r):
+    """``f``, ``[G_z G_p]`` and the bordered residual at ``u`` (pragma: compiled).
+
+    Writes the non-zeros into the top block of ``M`` (its structural zeros stay 0,
+    its last row is the border ``c``) and ``r = (f, c . u - h)``. Returns
+    ``(max|r|, r . r, max|u|, max|f|, sum M_ij^2)`` (maxima ignore NaN, the sums
+    do not), as the norms output of the CasADi evaluator.
+    """
+    _run_tape(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz)
+    n1 = u.size
+    n = n1 - 1
+    for k in range(nz.size):
+        M[rows[k], cols[k]] = nz[k]
+    s = 0.0
+    un = 0.0
+    for j in range(n1):
+        M[n, j] = c[j]
+        s += c[j] * u[j]
+        v = abs(u[j])
+        if v > un:
+            un = v
+    rr = 0.0
+    rn = 0.0
+    gn = 0.0
+    for i in range(n):
+        v = f[i]
+        r[i] = v
+        rr += v * v
+        v = abs(v)
+        if v > gn:
+            gn = v
+    rn = gn
+    v = s - h
+    r[n] = v
+    rr += v * v
+    if abs(v) > rn:
+        rn = abs(v)
+    mm = 0.0
+    for j in range(n1):
+        for i in range(n1):
+            v = M[i, j]
+            mm += v * v
+    return rn, rr, un, gn, mm
+
+
+@_jit
+def _backward_error(M, r, u):  # pragma: no cover - compiled
+    """``corrector._backward_error`` of the bordered residual ``r`` at ``u``.
+
+    ``max(max_i |G_i| / max_i (|M| |u|)_i, |r_n| / (|M| |u|)_n)``, ``i < n``.
+    """
+    n1 = u.size
+    n = n1 - 1
+    sf = 0.0
+    sb = 0.0
+    for i in range(n1):
+        s = 0.0
         for j in range(n1):
+            s += abs(M[i, j]) * abs(u[j])
+        if i < n:
+            sf = max(sf, s)
+        else:
+            sb = s
+    gf = 0.0
+    for i in range(n):
+        gf = max(gf, abs(r[i]))
+    wf = gf / (sf + 1e-300) if n else 0.0
+    return max(wf, abs(r[n]) / (sb + 1e-300))
+
+
+@_jit
+def _factor_solve(M, r, lu, x, piv, iw, ch):  # pragma: no cover - compiled
+    """LAPACK ``dgetrf`` and ``dgetrs``: what ``dgesv`` does. Returns info.
+
+    ``dgetrf`` of a copy of ``M`` into ``lu`` (1-based ``piv``) and ``dgetrs`` for ``x =
+    M^{-1} [r, e_{N+1}]``.
+    """
+    n1 = r.size
+    for j in range(n1):
+        for i in range(n1):
+            lu[i, j] = M[i, j]
+        x[j, 0] = r[j]
+        x[j, 1] = 0.0
+    x[n1 - 1, 1] = 1.0
+    iw[0] = n1
+    iw[1] = 2
+    iw[2] = 0
+    _dgetrf(iw.ctypes, iw.ctypes, lu.ctypes, iw.ctypes, piv.ctypes, iw[2:].ctypes)
+    info = iw[2]
+    if info != 0:
+        return info
+    _dgetrs(ch.ctypes, iw.ctypes, iw[1:].ctypes, lu.ctypes, iw.ctypes, piv.ctypes,
+            x.ctypes, iw.ctypes, iw[2:].ctypes)  # fmt: skip
+    return iw[2]
+
+
+@_jit
+def _eigs(M, n, A, wr, wi, work, iw, ch):  # pragma: no cover - compiled
+    """LAPACK ``dgeev`` (no vectors) of ``M[:n, :n]``. Returns info."""
+    for j in range(n):
+        for i in range(n):
+            A[i, j] = M[i, j]
+    iw[3] = n
+    iw[4] = work.size
+    iw[5] = 1
+    iw[6] = 0
+    _dgeev(ch.ctypes, ch.ctypes, iw[3:].ctypes, A.ctypes, iw[3:].ctypes, wr.ctypes,
+           wi.ctypes, work.ctypes, iw[5:].ctypes, work.ctypes, iw[5:].ctypes,
+           work.ctypes, iw[4:].ctypes, iw[6:].ctypes)  # fmt: skip
+    return iw[6]
+
+
+@_jit
+def _views(fb, ib):  # pragma: no cover - compiled
+    """The kernel's buffers as views of its two packed arrays.
+
+    One argument each: a compiled call pays for every argument it unboxes. Layout:
+    :class:`StepKernel`.
+    """
+    n, m, nnz, k, nw, lwork = ib[0], ib[1], ib[2], ib[3], ib[4], ib[5]
+    n1 = n + 1
+    o = 8
+    tp_op = ib[o : o + k]
+    tp_ia = ib[o + k : o + 2 * k]
+    tp_ib = ib[o + 2 * k : o + 3 * k]
+    tp_io = ib[o + 3 * k : o + 4 * k]
+    o += 4 * k
+    rows = ib[o : o + nnz]
+    cols = ib[o + nnz : o + 2 * nnz]
+    o += 2 * nnz
+    piv = ib[o : o + n1]
+    iw = ib[o + n1 : o + n1 + 8]
+    ch = ib[o + n1 + 8 : o + n1 + 9]  # the character 'N' (first byte of an int32)
+    o = 0
+    w = fb[o : o + nw]
+    o += nw
+    p = fb[o : o + m]
+    o += m
+    f = fb[o : o + n]
+    o += n
+    nz = fb[o : o + nnz]
+    o += nnz
+    M = fb[o : o + n1 * n1].reshape((n1, n1)).T
+    o += n1 * n1
+    r = fb[o : o + n1]
+    o += n1
+    lu = fb[o : o + n1 * n1].reshape((n1, n1)).T
+    o += n1 * n1
+    x = fb[o : o + 2 * n1].reshape((2, n1)).T
+    o += 2 * n1
+    A = fb[o : o + n * n].reshape((n, n)).T
+    o += n * n
+    wr = fb[o : o + n]
+    wi = fb[o + n : o + 2 * n]
+    o += 2 * n
+    work = fb[o : o + lwork]
+    o += lwork
+    tp_c = fb[o : o + k]
+    return (tp_op, tp_ia, tp_ib, tp_io, tp_c, w, p, f, nz, rows, cols, M, r, lu, x, piv,
+            A, wr, wi, work, iw, ch)  # fmt: skip
+
+
+@_jit
+def _step(fb, ib, out, piv_out, ua, tau, wt, prev_d, prev_tau, sc, hermite, guarded,
+          want_eig):  # fmt: skip  # pragma: no cover - compiled
+    """One pseudo-arclength step, compiled.
+
+    ``PALC.step`` with ``correct(..., exact=False)`` and ``make_point``.
+
+    ``sc = (ds, prev_h, cos_hermite, max_contraction, max_distance, cos_max, tol,
+    step_tol, max_iter, eig_tol, imag_tol, NOISE_SLACK, ROUNDOFF_FLOOR)``. On
+    acceptance the point is written into ``out`` (layout :func:`out_layout`) and
+    ``piv_out`` (0-based pivots).
+    Returns ``(code, iters, rn, gn, jac_finite, ctau, det_sign, eig_ok, n_real,
+    n_pairs)``; ``code`` 0: the step is accepted with these values; 1: anything
+    else (a rejection or a rare case: the caller runs the Python step instead,
+    which is authoritative).
+    """
+    (tp_op, tp_ia, tp_ib, tp_io, tp_c, w, p, f, nz, rows, cols, M, r, lu, x, piv,
+     A, wr, wi, work, iw, ch) = _views(fb, ib)  # fmt: skip
+    n1 = ua.size
+    n = n1 - 1
+    ds, prev_h, cos_hermite, max_contraction = sc[0], sc[1], sc[2], sc[3]
+    max_distance, cos_max, tol, step_tol = sc[4], sc[5], sc[6], sc[7]
+    max_iter, eig_tol, imag_tol = int(sc[8]), sc[9], sc[10]
+    noise_slack, roundoff = sc[11], sc[12]
+    fail = (1, 0, 0.0, 0.0, False, 0.0, 0.0, False, 0, 0)
+    o_eig, o_u, o_d, o_g, o_gz, o_gp, o_lu, o_t, o_tau, o_c = out_offsets(n)
+    # predictor
+    c = out[o_c : o_c + n1]
+    u = out[o_u : o_u + n1]
+    d = out[o_d : o_d + n1]  # (first the tangent prediction u_lin, then u - u_lin)
+    for i in range(n1):
+        c[i] = wt[i] * tau[i]
+        d[i] = ua[i] + ds * tau[i]
+        u[i] = d[i]
+    if hermite:
+        ctp = 0.0
+        for i in range(n1):
+            ctp += c[i] * prev_tau[i]
+        if ctp >= cos_hermite:
+            h = prev_h
+            rr_ = ds / h
+            al = rr_ * rr_ * (3.0 + 2.0 * rr_)
+            be = rr_ * rr_ * (h + ds)
             for i in range(n1):
-                lu[i, j] = M[i, j]
-            x[j, 0] = r[j]
-            x[j, 1] = 0.0
-        x[n1 - 1, 1] = 1.0
-        iw[0] = n1
-        iw[1] = 2
-        iw[2] = 0
-        _dgetrf(iw.ctypes, iw.ctypes, lu.ctypes, iw.ctypes, piv.ctypes, iw[2:].ctypes)
-        info = iw[2]
-        if info != 0:
-            return info
-        _dgetrs(ch.ctypes, iw.ctypes, iw[1:].ctypes, lu.ctypes, iw.ctypes, piv.ctypes,
-                x.ctypes, iw.ctypes, iw[2:].ctypes)  # fmt: skip
-        return iw[2]
-
-    @_jit
-    def _eigs(M, n, A, wr, wi, work, iw, ch):  # pragma: no cover - compiled
-        """LAPACK ``dgeev`` (no vectors) of ``M[:n, :n]``. Returns info."""
-        for j in range(n):
-            for i in range(n):
-                A[i, j] = M[i, j]
-        iw[3] = n
-        iw[4] = work.size
-        iw[5] = 1
-        iw[6] = 0
-        _dgeev(ch.ctypes, ch.ctypes, iw[3:].ctypes, A.ctypes, iw[3:].ctypes, wr.ctypes,
-               wi.ctypes, work.ctypes, iw[5:].ctypes, work.ctypes, iw[5:].ctypes,
-               work.ctypes, iw[4:].ctypes, iw[6:].ctypes)  # fmt: skip
-        return iw[6]
-
-    @_jit
-    def _views(fb, ib):  # pragma: no cover - compiled
-        """The kernel's buffers as views of its two packed arrays.
-
-        One argument each: a compiled call pays for every argument it unboxes. Layout:
-        :class:`StepKernel`.
-        """
-        n, m, nnz, k, nw, lwork = ib[0], ib[1], ib[2], ib[3], ib[4], ib[5]
-        n1 = n + 1
-        o = 8
-        tp_op = ib[o : o + k]
-        tp_ia = ib[o + k : o + 2 * k]
-        tp_ib = ib[o + 2 * k : o + 3 * k]
-        tp_io = ib[o + 3 * k : o + 4 * k]
-        o += 4 * k
-        rows = ib[o : o + nnz]
-        cols = ib[o + nnz : o + 2 * nnz]
-        o += 2 * nnz
-        piv = ib[o : o + n1]
-        iw = ib[o + n1 : o + n1 + 8]
-        ch = ib[o + n1 + 8 : o + n1 + 9]  # the character 'N' (first byte of an int32)
-        o = 0
-        w = fb[o : o + nw]
-        o += nw
-        p = fb[o : o + m]
-        o += m
-        f = fb[o : o + n]
-        o += n
-        nz = fb[o : o + nnz]
-        o += nnz
-        M = fb[o : o + n1 * n1].reshape((n1, n1)).T
-        o += n1 * n1
-        r = fb[o : o + n1]
-        o += n1
-        lu = fb[o : o + n1 * n1].reshape((n1, n1)).T
-        o += n1 * n1
-        x = fb[o : o + 2 * n1].reshape((2, n1)).T
-        o += 2 * n1
-        A = fb[o : o + n * n].reshape((n, n)).T
-        o += n * n
-        wr = fb[o : o + n]
-        wi = fb[o + n : o + 2 * n]
-        o += 2 * n
-        work = fb[o : o + lwork]
-        o += lwork
-        tp_c = fb[o : o + k]
-        return (tp_op, tp_ia, tp_ib, tp_io, tp_c, w, p, f, nz, rows, cols, M, r, lu, x, piv,
-                A, wr, wi, work, iw, ch)  # fmt: skip
-
-    @_jit
-    def _step(fb, ib, out, piv_out, ua, tau, wt, prev_d, prev_tau, sc, hermite, guarded,
-              want_eig):  # fmt: skip  # pragma: no cover - compiled
-        """One pseudo-arclength step, compiled.
-
-        ``PALC.step`` with ``correct(..., exact=False)`` and ``make_point``.
-
-        ``sc = (ds, prev_h, cos_hermite, max_contraction, max_distance, cos_max, tol,
-        step_tol, max_iter, eig_tol, imag_tol, NOISE_SLACK, ROUNDOFF_FLOOR)``. On
-        acceptance the point is written into ``out`` (layout :func:`out_layout`) and
-        ``piv_out`` (0-based pivots).
-        Returns ``(code, iters, rn, gn, jac_finite, ctau, det_sign, eig_ok, n_real,
-        n_pairs)``; ``code`` 0: the step is accepted with these values; 1: anything
-        else (a rejection or a rare case: the caller runs the Python step instead,
-        which is authoritative).
-        """
-        (tp_op, tp_ia, tp_ib, tp_io, tp_c, w, p, f, nz, rows, cols, M, r, lu, x, piv,
-         A, wr, wi, work, iw, ch) = _views(fb, ib)  # fmt: skip
-        n1 = ua.size
-        n = n1 - 1
-        ds, prev_h, cos_hermite, max_contraction = sc[0], sc[1], sc[2], sc[3]
-        max_distance, cos_max, tol, step_tol = sc[4], sc[5], sc[6], sc[7]
-        max_iter, eig_tol, imag_tol = int(sc[8]), sc[9], sc[10]
-        noise_slack, roundoff = sc[11], sc[12]
-        fail = (1, 0, 0.0, 0.0, False, 0.0, 0.0, False, 0, 0)
-        o_eig, o_u, o_d, o_g, o_gz, o_gp, o_lu, o_t, o_tau, o_c = out_offsets(n)
-        # predictor
-        c = out[o_c : o_c + n1]
-        u = out[o_u : o_u + n1]
-        d = out[o_d : o_d + n1]  # (first the tangent prediction u_lin, then u - u_lin)
+                u[i] = d[i] - al * prev_d[i] + (be - al * h) * (prev_tau[i] - tau[i])
+    hlev = 0.0
+    for i in range(n1):
+        hlev += c[i] * ua[i]
+    hlev += ds
+    # the componentwise step scale max(|u_pred,i|, |u_ref,i|) + a (corrector._step_ok)
+    su = np.empty(n1)
+    ur = 0.0
+    for i in range(n1):
+        su[i] = max(abs(u[i]), abs(ua[i]))
+        ur = max(ur, abs(ua[i]))
+    # corrector (Newton on the bordered system, the rules of _correct_fused)
+    rn, rr, un, gn, mm = _linearise(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz,
+                                     rows, cols, c, hlev, M, r)  # fmt: skip
+    finite = rr < math.inf
+    rn0 = rn
+    rn_prev = math.inf
+    step = math.inf
+    it = 0
+    a = min(1.0, un) + 1e-300
+    lo = step_tol * a
+    hi = step_tol * (max(un, ur) + a)
+    step_ok = False  # the last step passed the step test
+    mc = max_contraction if guarded else -1.0
+    dn = 0.0
+    dn_ok = False
+    while True:
+        if not finite:
+            return fail
+        if _factor_solve(M, r, lu, x, piv, iw, ch) != 0:
+            return fail
+        dd = 0.0
+        dn = 0.0
+        ratio = 0.0  # max_i |du_i| / (su_i + a)
         for i in range(n1):
-            c[i] = wt[i] * tau[i]
-            d[i] = ua[i] + ds * tau[i]
-            u[i] = d[i]
-        if hermite:
-            ctp = 0.0
-            for i in range(n1):
-                ctp += c[i] * prev_tau[i]
-            if ctp >= cos_hermite:
-                h = prev_h
-                rr_ = ds / h
-                al = rr_ * rr_ * (3.0 + 2.0 * rr_)
-                be = rr_ * rr_ * (h + ds)
-                for i in range(n1):
-                    u[i] = d[i] - al * prev_d[i] + (be - al * h) * (prev_tau[i] - tau[i])
-        hlev = 0.0
+            v = x[i, 0]
+            dd += v * v
+            v = abs(v)
+            if v > dn:
+                dn = v
+            q = v / (su[i] + a)
+            if q > ratio:
+                ratio = q
+        if not dd < math.inf:
+            return fail
+        dn_ok = dn <= lo or (dn <= hi and ratio <= step_tol)
+        if (
+            (rn <= tol and (dn_ok or step_ok))
+            or (
+                it > 0
+                and rn <= tol
+                and rn > 0.5 * rn_prev
+                and dn > 0.5 * step
+                and dn <= noise_slack * hi
+                and ratio <= noise_slack * step_tol
+            )
+            or (step_ok and rn > 0.5 * rn_prev and _backward_error(M, r, u) <= roundoff)
+            or (it > 0 and dn_ok and 10.0 * rn * dn * dn <= tol * step * step)
+        ):
+            break
+        if it >= max_iter:
+            return fail
+        if it >= 2 and rn > 1e4 * max(rn0, tol):
+            return fail
         for i in range(n1):
-            hlev += c[i] * ua[i]
-        hlev += ds
-        # the componentwise step scale max(|u_pred,i|, |u_ref,i|) + a (corrector._step_ok)
-        su = np.empty(n1)
-        ur = 0.0
-        for i in range(n1):
-            su[i] = max(abs(u[i]), abs(ua[i]))
-            ur = max(ur, abs(ua[i]))
-        # corrector (Newton on the bordered system, the rules of _correct_fused)
+            u[i] -= x[i, 0]
+        it += 1
+        step_prev = step
+        step = dn
+        step_ok = dn_ok
+        if mc >= 0.0 and it >= 2 and step > mc * step_prev and not step_ok and rn > tol:
+            return fail
+        rn_prev = rn
         rn, rr, un, gn, mm = _linearise(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz,
                                          rows, cols, c, hlev, M, r)  # fmt: skip
         finite = rr < math.inf
-        rn0 = rn
-        rn_prev = math.inf
-        step = math.inf
-        it = 0
-        a = min(1.0, un) + 1e-300
-        lo = step_tol * a
-        hi = step_tol * (max(un, ur) + a)
-        step_ok = False  # the last step passed the step test
-        mc = max_contraction if guarded else -1.0
-        dn = 0.0
-        dn_ok = False
-        while True:
-            if not finite:
-                return fail
-            if _factor_solve(M, r, lu, x, piv, iw, ch) != 0:
-                return fail
-            dd = 0.0
-            dn = 0.0
-            ratio = 0.0  # max_i |du_i| / (su_i + a)
-            for i in range(n1):
-                v = x[i, 0]
-                dd += v * v
-                v = abs(v)
-                if v > dn:
-                    dn = v
-                q = v / (su[i] + a)
-                if q > ratio:
-                    ratio = q
-            if not dd < math.inf:
-                return fail
-            dn_ok = dn <= lo or (dn <= hi and ratio <= step_tol)
-            if (
-                (rn <= tol and (dn_ok or step_ok))
-                or (
-                    it > 0
-                    and rn <= tol
-                    and rn > 0.5 * rn_prev
-                    and dn > 0.5 * step
-                    and dn <= noise_slack * hi
-                    and ratio <= noise_slack * step_tol
-                )
-                or (step_ok and rn > 0.5 * rn_prev and _backward_error(M, r, u) <= roundoff)
-                or (it > 0 and dn_ok and 10.0 * rn * dn * dn <= tol * step * step)
-            ):
-                break
-            if it >= max_iter:
-                return fail
-            if it >= 2 and rn > 1e4 * max(rn0, tol):
-                return fail
-            for i in range(n1):
-                u[i] -= x[i, 0]
-            it += 1
-            step_prev = step
-            step = dn
-            step_ok = dn_ok
-            if mc >= 0.0 and it >= 2 and step > mc * step_prev and not step_ok and rn > tol:
-                return fail
-            rn_prev = rn
-            rn, rr, un, gn, mm = _linearise(tp_op, tp_ia, tp_ib, tp_io, tp_c, w, u, p, f, nz,
-                                             rows, cols, c, hlev, M, r)  # fmt: skip
-            finite = rr < math.inf
-        # accepted by the corrector: lin is of the last evaluation, the factorisation too
-        if dn_ok:
-            for i in range(n1):
-                u[i] -= x[i, 0]
-        dist = 0.0
+    # accepted by the corrector: lin is of the last evaluation, the factorisation too
+    if dn_ok:
         for i in range(n1):
-            v = u[i] - d[i]
-            d[i] = v
-            dist += wt[i] * v * v
-        if guarded and math.sqrt(dist) > max_distance * ds:
-            return fail
-        # tangent from the same factorisation (make_point with lu and t_raw)
-        t_raw = out[o_t : o_t + n1]
-        nrm2 = 0.0
+            u[i] -= x[i, 0]
+    dist = 0.0
+    for i in range(n1):
+        v = u[i] - d[i]
+        d[i] = v
+        dist += wt[i] * v * v
+    if guarded and math.sqrt(dist) > max_distance * ds:
+        return fail
+    # tangent from the same factorisation (make_point with lu and t_raw)
+    t_raw = out[o_t : o_t + n1]
+    nrm2 = 0.0
+    for i in range(n1):
+        v = x[i, 1]
+        t_raw[i] = v
+        nrm2 += wt[i] * v * v
+    if not (0.0 < nrm2 < math.inf):
+        return fail
+    scale = 1.0 / math.sqrt(nrm2)
+    tau_b = out[o_tau : o_tau + n1]
+    ctau = 0.0
+    for i in range(n1):
+        tau_b[i] = t_raw[i] * scale
+        ctau += c[i] * tau_b[i]
+    if ctau < 0.0:
         for i in range(n1):
-            v = x[i, 1]
-            t_raw[i] = v
-            nrm2 += wt[i] * v * v
-        if not (0.0 < nrm2 < math.inf):
-            return fail
-        scale = 1.0 / math.sqrt(nrm2)
-        tau_b = out[o_tau : o_tau + n1]
-        ctau = 0.0
-        for i in range(n1):
-            tau_b[i] = t_raw[i] * scale
-            ctau += c[i] * tau_b[i]
-        if ctau < 0.0:
-            for i in range(n1):
-                tau_b[i] = -tau_b[i]
-            ctau = -ctau
-        if ctau == 0.0:
-            return fail
-        if ctau < cos_max and guarded:
-            return fail
-        # G, Gz (Fortran order), Gp of the last evaluation; the factors; sign of det M
+            tau_b[i] = -tau_b[i]
+        ctau = -ctau
+    if ctau == 0.0:
+        return fail
+    if ctau < cos_max and guarded:
+        return fail
+    # G, Gz (Fortran order), Gp of the last evaluation; the factors; sign of det M
+    for i in range(n):
+        out[o_g + i] = f[i]
+        out[o_gp + i] = M[i, n]
+    for j in range(n):
         for i in range(n):
-            out[o_g + i] = f[i]
-            out[o_gp + i] = M[i, n]
-        for j in range(n):
-            for i in range(n):
-                out[o_gz + i + j * n] = M[i, j]
-        neg = 0
-        for j in range(n1):
-            for i in range(n1):
-                out[o_lu + i + j * n1] = lu[i, j]
-            piv_out[j] = piv[j] - 1
-            if piv_out[j] != j:
-                neg += 1
-            if lu[j, j] < 0.0:
-                neg += 1
-        det_sign = -1.0 if neg % 2 else 1.0
-        # eigenvalues of G_z, sorted by decreasing real, then imaginary part, and counts
-        jac_finite = mm < math.inf
-        eig_ok = False
-        n_real = 0
-        n_pairs = 0
-        if want_eig and jac_finite and _eigs(M, n, A, wr, wi, work, iw, ch) == 0:
-            eig_ok = True
-            order = np.empty(n, dtype=np.int64)
-            for i in range(n):  # insertion sort on (-re, -im); n is small
-                j = i
-                while j > 0 and (
-                    wr[order[j - 1]] < wr[i]
-                    or (wr[order[j - 1]] == wr[i] and wi[order[j - 1]] < wi[i])
-                ):
-                    order[j] = order[j - 1]
-                    j -= 1
-                order[j] = i
-            for i in range(n):
-                k = order[i]
-                re = wr[k]
-                im = wi[k]
-                out[o_eig + 2 * i] = re
-                out[o_eig + 2 * i + 1] = im
-                if re > eig_tol:
-                    if abs(im) > imag_tol * max(1.0, math.hypot(re, im)):
-                        if im > 0.0:
-                            n_pairs += 1
-                    else:
-                        n_real += 1
-        return (0, it, rn, gn, jac_finite, ctau, det_sign, eig_ok, n_real, n_pairs)
+            out[o_gz + i + j * n] = M[i, j]
+    neg = 0
+    for j in range(n1):
+        for i in range(n1):
+            out[o_lu + i + j * n1] = lu[i, j]
+        piv_out[j] = piv[j] - 1
+        if piv_out[j] != j:
+            neg += 1
+        if lu[j, j] < 0.0:
+            neg += 1
+    det_sign = -1.0 if neg % 2 else 1.0
+    # eigenvalues of G_z, sorted by decreasing real, then imaginary part, and counts
+    jac_finite = mm < math.inf
+    eig_ok = False
+    n_real = 0
+    n_pairs = 0
+    if want_eig and jac_finite and _eigs(M, n, A, wr, wi, work, iw, ch) == 0:
+        eig_ok = True
+        order = np.empty(n, dtype=np.int64)
+        for i in range(n):  # insertion sort on (-re, -im); n is small
+            j = i
+            while j > 0 and (
+                wr[order[j - 1]] < wr[i] or (wr[order[j - 1]] == wr[i] and wi[order[j - 1]] < wi[i])
+            ):
+                order[j] = order[j - 1]
+                j -= 1
+            order[j] = i
+        for i in range(n):
+            k = order[i]
+            re = wr[k]
+            im = wi[k]
+            out[o_eig + 2 * i] = re
+            out[o_eig + 2 * i + 1] = im
+            if re > eig_tol:
+                if abs(im) > imag_tol * max(1.0, math.hypot(re, im)):
+                    if im > 0.0:
+                        n_pairs += 1
+                else:
+                    n_real += 1
+    return (0, it, rn, gn, jac_finite, ctau, det_sign, eig_ok, n_real, n_pairs)
 
 
 # ----------------------------------------------------------------------------- Python side
@@ -782,4 +779,4 @@ class KernelPoint(PointInfo):
     t_raw = _lazy("t_raw", lambda pt: pt._out[pt._k.offsets[7] : pt._k.offsets[8]])
 
 
-__all__ = ["HAVE_NUMBA", "StepKernel", "out_layout"]
+__all__ = ["StepKernel", "out_layout"]

@@ -9,8 +9,8 @@ system's residual and Jacobian without compiling code per system.
 
 :func:`step_kernel_for` decides whether a problem gets the compiled step: dense, a
 CasADi trace, at most ``MAX_KERNEL_SIZE - 1`` states, a tape of at most
-``MAX_TAPE_INSTRUCTIONS`` supported operations, and Numba installed (imported only
-then). Large tapes stay on CasADi's own virtual machine, which evaluates them faster
+``MAX_TAPE_INSTRUCTIONS`` supported operations (Numba, a required dependency, is
+imported only then). Large tapes stay on CasADi's own virtual machine, which evaluates them faster
 than the interpreted tape (measurement in ``benchmarks/README.md``, *Engine design
 measurements*), while small systems gain from the step as one call.
 """
@@ -22,6 +22,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from ._jit import compiled
 
 log = logging.getLogger(__name__)
 
@@ -155,7 +157,7 @@ def step_kernel_for(problem: Any) -> Any:
     """The compiled step of an :class:`~continuation.problem.EquilibriumProblem`, or None.
 
     :class:`continuation._kernel.StepKernel`; None when sparse, without a CasADi trace, too
-    large, with an unsupported operation, or without Numba.
+    large, or with an unsupported operation.
     """
     if getattr(problem, "sparse", True):
         return None
@@ -169,12 +171,9 @@ def step_kernel_for(problem: Any) -> Any:
         got = cache[int(index)] = linearisation_tape(system, int(index))
     if got is None:
         return None
-    from ._kernel import HAVE_NUMBA, StepKernel  # (imports Numba, only now)
-
-    if not HAVE_NUMBA:
-        return None
     tape, rows, cols = got
-    return StepKernel(tape, rows, cols, system.n_states, problem.params.values)
+    kernel = compiled("continuation._kernel")  # (imports Numba, only now)
+    return kernel.StepKernel(tape, rows, cols, system.n_states, problem.params.values)
 
 
 __all__ = [

@@ -21,7 +21,7 @@ from .events import Event
 from .params import Params
 from .problem import EquilibriumProblem
 from .settings import ContinuationSettings
-from .system import System
+from .system import System, as_params
 
 _DEFAULTS = {
     "ds": 1e-2,
@@ -31,21 +31,6 @@ _DEFAULTS = {
     "p_max": math.inf,
     "max_steps": 500,
 }
-
-
-def _params(system: System, params: Any) -> Params:
-    if isinstance(params, Params):
-        if params.names != system.param_names:
-            raise ValueError(f"`params` has names {params.names}, expected {system.param_names}")
-        return params
-    if isinstance(params, Mapping):
-        unknown = sorted(set(params) - set(system.param_names))
-        if unknown:
-            raise ValueError(
-                f"`params` names unknown parameter(s) {unknown}; valid names are "
-                f"{system.param_names}"
-            )
-    return Params(system.param_names, system.check_params(params, "params"))
 
 
 def continue_equilibria(
@@ -116,7 +101,7 @@ def continue_equilibria(
     if not isinstance(free, str) or free not in system.param_names:
         raise ValueError(f"`free` must be one of {system.param_names}, got {free!r}")
     x = system.check_state(x0, "x0")
-    par = _params(system, params)
+    par = as_params(system, params)
     given: dict[str, Any] = {
         "ds": ds,
         "ds_min": ds_min,

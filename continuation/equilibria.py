@@ -82,8 +82,8 @@ def solve_equilibrium(
     EquilibriumResult
     """
     x = system.check_state(x0, "x0")
-    pv = system.check_params(params, "params")
-    par = Params(system.param_names, pv)
+    par = system.as_params(params)
+    pv = np.array(par.values)
     res = newton(lambda z: system.f(z, pv), lambda z: system.jacobian(z, pv), x, settings)
     if not res.converged:
         if throw:

@@ -33,8 +33,9 @@ from typing import Any
 import numpy as np
 
 from .algorithms.base import theta_norm
-from .algorithms.corrector import correct
+from .algorithms.corrector import CorrectorResult
 from .algorithms.point import PointInfo, make_point
+from .algorithms.step import palc_point
 from .linalg import inf_norm as _inf_norm
 from .problem import linearize
 from .settings import NewtonSettings
@@ -103,19 +104,20 @@ def point_at(
         if 0.0 < s_q < sigma_b and abs(sigma - s_q) < min(sigma, sigma_b - sigma) and ct > 0.1:
             u_pred = q.u + ((sigma - s_q) / ct) * q.tau
             u_base = q.u
-    res = correct(problem, u_pred, ua, c, sigma, newton)
-    if not res.converged or res.lin is None:
-        return None
-    # the corrector must stay on the branch it started from: its correction may not
-    # exceed the predictor step (as in PALC), up to the corrector's own tolerance. Next
-    # to a branch point Newton otherwise drifts, along the near-null vector of the
-    # bordered matrix, onto the crossing branch.
-    noise = 2.0 * newton.step_tol * (1.0 + _inf_norm(res.u))
-    if _inf_norm(res.u - u_pred) > max(_inf_norm(u_pred - u_base), noise):
-        return None
-    try:
-        pt = make_point(res.z, res.p, res.lin, c, w, iters=res.iters, lu=res.lu, u=res.u_full)
-    except np.linalg.LinAlgError:
+
+    def on_branch(res: CorrectorResult) -> str:
+        # the corrector must stay on the branch it started from: its correction may not
+        # exceed the predictor step (as in PALC), up to the corrector's own tolerance.
+        # Next to a branch point Newton otherwise drifts, along the near-null vector of
+        # the bordered matrix, onto the crossing branch.
+        noise = 2.0 * newton.step_tol * (1.0 + _inf_norm(res.u))
+        if _inf_norm(res.u - u_pred) > max(_inf_norm(u_pred - u_base), noise):
+            return "left the branch"
+        return ""
+
+    got = palc_point(problem, u_pred, ua, c, sigma, w, newton, accept=on_branch)
+    res, pt = got.res, got.point
+    if got.singular and res.lin is not None:
         if same_branch:
             return None  # (no tangent to check: the caller interpolates instead)
         # exactly singular bordered matrix: an exact branch point; the tangent is not
@@ -137,6 +139,8 @@ def point_at(
             iters=res.iters,
             residual_norm=res.residual_norm,
         )
+    if pt is None:
+        return None
     if same_branch and not tangent_agrees(pt, a, b, w):
         return None
     return pt
@@ -372,13 +376,11 @@ def locate_beyond(
     s_prev, g_prev = s_e, g_e
     for it in range(1, max_iter + 1):
         u_pred = q.u + ((s - s_e) / ct) * q.tau
-        res = correct(problem, u_pred, a.u, c, s, newton)
-        if not res.converged or res.lin is None:
-            return LocateResult(s_e, q, g_e, False, it, "corrector failed beyond the row")
-        try:
-            pt = make_point(res.z, res.p, res.lin, c, w, iters=res.iters, lu=res.lu, u=res.u_full)
-        except np.linalg.LinAlgError:
-            return LocateResult(s_e, q, g_e, False, it, "singular point beyond the row")
+        got = palc_point(problem, u_pred, a.u, c, s, w, newton)
+        pt = got.point
+        if pt is None:
+            why = "singular point" if got.singular else "corrector failed"
+            return LocateResult(s_e, q, g_e, False, it, f"{why} beyond the row")
         g = float(test(pt, s / sigma_b))
         if not math.isfinite(g):
             return LocateResult(s_e, q, g_e, False, it, "test not finite")

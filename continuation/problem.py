@@ -51,7 +51,7 @@ import scipy.sparse as sp
 
 from .branch import SpecialPoint
 from .params import Params
-from .system import System
+from .system import System, as_params
 from .typing import ComplexArray, FloatArray
 
 
@@ -123,9 +123,7 @@ class EquilibriumProblem:
     _index: int = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.params, Params):
-            vec = self.system.check_params(self.params)
-            object.__setattr__(self, "params", Params(self.system.param_names, vec))
+        object.__setattr__(self, "params", as_params(self.system, self.params))
         if self.params.names != self.system.param_names:
             raise ValueError(
                 f"`params` names {self.params.names} do not match the system's "
@@ -231,8 +229,8 @@ class EquilibriumProblem:
     def step_kernel(self) -> Any:
         """The compiled pseudo-arclength step of this problem, built once and cached.
 
-        :class:`continuation._kernel.StepKernel` (dense, CasADi trace, a few states, a short tape,
-        Numba installed; :func:`continuation._tape.step_kernel_for`); None otherwise.
+        :class:`continuation._kernel.StepKernel` (dense, CasADi trace, a few states, a short
+        tape; :func:`continuation._tape.step_kernel_for`); None otherwise.
         """
         k = self.__dict__.get("_step_kernel", False)
         if k is False:

@@ -343,6 +343,12 @@ class System:
                 raise ValueError(f"`{name}` has names {p.names}, expected {self.param_names}")
             return np.array(p.values, dtype=float)
         if isinstance(p, Mapping):
+            unknown = sorted(set(p) - set(self.param_names))
+            if unknown:
+                raise ValueError(
+                    f"`{name}` names unknown parameter(s) {unknown}; valid names are "
+                    f"{self.param_names}"
+                )
             base = self._defaults
             if base is not None:
                 return np.array(base.replace(**p).values)
@@ -356,6 +362,41 @@ class System:
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"`{name}` contains NaN or inf: {arr}")
         return arr
+
+    def as_params(self, p: Any = None, name: str = "params") -> Params:
+        """Named parameters from a Params, a mapping or an array, checked.
+
+        The one coercion of user parameters in the library: every entry point that
+        takes ``params`` calls it.
+
+        Parameters
+        ----------
+        p : Params, mapping or array_like, shape (m,), optional
+            A :class:`Params` with this system's names (returned as it is), a mapping
+            (missing names from the defaults when the system has them) or a vector in
+            ``param_names`` order. ``None`` means the defaults.
+        name : str
+            Argument name used in error messages.
+
+        Returns
+        -------
+        Params
+            Shape ``(m,)``, names ``param_names``.
+
+        Raises
+        ------
+        ValueError
+            Wrong names, shape or non-finite values (message names ``name``); ``None``
+            for a system without defaults.
+        """
+        if p is None:
+            if self._defaults is None:
+                raise ValueError(f"`{name}` is required: {self.param_names} have no defaults")
+            return self._defaults
+        vec = self.check_params(p, name)
+        if isinstance(p, Params):
+            return p
+        return Params(self.param_names, vec)
 
     # ------------------------------------------------------------------ evaluation
     def rhs(self, x: Any, p: Any, ops: Ops = NUMPY_OPS) -> Any:
@@ -697,4 +738,17 @@ def check_jacobian(
     return ex, ep
 
 
-__all__ = ["DynamicalSystem", "System", "check_jacobian"]
+def as_params(system: Any, p: Any, name: str = "params") -> Params:
+    """``p`` as :class:`Params` of ``system``: :meth:`System.as_params`.
+
+    For a duck-typed system without ``as_params`` (only ``param_names``) a Params is
+    returned as it is and anything else is read as a vector in ``param_names`` order.
+    """
+    if hasattr(system, "as_params"):
+        return system.as_params(p, name)  # type: ignore[no-any-return]
+    if isinstance(p, Params):
+        return p
+    return Params(tuple(system.param_names), np.asarray(p, dtype=float))
+
+
+__all__ = ["as_params", "DynamicalSystem", "System", "check_jacobian"]

@@ -181,6 +181,14 @@ class VesselModel(Protocol):
         """Index of a state name."""
         ...
 
+    def state_index(self, name: str) -> int:
+        """Index of a state name; ValueError listing the valid names."""
+        ...
+
+    def param_index(self, name: str) -> int:
+        """Index of a parameter name; ValueError listing the valid names."""
+        ...
+
     def check_params(self, params: Any, name: str = "params") -> FloatArray:
         """Parameters as a checked array in ``param_names`` order."""
         ...
@@ -191,6 +199,10 @@ class VesselModel(Protocol):
 
     def jacobian(self, x: FloatArray, p: Params | FloatArray) -> Any:
         """Jacobian ``df/dx``, shape (n, n)."""
+        ...
+
+    def as_params(self, p: Any = None, name: str = "params") -> Params:
+        """Named parameters from a Params, mapping or array (None: the defaults), checked."""
         ...
 
     def params(self, **values: float) -> Params:

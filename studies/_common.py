@@ -17,12 +17,15 @@ Every file is written atomically (a temporary file renamed onto the final name,
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import csv
+import json
 import logging
 import math
 import os
-from collections.abc import Iterator, Mapping, Sequence
+import sys
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -51,6 +54,48 @@ STYLE: dict[str, Any] = {
     "axes.spines.top": False,
     "axes.spines.right": False,
 }
+
+
+def study_main(
+    doc: str,
+    default_out: str,
+    compute: Callable[..., dict[str, Any]],
+    argv: Sequence[str] | None = None,
+    *,
+    flags: Sequence[tuple[str, str]] = (),
+    shown: Sequence[str] | None = None,
+) -> int:
+    """The command-line entry of a figure step: ``python studies/<step>.py --out DIR``.
+
+    Parameters
+    ----------
+    doc : str
+        The module docstring (its first line is the description).
+    default_out : str
+        Default ``--out`` folder.
+    compute : callable
+        ``compute(out, progress=..., **flags) -> summary``.
+    argv : sequence of str, optional
+        Arguments (default ``sys.argv[1:]``).
+    flags : sequence of (name, help)
+        Boolean options ``--name`` passed to ``compute`` as ``name=True/False``.
+    shown : sequence of str, optional
+        The summary keys printed (default: all of it).
+
+    Returns
+    -------
+    int
+        0 (a failure raises).
+    """
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path(default_out))
+    for name, help_ in flags:
+        ap.add_argument(f"--{name}", action="store_true", help=help_)
+    args = ap.parse_args(argv)
+    options = {name: getattr(args, name) for name, _ in flags}
+    s = compute(args.out, progress=lambda m: sys.stdout.write(m + "\n"), **options)
+    sys.stdout.write(json.dumps(s if shown is None else {k: s[k] for k in shown}, indent=2) + "\n")
+    return 0
 
 
 def output_dir(name: str = "", root: str | os.PathLike[str] | None = None) -> Path:

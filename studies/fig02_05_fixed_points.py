@@ -23,7 +23,6 @@ not plotted. Run: ``python studies/fig02_05_fixed_points.py [--out DIR]``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
@@ -38,7 +37,14 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ship_models.paper import PAPER_FN
-from studies._common import new_figure, save_figure, save_table, write_atomic_group, write_json
+from studies._common import (
+    new_figure,
+    save_figure,
+    save_table,
+    study_main,
+    write_atomic_group,
+    write_json,
+)
 
 FN = PAPER_FN
 CHI_C_DEG = 10.0
@@ -252,12 +258,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
 
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry: ``python studies/fig02_05_fixed_points.py --out DIR``."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=Path("out/fig02_05"))
-    args = ap.parse_args(argv)
-    s = compute(args.out, progress=lambda m: print(m, flush=True))
-    print(json.dumps(s, indent=2))
-    return 0
+    return study_main(__doc__, "out/fig02_05", compute, argv)
 
 
 if __name__ == "__main__":

@@ -25,8 +25,6 @@ Run: ``python studies/fig10_15_manifolds.py [--out DIR]``.
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import sys
 import time
@@ -47,6 +45,7 @@ from studies._common import (
     save_csv,
     save_figure,
     state_columns,
+    study_main,
     write_json,
 )
 
@@ -299,12 +298,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
 
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry: ``python studies/fig10_15_manifolds.py --out DIR``."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=Path("out/fig10_15"))
-    args = ap.parse_args(argv)
-    s = compute(args.out, progress=lambda m: print(m, flush=True))
-    print(json.dumps({k: s[k] for k in ("critical", "seconds")}, indent=2))
-    return 0
+    return study_main(__doc__, "out/fig10_15", compute, argv, shown=("critical", "seconds"))
 
 
 if __name__ == "__main__":

@@ -31,8 +31,6 @@ figures and every 5 deg with a tighter tolerance, several minutes).
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import sys
 import time
@@ -56,6 +54,7 @@ from studies._common import (
     save_figure,
     save_table,
     state_columns,
+    study_main,
     write_json,
 )
 from studies._sudden_tasks import compute_orbits, load_orbits, task
@@ -535,17 +534,17 @@ def _compute(
 
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry: ``python studies/fig16_22_sudden_change.py --out DIR``."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=Path("out/fig16_22"))
-    ap.add_argument("--full", action="store_true", help="fine grids, every 5 deg, tol 2e-5")
-    ap.add_argument(
-        "--bvp", action="store_true", help="also the boundary as a landing BVP (Figs. 16, 22)"
+    return study_main(
+        __doc__,
+        "out/fig16_22",
+        compute,
+        argv,
+        flags=(
+            ("full", "fine grids, every 5 deg, tol 2e-5"),
+            ("bvp", "also the boundary as a landing BVP (Figs. 16, 22)"),
+        ),
+        shown=("heteroclinic_Fn_10deg", "fig23_squares", "seconds"),
     )
-    args = ap.parse_args(argv)
-    s = compute(args.out, progress=lambda m: print(m, flush=True), full=args.full, bvp=args.bvp)
-    print(json.dumps({k: s[k] for k in ("heteroclinic_Fn_10deg", "fig23_squares", "seconds")},
-                     indent=2))  # fmt: skip
-    return 0
 
 
 if __name__ == "__main__":

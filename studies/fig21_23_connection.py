@@ -23,8 +23,6 @@ Run: ``python studies/fig21_23_connection.py [--out DIR] [--quick]``.
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import sys
 import time
@@ -46,6 +44,7 @@ from studies._common import (
     save_figure,
     save_table,
     state_columns,
+    study_main,
     write_atomic,
     write_json,
 )
@@ -259,18 +258,14 @@ def compute(
 
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry: ``python studies/fig21_23_connection.py --out DIR``."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=Path("out/fig21_23"))
-    ap.add_argument("--quick", action="store_true", help="every 5 deg, one bisection check")
-    args = ap.parse_args(argv)
-    s = compute(args.out, progress=lambda m: print(m, flush=True), quick=args.quick)
-    print(
-        json.dumps(
-            {k: s[k] for k in ("bvp", "bisection", "difference_bvp_minus_bisection", "seconds")},
-            indent=2,
-        )
+    return study_main(
+        __doc__,
+        "out/fig21_23",
+        compute,
+        argv,
+        flags=(("quick", "every 5 deg, one bisection check"),),
+        shown=("bvp", "bisection", "difference_bvp_minus_bisection", "seconds"),
     )
-    return 0
 
 
 if __name__ == "__main__":

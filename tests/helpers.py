@@ -202,6 +202,44 @@ def brusselator_rd(N: int, D1: float, D2: float) -> System:
     return System(rhs, names, ("A", "B"))
 
 
+def vdp_period(mu: float) -> float:
+    """Period of the van der Pol cycle, an independent reference: the time between upward
+    zero crossings of x by SciPy's DOP853 at rtol = atol = 1e-12, after the transient
+    from (2, 0)."""
+    from scipy.integrate import solve_ivp
+
+    f = lambda t, x: [x[1], mu * (1 - x[0] ** 2) * x[1] - x[0]]  # noqa: E731
+    up = lambda t, x: x[0]  # noqa: E731
+    up.direction = 1
+    r = solve_ivp(f, (0.0, 6 * (3 + 1.7 * mu)), [2.0, 0.0], method="DOP853", rtol=1e-12,
+                  atol=1e-12, events=up)  # fmt: skip
+    return float(np.diff(r.t_events[0])[-1])
+
+
+def pendulum_loop_returns(I: float, gamma: float) -> float:
+    """+1 if the saddle's unstable manifold of the driven pendulum
+    ``theta'' + gamma theta' + sin(theta) = I`` passes the next saddle (theta + 2 pi),
+    -1 if it falls back (v = 0 first): the sign whose change is the homoclinic orbit
+    (an independent shooting computation, tight tolerances)."""
+    import math
+
+    from scipy.integrate import solve_ivp
+
+    ths = math.pi - math.asin(I)
+    J = np.array([[0.0, 1.0], [-math.cos(ths), -gamma]])
+    w, V = np.linalg.eig(J)
+    v = V[:, int(np.argmax(w.real))].real
+    v = v if v[1] > 0 else -v
+    ev1 = lambda t, x: x[0] - (ths + 2 * math.pi)  # noqa: E731
+    ev1.terminal = True
+    ev2 = lambda t, x: x[1]  # noqa: E731
+    ev2.terminal, ev2.direction = True, -1
+    r = solve_ivp(lambda t, x: [x[1], I - gamma * x[1] - math.sin(x[0])], (0, 200),
+                  np.array([ths, 0.0]) + 1e-9 * v, events=[ev1, ev2], rtol=1e-12,
+                  atol=1e-14, method="DOP853")  # fmt: skip
+    return 1.0 if r.t_events[0].size else -1.0
+
+
 def assert_invariants(br, tol=1e-9):
     """Branch invariants that must hold on every run."""
     prob = br.problem

@@ -12,7 +12,6 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from continuation import _jit
 from continuation.bvp import find_connection
 from continuation.bvp.condense import CondensedLU, StageCondenser
 from continuation.linalg import BorderedLU, _perm_parity, assemble_bordered_csc
@@ -120,35 +119,24 @@ def test_both_factorisations_of_the_schur_complement_match_superlu(
     _assert_matches_superlu(fac, M, rng.standard_normal((M.shape[0], 2)))
 
 
-@pytest.mark.parametrize("compiled", [True, False], ids=["compiled blocks", "NumPy blocks"])
-def test_both_block_paths_match_superlu(linearised, compiled, monkeypatch):
+def test_block_factorisation_matches_superlu(linearised):
     # the stage blocks are factorised by the compiled kernel (block LU, Hager's condition
-    # estimate, determinants from the pivots) or by NumPy (inverses): both against
-    # SuperLU of the whole matrix, solves, transposed solves and the determinant
-    import continuation.bvp.condense as cd
-
+    # estimate, determinants from the pivots; Numba is required): against SuperLU of the
+    # whole matrix, solves, transposed solves and the determinant
     J, gp = linearised
-    assert _jit.compiled(cd.KERNELS) is not None  # Numba is a dependency: the default
-    if not compiled:
-        monkeypatch.setitem(_jit.LOADED, cd.KERNELS, None)
     owner = J.condensed_lu.__self__
     fresh = StageCondenser(owner.rows_s, owner.cols_s)
     rng = np.random.default_rng(11)
     c = rng.standard_normal(J.shape[0] + 1)
     M = assemble_bordered_csc(J, gp, c)
     fac = fresh.factor(M)
-    assert isinstance(fac, CondensedLU) and (fac._Ainv is None) == compiled
+    assert isinstance(fac, CondensedLU)
     _assert_matches_superlu(fac, M, rng.standard_normal((M.shape[0], 3)))
 
 
-@pytest.mark.parametrize("compiled", [True, False], ids=["compiled blocks", "NumPy blocks"])
-def test_an_ill_conditioned_block_falls_back(compiled, monkeypatch):
+def test_an_ill_conditioned_block_falls_back():
     # two 3 x 3 stage blocks coupled through one rest unknown; block 1 has condition
     # number about 1e13 > MAX_BLOCK_COND: no condensation (the caller's general LU)
-    import continuation.bvp.condense as cd
-
-    if not compiled:
-        monkeypatch.setitem(_jit.LOADED, cd.KERNELS, None)
     rng = np.random.default_rng(5)
     Q1, _ = np.linalg.qr(rng.standard_normal((3, 3)))
     Q2, _ = np.linalg.qr(rng.standard_normal((3, 3)))

@@ -43,6 +43,7 @@ from continuation.errors import ConvergenceError
 from continuation.settings import NewtonSettings
 from continuation.status import Status
 from continuation.system import System
+from tests.connection_problems import nagumo, nagumo4, pendulum
 
 matplotlib.use("Agg")
 
@@ -52,48 +53,11 @@ SQ2 = np.sqrt(2.0)
 
 
 # ---------------------------------------------------------------------------- models
-def nagumo() -> System:
-    def rhs(x, p, ops):
-        a, c = p[0], p[1]
-        return ops.stack([x[1], -c * x[1] - x[0] * (1 - x[0]) * (x[0] - a)])
-
-    return System(rhs, ("u", "v"), ("a", "c"))
-
-
 def fisher() -> System:
     def rhs(x, p, ops):
         return ops.stack([x[1], -p[0] * x[1] - x[0] * (1 - x[0])])
 
     return System(rhs, ("u", "v"), ("c",))
-
-
-def pendulum() -> System:
-    def rhs(x, p, ops):
-        return ops.stack([x[1], p[1] - p[0] * x[1] - ops.sin(x[0])])
-
-    return System(rhs, ("theta", "omega"), ("gamma", "F"), periodic={"theta": 2 * np.pi})
-
-
-def nagumo4() -> System:
-    """Nagumo front driving a damped rotation (y, w): n = 4, complex eigenvalues -1 +- 2i.
-
-    The (u, v) subsystem is autonomous, so the connection still has c = sqrt2 (1/2 - a);
-    the equilibria of (y, w) move with u, and the coupling term makes y nonlinear.
-    """
-
-    def rhs(x, p, ops):
-        u, v, y, w = x[0], x[1], x[2], x[3]
-        a, c, om = p[0], p[1], p[2]
-        return ops.stack(
-            [
-                v,
-                -c * v - u * (1 - u) * (u - a),
-                -y + om * w + u**2 + 0.3 * v * y,
-                -om * y - w + ops.sin(u),
-            ]
-        )
-
-    return System(rhs, ("u", "v", "y", "w"), ("a", "c", "om"))
 
 
 def front_guess(T: float, width: float = 1.5, n: int = 200) -> tuple[np.ndarray, np.ndarray]:

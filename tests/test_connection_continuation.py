@@ -23,24 +23,9 @@ from continuation.bvp.solve import connection_at, continue_connection, solve_con
 from continuation.events import Event
 from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
-from continuation.system import System
+from tests.connection_problems import nagumo, pendulum
 
 SQ2 = np.sqrt(2.0)
-
-
-def nagumo() -> System:
-    def rhs(x, p, ops):
-        a, c = p[0], p[1]
-        return ops.stack([x[1], -c * x[1] - x[0] * (1 - x[0]) * (x[0] - a)])
-
-    return System(rhs, ("u", "v"), ("a", "c"))
-
-
-def pendulum() -> System:
-    def rhs(x, p, ops):
-        return ops.stack([x[1], p[1] - p[0] * x[1] - ops.sin(x[0])])
-
-    return System(rhs, ("theta", "omega"), ("gamma", "F"), periodic={"theta": 2 * np.pi})
 
 
 def shooting_F(gamma: float) -> float:

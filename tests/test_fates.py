@@ -229,33 +229,29 @@ def test_classifier_bad_input():
 
 
 # ----------------------------------------------------------------------- bisection
+def _switch_fates(**options):
+    """Fates of the switch system's saddle branch +1 against mu (heteroclinic at C / 2)."""
+    return manifold_fate_function(SWITCH, [0.2, C], "mu", [-1.0, 0.2 - C], branch=1,
+                                  equilibria={"R": [1.0, C - 0.2]}, events=SWITCH_EVENTS,
+                                  t_max=60.0, **options)  # fmt: skip
+
+
+def _pendulum_fates(g, F0, **options):
+    """Fates of the driven pendulum's saddle branch +1 against F (damping g)."""
+    return manifold_fate_function(PEND, [g, F0], "F", [np.pi - np.arcsin(F0), 0.0], branch=1,
+                                  equilibria={"down": [np.arcsin(F0), 0.0]},
+                                  t_max=20 / g + 200, tol=1e-5, **options)  # fmt: skip
+
+
 def test_switch_system_fates_on_both_sides():
-    fate_at = manifold_fate_function(
-        SWITCH,
-        [0.2, C],
-        "mu",
-        [-1.0, 0.2 - C],
-        branch=1,
-        equilibria={"R": [1.0, C - 0.2]},
-        events=SWITCH_EVENTS,
-        t_max=60.0,
-    )
+    fate_at = _switch_fates()
     assert fate_at(0.6).label == "event:y_down"
     assert fate_at(0.7).label == "event:y_up"
     assert fate_at(0.2).label == "event:y_down"
 
 
 def test_bisect_fate_finds_exact_heteroclinic_parameter():
-    fate_at = manifold_fate_function(
-        SWITCH,
-        [0.2, C],
-        "mu",
-        [-1.0, 0.2 - C],
-        branch=1,
-        equilibria={"R": [1.0, C - 0.2]},
-        events=SWITCH_EVENTS,
-        t_max=60.0,
-    )
+    fate_at = _switch_fates()
     seen = []
     res = bisect_fate(fate_at, 0.1, 1.25, tol=1e-7, progress=lambda lo, hi, n: seen.append(n))
     assert res.status is Status.SUCCESS
@@ -336,16 +332,7 @@ def test_equilibrium_tracker_follows_and_detects_index_change():
 def _melnikov_deviation(g):
     """Relative deviation of the computed homoclinic F_c(g) from Melnikov's 4 g / pi."""
     F0 = 4 * g / np.pi
-    fate_at = manifold_fate_function(
-        PEND,
-        [g, F0],
-        "F",
-        [np.pi - np.arcsin(F0), 0.0],
-        branch=1,
-        equilibria={"down": [np.arcsin(F0), 0.0]},
-        t_max=20 / g + 200,
-        tol=1e-5,
-    )
+    fate_at = _pendulum_fates(g, F0)
     res = bisect_fate(fate_at, 0.5 * F0, 1.5 * F0, tol=1e-9 * F0 / 0.1)
     assert res.status is Status.SUCCESS
     Fc = res.p_critical
@@ -361,17 +348,7 @@ def _melnikov_deviation(g):
         assert f.visits and f.visits[0].label == "saddle@+1"
     # first passage of the start's copy one period on: back towards down@+1 (theta
     # decreasing, side -1) below F_c, on over the top (side +1) above
-    side_at = manifold_fate_function(
-        PEND,
-        [g, F0],
-        "F",
-        [np.pi - np.arcsin(F0), 0.0],
-        branch=1,
-        equilibria={"down": [np.arcsin(F0), 0.0]},
-        t_max=20 / g + 200,
-        tol=1e-5,
-        passage="saddle",
-    )
+    side_at = _pendulum_fates(g, F0, passage="saddle")
     assert side_at(Fc * (1 - 1e-6)) == "passage:saddle:-1"
     assert side_at(Fc * (1 + 1e-6)) == "passage:saddle:+1"
     return abs(Fc / F0 - 1)
@@ -417,18 +394,7 @@ def test_passage_side_of_the_neighbouring_saddle(dmu):
 
 
 def test_bisect_first_passage_finds_exact_heteroclinic_parameter():
-    fate_at = manifold_fate_function(
-        SWITCH,
-        [0.2, C],
-        "mu",
-        [-1.0, 0.2 - C],
-        branch=1,
-        equilibria={"R": [1.0, C - 0.2]},
-        events=SWITCH_EVENTS,
-        t_max=60.0,
-        passage="R",
-        passage_labels={1: "event:y_up", -1: "event:y_down"},
-    )
+    fate_at = _switch_fates(passage="R", passage_labels={1: "event:y_up", -1: "event:y_down"})
     res = bisect_fate(fate_at, 0.1, 1.25, tol=1e-7)
     assert res.status is Status.SUCCESS
     lo, hi = res.bracket

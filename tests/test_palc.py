@@ -333,7 +333,7 @@ def test_palc_distance_safeguard_rejects_far_corrections(monkeypatch):
         x = -math.sqrt(0.4)
         return corrector.CorrectorResult(True, np.array([x]), 0.4, res.lin, res.iters, 0.0)
 
-    monkeypatch.setattr("continuation.algorithms.palc.correct", far)
+    monkeypatch.setattr("continuation.algorithms.step.correct", far)
     _, out = alg.step(prob, state, st)
     assert not out.converged and "away from the predictor" in out.message
     with pytest.raises(ValueError, match="max_distance"):

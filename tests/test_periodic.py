@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import pendulum_loop_returns, vdp_period
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -16,7 +17,6 @@ from continuation import (
     SpecialKind,
     Status,
     System,
-    _jit,
     continue_equilibria,
     simulate,
 )
@@ -186,17 +186,6 @@ def test_adapted_mesh_resolves_a_relaxation_oscillation():
     assert error_estimate(ada.mesh, ada.X) < error_estimate(uni.mesh, uni.X)
 
 
-def _vdp_period_by_simulation(mu: float) -> float:
-    """Independent reference: the time between upward zero crossings of x, by scipy's
-    DOP853 at rtol = atol = 1e-12, after the transient from (2, 0)."""
-    f = lambda t, x: [x[1], mu * (1 - x[0] ** 2) * x[1] - x[0]]  # noqa: E731
-    up = lambda t, x: x[0]  # noqa: E731
-    up.direction = 1
-    r = solve_ivp(f, (0.0, 6 * (3 + 1.7 * mu)), [2.0, 0.0], method="DOP853", rtol=1e-12,
-                  atol=1e-12, events=up)  # fmt: skip
-    return float(np.diff(r.t_events[0])[-1])
-
-
 def test_a_branch_on_too_coarse_a_mesh_says_so_and_error_tol_fixes_it():
     """van der Pol from mu = 1 to 10 (the jumps sharpen as mu grows). On a fixed mesh
     (40 uniform intervals, error_tol=None) the period at mu = 10 is off by more than 1 %,
@@ -209,7 +198,7 @@ def test_a_branch_on_too_coarse_a_mesh_says_so_and_error_tol_fixes_it():
     s, orb = _vdp_orbit(1.0, CollocationMesh(40, 4, 1.0))
     uz = [Event("UZ5", lambda z, p: p - 5.0), Event("UZ10", lambda z, p: p - 10.0)]
     st = ContinuationSettings(p_max=10.0)
-    ref = {"UZ5": _vdp_period_by_simulation(5.0), "UZ10": _vdp_period_by_simulation(10.0)}
+    ref = {"UZ5": vdp_period(5.0), "UZ10": vdp_period(10.0)}
     assert ref["UZ10"] == pytest.approx(19.0784, abs=1e-4)  # tabulated: T(10) = 19.0784
 
     def periods(br):
@@ -375,23 +364,7 @@ def test_neimark_sacker_and_branch_point_of_cycles_closed_form():
 def _pendulum_homoclinic(gamma: float) -> float:
     """I at which the saddle's unstable manifold returns to the saddle one turn later
     (an independent shooting + bisection computation)."""
-
-    def arrive(I: float) -> float:
-        ths = math.pi - math.asin(I)
-        J = np.array([[0.0, 1.0], [-math.cos(ths), -gamma]])
-        w, V = np.linalg.eig(J)
-        v = V[:, int(np.argmax(w.real))].real
-        v = v if v[1] > 0 else -v
-        ev1 = lambda t, x: x[0] - (ths + 2 * math.pi)  # noqa: E731
-        ev1.terminal = True
-        ev2 = lambda t, x: x[1]  # noqa: E731
-        ev2.terminal, ev2.direction = True, -1
-        r = solve_ivp(lambda t, x: [x[1], I - gamma * x[1] - math.sin(x[0])], (0, 100),
-                      np.array([ths, 0.0]) + 1e-9 * v, events=[ev1, ev2], rtol=1e-12,
-                      atol=1e-14, method="DOP853")  # fmt: skip
-        return 1.0 if r.t_events[0].size else -1.0
-
-    return brentq(arrive, 0.3, 0.95, xtol=1e-13)
+    return brentq(lambda I: pendulum_loop_returns(I, gamma), 0.3, 0.95, xtol=1e-13)
 
 
 def test_pendulum_rotation_period_blows_up_at_homoclinic():
@@ -576,13 +549,15 @@ def test_numpy_only_system():
 
 
 @pytest.mark.parametrize("n", [2, 3, 4])
-def test_compiled_floquet_kernels_match_numpy(n, monkeypatch):
-    # the deflation of the trivial multiplier and the stage solves of the transfer
-    # matrices, compiled, against the NumPy code on the same data (a rotation-like
-    # product with f along the flow, perturbed, so that every block is exercised)
+def test_compiled_floquet_kernels(n):
+    # the deflation of the trivial multiplier (compiled; Numba is required) on transfer
+    # matrices built with a known answer: Phi_j = Q_{j+1} A_j Q_j^T with Q_j orthonormal,
+    # first column f_j / |f_j|, and A_j = [[r_j, b_j], [0, C_j]], so that the trivial
+    # multiplier is prod r_j and the others are the eigenvalues of C_{N-1} ... C_0
+    # (exactly, no coupling to neglect); then the stage solves of the transfer matrices
+    # against NumPy's solver
     import importlib
 
-    import continuation.bvp.condense as cd
     from continuation.bvp import _condense_jit
 
     fq = importlib.import_module("continuation.periodic.floquet")  # (the package exports
@@ -590,31 +565,73 @@ def test_compiled_floquet_kernels_match_numpy(n, monkeypatch):
 
     rng = np.random.default_rng(n)
     N = 12
-    Phi = np.eye(n)[None] + 0.1 * rng.standard_normal((N, n, n))
     f_nodes = rng.standard_normal((N + 1, n))
-    assert _jit.compiled(fq.KERNELS) is not None  # Numba is a dependency: compiled
+    f_nodes[N] = f_nodes[0]  # (a closed cycle)
+    Q = []
+    for j in range(N):
+        q, _ = np.linalg.qr(np.column_stack([f_nodes[j], rng.standard_normal((n, n - 1))]))
+        Q.append(q * np.sign(q[:, 0] @ f_nodes[j]))  # first column +f_j / |f_j|
+    Q.append(Q[0])
+    r = 1.0 + 0.1 * rng.standard_normal(N)
+    C = np.eye(n - 1)[None] + 0.1 * rng.standard_normal((N, n - 1, n - 1))
+    Phi = np.empty((N, n, n))
+    for j in range(N):
+        A = np.zeros((n, n))
+        A[0, 0], A[0, 1:], A[1:, 1:] = r[j], rng.standard_normal(n - 1), C[j]
+        Phi[j] = Q[j + 1] @ A @ Q[j].T
+    prod_C = functools.reduce(lambda acc, c: c @ acc, C, np.eye(n - 1))
     got = fq.floquet(Phi, f_nodes)
-    monkeypatch.setitem(_jit.LOADED, fq.KERNELS, None)
-    ref = fq.floquet(Phi, f_nodes)
-    np.testing.assert_allclose(np.sort_complex(got.multipliers), np.sort_complex(ref.multipliers),
-                               rtol=1e-12, atol=1e-14)  # fmt: skip
-    assert got.trivial == pytest.approx(ref.trivial, rel=1e-12)
-    assert got.trivial_error == pytest.approx(ref.trivial_error, rel=1e-10)
+    np.testing.assert_allclose(np.sort_complex(got.multipliers),
+                               np.sort_complex(np.linalg.eigvals(prod_C)),
+                               rtol=1e-10, atol=1e-12)  # fmt: skip
+    assert got.trivial == pytest.approx(np.prod(r), rel=1e-12)
+    assert got.trivial_error == pytest.approx(abs(np.prod(r) - 1), rel=1e-6)
     K = rng.standard_normal((N, 4 * n, 4 * n)) + 4 * np.eye(4 * n)
     R = rng.standard_normal((N, 4 * n, n))
     X = np.empty_like(R)
-    assert _jit.compiled(cd.KERNELS) is _condense_jit
     assert _condense_jit.solve_many(K.copy(), R, X)
     np.testing.assert_allclose(X, np.linalg.solve(K, R), rtol=1e-12, atol=1e-13)
     K[3, :, 2] = 0.0  # a singular block is reported, not solved
     assert not _condense_jit.solve_many(K.copy(), R, X)
 
 
+def _collocation_residual(prob, s, z, p):
+    """The periodic collocation equations written out interval by interval (the
+    reference of the compiled kernel): ``sum_l D[k,l] X_{j,l} / h_j - T f(X_{j,k+1})``,
+    continuity ``sum_l e_l X_{j,l} - x_{j+1}``, periodicity ``x_N - x_0 - shift`` and
+    the integral phase condition."""
+    lay = prob.layout
+    N, m, n = lay.N, lay.m, lay.n
+    D, e, h = lay.mesh.D, lay.mesh.e, lay.mesh.h
+    X, T = lay.split(z)
+    pv = np.array(prob.params.values)
+    pv[prob.params.index(prob.free)] = p
+    G = np.zeros(lay.n_unknowns)
+    row = 0
+    for j in range(N):
+        Xj = X[j * (m + 1) : (j + 1) * (m + 1) + 1]
+        for k in range(m):
+            G[row : row + n] = sum(D[k, l] * Xj[l] for l in range(m + 1)) / h[j] - T * s.f(
+                Xj[k + 1], pv
+            )
+            row += n
+        G[row : row + n] = sum(e[l] * Xj[l] for l in range(m + 1)) - Xj[m + 1]
+        row += n
+    G[row : row + n] = X[-1] - X[0] - prob._shift
+    Xs = X[lay.stage_points]
+    ref, dref = prob._slot["ref"], prob._slot["dref"]
+    G[row + n] = np.sum(lay.weights[:, None] * (Xs - ref) * dref)
+    return G
+
+
 @pytest.mark.parametrize("case", ["rotation", "rossler"])
-def test_compiled_collocation_matches_numpy(case, monkeypatch):
-    # residual, Jacobian values, dG/dp and the blocks of the compiled collocation
-    # kernel against the layout's NumPy code, at a point off the cycle (every term
-    # nonzero): a rotation orbit (periodicity shift 2 pi) and the 3-state Rossler cycle
+def test_compiled_collocation_kernel(case):
+    # residual, Jacobian, dG/dp and the blocks of the compiled collocation kernel (Numba
+    # is required) at a point off the cycle (every term nonzero): the residual against
+    # the equations written out, the derivatives against central differences of it
+    # (truncation O(eps^2), round-off O(1e-16 / eps) relative: 1e-6 allows both), the
+    # blocks against the layout's B = D/h I - T f_x; a rotation orbit (periodicity shift
+    # 2 pi) and the 3-state Rossler cycle
     import continuation.periodic.problem as pp
 
     if case == "rotation":
@@ -633,16 +650,19 @@ def test_compiled_collocation_matches_numpy(case, monkeypatch):
     prob = pp.PeriodicOrbitProblem.from_orbit(orb, free)
     z = prob.reference * (1 + 1e-3 * np.sin(np.arange(prob.n_unknowns)))
     p = orb.param(free) + 0.01
-    assert _jit.compiled(pp.KERNELS) is not None
-    G1, J1, Gp1 = prob.linearize(z, p)
-    B1, r1 = prob._slot["cache"][2].copy(), prob.residual(z, p)
-    monkeypatch.setitem(_jit.LOADED, pp.KERNELS, None)
-    G0, J0, Gp0 = prob.linearize(z, p)
-    B0, r0 = prob._slot["cache"][2].copy(), prob.residual(z, p)
-    scale = np.max(np.abs(G0))
-    assert np.max(np.abs(G1 - G0)) <= 1e-12 * scale and np.max(np.abs(r1 - r0)) <= 1e-12 * scale
-    assert (J1.indices is J0.indices) and np.max(np.abs(J1.data - J0.data)) <= 1e-14 * np.max(
-        np.abs(J0.data)
-    )
-    np.testing.assert_allclose(Gp1, Gp0, rtol=1e-14, atol=0)
-    np.testing.assert_allclose(B1, B0, rtol=1e-14, atol=0)
+    G, J, Gp = prob.linearize(z, p)
+    B = prob._slot["cache"][2].copy()
+    ref = _collocation_residual(prob, s, z, p)
+    scale = np.max(np.abs(ref))
+    assert np.max(np.abs(G - ref)) <= 1e-12 * scale
+    assert np.max(np.abs(prob.residual(z, p) - ref)) <= 1e-12 * scale
+    eps = 1e-6
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        v = rng.standard_normal(z.size) * np.maximum(np.abs(z), 1.0)
+        fd = (prob.residual(z + eps * v, p) - prob.residual(z - eps * v, p)) / (2 * eps)
+        assert np.linalg.norm(J @ v - fd) <= 1e-6 * np.linalg.norm(fd)
+    fd_p = (prob.residual(z, p + eps) - prob.residual(z, p - eps)) / (2 * eps)
+    assert np.linalg.norm(Gp - fd_p) <= 1e-6 * max(np.linalg.norm(fd_p), 1e-12)
+    X, T, _, _, Jx, _ = prob._stages(z, p, True)
+    np.testing.assert_allclose(B, prob.layout.blocks(X, T, Jx), rtol=1e-14, atol=0)

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import pendulum_loop_returns, vdp_period
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -32,16 +33,6 @@ def _vdp(x, p, ops):
     return ops.stack([x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0]])
 
 
-def _vdp_period(mu: float) -> float:
-    """Time between upward zero crossings of x once settled (DOP853, 1e-12)."""
-    f = lambda t, x: [x[1], mu * (1 - x[0] ** 2) * x[1] - x[0]]  # noqa: E731
-    up = lambda t, x: x[0]  # noqa: E731
-    up.direction = 1
-    r = solve_ivp(f, (0.0, 6 * (3 + 1.7 * mu)), [2.0, 0.0], method="DOP853", rtol=1e-12,
-                  atol=1e-12, events=up)  # fmt: skip
-    return float(np.diff(r.t_events[0])[-1])
-
-
 def test_van_der_pol_periods_at_the_default_settings():
     """From mu = 1 to 10 at the defaults (the start cycle on the default 40 intervals):
     the periods at mu = 5 and 10 within 1e-6 of the simulation (a fixed mesh was
@@ -54,9 +45,9 @@ def test_van_der_pol_periods_at_the_default_settings():
     assert br.status == Status.PARAM_BOUND, br.message
     assert np.all(br.records["error"] <= 1.01e-6)
     got = {sp.label: orbit_at(br, sp).T for sp in br.special_points if sp.label in ("UZ5", "UZ10")}
-    ref10 = _vdp_period(10.0)
+    ref10 = vdp_period(10.0)
     assert ref10 == pytest.approx(19.0784, abs=1e-4)  # tabulated: T(10) = 19.0784
-    assert got["UZ5"] == pytest.approx(_vdp_period(5.0), abs=1e-6)
+    assert got["UZ5"] == pytest.approx(vdp_period(5.0), abs=1e-6)
     assert got["UZ10"] == pytest.approx(ref10, abs=1e-6)
 
 
@@ -65,32 +56,14 @@ def _pendulum(x, p, ops):
     return ops.stack([x[1], p[0] - p[1] * x[1] - ops.sin(x[0])])
 
 
-def _loop_returns(I: float, gamma: float) -> float:
-    """+1 if the saddle's unstable manifold passes the next saddle (theta + 2 pi), -1 if
-    it falls back (v = 0 first)."""
-    ths = math.pi - math.asin(I)
-    J = np.array([[0.0, 1.0], [-math.cos(ths), -gamma]])
-    w, V = np.linalg.eig(J)
-    v = V[:, int(np.argmax(w.real))].real
-    v = v if v[1] > 0 else -v
-    ev1 = lambda t, x: x[0] - (ths + 2 * math.pi)  # noqa: E731
-    ev1.terminal = True
-    ev2 = lambda t, x: x[1]  # noqa: E731
-    ev2.terminal, ev2.direction = True, -1
-    r = solve_ivp(lambda t, x: [x[1], I - gamma * x[1] - math.sin(x[0])], (0, 200),
-                  np.array([ths, 0.0]) + 1e-9 * v, events=[ev1, ev2], rtol=1e-12,
-                  atol=1e-14, method="DOP853")  # fmt: skip
-    return 1.0 if r.t_events[0].size else -1.0
-
-
 @functools.lru_cache(maxsize=4)
 def _homoclinic_I(gamma: float) -> float:
-    return brentq(lambda I: _loop_returns(I, gamma), 0.3, 0.95, xtol=1e-13)
+    return brentq(lambda I: pendulum_loop_returns(I, gamma), 0.3, 0.95, xtol=1e-13)
 
 
 @functools.lru_cache(maxsize=4)
 def _homoclinic_gamma(I: float) -> float:
-    return brentq(lambda g: -_loop_returns(I, g), 0.05, 1.5, xtol=1e-13)
+    return brentq(lambda g: -pendulum_loop_returns(I, g), 0.05, 1.5, xtol=1e-13)
 
 
 def _rotation_period(I: float, gamma: float, x0) -> float:

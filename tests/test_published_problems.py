@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from connection_problems import lorenz
 from helpers import brusselator_rd
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, fsolve
@@ -45,16 +46,6 @@ def _one(branch, kind):
 
 
 # =============================================================================== Lorenz
-def lorenz() -> System:
-    def rhs(x, p, ops):
-        sigma, r, beta = p[0], p[1], p[2]
-        return ops.stack(
-            [sigma * (x[1] - x[0]), r * x[0] - x[1] - x[0] * x[2], x[0] * x[1] - beta * x[2]]
-        )
-
-    return System(rhs, ("x", "y", "z"), ("sigma", "r", "beta"))
-
-
 def _lorenz_hopf_r(sigma, beta):
     return sigma * (sigma + beta + 3) / (sigma - beta - 1)
 

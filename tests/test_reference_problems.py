@@ -180,21 +180,17 @@ def test_lorenz84_folds_and_hopf_independent_solve():
 BRATU_LAMBDA_STAR = 3.513830719125161  # continuous fold (e.g. Mohsen 2014, Boyd 1986)
 
 
+def _bratu_branch(n: int, stop: Event, *, ds: float):
+    """Bratu's branch from the trivial solution at lambda = 0, up to the event ``stop``."""
+    return continue_equilibria(bratu(n), np.zeros(n), {"lam": 0.0}, "lam", p_min=0.0,
+                               p_max=4.0, ds=ds, ds_max=0.5, direction="forward",
+                               events=[stop])  # fmt: skip
+
+
 def _bratu_fold(n: int) -> float:
     # stop soon after the fold, on the upper branch (max u = 2 > 1.39 at the fold)
     stop = Event("upper", lambda x, p: float(np.max(x)) - 2.0, terminal=True)
-    br = continue_equilibria(
-        bratu(n),
-        np.zeros(n),
-        {"lam": 0.0},
-        "lam",
-        p_min=0.0,
-        p_max=4.0,
-        ds=0.1,
-        ds_max=0.5,
-        direction="forward",
-        events=[stop],
-    )
+    br = _bratu_branch(n, stop, ds=0.1)
     assert br.status is Status.EVENT
     assert br.problem.sparse == (n >= 100)
     (f,) = br.find("fold")
@@ -317,18 +313,7 @@ def test_bratu_50_branch_point_near_lambda_zero_is_genuine():
     n = 50
     lam_ref, m_ref = _bratu_symmetric_pitchfork(n, 44.0, 46.0)
     stop = Event("far", lambda x, p: float(np.max(x)) - 50.0, terminal=True)
-    br = continue_equilibria(
-        bratu(n),
-        np.zeros(n),
-        {"lam": 0.0},
-        "lam",
-        p_min=0.0,
-        p_max=4.0,
-        ds=0.05,
-        ds_max=0.5,
-        direction="forward",
-        events=[stop],
-    )
+    br = _bratu_branch(n, stop, ds=0.05)
     assert br.status is Status.EVENT
     (bp,) = br.find("bp")
     assert bp.located and bp.delta_unstable == (1, 0)
@@ -347,18 +332,7 @@ def test_bratu_20_branch_point_against_shooting():
     n = 20
     lam_ref, m_ref = _bratu_symmetric_pitchfork(n, 19.0, 21.0)
     stop = Event("far", lambda x, p: float(np.max(x)) - 21.0, terminal=True)
-    br = continue_equilibria(
-        bratu(n),
-        np.zeros(n),
-        {"lam": 0.0},
-        "lam",
-        p_min=0.0,
-        p_max=4.0,
-        ds=0.5,
-        ds_max=0.5,
-        direction="forward",
-        events=[stop],
-    )
+    br = _bratu_branch(n, stop, ds=0.5)
     (bp,) = br.find("bp")
     assert bp.located
     assert bp.p == pytest.approx(lam_ref, rel=1e-7)

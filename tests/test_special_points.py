@@ -135,34 +135,24 @@ def test_transcritical_nontrivial_branch():
     np.testing.assert_allclose(br.x[:, 0], br.p, atol=1e-9)
 
 
+_FOLD_RUN = {"p_min": -1.0, "p_max": 2.0, "direction": "forward", "ds": -0.01}
+
+
+def _fold_branch(event: Event):
+    """The upper fold-normal-form branch from mu = 1 down through its fold, with ``event``."""
+    return continue_equilibria(
+        fold_normal_form(), [1.0], {"mu": 1.0}, "mu", events=[event], **_FOLD_RUN
+    )
+
+
 def test_user_event_located_and_terminal():
     ev = Event("x_half", lambda x, p: x[0] - 0.5, direction="down")
-    br = continue_equilibria(
-        fold_normal_form(),
-        [1.0],
-        {"mu": 1.0},
-        "mu",
-        p_min=-1.0,
-        p_max=2.0,
-        events=[ev],
-        direction="forward",
-        ds=-0.01,
-    )
+    br = _fold_branch(ev)
     (e,) = br.find("x_half")
     assert e.kind is SpecialKind.USER and e.located
     assert e.p == pytest.approx(0.25, abs=1e-12) and e.x[0] == pytest.approx(0.5, abs=1e-12)
     term = Event("stop", lambda x, p: x[0] + 0.5, terminal=True)
-    br2 = continue_equilibria(
-        fold_normal_form(),
-        [1.0],
-        {"mu": 1.0},
-        "mu",
-        p_min=-1.0,
-        p_max=2.0,
-        events=[term],
-        direction="forward",
-        ds=-0.01,
-    )
+    br2 = _fold_branch(term)
     assert br2.status is Status.EVENT
     assert br2.x[-1, 0] == pytest.approx(-0.5, abs=1e-12)
     assert [sp.kind.value for sp in br2.special_points] == ["fold", "user"]
@@ -171,17 +161,7 @@ def test_user_event_located_and_terminal():
 
 def test_event_direction_filter():
     up = Event("up", lambda x, p: x[0] - 0.5, direction="up")
-    br = continue_equilibria(
-        fold_normal_form(),
-        [1.0],
-        {"mu": 1.0},
-        "mu",
-        p_min=-1.0,
-        p_max=2.0,
-        events=[up],
-        direction="forward",
-        ds=-0.01,
-    )
+    br = _fold_branch(up)
     assert not br.find("up")  # x decreases along this branch
 
 
@@ -228,17 +208,7 @@ def test_hopf_picks_the_crossing_pair_not_the_nearest():
 
 def test_event_on_a_jump_is_bracketed_not_located():
     jump = Event("jump", lambda x, p: 1.0 if p > 0.3 else -1.0)
-    br = continue_equilibria(
-        fold_normal_form(),
-        [1.0],
-        {"mu": 1.0},
-        "mu",
-        p_min=-1.0,
-        p_max=2.0,
-        events=[jump],
-        direction="forward",
-        ds=-0.01,
-    )
+    br = _fold_branch(jump)
     jumps = br.find("jump")
     assert len(jumps) == 2  # mu passes 0.3 on the way down and on the way back up
     for e in jumps:

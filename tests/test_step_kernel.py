@@ -21,8 +21,6 @@ from continuation.problem import EquilibriumProblem
 from continuation.settings import ContinuationSettings
 from continuation.system import System
 
-pytestmark = pytest.mark.skipif(not K.HAVE_NUMBA, reason="Numba is not installed")
-
 
 # ----------------------------------------------------------------------------- tape
 def _all_ops_function() -> ca.Function:
@@ -176,8 +174,8 @@ def test_cubic8_folds_exact_with_kernel():
 
 
 def test_when_there_is_no_kernel(monkeypatch):
-    """No kernel for sparse problems, NumPy-only systems, large systems, long tapes, or
-    without Numba; those runs take the Python step."""
+    """No kernel for sparse problems, NumPy-only systems, large systems or long tapes;
+    those runs (and ``PALC(kernel=False)``) take the Python step."""
     assert EquilibriumProblem(bratu(120), {"lam": 0.0}, "lam").step_kernel() is None  # sparse
     numpy_only = System(lambda x, p: np.array([p[0] - x[0] ** 2]), ("x",), ("mu",))
     assert EquilibriumProblem(numpy_only, {"mu": 1.0}, "mu").step_kernel() is None
@@ -186,11 +184,8 @@ def test_when_there_is_no_kernel(monkeypatch):
     monkeypatch.setattr(T, "MAX_TAPE_INSTRUCTIONS", 10)
     assert EquilibriumProblem(brusselator(), {"A": 1.5, "B": 1.0}, "B").step_kernel() is None
     monkeypatch.setattr(T, "MAX_TAPE_INSTRUCTIONS", 2000)
-    monkeypatch.setattr(K, "HAVE_NUMBA", False)
-    prob = EquilibriumProblem(hopf_normal_form(), {"mu": -1.0}, "mu")
-    assert prob.step_kernel() is None
     br = continue_equilibria(hopf_normal_form(), [0.0, 0.0], {"mu": -1.0}, "mu", p_min=-1,
-                             p_max=1)  # fmt: skip
+                             p_max=1, algorithm=PALC(kernel=False))  # fmt: skip
     (h,) = br.find("hopf")
     assert h.located and abs(h.p) < 1e-10
 

@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from . import auto_native
 from .common import PeerResult, PeerUnavailable
 
 _KIND = {"FOLD": "fold", "HOPF_BIFURCATION": "hopf", "BRANCH_POINT": "bp"}
@@ -141,6 +142,24 @@ def _result(res: Any, problem: Any) -> PeerResult:
     )
 
 
+def rows_result(rows: list[auto_native.Point], problem: Any) -> PeerResult:
+    """A :class:`PeerResult` from the rows of a ``fort.7`` (status: AUTO's type label)."""
+    if not rows:
+        raise RuntimeError("AUTO-07p wrote no solution rows")
+    col = f"PAR({problem.free_index + 1})"
+    special = [
+        (auto_native.KIND[r.ty], float(r.values[col])) for r in rows if r.ty in auto_native.KIND
+    ]
+    last = rows[-1]
+    return PeerResult(
+        steps=len(rows) - 1,
+        special=special,
+        p_end=float(last.values[col]),
+        status=auto_native.TYPE_LABEL.get(last.ty, str(last.ty)),
+        extra={"branches": len({r.branch for r in rows})},
+    )
+
+
 def run_ctypes(problem: Any) -> PeerResult:
     """One AUTO-07p run through bifpy's ctypes callbacks (fork + run + parse)."""
     auto = _auto()
@@ -192,15 +211,7 @@ class NativeAuto:
     def run(self) -> float:
         """Run the executable once; return its wall time in seconds (start to exit)."""
         self._clean()
-        t0 = time.perf_counter()
-        proc = subprocess.run(
-            [str(self.exe)],
-            cwd=self.directory,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            check=False,
-        )
-        dt = time.perf_counter() - t0
+        dt, proc = auto_native.run_executable(self.exe, self.directory)
         if proc.returncode != 0:
             raise RuntimeError(f"AUTO-07p executable exited with {proc.returncode}")
         return dt
@@ -229,10 +240,8 @@ class NativeAuto:
             return None
 
     def result(self) -> PeerResult:
-        """Parse the ``fort.7`` of the last run."""
-        from bifpy.auto import _parsing
-
-        return _result(_parsing.parse_fort7(self.directory / "fort.7"), self.problem)
+        """The ``fort.7`` of the last run (:func:`auto_native.parse_fort7`)."""
+        return rows_result(auto_native.parse_fort7(self.directory / "fort.7"), self.problem)
 
     def close(self) -> None:
         """Remove the build directory."""

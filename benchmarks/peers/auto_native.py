@@ -92,7 +92,8 @@ class Point:
     values: dict[str, float]
 
 
-_TY = {
+#: AUTO's two-letter label of each type code (``TY``).
+TYPE_LABEL = {
     1: "BP",
     2: "LP",
     3: "HB",
@@ -128,6 +129,29 @@ def parse_fort7(path: str | os.PathLike[str]) -> list[Point]:
             continue
         rows.append(Point(br, abs(pt), ty, lab, dict(zip(names, vals, strict=False))))
     return rows
+
+
+#: AUTO's type codes (``TY`` of ``fort.7``) of the special points the benchmarks count.
+KIND = {1: "bp", 2: "fold", 3: "hopf", 5: "fold", 6: "bp"}
+
+
+def run_executable(
+    exe: str | os.PathLike[str], directory: str | os.PathLike[str]
+) -> tuple[float, subprocess.CompletedProcess[str]]:
+    """Run an AUTO executable in ``directory``; ``(wall s from start to exit, process)``.
+
+    The one way the benchmarks start AUTO-07p: output captured, no exception on a
+    non-zero exit (the caller reads ``returncode``).
+    """
+    t0 = time.perf_counter()
+    proc = subprocess.run(
+        [str(pathlib.Path(exe).resolve())],
+        cwd=directory,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    return time.perf_counter() - t0, proc
 
 
 @dataclasses.dataclass(frozen=True)
@@ -169,11 +193,8 @@ def run_chain(
         if k > 0:
             shutil.copyfile(d / "fort.8", d / "fort.3")
         (d / "fort.2").write_text(constants_text(constants))
-        t0 = time.perf_counter()
-        proc = subprocess.run(
-            [str(pathlib.Path(exe).resolve())], cwd=d, capture_output=True, text=True, check=False
-        )
-        wall += time.perf_counter() - t0
+        dt, proc = run_executable(exe, d)
+        wall += dt
         m = re.search(r"Total Time\s+([0-9.E+-]+)", proc.stdout)
         auto_total += float(m.group(1)) if m else float("nan")
         rows = parse_fort7(d / "fort.7") if (d / "fort.7").exists() else []
@@ -188,7 +209,7 @@ def run_chain(
 
 def last(rows: Sequence[Point], ty: str | None = None) -> Point:
     """The last row (of type ``ty``, e.g. "UZ", if given)."""
-    sel = [r for r in rows if ty is None or _TY.get(r.ty) == ty]
+    sel = [r for r in rows if ty is None or TYPE_LABEL.get(r.ty) == ty]
     if not sel:
         raise RuntimeError(f"no {ty} point in AUTO's output")
     return sel[-1]
@@ -196,13 +217,15 @@ def last(rows: Sequence[Point], ty: str | None = None) -> Point:
 
 def label_of(rows: Sequence[Point], ty: str, k: int = 1) -> int:
     """Label of the ``k``-th point of type ``ty``."""
-    sel = [r.lab for r in rows if _TY.get(r.ty) == ty and r.lab > 0]
+    sel = [r.lab for r in rows if TYPE_LABEL.get(r.ty) == ty and r.lab > 0]
     if len(sel) < k:
         raise RuntimeError(f"AUTO's output has {len(sel)} {ty} points, wanted number {k}")
     return sel[k - 1]
 
 
 __all__ = [
+    "KIND",
+    "TYPE_LABEL",
     "ChainResult",
     "Point",
     "build",
@@ -212,4 +235,5 @@ __all__ = [
     "library_paths",
     "parse_fort7",
     "run_chain",
+    "run_executable",
 ]

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import logging
 import math
 import sys
 from collections.abc import Callable
@@ -35,6 +34,7 @@ from ..options import (
     check_fn,
     finite,
     json_safe,
+    numerical_failure_exit,
     ship_from_args,
 )
 from ..progress import StatusLine
@@ -246,14 +246,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the command; a numerical failure is one line on stderr (exit 1), never a traceback."""
-    from continuation.errors import ContinuationError
-
-    try:
-        return _run(args)
-    except ContinuationError as exc:
-        logging.getLogger(__name__).debug("%s failed", NAME, exc_info=True)
-        sys.stderr.write(f"broachkit {NAME}: {exc}\n")
-        return 1
+    return numerical_failure_exit(NAME, _run, args)
 
 
 def _window(model: Any, params: Any, args: argparse.Namespace) -> None:

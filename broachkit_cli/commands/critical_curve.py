@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import logging
 import math
 import sys
 import time
@@ -39,6 +38,7 @@ from ..options import (
     check_workers,
     finite,
     json_safe,
+    numerical_failure_exit,
     parse_list,
     prepare_out,
     ship_from_args,
@@ -152,14 +152,7 @@ def plot_curve(curve: Any, path: Path, *, paper: bool = True, thresholds: Any = 
 
 def run(args: argparse.Namespace) -> int:
     """Run the command; a numerical failure is one line on stderr (exit 1), never a traceback."""
-    from continuation.errors import ContinuationError
-
-    try:
-        return _run(args)
-    except ContinuationError as exc:
-        logging.getLogger(__name__).debug("%s failed", NAME, exc_info=True)
-        sys.stderr.write(f"broachkit {NAME}: {exc}\n")
-        return 1
+    return numerical_failure_exit(NAME, _run, args)
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -24,14 +24,13 @@ from __future__ import annotations
 import argparse
 import csv
 import io
-import json
 import math
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ..cycle_options import START_FN, add_branch_options, check_branch_options, emit, roll_verdict
 from ..files import write_atomic, write_json, write_text
 from ..options import (
     add_out,
@@ -39,7 +38,6 @@ from ..options import (
     check_chi_c_deg,
     check_fn,
     finite,
-    json_safe,
     prepare_out,
     ship_from_args,
 )
@@ -47,8 +45,6 @@ from ..options import (
 NAME = "cycles"
 HELP = "the overtaken-by-waves cycle continued in Fn (or chi_c) to its period blow-up"
 
-#: Fn of the start cycle when ``--fn`` is not given (simulation settles there).
-START_FN = 0.1
 #: Branch end statuses that are a complete answer (the period blew up, or the
 #: parameter range was covered).
 COMPLETE = ("PERIOD_UNBOUNDED", "PARAM_BOUND", "SUCCESS")
@@ -75,18 +71,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--chi-c-max", dest="chi_c_max", type=float, default=60.0,
         help="--vary chi-c: upper course in deg (60)",
     )  # fmt: skip
-    parser.add_argument(
-        "--period-max", dest="period_max", type=float, default=60.0,
-        help="end the branch where the period exceeds this many seconds (60)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--max-steps", dest="max_steps", type=int, default=400,
-        help="most continuation steps (400)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--compare",
-        action="store_true",
-        help="--vary fn: also solve the heteroclinic connection for its critical Fn",
+    add_branch_options(
+        parser, "--vary fn: also solve the heteroclinic connection for its critical Fn"
     )
     add_out(parser, None, "cycles_<vary>.csv/.json/.png")
 
@@ -95,9 +81,7 @@ def check_args(args: argparse.Namespace) -> None:
     """The options' own checks (before the vessel is loaded); ValueError naming one."""
     finite("--fn", args.Fn, low=0.0)
     check_chi_c_deg("--chi-c", args.chi_c)
-    finite("--period-max", args.period_max, low=0.0, high=1e4, unit="s")
-    if not isinstance(args.max_steps, int) or not 1 <= args.max_steps <= 100_000:
-        raise ValueError(f"--max-steps must be an integer in [1, 100000], got {args.max_steps}")
+    check_branch_options(args)
     if args.vary == "fn":
         finite("--fn-max", args.Fn_max, low=0.0)
         if not args.Fn < args.Fn_max:
@@ -279,10 +263,7 @@ def run(args: argparse.Namespace) -> int:
     ok = doc["status"] in COMPLETE and not doc["rolls_past_vanishing_angle"]
     if args.compare:
         ok = ok and doc["Fn_bvp_status"] == "SUCCESS"
-    if args.json:
-        sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
-    else:
-        sys.stdout.write(_text(doc) + "\n")
+    emit(args, doc, _text)
     return 0 if ok else 1
 
 
@@ -319,13 +300,5 @@ def _text(doc: dict[str, Any]) -> str:
         lines.append(f"  stability lost at {name} = {_fmt(lost, unit)}")
     else:
         lines.append("  stable throughout (no Floquet multiplier outside the unit circle)")
-    verdict = (
-        "ROLLS PAST it: a capsize, not a cycle" if doc["rolls_past_vanishing_angle"] else "below it"
-    )
-    lines.append(
-        f"  max roll {doc['max_roll_deg']:.3g} deg vs vanishing stability "
-        f"{doc['vanishing_angle_deg']:.3g} deg: {verdict}"
-    )
-    for f in doc.get("files", []):
-        lines.append(f"  wrote {f}")
+    lines.append(roll_verdict(doc))
     return "\n".join(lines)

@@ -20,25 +20,23 @@ from __future__ import annotations
 import argparse
 import csv
 import io
-import json
 import math
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ..cycle_options import START_FN, emit, roll_verdict
 from ..files import write_atomic, write_json, write_text
 from ..options import (
     add_out,
     add_ship,
     check_chi_c_deg,
     finite,
-    json_safe,
     prepare_out,
     ship_from_args,
 )
-from .cycles import START_FN, _start_cycle
+from .cycles import _start_cycle
 
 NAME = "periodic"
 HELP = "one overtaken-by-waves cycle: its period, Floquet multipliers and stability"
@@ -190,10 +188,7 @@ def run(args: argparse.Namespace) -> int:
     doc, orbit = compute(model, params, bool(args.shooting))
     if out is not None:
         doc["files"] = [str(p) for p in write_files(out, doc, orbit)]
-    if args.json:
-        sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
-    else:
-        sys.stdout.write(_text(doc) + "\n")
+    emit(args, doc, _text)
     return 1 if doc["rolls_past_vanishing_angle"] else 0
 
 
@@ -221,13 +216,5 @@ def _text(doc: dict[str, Any]) -> str:
             )
         else:
             lines.append(f"  shooting solver: {sh['status']}")
-    verdict = (
-        "ROLLS PAST it: a capsize, not a cycle" if doc["rolls_past_vanishing_angle"] else "below it"
-    )
-    lines.append(
-        f"  max roll {doc['max_roll_deg']:.3g} deg vs vanishing stability "
-        f"{doc['vanishing_angle_deg']:.3g} deg: {verdict}"
-    )
-    for f in doc.get("files", []):
-        lines.append(f"  wrote {f}")
+    lines.append(roll_verdict(doc))
     return "\n".join(lines)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from ..cycle_options import add_branch_options
 from ..options import (
     add_json,
     add_out,
@@ -46,18 +47,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
     add_wave(parser)
     add_json(parser)
-    parser.add_argument(
-        "--period-max", dest="period_max", type=float, default=60.0,
-        help="end the branch where the period exceeds this many seconds (60)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--max-steps", dest="max_steps", type=int, default=400,
-        help="most continuation steps (400)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--compare", action="store_true",
-        help="with an Fn range: also solve the heteroclinic connection for its critical Fn",
-    )  # fmt: skip
+    add_branch_options(
+        parser, "with an Fn range: also solve the heteroclinic connection for its critical Fn"
+    )
     add_out(parser, None, "cycles_fn or cycles_chi_c .csv/.json/.png")
 
 

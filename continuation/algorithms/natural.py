@@ -17,8 +17,7 @@ import numpy as np
 
 from ..settings import ContinuationSettings
 from .base import ContinuationAlgorithm, StepOutcome, StepState
-from .corrector import correct
-from .point import make_point
+from .step import palc_point
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -50,15 +49,10 @@ class Natural(ContinuationAlgorithm):
         u_pred = ua + (dp / a.tau[-1]) * a.tau
         e_p = np.zeros(ua.size)
         e_p[-1] = state.direction
-        res = correct(problem, u_pred, ua, e_p, abs(dp), settings.newton)
-        if not res.converged or res.lin is None:
-            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, res.message)
-        try:
-            b = make_point(
-                res.z, res.p, res.lin, e_p, state.w, iters=res.iters, lu=res.lu, u=res.u_full
-            )
-        except np.linalg.LinAlgError as exc:
-            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
+        got = palc_point(problem, u_pred, ua, e_p, abs(dp), state.w, settings.newton)
+        res, b = got.res, got.point
+        if b is None:
+            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, got.message)
         sigma = float(np.dot(state.w * a.tau, b.u - ua))
         new = StepState(b, state.ds, state.w, state.direction, state.n_steps + 1)
         return new, StepOutcome(True, res.iters, res.residual_norm, sigma)

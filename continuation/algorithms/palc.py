@@ -73,8 +73,8 @@ import numpy as np
 from ..problem import exact_jacobian, jacobian_is_stability, step_kernel
 from ..settings import ContinuationSettings
 from .base import ContinuationAlgorithm, StepOutcome, StepState
-from .corrector import NOISE_SLACK, ROUNDOFF_FLOOR, correct
-from .point import make_point
+from .corrector import NOISE_SLACK, ROUNDOFF_FLOOR, CorrectorResult
+from .step import palc_point
 
 #: The Hermite predictor is used only where consecutive tangents differ by at most this
 #: angle (degrees, ``theta``-metric): where the steps resolve the branch's turning, so
@@ -114,8 +114,8 @@ class PALC(ContinuationAlgorithm):
         branch is smooth there, else the tangent; ``"tangent"``: always the tangent.
     kernel : bool
         Run each step as one compiled call where the problem offers one
-        (``problem.step_kernel()``: small dense systems with a CasADi trace, when
-        Numba is installed; :mod:`continuation._kernel`). Same predictor, corrector,
+        (``problem.step_kernel()``: small dense systems with a CasADi trace;
+        :mod:`continuation._kernel`). Same predictor, corrector,
         safeguards, tangent and eigenvalues; any step the kernel does not accept as a
         whole (a rejection, a singular matrix, ...) is redone by the Python step,
         which decides. ``False``: always the Python step.
@@ -184,13 +184,26 @@ class PALC(ContinuationAlgorithm):
             al = r * r * (3.0 + 2.0 * r)
             be = r * r * (h + ds)
             u_pred = u_lin - al * d_prev + (be - al * h) * (state.prev_tau - tau)
-        res = correct(
+        d = None
+
+        def near_predictor(res: CorrectorResult) -> str:
+            # the distance safeguard, measured from the tangent predictor
+            nonlocal d
+            d = res.u - u_lin
+            dist = math.sqrt(float((state.w * d).dot(d)))
+            if dist > self.max_distance * ds:
+                return f"corrected point {dist / ds:.3g} ds away from the predictor"
+            return ""
+
+        got = palc_point(
             problem,
             u_pred,
             ua,
             c,
             ds,
+            state.w,
             settings.newton,
+            accept=near_predictor if guarded else None,
             max_contraction=self.max_contraction if guarded else None,
             exact=False,
             # (with exact derivatives Newton's rate is quadratic, and a Jacobian one
@@ -198,39 +211,10 @@ class PALC(ContinuationAlgorithm):
             # matrix: the last linearisation may be skipped)
             predict_final=exact_jacobian(problem) and not jacobian_is_stability(problem),
         )
-        if not res.converged or res.lin is None:
+        res, b = got.res, got.point
+        if b is None:
             state.retries += 1
-            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, res.message)
-        d = None
-        if guarded:
-            d = res.u - u_lin
-            dist = math.sqrt(float((state.w * d).dot(d)))
-            if dist > self.max_distance * ds:
-                state.retries += 1
-                return state, StepOutcome(
-                    False,
-                    res.iters,
-                    res.residual_norm,
-                    0.0,
-                    f"corrected point {dist / ds:.3g} ds away from the predictor",
-                )
-        try:
-            b = make_point(
-                res.z,
-                res.p,
-                res.lin,
-                c,
-                state.w,
-                iters=res.iters,
-                lu=res.lu,
-                u=res.u_full,
-                residual_norm=res.g_norm,
-                t_raw=res.t_raw,
-                jac_finite=res.jac_finite,
-            )
-        except np.linalg.LinAlgError as exc:
-            state.retries += 1
-            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, str(exc))
+            return state, StepOutcome(False, res.iters, res.residual_norm, 0.0, got.message)
         cos_angle = b.ctau  # = c . tau (make_point's border is c)
         if cos_angle < self._cos_max and guarded:
             state.retries += 1

@@ -1,7 +1,7 @@
 r"""Compiled kernels of the stage condensation (:mod:`continuation.bvp.condense`).
 
-At the sizes of continuation (tens of stage blocks of 8 to 32 rows) the NumPy path's
-batched calls (inverses, condition numbers, products, determinants) cost more in
+At the sizes of continuation (tens of stage blocks of 8 to 32 rows) batched NumPy
+calls (inverses, condition numbers, products, determinants) cost more in
 call overhead than in arithmetic. Here one call per factorisation does, for every
 stage block ``A_j`` (``b x b``):
 

@@ -24,15 +24,15 @@ the Schur complement :math:`S = A_{rr} - A_{rs} A_{ss}^{-1} A_{sr}` on the
 
 The stage blocks are factorised in one compiled call (:mod:`continuation.bvp._condense_jit`:
 block LU with partial pivoting, a condition estimate, the determinants from the pivots,
-and the products with the few rest columns (rows) each block touches); without Numba
-by batched NumPy calls on their explicit inverses. ``S`` couples each
+and the products with the few rest columns (rows) each block touches; Numba is
+required). ``S`` couples each
 mesh point only with its neighbours and the few global unknowns, so it is sparse (2 %
 non-zeros for 3 states on 55 intervals); from ``SPARSE_SCHUR_MIN`` unknowns on, with at
 most ``SPARSE_SCHUR_DENSITY`` of its entries structurally non-zero, it is factorised
 by SuperLU in its natural (mesh) order with partial pivoting, as a band, instead of by
 the dense LU whose ``O(n_r^3)`` cost then dominates. Where a block is
-singular or badly conditioned (``cond_1 > 1e10``: Hager's estimate on the compiled
-path, the exact value from the inverse on NumPy's) the factorisation returns None and
+singular or badly conditioned (``cond_1 > 1e10``, Hager's estimate) the factorisation
+returns None and
 the caller uses a general sparse LU instead.
 """
 
@@ -185,23 +185,24 @@ class CondensedLU:
     """
 
     def __init__(
-        self, st: _Structure, Ainv: FloatArray | None, W: FloatArray, Ars: FloatArray,
-        lu: Any, piv: np.ndarray | None, blocks: FloatArray,
-        block_lu: tuple[Any, ...] | None = None,
-    ) -> None:  # fmt: skip
+        self,
+        st: _Structure,
+        W: FloatArray,
+        Ars: FloatArray,
+        lu: Any,
+        piv: np.ndarray | None,
+        block_lu: tuple[Any, ...],
+    ) -> None:
         # lu, piv: LAPACK getrf factors of S, or (piv None) SciPy's SuperLU of S.
-        # The stage blocks: their inverses Ainv (NumPy path), or block_lu = (kernels,
-        # LU factors, pivots, log|det|, sign) of the compiled path (Ainv None)
-        self._st, self._Ainv, self._W, self._Ars = st, Ainv, W, Ars
-        self._lu, self._piv, self._blocks = lu, piv, blocks
+        # The stage blocks: block_lu = (kernels, LU factors, pivots, log|det|, sign)
+        self._st, self._W, self._Ars = st, W, Ars
+        self._lu, self._piv = lu, piv
         self._block_lu = block_lu
         self.shape = (st.size, st.size)
 
     def _blocks_solve(self, B: FloatArray, trans: bool) -> FloatArray:
         """``A_j^{-1} B[j]`` (``A_j^{-T}`` with ``trans``) for ``B`` of shape (N, b, k)."""
-        if self._Ainv is not None:
-            return (np.swapaxes(self._Ainv, 1, 2) if trans else self._Ainv) @ B
-        kern, LU, bpiv = self._block_lu[:3]  # type: ignore[index]
+        kern, LU, bpiv = self._block_lu[:3]
         return kern.solve_blocks(LU, bpiv, np.ascontiguousarray(B), trans)  # type: ignore[no-any-return]
 
     def _solve_schur(self, b: FloatArray, trans: int) -> FloatArray:
@@ -218,7 +219,7 @@ class CondensedLU:
         one = rhs.ndim == 1
         B = rhs.reshape(st.size, -1)
         k = B.shape[1]
-        if trans == "N" and self._block_lu is not None:  # two compiled halves
+        if trans == "N":  # two compiled halves
             kern, LU, bpiv = self._block_lu[:3]
             Bc = np.ascontiguousarray(B)
             ys = np.empty((st.N, st.b, k))
@@ -228,28 +229,18 @@ class CondensedLU:
             out = np.empty((st.size, k))
             kern.solve_post(ys, self._W, xr, st.sr_cols, st.cols_s, st.rest_c, out)
             return out.ravel() if one else out
-        bs = B[st.rows_s if trans == "N" else st.cols_s]  # (N, b, k)
+        # trans == "T": A_sr^T y_s = (A_ss W)^T y_s = W^T A_ss^T y_s = W^T bs (by blocks)
+        bs = B[st.cols_s]  # (N, b, k)
         br = np.zeros((st.nr + 1, k))
-        br[:-1] = B[st.rest_r if trans == "N" else st.rest_c]
-        if trans == "N":
-            ys = self._blocks_solve(bs, False)
-            np.subtract.at(br, st.rs_rows, self._Ars @ ys)
-            xr = self._solve_schur(br[:-1], 0)
-            xr_pad = np.vstack((xr, np.zeros((1, k))))
-            xs = ys - self._W @ xr_pad[st.sr_cols]
-            out = np.empty_like(B)
-            out[st.cols_s] = xs
-            out[st.rest_c] = xr
-        else:
-            # A_sr^T y_s = (A_ss W)^T y_s = W^T A_ss^T y_s = W^T bs (block by block)
-            np.subtract.at(br, st.sr_cols, np.swapaxes(self._W, 1, 2) @ bs)
-            xr = self._solve_schur(br[:-1], 1)
-            xr_pad = np.vstack((xr, np.zeros((1, k))))
-            # x_s = A_ss^{-T} (b_s - A_rs^T x_r)
-            xs = self._blocks_solve(bs - np.swapaxes(self._Ars, 1, 2) @ xr_pad[st.rs_rows], True)
-            out = np.empty_like(B)
-            out[st.rows_s] = xs
-            out[st.rest_r] = xr
+        br[:-1] = B[st.rest_c]
+        np.subtract.at(br, st.sr_cols, np.swapaxes(self._W, 1, 2) @ bs)
+        xr = self._solve_schur(br[:-1], 1)
+        xr_pad = np.vstack((xr, np.zeros((1, k))))
+        # x_s = A_ss^{-T} (b_s - A_rs^T x_r)
+        xs = self._blocks_solve(bs - np.swapaxes(self._Ars, 1, 2) @ xr_pad[st.rs_rows], True)
+        out = np.empty_like(B)
+        out[st.rows_s] = xs
+        out[st.rest_r] = xr
         return out.ravel() if one else out
 
     def diag_parity(self) -> tuple[FloatArray, int]:
@@ -260,10 +251,7 @@ class CondensedLU:
         block's sign folded into ``parity`` (the engine's convention for SuperLU).
         """
         st = self._st
-        if self._block_lu is not None:
-            logabs, sgn = self._block_lu[3], self._block_lu[4]
-        else:
-            sgn, logabs = np.linalg.slogdet(self._blocks)
+        logabs, sgn = self._block_lu[3], self._block_lu[4]
         if self._piv is None:
             dS = self._lu.U.diagonal().copy()
             parity = st.perm_sign * _parity(self._lu.perm_r) * _parity(self._lu.perm_c)
@@ -332,37 +320,27 @@ class StageCondenser:
             return None
         data = M.data
         kern = compiled(KERNELS)
-        if kern is not None:
-            buf = np.empty(st.gather_len)
-            kern.gather(data, st.gather_src, st.gather_dst, buf)
-        else:
-            buf = np.zeros(st.gather_len)
-            buf[st.gather_dst] = data[st.gather_src]
+        buf = np.empty(st.gather_len)
+        kern.gather(data, st.gather_src, st.gather_dst, buf)
         c1, c2 = st.gather_cut
         A = buf[:c1].reshape(N, b, b)
         Asr = buf[c1:c2].reshape(N, b, st.wc)
         Ars = buf[c2:].reshape(N, st.wr, b)
-        block_lu = None
-        if kern is not None:  # block LU, conditions, determinants, W and A_rs W: one call
-            bpiv, W, U, cond, logdet, bsign = kern.factor(A, Asr, Ars)  # (A: now its LU)
-            if not np.all(cond <= MAX_BLOCK_COND):
-                return None
-            block_lu = (kern, A, bpiv, logdet, bsign)
-            return self._finish(M, st, None, W, U, Ars, A, block_lu)
-        try:
-            Ainv = np.linalg.inv(A)
-        except np.linalg.LinAlgError:
-            return None
-        cond = np.abs(A).sum(axis=1).max(axis=1) * np.abs(Ainv).sum(axis=1).max(axis=1)
+        # block LU, conditions, determinants, W and A_rs W: one call
+        bpiv, W, U, cond, logdet, bsign = kern.factor(A, Asr, Ars)  # (A: now its LU)
         if not np.all(cond <= MAX_BLOCK_COND):
             return None
-        W = Ainv @ Asr  # (N, b, wc)
-        return self._finish(M, st, Ainv, W, Ars @ W, Ars, A, None)
+        return self._finish(M, st, W, U, Ars, (kern, A, bpiv, logdet, bsign))
 
     def _finish(
-        self, M: Any, st: _Structure, Ainv: FloatArray | None, W: FloatArray, U: FloatArray,
-        Ars: FloatArray, A: FloatArray, block_lu: tuple[Any, ...] | None,
-    ) -> CondensedLU:  # fmt: skip
+        self,
+        M: Any,
+        st: _Structure,
+        W: FloatArray,
+        U: FloatArray,
+        Ars: FloatArray,
+        block_lu: tuple[Any, ...],
+    ) -> CondensedLU:
         """Form and factorise the Schur complement ``S = A_rr - sum_j U_j`` (scattered)."""
         data, nr = M.data, st.nr
         if st.sparse_schur:
@@ -373,7 +351,7 @@ class StageCondenser:
                 slu = spla.splu(S, permc_spec="NATURAL")
             except RuntimeError as exc:
                 raise np.linalg.LinAlgError(f"singular condensed matrix ({exc})") from exc
-            return CondensedLU(st, Ainv, W, Ars, slu, None, A, block_lu)
+            return CondensedLU(st, W, Ars, slu, None, block_lu)
         # S = A_rr - A_rs W, the updates summed by bincount (no ufunc.at), padded
         Sp = -np.bincount(st.upd, weights=U.ravel(), minlength=(nr + 1) * (nr + 1))
         Sp[st.rr_pad] += data[st.rr[0]]
@@ -381,7 +359,7 @@ class StageCondenser:
         lu, piv, info = lapack.dgetrf(np.asfortranarray(Sp[:nr, :nr]), overwrite_a=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"singular condensed matrix (getrf info={info})")
-        return CondensedLU(st, Ainv, W, Ars, lu, piv, A, block_lu)
+        return CondensedLU(st, W, Ars, lu, piv, block_lu)
 
 
 __all__ = ["CondensedLU", "StageCondenser"]

@@ -18,7 +18,7 @@ import numpy as np
 from ..newton import NewtonResult, newton
 from ..params import Params
 from ..settings import NewtonSettings
-from ..system import System
+from ..system import System, as_params
 from ..typing import ComplexArray, FloatArray
 from ._build import AugmentedFunctions, Recipe, augmented_functions, param_vector
 
@@ -67,12 +67,7 @@ class AugmentedProblem:
         for attr in ("state_names", "param_names", "f", "jacobian"):
             if not hasattr(system, attr):
                 raise ValueError(f"`system` must be a System (missing {attr!r})")
-        if not isinstance(self.params, Params):
-            if hasattr(system, "check_params"):
-                vec = system.check_params(self.params, "params")
-            else:
-                vec = np.asarray(self.params, dtype=float)
-            object.__setattr__(self, "params", Params(system.param_names, vec))
+        object.__setattr__(self, "params", as_params(system, self.params))
         if self.params.names != tuple(system.param_names):
             raise ValueError(
                 f"`params` names {self.params.names} do not match the system's "
@@ -358,10 +353,7 @@ def _check_start(branch: Any, sp: Any, free2: str, kind: str) -> tuple[Any, Para
             f"`sp.x` must be a state of shape ({len(system.state_names)},), "
             f"got {np.asarray(sp.x).shape}"
         )
-    params = problem.params
-    if not isinstance(params, Params):
-        params = Params(names, np.asarray(params, dtype=float))
-    return system, params, problem.free
+    return system, as_params(system, problem.params), problem.free
 
 
 def null_vector(J: FloatArray) -> FloatArray:

@@ -43,7 +43,7 @@ import numpy as np
 
 from ..params import Params
 from ..settings import NewtonSettings
-from ..system import System
+from ..system import System, as_params
 from ..typing import FloatArray
 from ._base import AugmentedProblem, adjugate, null_vector, scaled_adjugate, signed_product
 from ._build import fold_recipe
@@ -120,8 +120,7 @@ class FoldProblem(AugmentedProblem):
         FoldProblem
             With ``z0 = (x, p1, v)`` (``v`` the unit null vector of ``J``) and ``p0``.
         """
-        if not isinstance(params, Params):
-            params = Params(system.param_names, system.check_params(params, "params"))
+        params = as_params(system, params)
         x = system.check_state(x, "x") if hasattr(system, "check_state") else np.asarray(x)
         if free1 not in params.names:
             raise ValueError(f"`free1` must be one of {params.names}, got {free1!r}")

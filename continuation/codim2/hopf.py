@@ -52,7 +52,7 @@ import numpy as np
 
 from ..params import Params
 from ..settings import NewtonSettings
-from ..system import System
+from ..system import System, as_params
 from ..typing import FloatArray
 from ._base import AugmentedProblem, signed_product
 from ._build import hopf_recipe
@@ -212,8 +212,7 @@ class HopfProblem(AugmentedProblem):
         ValueError
             If ``J(x)`` has no complex eigenvalue pair.
         """
-        if not isinstance(params, Params):
-            params = Params(system.param_names, system.check_params(params, "params"))
+        params = as_params(system, params)
         x = system.check_state(x, "x") if hasattr(system, "check_state") else np.asarray(x)
         for arg, val in (("free1", free1), ("free2", free2)):
             if val not in params.names:

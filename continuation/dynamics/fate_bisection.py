@@ -35,9 +35,9 @@ import numpy as np
 
 from ..errors import ContinuationError, ConvergenceError
 from ..newton import newton
-from ..params import Params
 from ..settings import NewtonSettings
 from ..status import Status
+from ..system import as_params
 from ..typing import FloatArray
 from ._common import positive
 from .classifier import FateClassifier
@@ -273,8 +273,8 @@ class EquilibriumTracker:
         if free not in system.param_names:
             raise ValueError(f"`free` must be one of {tuple(system.param_names)}, got {free!r}")
         self.system = system
-        vec = np.asarray(system.check_params(params, "params"), dtype=float)
-        self.params = Params(tuple(system.param_names), vec)
+        self.params = as_params(system, params)
+        vec = np.array(self.params.values)
         self.free = free
         self.k = list(system.param_names).index(free)
         if isinstance(points, Mapping):

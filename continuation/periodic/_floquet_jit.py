@@ -3,13 +3,14 @@ r"""Compiled kernel of the deflation of the trivial Floquet multiplier.
 See :func:`continuation.periodic.floquet.floquet`.
 
 For the transfer matrices ``Phi_j`` (``n x n``) and ``f_j = f(x_j)`` at the mesh nodes,
-one call builds the Householder frames :math:`Q_j = [f_j/|f_j|, Q_j^\perp]`
-(:func:`~continuation.periodic.floquet._frames`), the products
+one call builds the Householder frames :math:`Q_j = [f_j/|f_j|, Q_j^\perp]` (with
+``v = f_j / |f_j|``, ``s = sign(v_0)`` and ``u = (v + s e_1) / |.|``,
+``Q_j = -s (I - 2 u u^T)``, whose first column is ``v``), the products
 :math:`A_j = Q_{j+1}^T \Phi_j Q_j` (:math:`Q_N = Q_0`), and returns their trailing
 blocks :math:`C_j` with :math:`\sum_j \ln|r_j|`, :math:`\operatorname{sign}\prod_j r_j`
 (:math:`r_j = (A_j)_{00}`) and the neglected coupling
-:math:`\max_j \max_{i \ge 1} |(A_j)_{i0}| / \|A_j\|_F`: what the NumPy code does in a
-dozen batched calls whose overhead dominates at the sizes of continuation. Compiled on
+:math:`\max_j \max_{i \ge 1} |(A_j)_{i0}| / \|A_j\|_F` (in one call: a dozen batched
+NumPy calls would cost more than the work at the sizes of continuation). Compiled on
 first use and cached on disk.
 """
 

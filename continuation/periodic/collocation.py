@@ -47,7 +47,6 @@ from ..bvp.collocation import CollocationMesh, stage_points, stage_unknowns
 from ..bvp.condense import KERNELS as _CONDENSE_KERNELS
 from ..bvp.condense import StageCondenser
 from ..casadi_compile import compiled_soon, settled
-from ..linalg import csc_with_data
 from ..typing import FloatArray
 
 #: CasADi functions per system, outside the system object (so that pickling a system,
@@ -361,43 +360,6 @@ class CollocationLayout:
             self.__dict__["_kernel_args"] = args
         return args  # type: ignore[no-any-return]
 
-    def assemble(self, B: FloatArray, F: FloatArray, dref: FloatArray) -> sp.csc_matrix:
-        """The sparse ``dG/dz`` from the blocks, ``f`` at the stages and the phase row."""
-        ph_vals = (self.weights[:, None] * dref).ravel()
-        vals = np.concatenate([B.ravel(), self._const_vals, -F.ravel(), ph_vals])[self._order]
-        if self._slot_of is not None:
-            vals = np.bincount(self._slot_of, weights=vals, minlength=self._template.nnz)
-        return csc_with_data(self._template, vals)
-
-    def residual(
-        self,
-        X: FloatArray,
-        T: float,
-        F: FloatArray,
-        shift: FloatArray,
-        ref: FloatArray,
-        dref: FloatArray,
-    ) -> FloatArray:
-        """``G`` (see module doc).
-
-        ``F`` is ``f`` at the stages ``(N m, n)``, ``ref`` and ``dref`` the reference orbit
-        and its ``tau``-derivative at the stages.
-        """
-        N, m, n = self.N, self.m, self.n
-        m1 = m + 1
-        D, e, h = self.mesh.D, self.mesh.e, self.mesh.h
-        Xb = X[: N * m1].reshape(N, m1, n)
-        coll = (D @ Xb) / h[:, None, None] - T * F.reshape(N, m, n)  # (N, m, n)
-        Xnext = X[m1::m1]  # x_{j+1}, (N, n)
-        cont = e @ Xb - Xnext  # (N, n)
-        out = np.empty(n * self.M + 1)
-        body = np.concatenate([coll, cont[:, None, :]], axis=1)  # (N, m+1, n)
-        out[: N * m1 * n] = body.ravel()
-        out[self.row_period : self.row_period + n] = X[-1] - X[0] - shift
-        Xs = X[self.stage_points]
-        out[self.row_phase] = float(np.sum(self.weights[:, None] * (Xs - ref) * dref))
-        return out
-
 
 def monodromy_factors(layout: CollocationLayout, B: FloatArray, stages: bool = False) -> Any:
     r"""Transfer matrices :math:`\Phi_j` of the linearised collocation equations.
@@ -425,14 +387,9 @@ def monodromy_factors(layout: CollocationLayout, B: FloatArray, stages: bool = F
     e = layout.mesh.e
     K = B[:, :, 1:].transpose(0, 1, 3, 2, 4).reshape(N, m * n, m * n)
     R = B[:, :, 0].reshape(N, m * n, n)
-    kern = compiled(_CONDENSE_KERNELS)
-    X: np.ndarray | None = None
-    if kern is not None:  # block LU and solves in one compiled call
-        X = np.empty((N, m * n, n))
-        if not kern.solve_many(np.array(K), np.ascontiguousarray(R), X):
-            X = None  # a singular block: NumPy raises as before
-    if X is None:
-        X = np.linalg.solve(K, R)
+    X: np.ndarray = np.empty((N, m * n, n))  # block LU and solves in one compiled call
+    if not compiled(_CONDENSE_KERNELS).solve_many(np.array(K), np.ascontiguousarray(R), X):
+        X = np.linalg.solve(K, R)  # a singular block: raises LinAlgError
     S = -X.reshape(N, m, n, n)  # stage responses
     Phi = (e[1:] @ S.reshape(N, m, n * n)).reshape(N, n, n)  # sum_l e_l S_l
     Phi += e[0] * np.eye(n)

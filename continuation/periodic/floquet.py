@@ -203,22 +203,6 @@ def periodic_eigenvalues(
 KERNELS = "continuation.periodic._floquet_jit"
 
 
-def _frames(F: FloatArray) -> FloatArray:
-    """Orthonormal bases whose first columns are ``F[j] / |F[j]|``, ``(K, n, n)``.
-
-    Householder reflections: with ``s = sign(v_0)`` and ``u = (v + s e_1) / |.|``,
-    ``H = I - 2 u u^T`` maps ``e_1`` to ``-s v``, so ``-s H`` has first column ``v``.
-    """
-    K, n = F.shape
-    v = F / np.maximum(np.linalg.norm(F, axis=1), 1e-300)[:, None]
-    s = np.where(v[:, 0] >= 0, 1.0, -1.0)
-    u = v.copy()
-    u[:, 0] += s
-    u /= np.linalg.norm(u, axis=1)[:, None]
-    H = np.eye(n)[None] - 2.0 * u[:, :, None] * u[:, None, :]
-    return -s[:, None, None] * H
-
-
 def floquet(
     factors: FloatArray, f_nodes: FloatArray, memo: dict[str, object] | None = None
 ) -> FloquetResult:
@@ -250,19 +234,8 @@ def floquet(
     if n == 1:
         mu1 = complex(np.prod(factors[:, 0, 0]))
         return FloquetResult(np.zeros(0, dtype=complex), mu1, float(abs(mu1 - 1)))
-    kern = compiled(KERNELS)
-    if kern is not None:  # the same in one compiled call
-        C, log_r, sign_r, eps = kern.deflate(factors, f[:N])
-    else:
-        Qf = _frames(f[:N])
-        Qn = np.concatenate([Qf[1:], Qf[:1]])  # Q_{j+1}, with Q_N = Q_0
-        A = np.swapaxes(Qn, 1, 2) @ factors @ Qf  # Q_{j+1}^T Phi_j Q_j
-        C = A[:, 1:, 1:]
-        r = A[:, 0, 0]
-        log_r = float(np.sum(np.log(np.maximum(np.abs(r), 5e-324))))
-        sign_r = float(np.prod(np.where(r >= 0, 1.0, -1.0)))
-        eps = float(np.max(np.max(np.abs(A[:, 1:, 0]), axis=1)
-                           / np.maximum(np.linalg.norm(A, axis=(1, 2)), 1e-300)))  # fmt: skip
+    # frames, A_j = Q_{j+1}^T Phi_j Q_j, its blocks and the trivial product: one call
+    C, log_r, sign_r, eps = compiled(KERNELS).deflate(factors, f[:N])
     trivial = sign_r * math.exp(min(log_r, 709.0))
     if n == 2:  # one nontrivial multiplier: the product of the 1x1 blocks
         c = C[:, 0, 0]

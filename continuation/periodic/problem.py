@@ -262,13 +262,10 @@ class PeriodicOrbitProblem:
         """``G(z, p)``, shape ``(n M + 1,)``."""
         X, T, _, F, _, _ = self._stages(np.asarray(z, float), p, False)
         s = self._slot
-        kern = compiled(KERNELS)
-        if kern is not None:
-            D, e, h, w, sp_ = self.layout.kernel_args()[:5]
-            G = np.empty(self.layout.n_unknowns)
-            kern.residual(X, T, F, D, e, h, self._shift, s["ref"], s["dref"], w, sp_, G)
-            return G
-        return self.layout.residual(X, T, F, self._shift, s["ref"], s["dref"])
+        D, e, h, w, sp_ = self.layout.kernel_args()[:5]
+        G = np.empty(self.layout.n_unknowns)
+        compiled(KERNELS).residual(X, T, F, D, e, h, self._shift, s["ref"], s["dref"], w, sp_, G)
+        return G
 
     def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
         """``(G, dG/dz (CSC), dG/dp)`` in one evaluation of ``f, f_x, f_p``."""
@@ -276,26 +273,32 @@ class PeriodicOrbitProblem:
         lay = self.layout
         X, T, _, F, J, Jp = self._stages(z, p, True)
         s = self._slot
-        kern = compiled(KERNELS)
-        if kern is not None:  # residual, Jacobian values and dG/dp in one compiled call
-            args = lay.kernel_args()
-            G = np.empty(lay.n_unknowns)
-            Gp = np.empty(lay.n_unknowns)
-            vals = np.empty(lay._order.size)
-            data = np.empty(lay._template.nnz)
-            Jp0 = np.ascontiguousarray(Jp[:, :, 0])
-            kern.linearize(X, T, F, J, Jp0, *args[:3], self._shift, s["ref"], s["dref"],
-                           *args[3:], G, vals, data, Gp)  # fmt: skip
-            B = vals[: args[5].size].reshape(lay.N, lay.m, lay.m + 1, lay.n, lay.n)
-            self._slot["cache"] = (z.copy(), float(p), B, F)
-            return G, csc_with_data(lay._template, data), Gp
-        G = lay.residual(X, T, F, self._shift, s["ref"], s["dref"])
-        B = lay.blocks(X, T, J)
-        Gz = lay.assemble(B, F, s["dref"])
-        Gp = np.zeros(lay.n_unknowns)
-        Gp[lay.stage_rows.ravel()] = -T * Jp[:, :, 0].ravel()  # (the free column only)
+        # residual, Jacobian values and dG/dp in one compiled call
+        args = lay.kernel_args()
+        G = np.empty(lay.n_unknowns)
+        Gp = np.empty(lay.n_unknowns)
+        vals = np.empty(lay._order.size)
+        data = np.empty(lay._template.nnz)
+        Jp0 = np.ascontiguousarray(Jp[:, :, 0])
+        compiled(KERNELS).linearize(
+            X,
+            T,
+            F,
+            J,
+            Jp0,
+            *args[:3],
+            self._shift,
+            s["ref"],
+            s["dref"],
+            *args[3:],
+            G,
+            vals,
+            data,
+            Gp,
+        )
+        B = vals[: args[5].size].reshape(lay.N, lay.m, lay.m + 1, lay.n, lay.n)
         self._slot["cache"] = (z.copy(), float(p), B, F)
-        return G, Gz, Gp
+        return G, csc_with_data(lay._template, data), Gp
 
     def jacobian(self, z: FloatArray, p: float) -> Any:
         """``dG/dz``, SciPy CSC of shape ``(n M + 1, n M + 1)``."""

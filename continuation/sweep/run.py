@@ -196,13 +196,15 @@ class SweepResult:
         }
 
     def write_csv(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`rows` as CSV (columns in first-appearance order; lists as JSON)."""
+        """Write :meth:`rows` as CSV, atomically (columns in first-appearance order)."""
+        from ..atomic import atomic_path
+
         rows = self.rows()
         cols: list[str] = []
         for r in rows:
             cols.extend(c for c in r if c not in cols)
         p = Path(path)
-        with p.open("w", newline="") as fh:
+        with atomic_path(p) as tmp, tmp.open("w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(cols)
             for r in rows:
@@ -221,7 +223,11 @@ def _cell(v: Any) -> Any:
 
 
 class _NoBar:
-    """The progress bar when there is none: ``update`` and ``close`` do nothing."""
+    """The progress bar when it is off.
+
+    No tqdm object, hence no tqdm monitor thread left running in the caller's process
+    (a process that forks later must have one thread).
+    """
 
     def update(self, n: int = 1) -> None:
         """Nothing to show."""
@@ -234,8 +240,6 @@ def _progress_bar(enabled: bool | None, total: int, initial: int, desc: str) -> 
     if enabled is None:
         enabled = sys.stderr.isatty()
     if not enabled:
-        # not a disabled tqdm: tqdm (4.70) starts its monitor thread even for one, and
-        # the thread outlives the bar, so a later fork in this process is refused
         return _NoBar()
     from tqdm.auto import tqdm
 

@@ -28,8 +28,9 @@ from ..algorithms.base import (
     StepState,
     theta_norm,
 )
-from ..algorithms.corrector import correct
+from ..algorithms.corrector import CorrectorResult
 from ..algorithms.point import make_point
+from ..algorithms.step import palc_point
 from ..settings import ContinuationSettings, NewtonSettings
 from ..typing import FloatArray
 from .bifurcation_equation import CrossingTangents
@@ -124,19 +125,34 @@ def start_point(
     u_star = np.append(ct.z, ct.p)
     phi2, S = offset_direction(ct, t_new, w)
     u_pred = u_star + sign * amplitude * t_new
-    res = correct(problem, u_pred, u_star, w * phi2, sign * amplitude * S, newton)
+
+    def near_prediction(res: CorrectorResult) -> str:
+        dist = theta_norm(res.u - u_pred, w)
+        if dist > START_DISTANCE * amplitude:
+            return (
+                f"the corrected start point is {dist / amplitude:.3g} amplitudes away from "
+                "its prediction on the crossing branch"
+            )
+        return ""
+
+    got = palc_point(
+        problem,
+        u_pred,
+        u_star,
+        w * phi2,
+        sign * amplitude * S,
+        w,
+        newton,
+        border=w * t_new,
+        accept=near_prediction,
+    )
+    res, pt = got.res, got.point
     if not res.converged or res.lin is None:
         return None, f"the start point did not converge ({res.message or 'Newton failed'})"
-    dist = theta_norm(res.u - u_pred, w)
-    if dist > START_DISTANCE * amplitude:
-        return None, (
-            f"the corrected start point is {dist / amplitude:.3g} amplitudes away from its "
-            "prediction on the crossing branch"
-        )
-    try:
-        pt = make_point(res.z, res.p, res.lin, w * t_new, w)
-    except np.linalg.LinAlgError as exc:
-        return None, f"no tangent at the start point ({exc})"
+    if got.singular:
+        return None, f"no tangent at the start point ({got.message})"
+    if pt is None:
+        return None, got.message
     cos = abs(float((w * pt.tau).dot(t_new)))
     if cos < math.cos(math.radians(START_ANGLE_DEG)):
         return None, (

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from ..contracts import VesselModel
 from .critical_bisection import CRITERIA, FN_BRACKET, first_passage_bisection, upslope_bisection
 from .critical_bvp import BVPSettings, critical_fn_bvp
 from .critical_result import METHODS, CriticalFn, FateEvaluation
@@ -36,7 +37,7 @@ from .params import course, ship_model, ship_params
 
 
 def critical_fn(
-    model: Any = None,
+    model: VesselModel | None = None,
     params: Any = None,
     *,
     chi_c: float | None = None,

@@ -67,6 +67,7 @@ from continuation.errors import ContinuationError, ConvergenceError
 from continuation.params import Params
 from continuation.status import Status
 
+from ..contracts import VesselModel
 from .critical_result import CriticalFn, FateEvaluation
 from .fixed_points import FixedPoint, find_fixed_point, fixed_points, polish
 from .manifold import BRANCH_SIGNS, ShipFate, unstable_manifold
@@ -147,7 +148,7 @@ class _FateAt:
 
     def __init__(
         self,
-        model: Any,
+        model: VesselModel,
         params: Params,
         start: FixedPoint,
         branch: str,
@@ -217,7 +218,7 @@ def _bracket(value: Any, name: str = "Fn_bracket") -> tuple[float, float]:
 
 
 def first_passage_bisection(
-    model: Any = None,
+    model: VesselModel | None = None,
     params: Any = None,
     *,
     chi_c: float | None = None,
@@ -342,7 +343,7 @@ class _WrongEnd(Exception):
 def upslope_bisection(
     chi_c: float,
     *,
-    model: Any = None,
+    model: VesselModel | None = None,
     params: Any = None,
     Fn_bracket: tuple[float, float] = (0.28, 0.33),
     tol: float = 1e-6,

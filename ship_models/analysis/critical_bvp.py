@@ -49,6 +49,7 @@ from continuation.settings import NewtonSettings
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .boundary_check import boundary_refusal
 from .crest_saddle import crest_saddle
 from .critical_result import CriticalFn
@@ -215,7 +216,7 @@ def _solve(
 def critical_fn_bvp(
     chi_c: float,
     *,
-    model: Any = None,
+    model: VesselModel | None = None,
     params: Any = None,
     guess: Any = None,
     Fn_guess: float | None = None,

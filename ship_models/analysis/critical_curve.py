@@ -36,6 +36,7 @@ from continuation.sweep.backends import check_workers
 from continuation.sweep.forked import ForkedTasks
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .boundary_check import boundary_refusal
 from .critical_bvp import critical_fn_bvp
 from .critical_result import CriticalFn
@@ -221,7 +222,7 @@ def _crest_end(m: Any, params: Any, Fn: float, sign: float) -> float:
 def critical_curve(
     chi_c_values: Sequence[float] | FloatArray | None = None,
     *,
-    model: Any = None,
+    model: VesselModel | None = None,
     params: Any = None,
     start: CriticalFn | None = None,
     ds: float = 0.02,

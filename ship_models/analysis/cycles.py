@@ -50,7 +50,6 @@ from continuation.bvp import CollocationMesh
 from continuation.dynamics import simulate
 from continuation.dynamics.shooting import ShootingOrbit
 from continuation.errors import ContinuationError
-from continuation.params import Params
 from continuation.periodic import (
     PeriodicOrbit,
     continue_periodic,
@@ -75,14 +74,6 @@ log = logging.getLogger(__name__)
 WINDING = {"xi_G": -1}
 #: Default collocation mesh: intervals and degree.
 N_INTERVALS, DEGREE = 60, 4
-
-
-def _params(model: VesselModel, params: Any, name: str = "params") -> Params:
-    if isinstance(params, Params):
-        return params
-    if params is None:
-        return model.default_params()
-    return Params(model.param_names, model.check_params(params, name))
 
 
 def simulated_cycle(
@@ -121,7 +112,7 @@ def simulated_cycle(
         On bad input, or if the simulation capsizes or does not settle on a cycle
         drifting back one wave per period.
     """
-    par = _params(model, params)
+    par = model.as_params(params)
     if not (math.isfinite(t_settle) and t_settle > 0):
         raise ValueError(f"`t_settle` must be a positive time, got {t_settle!r}")
     x0 = default_guess(model, par) if x_guess is None else model.check_state(x_guess, "x_guess")

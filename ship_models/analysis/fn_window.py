@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 import scipy.optimize as so
 
+from ..contracts import VesselModel
 from .fixed_points import surge_model_of
 from .params import ship_params
 
@@ -68,7 +69,7 @@ class FnWindow:
         return self.exists and isinstance(Fn, (int, float)) and self.Fn_lo <= Fn <= self.Fn_hi
 
 
-def fn_limit(model: Any) -> float:
+def fn_limit(model: VesselModel) -> float:
     """Largest Fn the model is valid for: the vessel's R(u) fit range
     (``resistance.Fn_max_fit``), or 1 without one."""
     vessel = getattr(model, "vessel", None)
@@ -77,7 +78,7 @@ def fn_limit(model: Any) -> float:
     return 1.0
 
 
-def surf_riding_window(model: Any, params: Any = None, *, n_grid: int = 400) -> FnWindow:
+def surf_riding_window(model: VesselModel, params: Any = None, *, n_grid: int = 400) -> FnWindow:
     r"""The ``Fn`` interval with surf-riding equilibria, for the wave of ``params``.
 
     Parameters

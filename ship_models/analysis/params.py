@@ -45,7 +45,7 @@ def ship_params(
         p = model.default_params()
     else:
         try:
-            p = Params(tuple(model.param_names), model.check_params(params, name))
+            p = model.as_params(params, name)
         except (TypeError, ValueError) as exc:
             msg = str(exc)
             raise ValueError(msg if f"`{name}`" in msg else f"`{name}`: {msg}") from None

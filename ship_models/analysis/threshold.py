@@ -59,6 +59,7 @@ from typing import Any
 from continuation.dynamics.lowest_fate import lowest_fate
 from continuation.status import Status
 
+from ..contracts import VesselModel
 from .critical_bisection import _FateAt
 from .critical_result import CriticalFn
 from .fixed_points import find_fixed_point
@@ -353,7 +354,7 @@ def sample_of(Fn: float, fate: ShipFate | None) -> FateSample:
 
 
 def fates_at(
-    model: Any, params: Any, Fn: list[float], *, t_max: float = 1200.0
+    model: VesselModel, params: Any, Fn: list[float], *, t_max: float = 1200.0
 ) -> list[FateSample]:
     """The upslope branch's fate at each ``Fn`` (the crest saddle tracked by Newton from
     the first), e.g. the evidence of a heteroclinic Fn at ``Fn -+ 0.002``."""
@@ -385,7 +386,7 @@ class _Fates:
 
 
 def cycle_bifurcations(
-    model: Any, params: Any, *, Fn_min: float = 0.0, Fn_max: float
+    model: VesselModel, params: Any, *, Fn_min: float = 0.0, Fn_max: float
 ) -> CycleBifurcations:
     """Bifurcations of the overtaken cycle continued in ``Fn``, those in ``[Fn_min, Fn_max]``.
 
@@ -482,7 +483,7 @@ def _mechanism(
 LATERAL = ("v", "r", "phi", "p_roll", "delta")
 
 
-def _lateral_at_rest(model: Any, saddle: Any) -> bool:
+def _lateral_at_rest(model: VesselModel, saddle: Any) -> bool:
     """The saddle on the surge plane (all lateral states zero, heading on the course)."""
     names = [n for n in LATERAL if n in model.state_names]
     return bool(names) and all(abs(float(saddle.x[model.state_index(n)])) < 1e-12 for n in names)
@@ -492,7 +493,7 @@ def _lateral_at_rest(model: Any, saddle: Any) -> bool:
 RUDDER_SATURATED = 0.95
 
 
-def _rudder_saturated(model: Any, saddle: Any) -> bool:
+def _rudder_saturated(model: VesselModel, saddle: Any) -> bool:
     """The crest saddle's rudder angle within 5 % of its limit: the course is not held."""
     limit = getattr(getattr(model, "forces", None), "delta_max", None)
     if limit is None or "delta" not in model.state_names:
@@ -502,7 +503,7 @@ def _rudder_saturated(model: Any, saddle: Any) -> bool:
 
 
 def capsizing_threshold(
-    model: Any = None,
+    model: VesselModel | None = None,
     params: Any = None,
     *,
     chi_c: float | None = None,

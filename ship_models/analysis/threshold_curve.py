@@ -29,6 +29,7 @@ from continuation.status import Status
 from continuation.sweep.forked import ForkedTasks
 from continuation.typing import FloatArray
 
+from ..contracts import VesselModel
 from .critical_curve import CriticalCurve, critical_curve
 from .params import course, ship_model, ship_params
 from .threshold import CapsizingThreshold, ThresholdSettings, capsizing_threshold
@@ -154,7 +155,7 @@ def _het_at(curve: CriticalCurve, chi: float) -> tuple[float, float]:
 def threshold_curve(
     chi_c: Sequence[float] | FloatArray,
     *,
-    model: Any = None,
+    model: VesselModel | None = None,
     params: Any = None,
     heteroclinic: CriticalCurve | None = None,
     workers: int = 1,
