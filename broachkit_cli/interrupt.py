@@ -20,7 +20,16 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-_state: dict[str, Any] = {"requested": threading.Event(), "done": threading.Event()}
+_state: dict[str, Any] = {
+    "requested": threading.Event(),
+    "done": threading.Event(),
+    "seen": False,
+}
+
+
+def was_interrupted() -> bool:
+    """A Ctrl-C arrived during the last (or current) :func:`sticky_interrupt` block."""
+    return bool(_state["seen"])
 
 
 def acknowledge() -> None:
@@ -52,12 +61,14 @@ def sticky_interrupt(repeat: float = 0.5) -> Iterator[None]:
         yield
         return
     _state["requested"], _state["done"] = threading.Event(), threading.Event()
+    _state["seen"] = False
 
     # the watcher thread starts with the first Ctrl-C: until then the process has one
     # thread, so library code may fork workers (continuation.sweep.forked.can_fork)
     watcher: list[threading.Thread] = []
 
     def handler(signum: int, frame: Any) -> None:
+        _state["seen"] = True
         if not _state["done"].is_set():
             _state["requested"].set()
             if not watcher:
@@ -74,4 +85,40 @@ def sticky_interrupt(repeat: float = 0.5) -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
-__all__ = ["acknowledge", "sticky_interrupt"]
+def end_process(code: int, timeout: float = 0.5) -> None:
+    """End this process now with ``code``, after stopping the processes it started.
+
+    For the command line after an interrupt, once the command has written what it
+    keeps: every descendant process still running (worker processes, a Dask cluster's
+    workers, forked children; multiprocessing's resource tracker excepted, which cleans
+    up after this process) is killed and waited for at most ``timeout`` seconds, the
+    standard streams are flushed, and the process exits without running the
+    interpreter's exit handlers (Dask's wait up to 10 s for a cluster to close, and a
+    cluster start abandoned by the interrupt may still be running in a thread).
+    """
+    import os
+    import sys
+
+    with contextlib.suppress(Exception):
+        _kill_descendants(timeout)
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
+
+
+def _kill_descendants(timeout: float) -> None:
+    import psutil
+
+    procs = []
+    for p in psutil.Process().children(recursive=True):
+        with contextlib.suppress(psutil.Error):
+            if "resource_tracker" not in " ".join(p.cmdline()):
+                procs.append(p)
+    for p in procs:
+        with contextlib.suppress(psutil.Error):
+            p.kill()
+    psutil.wait_procs(procs, timeout=timeout)
+
+
+__all__ = ["acknowledge", "end_process", "sticky_interrupt", "was_interrupted"]
