@@ -190,3 +190,49 @@ def test_ctrl_c_during_a_dask_cluster_start_ends_everything_within_2_s(tmp_path,
     assert r["exit_s"] < 2.0 and r["gone_s"] < 2.0, r
     assert not r["traceback"], r["stderr_lines"]
     assert len(r["stderr_lines"]) == 1 and "interrupted" in r["stderr_lines"][0], r
+
+
+@pytest.mark.skipif(os.name != "posix", reason="POSIX signals")
+@pytest.mark.parametrize("after", ["ValueError", "RuntimeError", "return 0"])
+def test_a_command_that_fails_after_a_swallowed_ctrl_c_exits_as_interrupted(
+    monkeypatch, capsys, after
+):
+    """A library call that turns Ctrl-C into a status can leave a result the command
+    then refuses (``sweep boundary``: "`Fn_bracket` must be given: no heteroclinic
+    connection (Interrupted by the user ...)", exit 2): after a Ctrl-C the command ends
+    as interrupted (130, one line), whatever it did next."""
+    import importlib
+
+    from broachkit_cli.main import main
+
+    mod = importlib.import_module("broachkit_cli.commands.vessels")
+
+    def run(args: object) -> int:
+        assert _library_call(0.0) == "SUCCESS"
+        os.kill(os.getpid(), signal.SIGINT)
+        assert _library_call(5.0) == "INTERRUPTED"  # swallowed, as the engine does
+        if after == "ValueError":
+            raise ValueError("`Fn_bracket` must be given: no heteroclinic connection")
+        if after == "RuntimeError":
+            raise RuntimeError("no result")
+        return 0
+
+    monkeypatch.setattr(mod, "run", run)
+    assert main(["vessels", "list"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["interrupted; finished results are kept on disk"]
+
+
+def test_without_ctrl_c_a_refusal_is_still_exit_2(monkeypatch, capsys):
+    import importlib
+
+    from broachkit_cli.main import main
+
+    mod = importlib.import_module("broachkit_cli.commands.vessels")
+
+    def run(args: object) -> int:
+        raise ValueError("`--x` must be positive")
+
+    monkeypatch.setattr(mod, "run", run)
+    assert main(["vessels", "list"]) == 2
+    assert "error: `--x` must be positive" in capsys.readouterr().err
