@@ -13,6 +13,7 @@ import os
 import signal
 import threading
 import time
+from pathlib import Path
 
 import pytest
 
@@ -236,3 +237,61 @@ def test_without_ctrl_c_a_refusal_is_still_exit_2(monkeypatch, capsys):
     monkeypatch.setattr(mod, "run", run)
     assert main(["vessels", "list"]) == 2
     assert "error: `--x` must be positive" in capsys.readouterr().err
+
+
+_FAST_STEP = """
+from pathlib import Path
+
+
+def compute(out, progress):
+    Path(out).mkdir(parents=True, exist_ok=True)
+    (Path(out) / "summary.json").write_text("{}")
+    return {}
+"""
+
+_SLOW_SWEEP_STEP = """
+import os
+from pathlib import Path
+
+import sweep_tasks as T
+
+from continuation.sweep import run_sweep
+
+
+def compute(out, progress, backend=None, workers=1):
+    log = os.environ["SLOW_SWEEP_LOG"]
+    keys = [{"x": i, "sleep": 60.0, "log": log} for i in range(4)]
+    r = run_sweep(T.square, keys, backend=backend.executor, progress=False)  # the job's pool
+    if r.status.name == "INTERRUPTED":
+        raise KeyboardInterrupt  # as the packaged study does
+    Path(out).mkdir(parents=True, exist_ok=True)
+    (Path(out) / "summary.json").write_text("{}")
+    return {"status": r.status.name}
+"""
+
+
+@pytest.mark.skipif(os.name != "posix", reason="POSIX signals and process groups")
+def test_ctrl_c_in_the_sweep_step_after_the_other_steps_finished_ends_within_2_s(tmp_path):
+    """The main job's sweep step puts its tasks on the job's process pool. Ctrl-C in it
+    once every other step had finished used to wait for the sweep's running tasks (the
+    pool was closed without cancelling: 30 s or more); now exit 130 within 2 s, no
+    process left. Two stand-in studies (``--studies``): one that finishes at once, and
+    a sweep of 60-s tasks."""
+    from benchmarks.interrupt_latency import interrupt_at
+
+    studies = tmp_path / "studies"
+    studies.mkdir()
+    (studies / "fig02_05_fixed_points.py").write_text(_FAST_STEP)
+    (studies / "fig16_22_sudden_change.py").write_text(_SLOW_SWEEP_STEP)
+    here = Path(__file__).resolve().parent
+    env = dict(os.environ, SLOW_SWEEP_LOG=str(tmp_path / "log"))
+    env["PYTHONPATH"] = os.pathsep.join([str(here), str(here.parent), env.get("PYTHONPATH", "")])
+    args = ["reproduce", "--studies", str(studies), "--only", "fig02_05", "fig16_22",
+            "--workers", "2", "--no-report"]  # fmt: skip
+    # 3 s after the pool's 2 workers are up: the fast step is done, the sweep runs
+    r = interrupt_at(args, 3.0, tmp_path / "o", after_children=2, env=env)
+    assert not r["finished_before"], r
+    assert (tmp_path / "o" / "fig02_05" / "summary.json").is_file(), r
+    assert r["rc"] == 130, r
+    assert r["exit_s"] < 2.0 and r["gone_s"] < 2.0, r
+    assert not r["traceback"], r["stderr_lines"]
