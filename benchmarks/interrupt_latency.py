@@ -37,6 +37,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -63,6 +64,7 @@ def interrupt_at(
     out: Path,
     *,
     after_children: int = 0,
+    ready: Callable[[], bool] | None = None,
     timeout: float = 30.0,
     env: dict | None = None,
 ) -> dict[str, Any]:
@@ -74,6 +76,9 @@ def interrupt_at(
         Count ``at`` from the moment the group first has this many processes besides
         the command's own (e.g. 1: from the first worker process of a cluster being
         started); 0 counts from the start.
+    ready : callable, optional
+        Count ``at`` from the moment ``ready()`` is first true (polled; after
+        ``after_children``), e.g. when a file the command writes exists.
 
     Returns
     -------
@@ -93,6 +98,11 @@ def interrupt_at(
         finished_before = False
         while after_children and proc.poll() is None:
             if len(group_alive(proc.pid)) > after_children:
+                t_clock = time.monotonic()
+                break
+            time.sleep(0.02)
+        while ready is not None and proc.poll() is None:
+            if ready():
                 t_clock = time.monotonic()
                 break
             time.sleep(0.02)
