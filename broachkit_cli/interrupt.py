@@ -20,7 +20,16 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-_state: dict[str, Any] = {"requested": threading.Event(), "done": threading.Event()}
+_state: dict[str, Any] = {
+    "requested": threading.Event(),
+    "done": threading.Event(),
+    "seen": False,
+}
+
+
+def was_interrupted() -> bool:
+    """A Ctrl-C arrived during the last (or current) :func:`sticky_interrupt` block."""
+    return bool(_state["seen"])
 
 
 def acknowledge() -> None:
@@ -41,23 +50,106 @@ def _repeat(repeat: float) -> None:
             _thread.interrupt_main(signal.SIGINT)
 
 
+#: The line a stopped command ends with when it did not say more itself.
+INTERRUPTED_LINE = "interrupted; finished results are kept on disk"
+
+
+#: Name of the watchdog thread (a thread :func:`continuation.sweep.forked.can_fork`
+#: does not count: it only waits on its own pipe).
+WATCHDOG_THREAD = "broachkit-ctrl-c-watchdog"
+
+
+class _Watchdog:
+    """Ends the process ``deadline`` s after a SIGINT arrived, if it still runs.
+
+    A native call (building a CasADi function, a factorisation) returns to Python only
+    when it is done: neither Python's SIGINT handler nor the repeated interrupts run
+    inside it. The C-level handler still writes the signal's number to the wakeup pipe
+    (:func:`signal.set_wakeup_fd`) at once; this thread waits on that pipe, and such
+    calls release the GIL, so it can end the process (:func:`end_process`) on time.
+    Nothing finished is lost: results are written atomically as they finish, and an
+    interrupted step is marked to be redone.
+    """
+
+    def __init__(self, deadline: float, code: int) -> None:
+        import os
+
+        from continuation.sweep.forked import FORK_SAFE_THREADS
+
+        FORK_SAFE_THREADS.add(WATCHDOG_THREAD)
+        self.deadline, self.code = deadline, code
+        self._read, self._write = os.pipe()
+        os.set_blocking(self._write, False)
+        self._old = signal.set_wakeup_fd(self._write, warn_on_full_buffer=False)
+        self._thread = threading.Thread(target=self._run, name=WATCHDOG_THREAD, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        import os
+        import sys
+        import time
+
+        while True:
+            try:
+                data = os.read(self._read, 64)
+            except OSError:
+                return
+            if not data:  # closed: the command ended
+                return
+            if signal.SIGINT in data:
+                break
+        time.sleep(self.deadline)
+        if not _state["done"].is_set():  # the command did not handle it (nor say so)
+            with contextlib.suppress(Exception):
+                sys.stderr.write(INTERRUPTED_LINE + "\n")
+        end_process(self.code, timeout=0.3)
+
+    def close(self) -> None:
+        """Stop watching (the previous wakeup descriptor is restored)."""
+        import os
+
+        with contextlib.suppress(ValueError, OSError):
+            signal.set_wakeup_fd(self._old)
+        with contextlib.suppress(OSError):
+            os.close(self._write)  # the thread reads end-of-file and ends
+        self._thread.join(timeout=1.0)
+        with contextlib.suppress(OSError):
+            os.close(self._read)
+
+
 @contextlib.contextmanager
-def sticky_interrupt(repeat: float = 0.5) -> Iterator[None]:
+def sticky_interrupt(
+    repeat: float = 0.5, deadline: float | None = None, code: int = 130
+) -> Iterator[None]:
     """Inside: Ctrl-C raises ``KeyboardInterrupt`` and keeps raising it until handled.
 
     Only in the main thread (elsewhere it does nothing); the previous SIGINT handler is
     restored on exit.
+
+    Parameters
+    ----------
+    repeat : float
+        Seconds between the repeated interrupts.
+    deadline : float, optional
+        For a command-line process only: if it still runs ``deadline`` seconds after
+        the first Ctrl-C (stuck in a long native call), a watchdog thread ends it with
+        exit status ``code`` (:class:`_Watchdog`, :func:`end_process`). ``None``: no
+        watchdog.
+    code : int
+        Exit status of that end.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     _state["requested"], _state["done"] = threading.Event(), threading.Event()
+    _state["seen"] = False
 
     # the watcher thread starts with the first Ctrl-C: until then the process has one
     # thread, so library code may fork workers (continuation.sweep.forked.can_fork)
     watcher: list[threading.Thread] = []
 
     def handler(signum: int, frame: Any) -> None:
+        _state["seen"] = True
         if not _state["done"].is_set():
             _state["requested"].set()
             if not watcher:
@@ -66,12 +158,59 @@ def sticky_interrupt(repeat: float = 0.5) -> Iterator[None]:
             raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGINT, handler)
+    dog: _Watchdog | None = None
     try:
+        if deadline is not None:
+            dog = _Watchdog(deadline, code)
         yield
     finally:
         _state["done"].set()
         _state["requested"].set()  # let the watcher end
         signal.signal(signal.SIGINT, previous)
+        if dog is not None and not _state["seen"]:
+            dog.close()  # after a Ctrl-C it stays: the process is ending
 
 
-__all__ = ["acknowledge", "sticky_interrupt"]
+def end_process(code: int, timeout: float = 0.5) -> None:
+    """End this process now with ``code``, after stopping the processes it started.
+
+    For the command line after an interrupt, once the command has written what it
+    keeps: every descendant process still running (worker processes, a Dask cluster's
+    workers, forked children; multiprocessing's resource tracker excepted, which cleans
+    up after this process) is killed and waited for at most ``timeout`` seconds, the
+    standard streams are flushed, and the process exits without running the
+    interpreter's exit handlers (Dask's wait up to 10 s for a cluster to close, and a
+    cluster start abandoned by the interrupt may still be running in a thread).
+    """
+    import os
+    import sys
+
+    with contextlib.suppress(Exception):
+        _kill_descendants(timeout)
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
+
+
+def _kill_descendants(timeout: float) -> None:
+    import psutil
+
+    procs = []
+    for p in psutil.Process().children(recursive=True):
+        with contextlib.suppress(psutil.Error):
+            if "resource_tracker" not in " ".join(p.cmdline()):
+                procs.append(p)
+    for p in procs:
+        with contextlib.suppress(psutil.Error):
+            p.kill()
+    psutil.wait_procs(procs, timeout=timeout)
+
+
+__all__ = [
+    "INTERRUPTED_LINE",
+    "acknowledge",
+    "end_process",
+    "sticky_interrupt",
+    "was_interrupted",
+]

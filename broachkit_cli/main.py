@@ -24,7 +24,13 @@ import warnings
 from types import ModuleType
 from typing import Any
 
-from .interrupt import acknowledge, sticky_interrupt
+from .interrupt import (
+    INTERRUPTED_LINE,
+    acknowledge,
+    end_process,
+    sticky_interrupt,
+    was_interrupted,
+)
 from .options import OneLineParser, add_verbose
 
 #: Sub-command modules, in the order shown by ``broachkit --help``.
@@ -127,10 +133,26 @@ def configure_logging(verbose: bool) -> None:
     root.setLevel(logging.DEBUG if verbose else logging.WARNING)
     for noisy in ("matplotlib", "PIL", "numba", "asyncio"):
         logging.getLogger(noisy).setLevel(logging.WARNING)
+    from continuation.sweep.backends import WORKER_LOG_ENV
+
     if not verbose:
         handler.addFilter(_quiet_libraries)
-        # Dask's own processes read their log level from the environment they inherit
+        # worker processes read their log level from the environment they inherit: Dask's
+        # own messages not at all, the library's (a spawned worker has no filter) from
+        # ERROR up; the parent says in one line what happened
         os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "critical")
+        os.environ[WORKER_LOG_ENV] = "ERROR"
+        # multiprocessing's resource tracker (a helper process that outlives a stopped
+        # command) warns about the semaphores of the workers it cleans up after Ctrl-C
+        warn = os.environ.get("PYTHONWARNINGS", "")
+        if _QUIET_TRACKER not in warn:
+            os.environ["PYTHONWARNINGS"] = ",".join(filter(None, (warn, _QUIET_TRACKER)))
+    else:
+        os.environ.pop(WORKER_LOG_ENV, None)
+
+
+#: Warning filter (``PYTHONWARNINGS``) for multiprocessing's resource tracker.
+_QUIET_TRACKER = "ignore::UserWarning:multiprocessing.resource_tracker"
 
 
 #: Loggers of the library and of Dask: shown only with ``--verbose`` (errors always).
@@ -151,31 +173,69 @@ def _quiet_libraries(record: logging.LogRecord) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the ``broachkit`` command line; returns the exit code."""
-    cmds = _load_commands()
-    parser = build_parser(cmds)
-    argv = with_default_command(list(sys.argv[1:] if argv is None else argv), cmds)
-    args = parser.parse_args(argv)
-    verbose = bool(getattr(args, "verbose", False))
-    configure_logging(verbose)
-    name = args.command
+    """Run the ``broachkit`` command line; returns the exit code.
+
+    Called without ``argv`` (the installed script, ``python -m broachkit_cli.main``),
+    an interrupted command ends the process itself once it has written what it keeps
+    (:func:`~broachkit_cli.interrupt.end_process`: its worker processes are killed and
+    the interpreter's exit handlers, which may wait for a Dask cluster, are skipped),
+    so Ctrl-C ends it within about a second at any moment.
+    """
+    code = _main(argv, terminal=argv is None)
+    if argv is None and code == INTERRUPTED_EXIT:
+        end_process(code)
+    return code
+
+
+#: Exit status after Ctrl-C (128 + SIGINT, as a shell reports it).
+INTERRUPTED_EXIT = 130
+
+#: Seconds after Ctrl-C by which the command-line process ends even if it is inside a
+#: long native call (:func:`~broachkit_cli.interrupt.sticky_interrupt`'s watchdog);
+#: with the 0.3-s wait for its processes, within the 2-s bound of issue 28.
+DEADLINE_S = 1.4
+
+
+def _interrupted() -> int:
+    acknowledge()
+    sys.stderr.write(INTERRUPTED_LINE + "\n")
+    return INTERRUPTED_EXIT
+
+
+def _main(argv: list[str] | None, terminal: bool = False) -> int:
+    name = "reproduce"
+    verbose = False
+    deadline = DEADLINE_S if terminal else None
     try:
-        with warnings.catch_warnings():
-            if not verbose:
-                warnings.filterwarnings("ignore", module="matplotlib")
-                warnings.filterwarnings("ignore", category=UserWarning, message=".*[Ll]ayout.*")
-            with sticky_interrupt():
-                return int(cmds[name].run(args))
+        # from the start: a Ctrl-C while the modules load ends quietly too
+        with sticky_interrupt(deadline=deadline, code=INTERRUPTED_EXIT):
+            cmds = _load_commands()
+            parser = build_parser(cmds)
+            argv = with_default_command(list(sys.argv[1:] if argv is None else argv), cmds)
+            args = parser.parse_args(argv)
+            verbose = bool(getattr(args, "verbose", False))
+            configure_logging(verbose)
+            name = args.command
+            with warnings.catch_warnings():
+                if not verbose:
+                    warnings.filterwarnings("ignore", module="matplotlib")
+                    warnings.filterwarnings("ignore", category=UserWarning, message=".*[Ll]ayout.*")
+                code = int(cmds[name].run(args))
+        if was_interrupted() and code != INTERRUPTED_EXIT:
+            return _interrupted()  # the command finished what it had, but was stopped
+        return code
     except KeyboardInterrupt:
-        acknowledge()
-        sys.stderr.write("interrupted; finished results are kept on disk\n")
-        return 130
+        return _interrupted()
     except ValueError as exc:
+        if was_interrupted():  # a library call stopped by Ctrl-C left an unusable result
+            return _interrupted()
         if verbose:
             traceback.print_exc()
         sys.stderr.write(f"broachkit {name}: error: {_one_line(exc)}\n")
         return 2
     except Exception as exc:  # noqa: BLE001 - the front door never shows a traceback
+        if was_interrupted():
+            return _interrupted()
         if verbose:
             traceback.print_exc()
         sys.stderr.write(

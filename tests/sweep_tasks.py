@@ -58,3 +58,13 @@ def interrupt_at(key: dict[str, Any]) -> dict[str, Any]:
     if key.get("stop"):
         raise KeyboardInterrupt
     return square(key)
+
+
+def chatter(key: dict[str, Any]) -> dict[str, Any]:
+    """Log a warning and an error from a library logger, then :func:`square`."""
+    import logging
+
+    log = logging.getLogger("continuation.sweep_test_chatter")
+    log.warning("worker warning %s", key["x"])
+    log.error("worker error %s", key["x"])
+    return square(key)

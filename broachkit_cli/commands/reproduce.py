@@ -561,6 +561,7 @@ def _run(args: argparse.Namespace) -> int:
             mark_complete(out / key)
             log.info("%s: done in %.1f s (worker process)", key, seconds)
 
+    completed = False  # every step ran: the pool has nothing left to run
     try:
         for i, key, title, fn in todo:
             folder = out / key
@@ -587,6 +588,7 @@ def _run(args: argparse.Namespace) -> int:
         while side is not None and side.pending:
             bar.message(f"waiting for {', '.join(side.pending)} (worker processes)")
             collect(1.0)
+        completed = True
     except KeyboardInterrupt:
         acknowledge()
         bar.close()
@@ -603,7 +605,9 @@ def _run(args: argparse.Namespace) -> int:
                 pass  # the failure is being reported already
             side.cancel()
         if pool is not None:
-            pool.close(cancel=bool(side and side.pending))
+            # after Ctrl-C or a failure the pool may still hold the interrupted sweep
+            # step's tasks (even when every other step finished): stop them, never wait
+            pool.close(cancel=not completed or bool(side and side.pending))
     results = {k: results[k] for k, _, _ in steps if k in results}  # in step order
     timing = {k: timing[k] for k, _, _ in steps if k in timing}
     from studies.fig23_combined import draw as draw_fig23

@@ -45,9 +45,43 @@ class SerialExecutor(cf.Executor):
         return fut
 
 
+#: Environment variable naming the lowest level a worker process logs (e.g. ``ERROR``):
+#: set by a front end that keeps library messages quiet (the ``broachkit`` command
+#: without ``--verbose``); worker processes inherit it. Unset: Python's default (a
+#: process without logging configured prints warnings and errors to stderr).
+WORKER_LOG_ENV = "CONTINUATION_WORKER_LOG_LEVEL"
+
+_worker_logging_done = False
+
+
+def configure_worker_logging() -> None:
+    """In a worker process: log at :data:`WORKER_LOG_ENV`'s level or above, to stderr.
+
+    A spawned worker (process pool, Dask) starts with logging unconfigured, so every
+    library warning would reach stderr through Python's last-resort handler whatever
+    the front end chose; this gives it one handler at the level the front end set. Runs
+    once per process, only in a child process (``multiprocessing.parent_process()``),
+    and only when the variable names a level; elsewhere it does nothing.
+    """
+    global _worker_logging_done
+    if _worker_logging_done or multiprocessing.parent_process() is None:
+        return
+    _worker_logging_done = True
+    name = os.environ.get(WORKER_LOG_ENV, "").strip().upper()
+    level = logging.getLevelName(name) if name else None
+    if not isinstance(level, int):
+        return
+    handler = logging.StreamHandler()
+    handler.setLevel(level)
+    handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+    logging.getLogger().addHandler(handler)
+
+
 def _ignore_sigint() -> None:
-    # the sweep's process handles Ctrl-C (cancels, then stops the workers)
+    # the sweep's process handles Ctrl-C (cancels, then stops the workers); the worker
+    # logs only what the front end asked for (WORKER_LOG_ENV)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    configure_worker_logging()
 
 
 @contextlib.contextmanager
@@ -66,11 +100,25 @@ def sigint_blocked() -> Any:
     if mask is None or threading.current_thread() is not threading.main_thread():
         yield
         return
+    _start_resource_tracker()
     old = mask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
         mask(signal.SIG_SETMASK, old)
+
+
+def _start_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker now, before SIGINT is blocked.
+
+    Its first start (at the first process or semaphore) *unblocks* SIGINT in the calling
+    thread (CPython's ``resource_tracker.ensure_running``), so every process started
+    after it would take the terminal's Ctrl-C again.
+    """
+    from multiprocessing import resource_tracker
+
+    with contextlib.suppress(Exception):
+        resource_tracker.ensure_running()
 
 
 class _QuietProcessPool(cf.ProcessPoolExecutor):
@@ -203,7 +251,7 @@ def _helper_pids() -> set[int]:
     return {pid} if pid else set()
 
 
-def _kill_processes(pids: tuple[int, ...]) -> None:
+def _kill_processes(pids: tuple[int, ...], timeout: float = 1.0) -> None:
     """Kill processes (and their children) this backend started; gone ones are skipped."""
     import psutil
 
@@ -215,7 +263,7 @@ def _kill_processes(pids: tuple[int, ...]) -> None:
     for p in procs:
         with contextlib.suppress(psutil.Error):
             p.kill()
-    psutil.wait_procs(procs, timeout=1.0)
+    psutil.wait_procs(procs, timeout=timeout)
 
 
 def _stop_process_pool(ex: cf.ProcessPoolExecutor, timeout: float = 10.0) -> None:
@@ -318,6 +366,94 @@ def _is_client(obj: Any) -> bool:
     return type(obj).__name__ == "Client" and hasattr(obj, "get_executor")
 
 
+def _start_local_cluster(k: int, poll: float = 0.05) -> tuple[Any, Any, tuple[int, ...]]:
+    """A Dask ``LocalCluster`` of ``k`` one-thread worker processes and its ``Client``.
+
+    The start (several seconds: each worker process imports its modules) runs in a
+    daemon thread with SIGINT blocked, so the processes and threads it starts inherit
+    the block and a Ctrl-C at the terminal (sent to the whole process group) reaches
+    only this process. This (the main) thread waits for it in short slices, so a
+    Ctrl-C during the start raises ``KeyboardInterrupt`` here at once; the start is then
+    abandoned: the processes it has started so far, and any it starts in the next
+    moments, are killed, and the thread closes what it built if it still returns.
+
+    Returns
+    -------
+    cluster, client, pids
+        ``pids``: the processes the cluster started (its worker processes).
+    """
+    import threading
+
+    import dask
+    from distributed import Client, LocalCluster
+
+    box: dict[str, Any] = {}
+    ready, abandoned = threading.Event(), threading.Event()
+
+    _start_resource_tracker()
+    before = _child_pids() | _helper_pids()
+
+    def start() -> None:
+        mask = getattr(signal, "pthread_sigmask", None)
+        if mask is not None:
+            mask(signal.SIG_BLOCK, {signal.SIGINT})
+        made: list[Any] = []
+        try:
+            # the sweep retries a task once itself: Dask must not resubmit it on its own
+            with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+                made.append(
+                    LocalCluster(
+                        n_workers=k,
+                        threads_per_worker=1,
+                        processes=True,
+                        dashboard_address=":0",
+                        silence_logs=logging.ERROR,
+                    )
+                )
+                made.append(Client(made[0]))
+            box["made"] = made
+        except BaseException as exc:  # reported by the waiting thread
+            box["error"] = exc
+        finally:
+            if abandoned.is_set() or "error" in box:
+                for obj in reversed(made):  # nobody will use them
+                    with contextlib.suppress(BaseException):
+                        obj.close(timeout=1)
+            ready.set()
+
+    thread = threading.Thread(target=start, name="sweep-dask-start", daemon=True)
+    thread.start()
+    try:
+        while not ready.wait(poll):
+            pass
+    except BaseException:  # Ctrl-C during the start: give it up, stop what it started
+        abandoned.set()
+        _kill_new_processes(before, settle=0.3)
+        raise
+    if "error" in box:
+        raise box["error"]
+    cluster, client = box["made"]
+    pids = tuple(sorted(_child_pids() - before - _helper_pids()))
+    return cluster, client, pids
+
+
+def _kill_new_processes(before: set[int], settle: float) -> None:
+    """Kill this process's descendants not in ``before``, repeatedly for ``settle`` s.
+
+    A start abandoned in another thread may still be starting some.
+    """
+    import time
+
+    t_end = time.monotonic() + settle
+    while True:
+        new = tuple(sorted(_child_pids() - before - _helper_pids()))
+        if new:
+            _kill_processes(new, timeout=0.3)
+        if time.monotonic() >= t_end:
+            return
+        time.sleep(0.05)
+
+
 def open_backend(
     backend: str | cf.Executor | Any = "processes",
     *,
@@ -375,35 +511,10 @@ def open_backend(
     if backend == "serial":
         return Backend("serial", SerialExecutor(), 1)
     if backend == "dask":
-        import dask
-        from distributed import Client, LocalCluster
-
         k = n or cores
-        # the sweep retries a task once itself; Dask must not resubmit it on its own
-        # started with SIGINT blocked: the cluster's threads and processes inherit it,
-        # so Ctrl-C reaches this process only, which closes the cluster
-        started: list[Any] = []
-        before = _child_pids()
-        try:
-            with dask.config.set({"distributed.scheduler.allowed-failures": 0}), sigint_blocked():
-                started.append(
-                    LocalCluster(
-                        n_workers=k,
-                        threads_per_worker=1,
-                        processes=True,
-                        dashboard_address=":0",
-                        silence_logs=logging.ERROR,
-                    )
-                )
-                started.append(Client(started[0]))
-        except BaseException:  # Ctrl-C during the start (delivered when unblocked)
-            for obj in reversed(started):
-                with contextlib.suppress(Exception):
-                    obj.close()
-            raise
-        cluster, client = started
+        cluster, client, pids = _start_local_cluster(k)
         be = _client_backend(client, "dask", (client, cluster), slots=k)
-        be.pids = tuple(sorted(_child_pids() - before - _helper_pids()))
+        be.pids = pids
         return be
     raise ValueError(
         f"`backend` must be one of {', '.join(BACKENDS)}, a concurrent.futures.Executor or a "
@@ -414,9 +525,11 @@ def open_backend(
 __all__ = [
     "BACKENDS",
     "MAX_WORKERS",
+    "WORKER_LOG_ENV",
     "Backend",
     "SerialExecutor",
     "check_workers",
     "default_workers",
+    "configure_worker_logging",
     "open_backend",
 ]

@@ -55,19 +55,25 @@ _IN_CHILD = False
 
 log = logging.getLogger(__name__)
 
+#: Names of threads :func:`can_fork` does not count: threads that only wait in a system
+#: call on a file descriptor of their own and hold no lock a forked child could need
+#: (the command line's Ctrl-C watchdog, waiting on its signal pipe).
+FORK_SAFE_THREADS: set[str] = set()
+
 
 def can_fork() -> bool:
     """True when this process may fork workers (Linux, one thread, not a forked child).
 
-    Only Linux: on macOS a forked child of a process that loaded system frameworks
-    (Accelerate, the GUI libraries) may crash, which is why Python's multiprocessing
-    spawns there; other systems are untested.
+    Threads named in :data:`FORK_SAFE_THREADS` are not counted. Only Linux: on macOS a
+    forked child of a process that loaded system frameworks (Accelerate, the GUI
+    libraries) may crash, which is why Python's multiprocessing spawns there; other
+    systems are untested.
     """
     return (
         sys.platform.startswith("linux")
         and hasattr(os, "fork")
         and not _IN_CHILD
-        and threading.active_count() == 1
+        and sum(t.name not in FORK_SAFE_THREADS for t in threading.enumerate()) == 1
     )
 
 
@@ -236,4 +242,4 @@ def _read_records(path: Path) -> dict[int, object]:
     return out
 
 
-__all__ = ["MAX_TASKS", "ForkedTasks", "can_fork"]
+__all__ = ["FORK_SAFE_THREADS", "MAX_TASKS", "ForkedTasks", "can_fork"]

@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from ..status import Status
-from .backends import Backend, open_backend
+from .backends import Backend, configure_worker_logging, open_backend
 from .keys import check_key, function_name, source_version, table_order, task_id
 from .store import CheckpointStore
 
@@ -49,6 +49,7 @@ def execute_task(fn: Callable[[dict[str, Any]], Any], key: dict[str, Any]) -> di
     dict
         ``{"ok", "value" | "error" + "traceback", "elapsed_s", "worker"}``.
     """
+    configure_worker_logging()  # a Dask worker has no pool initializer to do it
     t0 = time.perf_counter()
     worker = f"{socket.gethostname()}:{os.getpid()}"
     try:

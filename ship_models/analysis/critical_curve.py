@@ -590,6 +590,12 @@ def _solve_task(
 
     Returns picklable rows (the result's ``orbit``, whose problem holds CasADi
     functions, is replaced by its samples ``x (M, 8)`` when ``keep_orbits``).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        When a solve was interrupted (its status ``INTERRUPTED``): the remaining courses
+        are not started, so one Ctrl-C stops the curve instead of one course each.
     """
     store: dict[Any, Any] = {}
     rows: list[_Solved] = []
@@ -597,6 +603,8 @@ def _solve_task(
         r = _solve_from_sheets(m, params, sheets, float(chis[k]), store)
         if r is None:
             continue
+        if r.status is Status.INTERRUPTED:  # Ctrl-C: stop here, not at every course
+            raise KeyboardInterrupt
         if not r.success:
             log.warning("course %.4g deg: %s", math.degrees(chis[k]), r.message)
         x = np.asarray(r.orbit.x, dtype=float) if keep_orbits and r.orbit is not None else None
