@@ -63,10 +63,10 @@ def compute_orbits(
     RuntimeError
         If the followed orbit does not converge.
     """
-    from ship_models import purse_seiner
     from ship_models.analysis.sudden_change import follow_orbit, periodic_orbit
+    from studies._model import default_model
 
-    model = purse_seiner()
+    model = default_model()  # one per process (shared by the steps it runs)
     base = model.default_params()
     p1 = base.replace(Fn=from_1[0], chi_c=math.radians(from_1[1]))
     orbits = {"from_1": periodic_orbit(model, p1, throw=True)}
