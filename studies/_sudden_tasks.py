@@ -18,6 +18,7 @@ to a serial run (the same calls on the same numbers).
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import pickle
@@ -27,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from continuation.atomic import write_atomic
+from studies._model import default_model
 
 _LOADED: dict[str, dict[str, Any]] = {}
 
@@ -63,10 +65,9 @@ def compute_orbits(
     RuntimeError
         If the followed orbit does not converge.
     """
-    from ship_models import purse_seiner
     from ship_models.analysis.sudden_change import follow_orbit, periodic_orbit
 
-    model = purse_seiner()
+    model = default_model()  # one per process (shared by the steps it runs)
     base = model.default_params()
     p1 = base.replace(Fn=from_1[0], chi_c=math.radians(from_1[1]))
     orbits = {"from_1": periodic_orbit(model, p1, throw=True)}
@@ -85,10 +86,23 @@ def compute_orbits(
 
 
 def load_orbits(path: str) -> dict[str, Any]:
-    """The pickled orbits of :func:`compute_orbits` (read once per process)."""
+    """The pickled orbits of :func:`compute_orbits` (read once per process).
+
+    An orbit of the default vessel is given this process's shared model
+    (:func:`studies._model.default_model`, the same vessel, class and options) instead of
+    the copy unpickled with it, so that the tasks and the other steps this process runs
+    share one model and its solvers' setup.
+    """
     key = str(Path(path).resolve())
     if key not in _LOADED:
-        _LOADED[key] = pickle.loads(Path(key).read_bytes())
+        orbits = pickle.loads(Path(key).read_bytes())
+        shared = default_model()
+        for name, o in orbits.items():
+            m = o.system
+            if (type(m) is type(shared) and m.options == shared.options
+                    and m.vessel == shared.vessel):  # fmt: skip
+                orbits[name] = dataclasses.replace(o, system=shared)
+        _LOADED[key] = orbits
     return _LOADED[key]
 
 

@@ -86,13 +86,13 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     source); the CSVs have angles in degrees (``*_deg``), as every CSV of the job.
     """
     say = progress or (lambda msg: None)
-    import ship_models
     from ship_models.analysis.critical_bvp import critical_fn_bvp
     from ship_models.analysis.cycles import cycle_at, cycle_branch, simulated_cycle
     from ship_models.analysis.events import capsize_angle
+    from studies._model import default_model
 
     out.mkdir(parents=True, exist_ok=True)
-    model = ship_models.get_model("purse_seiner")
+    model = default_model()  # the default vessel, one per process
     chi = math.radians(CHI_C_DEG)
     t0 = time.perf_counter()
     say("connection at 10 deg")

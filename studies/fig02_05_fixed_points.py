@@ -182,13 +182,13 @@ def _legend(fig: Any, branches: dict[str, Any]) -> None:
 
 def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Trace the fixed points, write figures and data into ``out``; return a summary."""
-    from ship_models import purse_seiner
     from ship_models.analysis import find_fixed_point, trace_in_chi_c, trace_in_fn
+    from studies._model import default_model
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    model = purse_seiner()
+    model = default_model()  # one per process (shared by the steps it runs)
     params = model.default_params().replace(Fn=FN, chi_c=math.radians(CHI_C_DEG))
     c = model.celerity(params)
     say("tracing the chi_c = 0 fixed points in chi_c from 0 to 50 deg")

@@ -43,13 +43,13 @@ LABELS = ("xi_G/lambda", "u'", "v'", "chi", "r'", "phi", "p'", "delta")
 
 def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Compute the eigen-structure of both fixed points; write figures and data."""
-    from ship_models import purse_seiner
     from ship_models.analysis import fixed_points
+    from studies._model import default_model
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    model = purse_seiner()
+    model = default_model()  # one per process (shared by the steps it runs)
     params = model.default_params().replace(Fn=FN, chi_c=math.radians(CHI_C_DEG))
     say(f"fixed points and their eigen-structure at Fn = {FN}, chi_c = {CHI_C_DEG:g} deg")
     pts = {fp.label: fp for fp in fixed_points(model, params)}

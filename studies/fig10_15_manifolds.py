@@ -193,7 +193,6 @@ def _save_series(man: Any, c: float, L: float, out: Path, case: str) -> list[str
 
 def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Bisection for the critical Fn, manifolds on both sides; figures and data in ``out``."""
-    from ship_models import purse_seiner
     from ship_models.analysis import (
         build_global_picture,
         critical_fn,
@@ -201,11 +200,12 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         unstable_manifold,
     )
     from ship_models.analysis.global_picture import compare_pictures
+    from studies._model import default_model
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    model = purse_seiner()
+    model = default_model()  # one per process (shared by the steps it runs)
     base = model.default_params().replace(chi_c=math.radians(CHI_C_DEG))
     c = model.celerity(base)
     L = float(model.forces.L)

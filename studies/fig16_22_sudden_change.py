@@ -179,12 +179,12 @@ def compute(
     (a :class:`continuation.sweep.Backend`, left open) runs them on a pool that is
     already there instead: the main job's, which runs its other steps too.
     """
-    from ship_models import purse_seiner
+    from studies._model import default_model
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
     t_all = time.perf_counter()
-    model = purse_seiner()
+    model = default_model()  # one per process (shared by the steps it runs)
     workers = default_workers() if workers is None else int(check_workers(workers))
     sweep_dir = out / SWEEP_DIR
     sweep_dir.mkdir(parents=True, exist_ok=True)
@@ -195,7 +195,10 @@ def compute(
     if be is None and workers > 1:
         be = open_backend("processes", workers=workers)
     try:
-        return _compute(out, say, full, model, orbits_path, be, t_all, bvp)
+        # on the job's shared pool the orbits are computed here: this process would
+        # only wait for them, while the pool's workers run the job's other steps
+        return _compute(out, say, full, model, orbits_path, be, t_all, bvp,
+                        orbits_here=backend is not None)  # fmt: skip
     finally:
         if be is not None and be is not backend:
             be.close()
@@ -210,6 +213,7 @@ def _compute(
     be: Any,
     t_all: float,
     bvp: bool = False,
+    orbits_here: bool = False,
 ) -> dict[str, Any]:
     from continuation.sweep import run_sweep, source_version
     from ship_models.analysis.critical_bvp import critical_fn_bvp
@@ -228,7 +232,7 @@ def _compute(
 
     say("periodic orbits: (0.1, 0 deg) from a calm-water start, (0.3, 45 deg) by following it")
     orbit_job = None
-    if be is not None:
+    if be is not None and not orbits_here:
         orbit_job = be.executor.submit(compute_orbits, orbits_path, FROM_1, FROM_2)
     else:
         orbit_info = compute_orbits(orbits_path, FROM_1, FROM_2)

@@ -81,17 +81,17 @@ def compute(
 ) -> dict[str, Any]:
     """Solve the connection, the curve and the bisection checks; write figures and data."""
     from continuation.dynamics import simulate
-    from ship_models import purse_seiner
     from ship_models.analysis.critical_bisection import upslope_bisection
     from ship_models.analysis.critical_bvp import check_critical_bvp, critical_fn_bvp
     from ship_models.analysis.critical_curve import critical_curve
     from ship_models.analysis.events import capsize_event
     from ship_models.analysis.upslope import upslope_branch
+    from studies._model import default_model
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
     t_all = time.perf_counter()
-    model = purse_seiner()
+    model = default_model()  # one per process (shared by the steps it runs)
     chi10 = math.radians(CHI_C_DEG)
     summary: dict[str, Any] = {"chi_c_deg": CHI_C_DEG, "paper_Fn_10deg": list(PAPER_FN)}
 

@@ -29,9 +29,10 @@ version, :mod:`continuation.sweep`; ``--force`` deletes them).
 
 On ``--workers N`` local processes (default one per core; ``N = 1``: everything in
 this process): one pool of ``N`` worker processes (:mod:`continuation.sweep`) serves
-the whole job. The other steps are its tasks, submitted heaviest first
-(:data:`STEP_WEIGHTS`); the sudden-change step (:data:`SWEEP_STEP`) runs in this
-process and puts its bisections and map rows on the same pool (``N`` is passed to it
+the whole job. The other steps are its tasks, handed to it heaviest first
+(:data:`STEP_WEIGHTS`) one per free worker (:class:`_SideSteps`); the sudden-change
+step (:data:`SWEEP_STEP`) runs in this process (its old periodic orbits too) and puts
+its bisections and map rows on the same pool (``N`` is passed to it
 as an argument; ``$BROACHKIT_WORKERS`` is the default of ``--workers``), so a worker
 that finishes a step takes the next task, whichever step it belongs to. Every step
 computes exactly what it computes alone, so the outputs do not depend on ``N``.
@@ -54,6 +55,7 @@ import platform
 import resource
 import shutil
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -217,18 +219,36 @@ class _SideSteps:
     The sweep step's own tasks go to the same pool (one pool of ``--workers``
     processes for the whole job: nothing starts twice, and a worker that finishes a
     step takes the next task, whichever step it belongs to).
+
+    The steps are handed to the pool heaviest first and only as workers free up: one
+    per worker at the start, the next one when one finishes (a callback). So the
+    sweep step's tasks, submitted meanwhile, run before the lighter side steps, and
+    these fill the workers at the end of the job while this process finishes the
+    sweep step's figures (no worker idles while the job's last step runs here).
     """
 
     def __init__(
         self, pool: Any, todo: list[tuple[str, str | None]], out: Path, studies: Path | None
     ) -> None:
+        self.pool = pool
         self.pending = [k for k, _ in todo]
         self.futures: dict[Any, str] = {}
-        for key, module in _heaviest_first(todo):
-            fut = pool.executor.submit(
-                _step_task, key, module, str(out), str(studies) if studies else None
-            )
+        self._queue = _heaviest_first(todo)
+        self._args = (str(out), str(studies) if studies else None)
+        self._lock = threading.Lock()
+        self._closed = False
+        for _ in range(min(max(int(getattr(pool, "slots", 1)), 1), len(self._queue))):
+            self._submit_next()
+
+    def _submit_next(self, _done: Any = None) -> None:
+        """Hand the next step to the pool (also the done-callback of each step's future)."""
+        with self._lock:
+            if self._closed or not self._queue:
+                return
+            key, module = self._queue.pop(0)
+            fut = self.pool.executor.submit(_step_task, key, module, *self._args)
             self.futures[fut] = key
+        fut.add_done_callback(self._submit_next)
 
     def finished(self, timeout: float) -> list[tuple[str, Any, float]]:
         """Steps finished within ``timeout`` s: ``(key, summary, seconds)``.
@@ -238,10 +258,13 @@ class _SideSteps:
         RuntimeError
             Naming the step, if one failed or its worker died.
         """
-        done, _ = cf.wait(list(self.futures), timeout=timeout, return_when=cf.FIRST_COMPLETED)
+        with self._lock:
+            futures = list(self.futures)
+        done, _ = cf.wait(futures, timeout=timeout, return_when=cf.FIRST_COMPLETED)
         out = []
         for fut in done:
-            key = self.futures.pop(fut)
+            with self._lock:
+                key = self.futures.pop(fut)
             try:
                 value, seconds = fut.result()
             except cf.BrokenExecutor as exc:
@@ -254,7 +277,11 @@ class _SideSteps:
 
     def cancel(self) -> None:
         """Drop the steps not started yet (the pool's close stops the running ones)."""
-        for fut in self.futures:
+        with self._lock:
+            self._closed = True
+            self._queue.clear()
+            futures = list(self.futures)
+        for fut in futures:
             fut.cancel()
 
 

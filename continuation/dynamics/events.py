@@ -155,12 +155,34 @@ class _Watch:
     ) -> list[Callable[[float, FloatArray], float]]:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def flagged(self, g0: float, g: FloatArray | None, x: FloatArray) -> np.ndarray:
+        """The sample intervals of a block where :meth:`candidates` may be non-empty.
+
+        ``x (M + 1, n)`` are the block's samples, ``g (M,)`` the event values at
+        ``x[1:]`` (:meth:`values`, or None) and ``g0`` the value at ``x[0]``. Returns a
+        boolean mask ``(M,)`` that holds every interval with a candidate (it may hold
+        more: :meth:`candidates` is still asked for each flagged interval), so that the
+        simulator loops in Python over the flagged intervals only.
+        """
+        return np.ones(x.shape[0] - 1, dtype=bool)
+
 
 def _crosses(ga: float, gb: float, direction: int) -> bool:
     """Sign change in the half-open interval ``(ta, tb]`` with the wanted direction."""
     up = ga < 0.0 <= gb
     down = ga > 0.0 >= gb
     return (up and direction >= 0) or (down and direction <= 0)
+
+
+def _crosses_mask(ga: FloatArray, gb: FloatArray, direction: int) -> np.ndarray:
+    """:func:`_crosses` for arrays of interval ends (elementwise, the same comparisons)."""
+    up = (ga < 0.0) & (0.0 <= gb)
+    down = (ga > 0.0) & (0.0 >= gb)
+    if direction > 0:
+        return up
+    if direction < 0:
+        return down
+    return up | down
 
 
 class _FnWatch(_Watch):
@@ -184,6 +206,14 @@ class _FnWatch(_Watch):
 
     def candidates(self, ga, gb, xa, xb):  # noqa: D102
         return [self._g] if _crosses(ga, gb, self.direction) else []
+
+    def flagged(self, g0, g, x):  # noqa: D102
+        if g is None:  # pragma: no cover - values() always returns an array here
+            return np.zeros(x.shape[0] - 1, dtype=bool)
+        ga = np.empty_like(g)
+        ga[0] = g0
+        ga[1:] = g[:-1]
+        return _crosses_mask(ga, g, self.direction)
 
 
 class _SectionWatch(_Watch):
@@ -211,6 +241,21 @@ class _SectionWatch(_Watch):
         return [
             (lambda t, x, L=L: float(x[i]) - L) for L in self.levels(float(xa[i]), float(xb[i]))
         ]
+
+    def flagged(self, g0, g, x):  # noqa: D102
+        v = x[:, self.i]
+        a, b = v[:-1], v[1:]
+        if self.P <= 0.0:
+            return _crosses_mask(a - self.c, b - self.c, self.direction)
+        # levels(a, b) is non-empty exactly when the section index k of the level
+        # below (above) changes between a and b; floor/ceil as in levels()
+        qa, qb = (a - self.c) / self.P, (b - self.c) / self.P
+        mask = np.zeros(a.shape, dtype=bool)
+        if self.direction >= 0:
+            mask |= (b > a) & (np.floor(qb) > np.floor(qa))
+        if self.direction <= 0:
+            mask |= (b < a) & (np.ceil(qa) > np.ceil(qb))
+        return mask
 
 
 def _locate(

@@ -324,6 +324,24 @@ class Simulator:
             x = xb
         return x
 
+    @staticmethod
+    def _emit(
+        t_out: list[float],
+        x_out: list[FloatArray],
+        tt: FloatArray,
+        xs: FloatArray,
+        is_out: np.ndarray,
+        j0: int,
+        j1: int,
+    ) -> None:
+        """Append the output samples ending the block's intervals ``j0 .. j1 - 1``."""
+        if j1 <= j0:
+            return
+        k = np.arange(j0 + 1, j1 + 1)
+        k = k[is_out[k]]
+        t_out.extend(tt[k].tolist())
+        x_out.extend(np.array(xs[k], dtype=float))
+
     def _loop(
         self,
         x0: FloatArray,
@@ -355,14 +373,21 @@ class Simulator:
                 found: list[tuple[float, int, FloatArray]] = []
                 gvals = [w.values(tt[1:], xs[1:]) for w in watches]
                 fx: dict[int, FloatArray] = {}  # derivatives at block samples, on demand
-                for j in range(tt.size - 1):
+                # only the intervals where some watch may have a candidate are visited
+                # one by one; the samples in between go to the output in one piece
+                flagged = np.zeros(tt.size - 1, dtype=bool)
+                for iw, w in enumerate(watches):
+                    flagged |= w.flagged(g_prev[iw], gvals[iw], xs)
+                done = 0  # intervals [0, done) handled
+                for j in np.flatnonzero(flagged).tolist():
+                    self._emit(t_out, x_out, tt, xs, is_out, done, j)
+                    done = j + 1
                     ta, tb, xa, xb = tt[j], tt[j + 1], xs[j], xs[j + 1]
                     found.clear()
                     for iw, w in enumerate(watches):
                         gv = gvals[iw]
                         gb = float(gv[j]) if gv is not None else 0.0
-                        ga = g_prev[iw]
-                        g_prev[iw] = gb
+                        ga = float(gv[j - 1]) if gv is not None and j > 0 else g_prev[iw]
                         cands = w.candidates(ga, gb, xa, xb)
                         if not cands:
                             continue
@@ -396,6 +421,9 @@ class Simulator:
                         x_out.append(np.asarray(xb, dtype=float))
                 if stop is not None:
                     break
+                self._emit(t_out, x_out, tt, xs, is_out, done, tt.size - 1)
+                for iw, gv in enumerate(gvals):  # the values at the block's last sample
+                    g_prev[iw] = float(gv[-1]) if gv is not None else 0.0
                 if sigints_counted() != n_sigint:  # a SIGINT some CasADi call lost
                     raise KeyboardInterrupt
                 if progress is not None:
