@@ -13,6 +13,8 @@ Every file is written atomically (a temporary file renamed onto the final name,
 - :func:`save_figure` -- PNG at a fixed resolution, figure closed afterwards.
 - :func:`save_csv` / :func:`read_csv` -- numeric columns with ``#`` metadata lines.
 - :func:`save_table` -- rows of text and numbers (e.g. a coefficient table).
+- :func:`write_summary` -- a step's ``summary.json`` (its results, the same bytes on
+  every run of the same inputs) and ``timings.json`` (this run's clock and reuse).
 """
 
 from __future__ import annotations
@@ -37,6 +39,75 @@ log = logging.getLogger(__name__)
 
 #: Environment variable naming the default output root.
 OUT_ENV = "BROACHKIT_OUT"
+
+#: Keys of a summary that describe the run rather than its results (wall-clock and
+#: CPU times, how many checkpointed tasks were reused, worker counts):
+#: :func:`write_summary` moves them to ``timings.json``.
+RUN_KEYS = frozenset({"seconds", "elapsed_s", "wall_s", "table_seconds", "reused", "workers"})
+
+
+def split_run_record(doc: Any) -> tuple[Any, Any]:
+    """Split a summary into its results and its run record.
+
+    Parameters
+    ----------
+    doc : Any
+        A JSON-like value (dicts, lists, scalars).
+
+    Returns
+    -------
+    results : Any
+        ``doc`` without the keys of :data:`RUN_KEYS`, at any depth.
+    record : Any
+        The removed entries in the same nesting (dicts only; ``None`` when there are
+        none). Entries inside lists are keyed by their index as a string.
+    """
+    if isinstance(doc, Mapping):
+        kept: dict[str, Any] = {}
+        record: dict[str, Any] = {}
+        for k, v in doc.items():
+            if k in RUN_KEYS:
+                record[k] = v
+                continue
+            kept[k], sub = split_run_record(v)
+            if sub is not None:
+                record[k] = sub
+        return kept, record or None
+    if isinstance(doc, list | tuple):
+        items = [split_run_record(v) for v in doc]
+        sub_rec = {str(i): r for i, (_, r) in enumerate(items) if r is not None}
+        return [v for v, _ in items], sub_rec or None
+    return doc, None
+
+
+def write_summary(out: str | os.PathLike[str], summary: Mapping[str, Any], **kw: Any) -> Path:
+    """Write a step's ``summary.json`` and ``timings.json`` into folder ``out``.
+
+    ``summary.json`` holds the results only, so a step rerun on the same inputs, or
+    resumed after Ctrl-C, writes the same bytes; the run's clock and reuse counts
+    (:data:`RUN_KEYS`) go to ``timings.json`` beside it. Both atomically.
+
+    Parameters
+    ----------
+    out : path-like
+        The step's folder.
+    summary : Mapping
+        The summary as the study computed it (the caller keeps its own copy whole).
+    **kw
+        Passed to :func:`continuation.atomic.write_json` (e.g. ``default=float``).
+
+    Returns
+    -------
+    Path
+        The path of ``summary.json``.
+    """
+    folder = Path(out)
+    results, record = split_run_record(dict(summary))
+    write_json(folder / "timings.json", record or {}, **kw)
+    path = folder / "summary.json"  # last: its presence marks the step finished
+    write_json(path, results, **kw)
+    return path
+
 
 #: matplotlib rcParams of all study figures.
 STYLE: dict[str, Any] = {
@@ -338,6 +409,9 @@ __all__ = [
     "OUT_ENV",
     "PLANE_LABELS",
     "RATE_STATES",
+    "RUN_KEYS",
+    "split_run_record",
+    "write_summary",
     "STYLE",
     "figure_style",
     "insert_breaks",

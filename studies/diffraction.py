@@ -42,7 +42,7 @@ from studies._common import (
     output_dir,
     save_csv,
     save_figure,
-    write_json,
+    write_summary,
 )
 
 #: The vessel of the study (the default vessel of the main job).
@@ -180,7 +180,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         "thresholds": th,
         "figures": ["diffraction.png"],
     }
-    write_json(out / "summary.json", summary)
+    write_summary(out, summary)
     return summary
 
 

@@ -43,7 +43,7 @@ from studies._common import (
     save_table,
     study_main,
     write_atomic_group,
-    write_json,
+    write_summary,
 )
 
 FN = PAPER_FN
@@ -252,7 +252,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         for label, br in fn_branches.items()
     }
     summary["seconds"] = round(time.perf_counter() - t0, 2)
-    write_json(out / "summary.json", summary)
+    write_summary(out, summary)
     return summary
 
 

@@ -34,7 +34,13 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ship_models.paper import PAPER_FN
-from studies._common import new_figure, save_figure, save_table, study_main, write_json
+from studies._common import (
+    new_figure,
+    save_figure,
+    save_table,
+    study_main,
+    write_summary,
+)
 
 FN = PAPER_FN
 CHI_C_DEG = 10.0
@@ -131,7 +137,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         save_table(out / fname, header, [[r[h] for h in header] for r in rows], meta=meta)
     summary["figures"] = figures
     summary["seconds"] = round(time.perf_counter() - t0, 2)
-    write_json(out / "summary.json", summary)
+    write_summary(out, summary)
     return summary
 
 

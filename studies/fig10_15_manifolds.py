@@ -47,6 +47,7 @@ from studies._common import (
     state_columns,
     study_main,
     write_json,
+    write_summary,
 )
 
 CHI_C_DEG = 10.0
@@ -292,7 +293,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     summary["figures"] = figures
     summary["data"] = data
     summary["seconds"] = round(time.perf_counter() - t0, 2)
-    write_json(out / "summary.json", summary, default=str)
+    write_summary(out, summary, default=str)
     return summary
 
 

@@ -55,7 +55,7 @@ from studies._common import (
     save_table,
     state_columns,
     study_main,
-    write_json,
+    write_summary,
 )
 from studies._sudden_tasks import compute_orbits, load_orbits, task
 
@@ -532,7 +532,7 @@ def _compute(
         "fig23_critical_condition.png",
     ]  # fmt: skip
     summary["seconds"] = round(time.perf_counter() - t_all, 2)
-    write_json(out / "summary.json", summary, default=float)
+    write_summary(out, summary, default=float)
     return summary
 
 

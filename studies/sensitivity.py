@@ -31,7 +31,7 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
 
 from continuation.atomic import atomic_path
 from ship_models.paper import PAPER_FN_BRACKET
-from studies._common import write_json
+from studies._common import write_json, write_summary
 
 CHI_C_DEG = 10.0
 #: Rows of the tornado figure and of the summary's elasticity list.
@@ -98,7 +98,7 @@ def write_outputs(out: Path, sens: Any, band: Any, *, seconds: float) -> dict[st
     summary["keys"] = [e.key for e in sens.entries]
     summary["elapsed_s"] = seconds
     summary["files"] = ["tornado.png", "sensitivity.json"]
-    write_json(out / "summary.json", summary)
+    write_summary(out, summary)
     return summary
 
 

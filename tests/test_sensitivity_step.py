@@ -20,6 +20,7 @@ from broachkit_cli.report import sensitivity_context, write_report
 from ship_models.analysis.sensitivity import Sensitivity, SensitivityEntry, UncertaintyBand
 from ship_models.paper import PAPER_FN_BRACKET
 from studies import sensitivity as step
+from studies._common import split_run_record
 
 FN = 0.30
 
@@ -54,7 +55,9 @@ def test_step_writes_tornado_and_summary_with_the_band(tmp_path: Path) -> None:
     s = step.write_outputs(tmp_path, sens, band, seconds=1.0)
     assert (tmp_path / "tornado.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     on_disk = json.loads((tmp_path / "summary.json").read_text())
-    assert on_disk == json.loads(json.dumps(s))
+    results, record = split_run_record(json.loads(json.dumps(s)))
+    assert on_disk == results  # the results; this run's clock beside them
+    assert json.loads((tmp_path / "timings.json").read_text()) == record == {"elapsed_s": 1.0}
     full = json.loads((tmp_path / "sensitivity.json").read_text())
     assert len(full["sensitivity"]["entries"]) == 4
     # closed form: sigma^2 = (0.07*0.1)^2 + (0.026*0.05)^2 + (1.3e-7*3e3)^2
