@@ -42,8 +42,15 @@ OUT_ENV = "BROACHKIT_OUT"
 
 #: Keys of a summary that describe the run rather than its results (wall-clock and
 #: CPU times, how many checkpointed tasks were reused, worker counts):
-#: :func:`write_summary` moves them to ``timings.json``.
-RUN_KEYS = frozenset({"seconds", "elapsed_s", "wall_s", "table_seconds", "reused", "workers"})
+#: :func:`write_summary` moves them to ``timings.json``. Keys ending in one of
+#: :data:`RUN_SUFFIXES` (e.g. ``threshold_elapsed_s``) are run keys too.
+RUN_KEYS = frozenset({"seconds", "elapsed_s", "wall_s", "reused", "workers"})
+RUN_SUFFIXES = ("_elapsed_s", "_seconds", "_wall_s")
+
+
+def is_run_key(key: object) -> bool:
+    """Whether a summary key describes the run (its clock or reuse), not a result."""
+    return isinstance(key, str) and (key in RUN_KEYS or key.endswith(RUN_SUFFIXES))
 
 
 def split_run_record(doc: Any) -> tuple[Any, Any]:
@@ -57,7 +64,7 @@ def split_run_record(doc: Any) -> tuple[Any, Any]:
     Returns
     -------
     results : Any
-        ``doc`` without the keys of :data:`RUN_KEYS`, at any depth.
+        ``doc`` without its run keys (:func:`is_run_key`), at any depth.
     record : Any
         The removed entries in the same nesting (dicts only; ``None`` when there are
         none). Entries inside lists are keyed by their index as a string.
@@ -66,7 +73,7 @@ def split_run_record(doc: Any) -> tuple[Any, Any]:
         kept: dict[str, Any] = {}
         record: dict[str, Any] = {}
         for k, v in doc.items():
-            if k in RUN_KEYS:
+            if is_run_key(k):
                 record[k] = v
                 continue
             kept[k], sub = split_run_record(v)
@@ -102,10 +109,40 @@ def write_summary(out: str | os.PathLike[str], summary: Mapping[str, Any], **kw:
         The path of ``summary.json``.
     """
     folder = Path(out)
-    results, record = split_run_record(dict(summary))
-    write_json(folder / "timings.json", record or {}, **kw)
-    path = folder / "summary.json"  # last: its presence marks the step finished
-    write_json(path, results, **kw)
+    write_results(folder / "summary.json", summary, record=folder / "timings.json", **kw)
+    return folder / "summary.json"
+
+
+def write_results(
+    path: str | os.PathLike[str],
+    doc: Mapping[str, Any],
+    *,
+    record: str | os.PathLike[str] | None = None,
+    **kw: Any,
+) -> Path:
+    """Write a JSON result file without its run keys, and the run keys beside it.
+
+    Parameters
+    ----------
+    path : path-like
+        The result file (e.g. ``critical.json``).
+    doc : Mapping
+        The document as computed.
+    record : path-like, optional
+        Where the run keys go (default: ``<stem>.timings.json`` beside ``path``).
+    **kw
+        Passed to :func:`continuation.atomic.write_json`.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    path = Path(path)
+    results, run = split_run_record(dict(doc))
+    rec = Path(record) if record is not None else path.with_name(f"{path.stem}.timings.json")
+    write_json(rec, run or {}, **kw)
+    write_json(path, results, **kw)  # last: a step's summary marks the step finished
     return path
 
 
@@ -410,7 +447,9 @@ __all__ = [
     "PLANE_LABELS",
     "RATE_STATES",
     "RUN_KEYS",
+    "is_run_key",
     "split_run_record",
+    "write_results",
     "write_summary",
     "STYLE",
     "figure_style",

@@ -27,7 +27,7 @@ import numpy as np
 if __package__ in (None, ""):  # run as a script: make the `studies` package importable
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from studies._common import new_figure, save_csv, save_figure, write_json, write_summary
+from studies._common import new_figure, save_csv, save_figure, write_results, write_summary
 
 CHI_C_DEG = 10.0
 FN_CHI = 0.3
@@ -146,7 +146,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     }
     summary = _no_nan(summary)
     summary["figures"] = ["cycles_vs_fn.png", "cycles_vs_chi_c.png"]
-    write_json(out / "cycles.json", summary)
+    write_results(out / "cycles.json", summary)
     write_summary(out, summary)
     return summary
 

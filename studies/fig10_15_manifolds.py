@@ -46,7 +46,7 @@ from studies._common import (
     save_figure,
     state_columns,
     study_main,
-    write_json,
+    write_results,
     write_summary,
 )
 
@@ -218,7 +218,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         tol=1e-5,
         progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),
     )
-    write_json(out / "critical.json", crit.to_json())
+    write_results(out / "critical.json", crit.to_json())
     if not crit.status.ok and crit.status.name != "SUCCESS":
         say(f"bisection did not succeed: {crit.message}")
     lo, hi = crit.bracket
@@ -237,7 +237,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         criterion="final",
         progress=lambda e: say(f"  Fn = {e.Fn:.7f}: {e.outcome or 'undecided'}"),
     )
-    write_json(out / "critical_final_fate.json", final.to_json())
+    write_results(out / "critical_final_fate.json", final.to_json())
     below = final.bracket[0] if final.status.name == "SUCCESS" else lo
     cases = {"above": hi, "below": below, "paper": PAPER_FN}
     figures: list[str] = []

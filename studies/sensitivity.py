@@ -31,7 +31,7 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
 
 from continuation.atomic import atomic_path
 from ship_models.paper import PAPER_FN_BRACKET
-from studies._common import write_json, write_summary
+from studies._common import write_results, write_summary
 
 CHI_C_DEG = 10.0
 #: Rows of the tornado figure and of the summary's elasticity list.
@@ -93,7 +93,7 @@ def write_outputs(out: Path, sens: Any, band: Any, *, seconds: float) -> dict[st
     out.mkdir(parents=True, exist_ok=True)
     with atomic_path(out / "tornado.png") as tmp:
         tornado_figure(sens, tmp, top=TOP, band=band)
-    write_json(out / "sensitivity.json", {"sensitivity": sens.to_json(), "band": band.to_json()})
+    write_results(out / "sensitivity.json", {"sensitivity": sens.to_json(), "band": band.to_json()})
     summary = summarise(sens, band)
     summary["keys"] = [e.key for e in sens.entries]
     summary["elapsed_s"] = seconds
