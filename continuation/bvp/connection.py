@@ -70,6 +70,7 @@ from ..newton import newton as _newton
 from ..params import Params
 from ..settings import NewtonSettings
 from ..status import Status
+from ..system import as_params
 from ..typing import FloatArray
 from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
@@ -633,9 +634,8 @@ class HeteroclinicProblem:
 
 
 def _as_params(system: Any, params: Any) -> Params:
-    """``params`` as :class:`Params` of ``system`` (a small local coercion; see issue 24)."""
-    if not isinstance(params, Params):
-        params = Params(system.param_names, system.check_params(params, "params"))
+    """``params`` as :class:`Params` of ``system`` (:func:`continuation.system.as_params`)."""
+    params = as_params(system, params)
     if params.names != system.param_names:
         raise ValueError(
             f"`params` names {params.names} do not match the system's {system.param_names}"

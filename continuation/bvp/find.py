@@ -35,9 +35,9 @@ import numpy as np
 
 from ..dynamics.manifolds import unstable_manifold
 from ..dynamics.simulate import Simulator
-from ..params import Params
 from ..settings import NewtonSettings
 from ..status import Status
+from ..system import as_params
 from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, _linear_flow
 from .collocation import CollocationMesh
@@ -331,8 +331,7 @@ def find_connection(
         raise ValueError(f"`end_distance` must be in (0, 1), got {end_distance!r}")
     if T is not None and not (math.isfinite(T) and T > 0):
         raise ValueError(f"`T` must be a positive time, got {T!r}")
-    if not isinstance(params, Params):
-        params = Params(system.param_names, system.check_params(params, "params"))
+    params = as_params(system, params)
     pvec = np.array(params.values, dtype=float)
     x_m = _refine_equilibrium(system, system.check_state(source, "source"), pvec, "source")
     if shift is not None:

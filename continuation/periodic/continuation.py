@@ -50,6 +50,7 @@ from ..events import Event
 from ..params import Params
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
+from ..system import as_params
 from ..typing import FloatArray
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
 from .problem import PeriodicOrbitProblem, error_estimate
@@ -92,8 +93,7 @@ def _as_orbit(system: Any, start: Any, params: Any, mesh: CollocationMesh | None
               winding: Any) -> PeriodicOrbit:  # fmt: skip
     if isinstance(start, PeriodicOrbit):
         orb = start
-        if not isinstance(params, Params):
-            params = Params(system.param_names, system.check_params(params, "params"))
+        params = as_params(system, params)
         orb = dataclasses.replace(orb, params=params)
         if mesh is not None and (
             mesh.degree != orb.mesh.degree or mesh.n_intervals != orb.mesh.n_intervals

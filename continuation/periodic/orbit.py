@@ -9,6 +9,7 @@ import numpy as np
 
 from ..bvp.collocation import CollocationMesh
 from ..params import Params
+from ..system import as_params
 from ..typing import FloatArray
 
 
@@ -134,8 +135,7 @@ def orbit_from_array(
     ValueError
         On shapes, non-increasing or non-finite times, or too few samples.
     """
-    if not isinstance(params, Params):
-        params = Params(system.param_names, system.check_params(params, "params"))
+    params = as_params(system, params)
     t = np.asarray(t, dtype=float).reshape(-1)
     x = np.asarray(x, dtype=float)
     n = system.n_states

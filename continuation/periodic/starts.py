@@ -16,8 +16,8 @@ import numpy as np
 
 from ..branch import Branch, SpecialPoint
 from ..bvp.collocation import CollocationMesh
-from ..params import Params
 from ..settings import ContinuationSettings
+from ..system import as_params
 from .continuation import adapt_mesh, continue_periodic, solve_orbit
 from .hopf import _hopf_point, periodic_orbit_from_hopf
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
@@ -69,8 +69,7 @@ def orbit_from_trajectory(
         t, x = np.asarray(trajectory.t, dtype=float), np.asarray(trajectory.x, dtype=float)
     if x.ndim != 2 or x.shape[0] != t.size or x.shape[1] != system.n_states:
         raise ValueError(f"`trajectory`: x must have shape ({t.size}, {system.n_states})")
-    if not isinstance(params, Params):
-        params = Params(system.param_names, system.check_params(params, "params"))
+    params = as_params(system, params)
     k = winding_vector(system, winding)
     shift = np.asarray(k, float) * np.asarray(getattr(system, "period", np.zeros(len(k))), float)
     xe = x[-1]
