@@ -104,15 +104,20 @@ def _est(value: float, unit: str, source: str, status: str = "estimated") -> Coe
     return Coefficient(float(value), unit, source, status)
 
 
-def offsets_path(v: VesselData) -> Path | None:
-    """The offsets file named by ``[vessel] hull_offsets`` (relative to the vessel file)."""
-    name = v.meta.get("hull_offsets")
+def _named_file(v: VesselData, key: str) -> Path | None:
+    """The file named by ``[vessel] <key>``, relative to the vessel file; None if unset."""
+    name = v.meta.get(key)
     if not name:
         return None
     p = Path(str(name))
     if not p.is_absolute() and v.path:
         p = Path(v.path).parent / p
     return p
+
+
+def offsets_path(v: VesselData) -> Path | None:
+    """The offsets file named by ``[vessel] hull_offsets`` (relative to the vessel file)."""
+    return _named_file(v, "hull_offsets")
 
 
 def offsets_hull(v: VesselData) -> OffsetsHull:
@@ -148,13 +153,7 @@ def offsets_hull(v: VesselData) -> OffsetsHull:
 
 def hull_mesh_path(v: VesselData) -> Path | None:
     """The mesh file named by ``[vessel] hull_mesh`` (relative to the vessel file)."""
-    name = v.meta.get("hull_mesh")
-    if not name:
-        return None
-    p = Path(str(name))
-    if not p.is_absolute() and v.path:
-        p = Path(v.path).parent / p
-    return p
+    return _named_file(v, "hull_mesh")
 
 
 def mesh_is_hull(v: VesselData) -> bool:
