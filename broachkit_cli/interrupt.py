@@ -16,6 +16,7 @@ from __future__ import annotations
 import _thread
 import contextlib
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from typing import Any
@@ -158,6 +159,8 @@ def sticky_interrupt(
             raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGINT, handler)
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = _quiet_unraisable_interrupt(previous_hook)
     dog: _Watchdog | None = None
     try:
         if deadline is not None:
@@ -167,8 +170,28 @@ def sticky_interrupt(
         _state["done"].set()
         _state["requested"].set()  # let the watcher end
         signal.signal(signal.SIGINT, previous)
+        sys.unraisablehook = previous_hook
         if dog is not None and not _state["seen"]:
             dog.close()  # after a Ctrl-C it stays: the process is ending
+
+
+def _quiet_unraisable_interrupt(previous: Any) -> Any:
+    """An unraisable-exception hook that drops a ``KeyboardInterrupt``.
+
+    The SIGINT handler raises in whatever Python code runs at that moment; when that is
+    a weakref callback, a ``__del__`` or a garbage-collector callback, Python cannot
+    propagate the exception and prints "Exception ignored in ..." with a traceback.
+    Nothing is lost by dropping it: the handler has already set the request, and the
+    repeated interrupt (:func:`_repeat`) raises it again where it can propagate. Every
+    other unraisable exception goes to ``previous``.
+    """
+
+    def hook(unraisable: Any) -> None:
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            return
+        previous(unraisable)
+
+    return hook
 
 
 def end_process(code: int, timeout: float = 0.5) -> None:

@@ -66,6 +66,45 @@ def test_without_an_interrupt_the_block_runs_to_its_end_and_restores_the_handler
     assert signal.getsignal(signal.SIGINT) is before
 
 
+def test_an_interrupt_landing_in_a_weakref_callback_prints_nothing_and_is_raised_again(
+    monkeypatch,
+):
+    """A SIGINT handled while a weakref callback runs cannot propagate from there:
+    Python would print "Exception ignored in ..." and a traceback (seen in CI during a
+    Dask cluster start). Inside ``sticky_interrupt`` it is dropped silently, the
+    previous hook is restored after, and the repeated interrupt still stops the block.
+    """
+    import sys
+    import weakref
+
+    class Thing:
+        pass
+
+    reported: list[str] = []  # what Python would print as "Exception ignored in ..."
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: reported.append(repr(u.exc_value)))
+    hook_before = sys.unraisablehook
+
+    def callback(_ref: object) -> None:
+        raise KeyboardInterrupt  # what the SIGINT handler does at this moment
+
+    t0 = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        with sticky_interrupt(repeat=0.1):
+            thing = Thing()
+            ref = weakref.ref(thing, callback)
+            del thing  # the callback runs here; its exception is unraisable
+            assert ref() is None
+            os.kill(os.getpid(), signal.SIGINT)  # the user's Ctrl-C, swallowed below
+            with contextlib.suppress(KeyboardInterrupt):
+                time.sleep(1.0)
+            while time.monotonic() - t0 < 30.0:
+                time.sleep(0.005)
+    acknowledge()
+    assert reported == []
+    assert sys.unraisablehook is hook_before
+    assert time.monotonic() - t0 < 5.0
+
+
 def test_outside_the_main_thread_it_does_nothing():
     seen: list[object] = []
 
