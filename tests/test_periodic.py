@@ -599,7 +599,9 @@ def _collocation_residual(prob, s, z, p):
     """The periodic collocation equations written out interval by interval (the
     reference of the compiled kernel): ``sum_l D[k,l] X_{j,l} / h_j - T f(X_{j,k+1})``,
     continuity ``sum_l e_l X_{j,l} - x_{j+1}``, periodicity ``x_N - x_0 - shift`` and
-    the integral phase condition."""
+    the integral phase condition, in the row order of every collocated orbit
+    (``continuation.bvp.layout.OrbitLayout``): the collocation rows of all stages, the
+    continuity rows of all intervals, then periodicity and phase."""
     lay = prob.layout
     N, m, n = lay.N, lay.m, lay.n
     D, e, h = lay.mesh.D, lay.mesh.e, lay.mesh.h
@@ -615,6 +617,8 @@ def _collocation_residual(prob, s, z, p):
                 Xj[k + 1], pv
             )
             row += n
+    for j in range(N):
+        Xj = X[j * (m + 1) : (j + 1) * (m + 1) + 1]
         G[row : row + n] = sum(e[l] * Xj[l] for l in range(m + 1)) - Xj[m + 1]
         row += n
     G[row : row + n] = X[-1] - X[0] - prob._shift

@@ -67,8 +67,9 @@ import scipy.sparse as sp
 from ..casadi_compile import compilation_allowed, compiled
 from ..linalg import csc_with_data
 from ..typing import FloatArray
-from .collocation import CollocationMesh, stage_points, stage_unknowns
+from .collocation import CollocationMesh, stage_points
 from .condense import StageCondenser
+from .layout import OrbitLayout
 
 
 @dataclass(frozen=True)
@@ -163,42 +164,18 @@ class ConnectionLayout:
             return ("h", "T", "Qp", "shift", "x0")
         return ("h", "T", "Qm", "Qp", "shift", "ref", "dref", "pin")
 
+    @property
+    def orbit(self) -> OrbitLayout:
+        """The orbit's unknowns and its collocation and continuity rows (:mod:`.layout`)."""
+        return OrbitLayout(self.n, self.n_intervals, self.degree)
+
     def stage_blocks(self) -> tuple[np.ndarray, np.ndarray]:
         """Collocation rows and stage unknowns of each interval, two ``(N, m n)`` arrays.
 
-        The rows of interval ``j`` involve only its own stage values besides the mesh
-        nodes: the blocks that :class:`~continuation.bvp.condense.StageCondenser`
-        eliminates.
+        :meth:`OrbitLayout.stage_blocks <continuation.bvp.layout.OrbitLayout.stage_blocks>`:
+        the blocks that :class:`~continuation.bvp.condense.StageCondenser` eliminates.
         """
-        n, N, m = self.n, self.n_intervals, self.degree
-        rows = np.arange(N * m * n).reshape(N, m * n)  # the collocation rows come first
-        return rows, stage_unknowns(n, N, m)
-
-
-def _derivative_matrix(N: int, m: int, D: FloatArray) -> sp.csc_matrix:
-    """``Dbig`` (M, N m): ``(X @ Dbig)[:, j m + k - 1] = sum_l D[k-1, l] X[:, j (m+1) + l]``."""
-    rows, cols, vals = [], [], []
-    for j in range(N):
-        for k in range(m):
-            for l in range(m + 1):
-                rows.append(j * (m + 1) + l)
-                cols.append(j * m + k)
-                vals.append(D[k, l])
-    return sp.csc_matrix((vals, (rows, cols)), shape=(N * (m + 1) + 1, N * m))
-
-
-def _continuity_matrix(N: int, m: int, e: FloatArray) -> sp.csc_matrix:
-    """``Cbig`` (M, N): ``(X @ Cbig)[:, j] = sum_l e[l] X_{j,l} - x_{j+1}``."""
-    rows, cols, vals = [], [], []
-    for j in range(N):
-        for l in range(m + 1):
-            rows.append(j * (m + 1) + l)
-            cols.append(j)
-            vals.append(e[l])
-        rows.append((j + 1) * (m + 1))
-        cols.append(j)
-        vals.append(-1.0)
-    return sp.csc_matrix((vals, (rows, cols)), shape=(N * (m + 1) + 1, N))
+        return self.orbit.stage_blocks()
 
 
 def _to_dm(A: sp.spmatrix) -> ca.DM:
@@ -240,23 +217,12 @@ def _collocation_jacobian(
     ``Sel`` picks the stage values out of ``vec(X)``. Assembling this from the mapped
     ``f_x``/``f_p`` avoids forward-mode AD through the map with one sweep per colour.
     """
-    n, N, m = layout.n, layout.n_intervals, layout.degree
+    n = layout.n
     M, Nm = layout.n_points, layout.n_stages
-    # constant (D kron I) and selection matrices, (n Nm, n M)
-    rows, cols, vals = [], [], []
-    srows, scols = [], []
-    for j in range(N):
-        for k in range(m):
-            s = j * m + k
-            for i in range(n):
-                for l in range(m + 1):
-                    rows.append(s * n + i)
-                    cols.append((j * (m + 1) + l) * n + i)
-                    vals.append(D[k, l])
-                srows.append(s * n + i)
-                scols.append((j * (m + 1) + k + 1) * n + i)
-    Kd = _to_dm(sp.csc_matrix((vals, (rows, cols)), shape=(n * Nm, n * M)))
-    Sel = _to_dm(sp.csc_matrix((np.ones(len(srows)), (srows, scols)), shape=(n * Nm, n * M)))
+    # constant (D kron I) and selection matrices, (n Nm, n M): the one orbit layout
+    orbit = layout.orbit
+    Kd = _to_dm(orbit.derivative_matrix(D))
+    Sel = _to_dm(orbit.stage_selection())
     scale = ca.vec(ca.repmat(1.0 / (h_rep * T), n, 1))  # (n Nm,)
     JF = compiled(fns["jac"]).map("jac_map", "serial", Nm, [1], [])(Xs, P_eff)  # (n, n Nm)
     bd_sparsity = ca.kron(ca.DM(ca.Sparsity.diag(Nm), 1.0), ca.DM.ones(n, n)).sparsity()
@@ -350,8 +316,10 @@ class ConnectionFunctions:
         # h repeated for each stage: (1, N m)
         E = sp.kron(sp.eye(N), np.ones((1, m)), format="csc")
         h_rep = ca.mtimes(h.T, _to_dm(E))
-        Dbig = _to_dm(_derivative_matrix(N, m, mesh.D))
-        Cbig = _to_dm(_continuity_matrix(N, m, mesh.e))
+        # the orbit layout of one state: X (n, M) times these gives the rows of all states
+        point = OrbitLayout(1, N, m)
+        Dbig = _to_dm(point.derivative_matrix(mesh.D).T)  # (M, N m)
+        Cbig = _to_dm(point.continuity_matrix(mesh.e).T)  # (M, N)
         # the stage evaluations (most of the cost) by compiled copies when possible
         fmap = compiled(f_fun).map("fmap", "serial", N * m, [1], [])
         F = fmap(Xs, P_eff)

@@ -5,12 +5,14 @@ See :class:`~continuation.periodic.collocation.CollocationLayout`.
 From the unknowns ``X`` (``(M, n)``, ``M = N (m + 1) + 1`` points), the period ``T``
 and ``f``, ``f_x``, ``df/dp`` at the ``N m`` stage points, one call fills
 
-* the residual ``G`` (collocation, continuity, periodicity and phase rows: the
-  equations of :meth:`CollocationLayout.residual`),
+* the residual ``G`` (collocation, continuity, periodicity and phase rows, in the
+  order of :class:`~continuation.bvp.layout.OrbitLayout` shared with connections and
+  landings: the collocation rows of all stages, then the continuity rows, then the
+  boundary conditions),
 * the values of the sparse Jacobian in its CSC order (the blocks
   :math:`B_{j,k,l} = D_{kl}/h_j I - [l = k+1] T f_x(x_{j,k})`, the constant continuity
   and periodicity entries, the ``T`` column ``-f`` and the phase row), as
-  :meth:`CollocationLayout.blocks` and :meth:`CollocationLayout.assemble` do,
+  :meth:`CollocationLayout.blocks` does, on the pattern of :class:`CollocationLayout`,
 * ``dG/dp`` (``-T df/dp`` on the collocation rows),
 
 in place of a dozen NumPy calls whose overhead dominates at the sizes of continuation.
@@ -35,16 +37,17 @@ def residual(
     M, n = X.shape
     N = h.shape[0]
     m, m1 = D.shape
+    rc = N * m * n  # the continuity rows follow the collocation rows (OrbitLayout)
     for j in range(N):
         base = j * m1
         for k in range(m):
-            row = (base + k) * n
+            row = (j * m + k) * n
             for i in range(n):
                 acc = 0.0
                 for l in range(m1):
                     acc += D[k, l] * X[base + l, i]
                 G[row + i] = acc / h[j] - T * F[j * m + k, i]
-        row = (base + m) * n
+        row = rc + j * n
         for i in range(n):
             acc = 0.0
             for l in range(m1):
@@ -107,12 +110,9 @@ def linearize(
             data[slot_of[q]] += vals[order[q]]
     for q in range(Gp.size):
         Gp[q] = 0.0
-    for j in range(N):
-        for k in range(m):
-            s = j * m + k
-            row = (j * m1 + k) * n
-            for i in range(n):
-                Gp[row + i] = -T * Jp0[s, i]
+    for s in range(N * m):
+        for i in range(n):
+            Gp[s * n + i] = -T * Jp0[s, i]
 
 
 __all__ = ["linearize", "residual"]

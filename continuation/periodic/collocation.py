@@ -8,18 +8,22 @@ degree ``m``) the unknowns are the values at all ``M = N (m + 1) + 1`` points
 
     z = [X_0, X_1, ..., X_{M-1}, T]         X_q in R^n, point-major (z[q n + i])
 
-and the equations, interval by interval (so the Jacobian is block banded)::
+and the equations, in the one row order of connections, landings and cycles
+(:class:`~continuation.bvp.layout.OrbitLayout`: collocation, continuity, then the
+problem's boundary conditions; the Jacobian is block banded in the unknowns)::
 
-    collocation  (1/h_j) sum_l D[k,l] X_{j,l} - T f(X_{j,k}, P) = 0   k = 1..m  (n m)
-    continuity   sum_l e[l] X_{j,l} - x_{j+1} = 0                              (n)
-    periodicity  x_N - x_0 - k o period = 0                                   (n)
+    collocation  (1/h_j) sum_l D[k,l] X_{j,l} - T f(X_{j,k}, P) = 0   rows s n + i, s = j m + k
+    continuity   sum_l e[l] X_{j,l} - x_{j+1} = 0                     rows n N m + j n + i
+    periodicity  x_N - x_0 - k o period = 0                           (n)
     phase        sum_j h_j sum_k b_k <X_{j,k} - ref_{j,k}, ref'_{j,k}> = 0    (1)
 
 ``X_{j,0} = x_j`` is mesh node ``j``; ``k o period`` is the winding ``k_i`` times the
 period of each periodic state (a *rotation orbit* advances a circle coordinate by
 ``k_i`` periods per cycle; ``k = 0`` is an ordinary cycle). The phase condition is
 the integral condition of Doedel (AUTO) against a reference orbit ``ref`` (the
-previous point of the branch), which removes the time-shift invariance.
+previous point of the branch), which removes the time-shift invariance. Periodicity
+and phase are the cycle's boundary conditions, where a connection has its
+equilibria, Riccati and projection rows and a landing its start point.
 
 The right-hand side and its derivatives come from the system's CasADi trace mapped
 over the ``N m`` collocation points in one call (NumPy loop for systems without a
@@ -28,9 +32,10 @@ pattern (and its COO-to-CSC permutation) is built once per layout, every Jacobia
 shares its index arrays, and carries a ``condensed_lu`` hook
 (:class:`~continuation.bvp.condense.StageCondenser`: the collocation rows of interval
 ``j`` involve only its own ``m`` stage values besides the nodes, so the stages are
-eliminated interval by interval before a small dense LU, as AUTO-07p does), which
-the driver's :class:`~continuation.linalg.BorderedLU` and Newton solves use instead
-of a general sparse LU.
+eliminated interval by interval before a small dense LU, as AUTO-07p does; the
+condenser of connections and landings too, on the same stage blocks), which the
+driver's :class:`~continuation.linalg.BorderedLU` and Newton solves use instead of a
+general sparse LU.
 """
 
 from __future__ import annotations
@@ -43,9 +48,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._jit import compiled
-from ..bvp.collocation import CollocationMesh, stage_points, stage_unknowns
+from ..bvp.collocation import CollocationMesh, stage_points
 from ..bvp.condense import KERNELS as _CONDENSE_KERNELS
 from ..bvp.condense import StageCondenser
+from ..bvp.layout import OrbitLayout
 from ..casadi_compile import compiled_soon, settled
 from ..typing import FloatArray
 
@@ -250,45 +256,34 @@ class CollocationLayout:
         self.n = n
         N, m = mesh.n_intervals, mesh.degree
         self.N, self.m = N, m
+        # the one orbit layout of connections, landings and cycles
+        self.orbit = OrbitLayout(n, N, m)
         self.M = mesh.n_points
         self.n_unknowns = n * self.M + 1
-        m1 = m + 1
         # stage point indices (N m,) in interval order
         self.stage_points = stage_points(N, m)
         # block pattern of the collocation rows: (N, m, m+1, n, n)
-        j, k, l, i, ii = np.meshgrid(
-            np.arange(N), np.arange(m), np.arange(m1), np.arange(n), np.arange(n), indexing="ij"
-        )
-        self._col_rows = (j * m1 * n + k * n + i).ravel()
-        self._col_cols = ((j * m1 + l) * n + ii).ravel()
+        rows_b, cols_b = self.orbit.collocation_blocks()
+        self._col_rows = rows_b.ravel()
+        self._col_cols = cols_b.ravel()
         # continuity rows: d/dX_{j,l} = e[l] I, d/dx_{j+1} = -I
-        j, l, i = np.meshgrid(np.arange(N), np.arange(m1), np.arange(n), indexing="ij")
-        rows_c = (j * m1 * n + m * n + i).ravel()
-        cols_c = ((j * m1 + l) * n + i).ravel()
-        vals_c = np.broadcast_to(mesh.e[None, :, None], (N, m1, n)).ravel()
-        j, i = np.meshgrid(np.arange(N), np.arange(n), indexing="ij")
-        rows_c2 = (j * m1 * n + m * n + i).ravel()
-        cols_c2 = ((j + 1) * m1 * n + i).ravel()
-        # periodicity rows
-        rp = N * m1 * n + np.arange(n)
+        rows_c, cols_c, vals_c = self.orbit.continuity_entries(mesh.e)
+        # the boundary conditions: periodicity rows, then the phase row
+        rp = self.orbit.boundary_row + np.arange(n)
         self.row_period = int(rp[0])
-        self.row_phase = N * m1 * n + n
-        self._const_rows = np.concatenate([rows_c, rows_c2, rp, rp])
-        self._const_cols = np.concatenate(
-            [cols_c, cols_c2, (self.M - 1) * n + np.arange(n), np.arange(n)]
-        )
-        self._const_vals = np.concatenate([vals_c, -np.ones(rows_c2.size), np.ones(n), -np.ones(n)])
-        # T column of the collocation rows
-        j, k, i = np.meshgrid(np.arange(N), np.arange(m), np.arange(n), indexing="ij")
-        self._T_rows = (j * m1 * n + k * n + i).ravel()
+        self.row_phase = int(rp[-1]) + 1
+        self._const_rows = np.concatenate([rows_c, rp, rp])
+        self._const_cols = np.concatenate([cols_c, (self.M - 1) * n + np.arange(n), np.arange(n)])
+        self._const_vals = np.concatenate([vals_c, np.ones(n), -np.ones(n)])
+        # T column of the collocation rows (row s n + i of stage s)
+        self._T_rows = np.arange(self.orbit.continuity_row)
         self.T_col = n * self.M
-        self.stage_rows = self._T_rows.reshape(N, m, n).reshape(N * m, n)  # row of stage s, i
+        self.stage_rows = self._T_rows.reshape(N * m, n)  # row of stage s, component i
         self._build_pattern()
 
     def _build_pattern(self) -> None:
         """The CSC pattern of ``dG/dz`` and the permutation of :meth:`assemble`'s values."""
-        n, M, N, m = self.n, self.M, self.N, self.m
-        m1 = m + 1
+        n, M = self.n, self.M
         self._ph_cols = (self.stage_points[:, None] * n + np.arange(n)[None, :]).ravel()
         rows = np.concatenate(
             [self._col_rows, self._const_rows, self._T_rows,
@@ -310,10 +305,9 @@ class CollocationLayout:
         indptr = np.searchsorted(ukey // size, np.arange(size + 1)).astype(np.int32)
         template = sp.csc_matrix((np.ones(ukey.size), indices, indptr), shape=(size, size))
         template.has_canonical_format  # noqa: B018  (flag checked once, shared)
-        # stage condensation: collocation rows (interleaved with continuity) and stage
-        # unknowns of interval j
-        rows_s = np.arange(N)[:, None] * m1 * n + np.arange(m * n)[None, :]
-        self.condenser = StageCondenser(rows_s, stage_unknowns(n, N, m))
+        # stage condensation: the collocation rows and stage unknowns of interval j, the
+        # same blocks as a connection's (OrbitLayout.stage_blocks)
+        self.condenser = StageCondenser(*self.orbit.stage_blocks())
         template.condensed_lu = self.condenser.factor
         self._template = template
 

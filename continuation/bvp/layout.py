@@ -1,0 +1,230 @@
+r"""The one layout of an orbit discretised by collocation: connections, landings, cycles.
+
+Every orbit the engine computes by Gauss-Legendre collocation on a
+:class:`~continuation.bvp.collocation.CollocationMesh` (``N`` intervals, degree ``m``,
+``M = N (m + 1) + 1`` mesh and collocation points) -- a connection between saddles
+(:mod:`continuation.bvp.connection`), a landing from a given point onto a saddle
+(:mod:`continuation.bvp.landing`) and a periodic orbit
+(:mod:`continuation.periodic.problem`) -- is one boundary-value problem
+:math:`x'(\tau) = T f(x, p)` on :math:`\tau \in [0, 1]` with its own boundary
+conditions. :class:`OrbitLayout` fixes, once for all three, where the orbit's unknowns
+and its collocation and continuity equations sit::
+
+    unknowns   z[q n + i] = X_q[i]       q = 0..M-1 (points in tau order), i = 0..n-1
+               z[n M:]                   the problem's own unknowns
+    rows       s n + i                   collocation at stage s = j m + k      (n N m)
+               n N m + j n + i           continuity of interval j               (n N)
+               n N (m + 1):              the problem's boundary conditions
+
+The equations of interval ``j`` (``X_{j,0} = x_j`` its left node, ``X_{j,k}`` its stage
+values, ``D``, ``e`` the mesh's derivative and end-value tableaux)::
+
+    collocation   sum_l D[k,l] X_{j,l} / h_j  =  T f(X_{j,k}, p)        k = 1..m
+    continuity    sum_l e[l] X_{j,l} - x_{j+1} = 0
+
+and the boundary conditions of each problem:
+
+* connection: ``f(x_-) = 0`` (and ``f(x_+) = 0``), the Riccati equations and the
+  projection conditions at both ends, the phase condition; own unknowns the saddles,
+  the Riccati unknowns and the solved parameters;
+* landing: ``x(0) = x_0(s)``, ``f(x_e) = 0``, the Riccati equations and the projection
+  condition at the end (the start point fixes the time shift: no phase condition);
+  own unknowns ``x_e``, the Riccati unknowns and the solved parameters;
+* periodic orbit: ``x(1) - x(0) = k o period`` and the integral phase condition; own
+  unknown the period ``T``.
+
+A landing is a connection whose start condition is a point instead of a saddle
+(:attr:`~continuation.bvp.casadi_backend.ConnectionLayout.start_point`); a periodic
+orbit is one whose ends are tied to each other.
+
+Because the stage values of interval ``j`` appear only in its own ``n m`` collocation
+rows, the stage blocks (:meth:`OrbitLayout.stage_blocks`) are eliminated interval by
+interval before a small LU (:class:`~continuation.bvp.condense.StageCondenser`, as
+AUTO-07p's condensation of parameters) -- one condensation for all three problems. The
+mesh error estimate of all three is :class:`~continuation.bvp.collocation.LocalError`.
+
+What is *not* shared, and why: the values of the residual and Jacobian are filled by
+two engines. Connections and landings build theirs in CasADi
+(:mod:`continuation.bvp.casadi_backend`): their boundary rows (Riccati equations of the
+projection bases, equilibria) need exact derivatives by automatic differentiation and
+the whole system is one expression graph. Periodic orbits fill theirs in a compiled
+Numba kernel (:mod:`continuation.periodic._collocation_jit`) from the system's ``f``,
+``f_x``, ``f_p`` at the stages: their boundary rows are linear, and at the sizes of a
+cycle branch the call overhead of a CasADi function is the larger cost. The two
+scalings of the collocation row also differ by the factor ``T`` (connections divide by
+``T``: :math:`(1/(h_j T)) \sum_l D_{kl} X_{j,l} - f`, cycles multiply ``f`` by their
+unknown period ``T``), kept so that the Newton iterates and tolerances are those of
+before; both place their entries by the index arrays of this module.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..typing import FloatArray
+from .collocation import stage_points, stage_unknowns
+
+
+@dataclass(frozen=True)
+class OrbitLayout:
+    """Positions of the orbit's unknowns and of its collocation and continuity rows.
+
+    Parameters
+    ----------
+    n : int
+        State dimension.
+    n_intervals : int
+        ``N``, the mesh intervals.
+    degree : int
+        ``m``, Gauss-Legendre points per interval.
+    """
+
+    n: int
+    n_intervals: int
+    degree: int
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def n_points(self) -> int:
+        """``M = N (m + 1) + 1`` mesh and collocation points."""
+        return self.n_intervals * (self.degree + 1) + 1
+
+    @property
+    def n_stages(self) -> int:
+        """``N m`` collocation points."""
+        return self.n_intervals * self.degree
+
+    @property
+    def n_orbit_unknowns(self) -> int:
+        """``n M``: the values at all points, ``z[:n M]``."""
+        return self.n * self.n_points
+
+    @property
+    def continuity_row(self) -> int:
+        """``n N m``: the first continuity row (the collocation rows come first)."""
+        return self.n * self.n_stages
+
+    @property
+    def boundary_row(self) -> int:
+        """``n N (m + 1)``: the first row of the problem's boundary conditions."""
+        return self.n * (self.n_stages + self.n_intervals)
+
+    @property
+    def stage_points(self) -> np.ndarray:
+        """Point indices of the ``N m`` stages, shape ``(N m,)`` (:func:`.stage_points`)."""
+        return _stage_points(self.n_intervals, self.degree)
+
+    # ------------------------------------------------------------------ entries
+    def collocation_blocks(self) -> tuple[np.ndarray, np.ndarray]:
+        r"""Rows and columns of the collocation blocks, two arrays ``(N, m, m + 1, n, n)``.
+
+        Entry ``[j, k, l, i, ii]`` is where :math:`\partial G_{j,k,i} / \partial X_{j,l,ii}`
+        sits: the row of component ``i`` of the collocation equation at stage ``(j, k)``
+        and the column of component ``ii`` of point ``l`` of interval ``j``
+        (``D[k, l] / h_j`` on the diagonal ``i = ii``, and ``-T f_x`` at ``l = k + 1``).
+        """
+        return _collocation_blocks(self.n, self.n_intervals, self.degree)
+
+    def continuity_entries(self, e: FloatArray) -> tuple[np.ndarray, np.ndarray, FloatArray]:
+        """``(rows, cols, values)`` of the (constant) continuity Jacobian.
+
+        ``e[l]`` at ``(n N m + j n + i, (j (m + 1) + l) n + i)`` and ``-1`` at
+        ``(n N m + j n + i, (j + 1) (m + 1) n + i)``: first all ``e`` entries
+        (ordered ``j, l, i``), then the ``-1`` entries (``j, i``).
+        """
+        n, N, m = self.n, self.n_intervals, self.degree
+        m1 = m + 1
+        j, l, i = np.meshgrid(np.arange(N), np.arange(m1), np.arange(n), indexing="ij")
+        rows_e = (self.continuity_row + j * n + i).ravel()
+        cols_e = ((j * m1 + l) * n + i).ravel()
+        vals_e = np.broadcast_to(np.asarray(e, dtype=float)[None, :, None], (N, m1, n)).ravel()
+        j, i = np.meshgrid(np.arange(N), np.arange(n), indexing="ij")
+        rows_1 = (self.continuity_row + j * n + i).ravel()
+        cols_1 = ((j + 1) * m1 * n + i).ravel()
+        return (
+            np.concatenate([rows_e, rows_1]),
+            np.concatenate([cols_e, cols_1]),
+            np.concatenate([vals_e, -np.ones(rows_1.size)]),
+        )
+
+    def stage_blocks(self) -> tuple[np.ndarray, np.ndarray]:
+        """Collocation rows and stage unknowns of each interval, two ``(N, m n)`` arrays.
+
+        The rows of interval ``j`` involve only its own stage values besides the mesh
+        nodes: the blocks that :class:`~continuation.bvp.condense.StageCondenser`
+        eliminates.
+        """
+        n, N, m = self.n, self.n_intervals, self.degree
+        rows = np.arange(N * m * n).reshape(N, m * n)
+        return rows, stage_unknowns(n, N, m)
+
+    # ------------------------------------------------------------------ matrices
+    def derivative_matrix(self, D: FloatArray) -> sp.csc_matrix:
+        """The constant part ``sum_l D[k, l] X_{j,l}`` of the collocation rows, ``(n N m, n M)``.
+
+        The diagonal (``i = ii``) of :meth:`collocation_blocks` with the values
+        ``D[k, l]``; with ``n = 1`` it acts on one state's values at the ``M`` points.
+        """
+        rows, cols = self.collocation_blocks()
+        n = self.n
+        diag = np.arange(n)
+        r = rows[..., diag, diag]  # (N, m, m+1, n)
+        c = cols[..., diag, diag]
+        D = np.asarray(D, dtype=float)
+        vals = np.broadcast_to(D[None, :, :, None], r.shape)
+        return sp.csc_matrix(
+            (vals.ravel(), (r.ravel(), c.ravel())),
+            shape=(n * self.n_stages, self.n_orbit_unknowns),
+        )
+
+    def stage_selection(self) -> sp.csc_matrix:
+        """``Sel`` ``(n N m, n M)``: ``Sel z`` are the stage values, row ``s n + i``.
+
+        The entries of :meth:`collocation_blocks` at ``l = k + 1``, ``i = ii`` (where
+        ``-T f_x(X_{j,k})`` sits) with the value 1.
+        """
+        rows, cols = self.collocation_blocks()
+        n, m = self.n, self.degree
+        diag = np.arange(n)
+        k = np.arange(m)
+        r = rows[:, k, k + 1][..., diag, diag]  # (N, m, n)
+        c = cols[:, k, k + 1][..., diag, diag]
+        return sp.csc_matrix(
+            (np.ones(r.size), (r.ravel(), c.ravel())),
+            shape=(n * self.n_stages, self.n_orbit_unknowns),
+        )
+
+    def continuity_matrix(self, e: FloatArray) -> sp.csc_matrix:
+        """The continuity rows as a matrix ``(n N, n M)`` (rows counted from ``n N m``)."""
+        rows, cols, vals = self.continuity_entries(e)
+        return sp.csc_matrix(
+            (vals, (rows - self.continuity_row, cols)),
+            shape=(self.n * self.n_intervals, self.n_orbit_unknowns),
+        )
+
+
+@functools.lru_cache(maxsize=32)
+def _stage_points(N: int, m: int) -> np.ndarray:
+    out = stage_points(N, m)
+    out.setflags(write=False)
+    return out
+
+
+@functools.lru_cache(maxsize=16)
+def _collocation_blocks(n: int, N: int, m: int) -> tuple[np.ndarray, np.ndarray]:
+    m1 = m + 1
+    j, k, l, i, ii = np.meshgrid(
+        np.arange(N), np.arange(m), np.arange(m1), np.arange(n), np.arange(n), indexing="ij"
+    )
+    rows = (j * m + k) * n + i
+    cols = (j * m1 + l) * n + ii
+    for a in (rows, cols):
+        a.setflags(write=False)
+    return rows, cols
+
+
+__all__ = ["OrbitLayout"]
