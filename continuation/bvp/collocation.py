@@ -357,7 +357,9 @@ class CollocationMesh:
         :math:`h_j^{m+1} |x^{(m+1)}|` (Russell & Christiansen 1978, "Adaptive mesh
         selection strategies for solving boundary value problems", SIAM J. Numer.
         Anal. 15:59-80). :math:`x^{(m+1)}` is estimated from differences of the
-        piecewise-constant ``m``-th derivative between neighbouring intervals, and
+        piecewise-constant ``m``-th derivative between neighbouring intervals
+        (:meth:`LocalError.derivative`, one-sided at the ends; the same estimate as the
+        mesh error of a cycle, :func:`~continuation.periodic.problem.error_estimate`), and
         the new nodes equidistribute :math:`\int \rho`, with
         :math:`\rho = (\max_i |x_i^{(m+1)}|)^{1/(m+1)}` plus a floor of 5% of its
         mean, which keeps intervals from growing without bound where ``x`` is flat.
@@ -375,17 +377,11 @@ class CollocationMesh:
         N = self.n_intervals if n_intervals is None else int(n_intervals)
         if N < 1:
             raise ValueError(f"`n_intervals` must be >= 1, got {n_intervals}")
-        dm = self.highest_derivative(X)  # (N_old, n)
-        mids = 0.5 * (self.nodes[:-1] + self.nodes[1:])
         if self.n_intervals >= 3:
-            # derivative of the piecewise-constant m-th derivative, one-sided at the ends
-            d1 = np.zeros_like(dm)
-            d1[1:-1] = (dm[2:] - dm[:-2]) / (mids[2:] - mids[:-2])[:, None]
-            d1[0] = (dm[1] - dm[0]) / (mids[1] - mids[0])
-            d1[-1] = (dm[-1] - dm[-2]) / (mids[-1] - mids[-2])
-            w = np.max(np.abs(d1), axis=1)
+            # the local error monitor of every collocated orbit (LocalError)
+            w = np.max(np.abs(LocalError(self).derivative(X)), axis=1)
         else:
-            w = np.max(np.abs(dm), axis=1)
+            w = np.max(np.abs(self.highest_derivative(X)), axis=1)
         rho = w ** (1.0 / (self.degree + 1))
         floor = 0.05 * float(np.sum(rho * self.h)) + 1e-300
         rho = rho + floor
@@ -417,4 +413,80 @@ class CollocationMesh:
         )
 
 
-__all__ = ["CollocationMesh", "MAX_DEGREE", "stage_points", "stage_unknowns"]
+class LocalError:
+    r"""The local error of degree-``m`` collocation on one mesh: one estimate for all orbits.
+
+    On interval ``j`` the uniform error of Gauss collocation of degree ``m`` is
+    :math:`\approx C_m h_j^{m+1} |x^{(m+1)}|` (de Boor & Swartz 1973, "Collocation at
+    Gaussian points", SIAM J. Numer. Anal. 10:582-606), with
+    :math:`C_m = \max_{s \in [0, 1]} |\prod_k (s - c_k)| / (m + 1)!`. The derivative
+    :math:`x^{(m+1)}` is estimated by differences of the piecewise-constant ``m``-th
+    derivatives (:meth:`CollocationMesh.highest_derivative`) of neighbouring intervals,
+    divided by the distance of their midpoints (Russell & Christiansen 1978).
+
+    The one error path of connections, landings and periodic orbits: the monitor of
+    :meth:`CollocationMesh.equidistributed` (the adaptive mesh of all three) and the
+    error estimate of a cycle (:func:`~continuation.periodic.problem.error_estimate`:
+    its records, the refinement of its mesh and the check of ``error_tol``). The
+    factors that depend on the mesh only are computed once.
+
+    Parameters
+    ----------
+    mesh : CollocationMesh
+    periodic : bool
+        The orbit closes on itself (a cycle): the differences wrap around the ends.
+        Otherwise (default) they are one-sided at the first and last interval.
+    """
+
+    def __init__(self, mesh: CollocationMesh, periodic: bool = False) -> None:
+        N, m = mesh.n_intervals, mesh.degree
+        self.N, self.m, self.periodic = N, m, bool(periodic)
+        self.lead = mesh.leading
+        self.hm = (mesh.h**m)[:, None]  # (N, 1)
+        mids = 0.5 * (mesh.nodes[:-1] + mesh.nodes[1:])
+        if N >= 3:
+            if self.periodic:
+                mp = np.concatenate([[mids[-1] - 1.0], mids, [mids[0] + 1.0]])
+                spacing = mp[2:] - mp[:-2]
+            else:
+                spacing = np.empty(N)
+                spacing[1:-1] = mids[2:] - mids[:-2]
+                spacing[0] = mids[1] - mids[0]
+                spacing[-1] = mids[-1] - mids[-2]
+            self.spacing = spacing[:, None]  # (N, 1)
+        s = np.linspace(0.0, 1.0, 201)
+        Cm = float(np.max(np.abs(np.prod(s[:, None] - mesh.c[None, :], axis=1))))
+        Cm /= float(np.prod(np.arange(1, m + 2)))
+        self.scale = (Cm * mesh.h ** (m + 1))[:, None]  # (N, 1)
+
+    def derivative(self, X: FloatArray) -> FloatArray:
+        """Estimate of :math:`x^{(m+1)}` (in ``tau``) on each interval, shape ``(N, n)``.
+
+        ``X`` (M, n): the values at all points of the mesh. Needs ``N >= 3``.
+        """
+        N, m1 = self.N, self.m + 1
+        if N < 3:
+            raise ValueError(f"the local error needs at least 3 intervals, the mesh has {N}")
+        X = np.asarray(X, dtype=float)
+        dm = (self.lead @ X[: N * m1].reshape(N, m1, -1)) / self.hm  # (N, n)
+        d = np.empty_like(dm)
+        d[1:-1] = dm[2:] - dm[:-2]
+        if self.periodic:
+            d[0] = dm[1] - dm[-1]
+            d[-1] = dm[0] - dm[-2]
+        else:
+            d[0] = dm[1] - dm[0]
+            d[-1] = dm[-1] - dm[-2]
+        return d / self.spacing  # type: ignore[no-any-return]
+
+    def __call__(self, X: FloatArray) -> float:
+        """``max_j C_m h_j^{m+1} |x^{(m+1)}|`` over intervals and states (nan for ``N < 3``).
+
+        An estimate (good to a factor of a few on resolved meshes), not a bound.
+        """
+        if self.N < 3:
+            return float("nan")
+        return float(np.max(self.scale * np.abs(self.derivative(X))))
+
+
+__all__ = ["CollocationMesh", "LocalError", "MAX_DEGREE", "stage_points", "stage_unknowns"]

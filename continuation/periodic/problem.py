@@ -26,7 +26,7 @@ import numpy as np
 
 from .._jit import compiled
 from ..branch import SpecialKind, SpecialPoint
-from ..bvp.collocation import CollocationMesh
+from ..bvp.collocation import CollocationMesh, LocalError
 from ..linalg import csc_with_data
 from ..params import Params
 from ..typing import ComplexArray, FloatArray
@@ -47,41 +47,14 @@ def error_estimate(mesh: CollocationMesh, X: FloatArray) -> float:
     :math:`\approx C_m h_j^{m+1} |x^{(m+1)}|` (de Boor & Swartz 1973) with
     :math:`C_m = \max_{s\in[0,1]} |\prod_k (s - c_k)| / (m+1)!`; :math:`x^{(m+1)}`
     is estimated by differences of the piecewise-constant ``m``-th derivatives of
-    neighbouring intervals (as in the mesh monitor of
-    :meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`). An
-    estimate (good to a factor of a few on resolved meshes), not a bound.
+    neighbouring intervals, wrapped around the ends (the cycle closes on itself).
+    The estimate is :class:`~continuation.bvp.collocation.LocalError`, the monitor of
+    the adaptive mesh of connections, landings and cycles
+    (:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`). An
+    estimate (good to a factor of a few on resolved meshes), not a bound; nan on fewer
+    than 3 intervals.
     """
-    return _ErrorWeights(mesh)(X)
-
-
-class _ErrorWeights:
-    """The mesh-dependent factors of :func:`error_estimate`, computed once per mesh."""
-
-    def __init__(self, mesh: CollocationMesh) -> None:
-        N, m = mesh.n_intervals, mesh.degree
-        self.N, self.m1 = N, m + 1
-        if N < 3:
-            return
-        # m-th derivative of the interval polynomial: lead_l / h_j^m times X_{j,l}
-        # (CollocationMesh.leading, as CollocationMesh.highest_derivative)
-        h = mesh.h
-        self.w = mesh.leading[None, :] / (h**m)[:, None]  # (N, m+1)
-        mids = 0.5 * (mesh.nodes[:-1] + mesh.nodes[1:])
-        # periodic differences (the cycle closes on itself)
-        mp = np.concatenate([[mids[-1] - 1.0], mids, [mids[0] + 1.0]])
-        s = np.linspace(0.0, 1.0, 201)
-        Cm = float(np.max(np.abs(np.prod(s[:, None] - mesh.c[None, :], axis=1))))
-        Cm /= float(np.prod(np.arange(1, m + 2)))
-        self.scale = (Cm * h ** (m + 1) / (mp[2:] - mp[:-2]))[:, None]  # (N, 1)
-
-    def __call__(self, X: FloatArray) -> float:
-        N, m1 = self.N, self.m1
-        if N < 3:
-            return float("nan")
-        Xb = np.asarray(X, dtype=float)[: N * m1].reshape(N, m1, -1)
-        dm = (self.w[:, None, :] @ Xb)[:, 0]  # (N, n)
-        dmp = np.vstack([dm[-1:], dm, dm[:1]])
-        return float(np.max(self.scale * np.abs(dmp[2:] - dmp[:-2])))
+    return LocalError(mesh, periodic=True)(X)
 
 
 #: The compiled collocation system (:func:`continuation._jit.compiled`).
@@ -149,7 +122,7 @@ class PeriodicOrbitProblem:
         index = self.system.param_names.index(self.free)
         object.__setattr__(self, "_eval", StageEvaluator(self.system, lay.N * lay.m, index))
         object.__setattr__(self, "_nodes_eval", StageEvaluator(self.system, lay.N + 1))
-        object.__setattr__(self, "_errw", _ErrorWeights(self.mesh))
+        object.__setattr__(self, "_errw", LocalError(self.mesh, periodic=True))
         object.__setattr__(self, "_index", index)
         object.__setattr__(self, "_shift", np.asarray(self.winding, dtype=float) * per)
         self.accept(ref)
