@@ -129,3 +129,38 @@ def test_equidistribution_uses_the_local_error_monitor():
     h = np.diff(new.nodes)
     mid = 0.5 * (new.nodes[:-1] + new.nodes[1:])
     assert np.max(h[np.abs(mid - 0.5) < 0.1]) < 0.5 * np.min(h[np.abs(mid - 0.5) > 0.35])
+
+
+def test_landing_result_is_the_connection_result_with_its_start(tmp_path):
+    # one result class body for both kinds; the landing records its start condition
+    # (x_from = x_0(s), s, start_name) and survives save/load; closed form of the
+    # truncated landing u' = u - p + y^2, y' = -y from (s, c): p(T) = s + c^2 (1 - e^{-3T}) / 3
+    from continuation.bvp import ConnectionAccuracy, ConnectionResult, OrbitResult
+    from continuation.bvp.landing_solve import solve_landing
+    from continuation.bvp.result import LandingResult
+
+    sys2 = System(lambda x, p, ops: ops.stack([x[0] - p[0] + x[1] ** 2, -x[1]]), ("u", "y"),
+                  ("p",))  # fmt: skip
+    T, s, c = 3.0, 0.1, 1.0
+    prob = LandingProblem(sys2, {"p": 0.3}, "p", start=lambda v: [v, c], saddle=[0.3, 0.0],
+                          T=T, s=s, start_name="s")  # fmt: skip
+    res = solve_landing(prob, (np.linspace(0, T, 50), np.zeros((50, 2))),
+                        accuracy=ConnectionAccuracy(estimate=False))  # fmt: skip
+    assert res.success
+    assert isinstance(res, LandingResult) and isinstance(res, OrbitResult)
+    assert not isinstance(res, ConnectionResult)
+    p_T = s + c**2 * (1 - math.exp(-3 * T)) / 3
+    # collocation error O(h^{2m}) on 40 intervals of degree 4: far below 1e-9
+    assert res.value("p") == pytest.approx(p_T, abs=1e-9)
+    np.testing.assert_array_equal(res.x_from, [s, c])
+    np.testing.assert_allclose(res.x[0], res.x_from, atol=1e-10)
+    np.testing.assert_allclose(res.x_eq, [res.value("p"), 0.0], atol=1e-10)
+    assert res.end_distance == pytest.approx(np.linalg.norm(res.x[-1] - res.x_eq))
+    np.testing.assert_allclose(res.state("y"), c * np.exp(-res.t), atol=1e-8)
+    path = res.save(tmp_path / "landing")
+    back = LandingResult.load(path)
+    assert isinstance(back, LandingResult) and back.s == s and back.start_name == "s"
+    np.testing.assert_array_equal(back.x, res.x)
+    assert OrbitResult.load(path).s == s
+    with pytest.raises(ValueError, match="does not hold a ConnectionResult"):
+        ConnectionResult.load(path)

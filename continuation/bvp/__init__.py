@@ -7,7 +7,8 @@ Public names:
 
 * :class:`CollocationMesh` — nodes, degree, truncation time ``T``;
 * :class:`HeteroclinicProblem`, :class:`PinPhase` — the connection and its phase condition;
-* :class:`ConnectionResult` — orbit, equilibria, parameters, status; ``save``/``load``/``plot``;
+* :class:`ConnectionResult` — orbit, equilibria, parameters, status; ``save``/``load``/``plot``
+  (:class:`OrbitResult`, shared with :class:`LandingResult`);
 * :func:`find_connection` — from a saddle alone: its unstable manifold, cut at the
   closest approach to the target, ``T`` from the eigenvalues, solve and check;
 * :func:`solve_connection` (adaptive mesh and error estimates by default,
@@ -54,8 +55,8 @@ from .collocation import CollocationMesh
 from .connection import HeteroclinicProblem, PinPhase
 from .find import find_connection
 from .landing import LandingProblem
-from .landing_solve import LandingResult, continue_landing, landing_at, solve_landing
-from .result import ConnectionResult, ErrorEstimates
+from .landing_solve import continue_landing, landing_at, solve_landing
+from .result import ConnectionResult, ErrorEstimates, LandingResult, OrbitResult
 from .simplified import JacobianCache, simplified_newton
 from .solve import (
     ContinuedConnection,
@@ -77,6 +78,7 @@ __all__ = [
     "JacobianCache",
     "LandingProblem",
     "LandingResult",
+    "OrbitResult",
     "PinPhase",
     "check_convergence",
     "connection_at",

@@ -71,7 +71,7 @@ from .connection import (
 )
 
 if TYPE_CHECKING:
-    from .landing_solve import LandingResult
+    from .result import LandingResult
 
 #: Relative step of the central difference of ``x_0(s)`` when no derivative is given.
 FD_STEP = 1e-5
@@ -346,19 +346,26 @@ class LandingProblem:
         newton_iters: int = 0,
         residual_norm: float | None = None,
     ) -> LandingResult:
-        """Wrap ``z`` (at start parameter ``s``) as a :class:`LandingResult`."""
-        from .landing_solve import LandingResult
+        """Wrap ``z`` (at start parameter ``s``) as a :class:`LandingResult`.
+
+        The connection's result (:class:`~continuation.bvp.result.OrbitResult`) with its
+        start condition recorded: ``x_from`` the start point ``x_0(s)``, ``s`` and
+        ``start_name``.
+        """
+        from .result import LandingResult
 
         parts = self.unpack(z)
         if residual_norm is None:
             residual_norm = float(np.max(np.abs(self.residual(z, s))))
+        s = self.s if s is None else float(s)
         return LandingResult(
             params=self.params.with_vector(self.param_vector(z)),
             free=self.free,
-            s=self.s if s is None else float(s),
+            state_names=self.state_names,
             t=self.mesh.t,
             x=np.array(parts["X"]),
-            x_eq=np.array(parts["x_end"]),
+            x_from=np.array(self.x0(s)),
+            x_to=np.array(parts["x_end"]),
             residual_norm=float(residual_norm),
             mesh=self.mesh,
             status=status,
@@ -366,6 +373,8 @@ class LandingProblem:
             newton_iters=int(newton_iters),
             z=np.array(z, dtype=float),
             problem=self,
+            s=s,
+            start_name=self.start_name,
         )
 
     # ------------------------------------------------------------------ starting data

@@ -28,93 +28,20 @@ stable manifold ``u = p - y^2 / 3``, so the orbit from ``(s, c)`` lands on it fo
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
 
 from ..errors import ConvergenceError
-from ..params import Params
 from ..settings import ContinuationSettings, NewtonSettings
-from ..status import Status
 from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, Resolves, controlled, extended_mesh, extended_orbit
-from .collocation import CollocationMesh
 from .landing import LandingProblem
-from .result import ErrorEstimates
+from .result import LandingResult
 from .solve import _finish, _newton_solve
 
 DEFAULT_NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=True)
-
-
-@dataclass(frozen=True, eq=False)
-class LandingResult:
-    """A (possibly failed) landing orbit.
-
-    Attributes
-    ----------
-    params : Params
-        All parameters, the solved ``free`` ones included.
-    free : tuple of str
-    s : float
-        Start parameter.
-    t : ndarray, shape (M,)
-    x : ndarray, shape (M, n)
-        The orbit; ``x[0]`` is the start point.
-    x_eq : ndarray, shape (n,)
-        The equilibrium the orbit lands on (``shift`` included).
-    residual_norm : float
-    mesh : CollocationMesh
-    status : Status
-    message : str
-    newton_iters : int
-    z : ndarray
-    problem : LandingProblem or None
-        Rebased at the solution.
-    errors : ErrorEstimates or None
-    """
-
-    params: Params
-    free: tuple[str, ...]
-    s: float
-    t: FloatArray
-    x: FloatArray
-    x_eq: FloatArray
-    residual_norm: float
-    mesh: CollocationMesh
-    status: Status
-    message: str
-    newton_iters: int = 0
-    z: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
-    problem: Any = field(default=None, repr=False)
-    errors: ErrorEstimates | None = None
-
-    @property
-    def success(self) -> bool:
-        """Converged (and, when estimated, within the error tolerances)."""
-        return self.status is Status.SUCCESS
-
-    @property
-    def T(self) -> float:
-        """Length of the orbit."""
-        return self.mesh.T
-
-    def value(self, name: str) -> float:
-        """Value of parameter ``name``."""
-        return float(self.params[name])
-
-    def error(self, name: str) -> float:
-        """Discretisation + truncation estimate of solved parameter ``name`` (nan if none)."""
-        if name not in self.free:
-            raise ValueError(f"`name` {name!r} is not a solved parameter; they are {self.free}")
-        return math.nan if self.errors is None else self.errors.total(name)
-
-    @property
-    def end_distance(self) -> float:
-        """``|x(T) - x_eq|`` (2-norm)."""
-        return float(np.linalg.norm(self.x[-1] - self.x_eq))
 
 
 def _plain(prob: LandingProblem, z0: FloatArray, settings: NewtonSettings) -> LandingResult:

@@ -142,9 +142,9 @@ class OrbitLayout:
         rows_e = (self.continuity_row + j * n + i).ravel()
         cols_e = ((j * m1 + l) * n + i).ravel()
         vals_e = np.broadcast_to(np.asarray(e, dtype=float)[None, :, None], (N, m1, n)).ravel()
-        j, i = np.meshgrid(np.arange(N), np.arange(n), indexing="ij")
-        rows_1 = (self.continuity_row + j * n + i).ravel()
-        cols_1 = ((j + 1) * m1 * n + i).ravel()
+        jj, ii = np.meshgrid(np.arange(N), np.arange(n), indexing="ij")
+        rows_1 = (self.continuity_row + jj * n + ii).ravel()
+        cols_1 = ((jj + 1) * m1 * n + ii).ravel()
         return (
             np.concatenate([rows_e, rows_1]),
             np.concatenate([cols_e, cols_1]),

@@ -1,4 +1,15 @@
-"""The result of a connecting-orbit solve: orbit, equilibria, parameters, mesh, status."""
+"""The result of a collocated orbit that ends at a saddle: connection or landing.
+
+:class:`OrbitResult` holds everything a solve of the one collocation core
+(:mod:`continuation.bvp.layout`) returns -- orbit, end points, parameters, mesh,
+status, error estimates -- with its access, I/O and plotting. The two kinds differ
+only in their start condition, which the result records:
+
+* :class:`ConnectionResult`: the orbit leaves a saddle ``x_from`` (``x_-``);
+* :class:`LandingResult`: the orbit starts at a given point ``x_from = x_0(s)`` of a
+  start parameter ``s`` (:mod:`continuation.bvp.landing`); ``x_eq`` is the equilibrium
+  it lands on (``x_to``).
+"""
 
 from __future__ import annotations
 
@@ -73,8 +84,10 @@ class ErrorEstimates:
 
 
 @dataclass(frozen=True, eq=False)
-class ConnectionResult:
-    """A (possibly failed) connecting orbit computed by collocation.
+class OrbitResult:
+    """A (possibly failed) orbit computed by collocation, from its start to a saddle.
+
+    The common part of :class:`ConnectionResult` and :class:`LandingResult`.
 
     Attributes
     ----------
@@ -89,7 +102,8 @@ class ConnectionResult:
     x : ndarray, shape (M, n)
         The orbit at ``t``.
     x_from, x_to : ndarray, shape (n,)
-        The saddles ``x_-`` and ``x_+``.
+        The start (the saddle ``x_-`` of a connection, the start point ``x_0(s)`` of a
+        landing) and the end equilibrium ``x_+``.
     residual_norm : float
         ``max |G|`` of the discretised equations at the returned point.
     mesh : CollocationMesh
@@ -102,7 +116,7 @@ class ConnectionResult:
         Newton iterations of the last solve.
     z : ndarray, shape (N_z,)
         The raw unknown vector (for restarts and continuation).
-    problem : HeteroclinicProblem or None
+    problem : HeteroclinicProblem or LandingProblem or None
         The (rebased) problem ``z`` belongs to; None after :meth:`load`.
     errors : ErrorEstimates or None
         Discretisation and truncation error estimates of the solved parameters (None
@@ -207,7 +221,8 @@ class ConnectionResult:
             nodes=self.mesh.nodes,
         )
         meta = {
-            "kind": "ConnectionResult",
+            "kind": type(self).__name__,
+            **self._start_meta(),
             "param_names": list(self.params.names),
             "free": list(self.free),
             "errors": None if self.errors is None else self.errors.to_dict(),
@@ -225,22 +240,37 @@ class ConnectionResult:
         path.with_suffix(".json").write_text(json.dumps(meta, indent=2))
         return path
 
+    def _start_meta(self) -> dict[str, Any]:
+        """The start condition's metadata for :meth:`save` (none for a connection)."""
+        return {}
+
     @classmethod
-    def load(cls, path: str | Path) -> ConnectionResult:
-        """Read a result written by :meth:`save` (``problem`` is None)."""
+    def load(cls, path: str | Path) -> Any:
+        """Read a result written by :meth:`save` (``problem`` is None).
+
+        ``ConnectionResult.load`` reads a connection, ``LandingResult.load`` a landing,
+        ``OrbitResult.load`` either.
+        """
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_suffix(".npz")
         meta = json.loads(path.with_suffix(".json").read_text())
-        if meta.get("kind") != "ConnectionResult":
-            raise ValueError(f"`path` {path} does not hold a ConnectionResult")
+        kinds: dict[str, type[OrbitResult]] = {"ConnectionResult": ConnectionResult,
+                                               "LandingResult": LandingResult}  # fmt: skip
+        kind = kinds.get(str(meta.get("kind")))
+        if kind is None or not issubclass(kind, cls):
+            raise ValueError(f"`path` {path} does not hold a {cls.__name__}")
+        extra: dict[str, Any] = {}
+        if kind is LandingResult:
+            extra = {"s": float(meta["s"]), "start_name": str(meta["start_name"])}
         with np.load(path) as d:
             arrays = {k: np.array(d[k]) for k in d.files}
         m = meta["mesh"]
         mesh = CollocationMesh(
             int(m["n_intervals"]), int(m["degree"]), float(m["T"]), arrays["nodes"]
         )
-        return cls(
+        return kind(
+            **extra,
             params=Params(tuple(meta["param_names"]), arrays["param_values"]),
             free=tuple(meta.get("free", meta.get("unknown_params", ()))),
             errors=None if not meta.get("errors") else ErrorEstimates.from_dict(meta["errors"]),
@@ -287,9 +317,52 @@ class ConnectionResult:
             for k, v in self.unknowns.items()
         )
         return (
-            f"ConnectionResult({unk}; status={self.status.name}, |G|={self.residual_norm:.2e}, "
-            f"{self.mesh!r})"
+            f"{type(self).__name__}({unk}; status={self.status.name}, "
+            f"|G|={self.residual_norm:.2e}, {self.mesh!r})"
         )
 
 
-__all__ = ["ConnectionResult", "ErrorEstimates"]
+@dataclass(frozen=True, eq=False)
+class ConnectionResult(OrbitResult):
+    """A (possibly failed) connecting orbit from the saddle ``x_from`` to ``x_to``.
+
+    The fields of :class:`OrbitResult`; ``problem`` is a
+    :class:`~continuation.bvp.connection.HeteroclinicProblem`.
+    """
+
+
+@dataclass(frozen=True, eq=False)
+class LandingResult(OrbitResult):
+    """A (possibly failed) landing orbit: a connection whose start is a given point.
+
+    The fields of :class:`OrbitResult` with ``x_from`` the start point ``x_0(s)`` and
+    ``x_to`` the equilibrium landed on (its shift included); ``problem`` is a
+    :class:`~continuation.bvp.landing.LandingProblem`, rebased at the solution.
+
+    Attributes
+    ----------
+    s : float
+        The start parameter.
+    start_name : str
+        Its name (the continuation parameter of
+        :func:`~continuation.bvp.landing_solve.continue_landing`).
+    """
+
+    s: float = math.nan
+    start_name: str = "s"
+
+    @property
+    def x_eq(self) -> FloatArray:
+        """The equilibrium the orbit lands on (``shift`` included), shape ``(n,)``."""
+        return self.x_to
+
+    @property
+    def end_distance(self) -> float:
+        """``|x(T) - x_eq|`` (2-norm)."""
+        return float(np.linalg.norm(self.x[-1] - self.x_to))
+
+    def _start_meta(self) -> dict[str, Any]:
+        return {"s": self.s, "start_name": self.start_name}
+
+
+__all__ = ["ConnectionResult", "ErrorEstimates", "LandingResult", "OrbitResult"]
