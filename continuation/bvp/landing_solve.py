@@ -39,7 +39,7 @@ from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, Resolves, controlled, extended_mesh, extended_orbit
 from .landing import LandingProblem
 from .result import LandingResult
-from .solve import _finish, _newton_solve
+from .solve import ContinuedOrbit, _finish, _newton_solve
 
 DEFAULT_NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=True)
 
@@ -153,58 +153,16 @@ def solve_landing(
     return result
 
 
-class ContinuedLanding:
-    """A :class:`LandingProblem` seen by the continuation driver (``free`` = ``start_name``)."""
+class ContinuedLanding(ContinuedOrbit):
+    """A :class:`LandingProblem` seen by the driver (``free`` = ``start_name``).
+
+    See :class:`~continuation.bvp.solve.ContinuedOrbit`, the adapter of connections too.
+    """
 
     def __init__(self, problem: LandingProblem) -> None:
         if not callable(problem.start):
             raise ValueError("the problem has a fixed start point: nothing to continue in")
-        self.problem = problem
-
-    #: ``G_z`` is a SciPy sparse (CSC) matrix (:class:`~continuation.problem.ProblemHooks`).
-    sparse = True
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        """Names of the ``N`` unknowns, ``z0, z1, ...``.
-
-        The landing's ``state_names`` are those of the system's states, not of ``z``.
-        """
-        return tuple(f"z{k}" for k in range(self.n_unknowns))
-
-    @property
-    def free(self) -> str:
-        """The continuation parameter: the start parameter's name."""
-        return self.problem.start_name
-
-    @property
-    def n_unknowns(self) -> int:
-        """Length of ``z``."""
-        return self.problem.n_unknowns
-
-    def residual(self, z: FloatArray, p: float) -> FloatArray:
-        """``G(z, s)``."""
-        return self.problem.residual(z, p)
-
-    def jacobian(self, z: FloatArray, p: float) -> Any:
-        """``dG/dz``."""
-        return self.problem.jacobian(z, p)
-
-    def dp(self, z: FloatArray, p: float) -> FloatArray:
-        """``dG/ds``."""
-        return self.problem.dp(z, p)
-
-    def linearize(self, z: FloatArray, p: float) -> Any:
-        """``(G, dG/dz, dG/ds)``."""
-        return self.problem.linearize(z, p)
-
-    def stability(self, z: FloatArray, p: float) -> None:
-        """None: a landing orbit has no stability eigenvalues."""
-        return None
-
-    def record(self, z: FloatArray, p: float) -> dict[str, float]:
-        """Solved parameters, end distance, Riccati norm."""
-        return self.problem.record(z, p)
+        super().__init__(problem, problem.start_name)
 
 
 def continue_landing(

@@ -435,48 +435,51 @@ def check_convergence(
     return ConvergenceCheck(result, refined, extended, d_mesh, d_T)
 
 
-class ContinuedConnection:
-    """A :class:`HeteroclinicProblem` seen by the continuation driver.
+class ContinuedOrbit:
+    """A collocated orbit problem ending at a saddle, seen by the continuation driver.
 
-    The driver's protocol calls its continuation parameter ``free``; for a connection
-    that is ``problem.vary`` (``problem.free`` are the solved parameters). This adapter
-    maps the one to the other and delegates everything else to ``problem``
-    (``branch.problem`` is this object; ``.problem`` is the connection problem).
+    The one adapter of connections (:class:`ContinuedConnection`) and landings
+    (:class:`~continuation.bvp.landing_solve.ContinuedLanding`): the driver's protocol
+    calls its continuation parameter ``free``, which is a connection's ``vary`` (its
+    ``problem.free`` are the solved parameters) and a landing's start parameter. The
+    equations are delegated to ``problem`` (``branch.problem`` is this object;
+    ``.problem`` the orbit problem).
+
+    Parameters
+    ----------
+    problem : HeteroclinicProblem or LandingProblem
+    free : str
+        The name of the continuation parameter.
     """
-
-    def __init__(self, problem: HeteroclinicProblem) -> None:
-        if problem.vary is None:
-            raise ValueError("`problem.vary` is None: no continuation parameter")
-        self.problem = problem
-
-    #: The connection's derivatives come from its CasADi trace (automatic
-    #: differentiation): see :func:`~continuation.problem.exact_jacobian`.
-    exact_jacobian = True
 
     #: ``G_z`` is a SciPy sparse (CSC) matrix (:class:`~continuation.problem.ProblemHooks`).
     sparse = True
+
+    def __init__(self, problem: Any, free: str) -> None:
+        self.problem = problem
+        self._free = str(free)
 
     @property
     def state_names(self) -> tuple[str, ...]:
         """Names of the ``N`` unknowns, ``z0, z1, ...``.
 
-        The connection's ``state_names`` are those of the system's states, not of ``z``.
+        The orbit problem's ``state_names`` are those of the system's states, not of ``z``.
         """
         return tuple(f"z{k}" for k in range(self.n_unknowns))
 
     @property
     def free(self) -> str:
-        """The continuation parameter (``problem.vary``)."""
-        return str(self.problem.vary)
+        """The continuation parameter."""
+        return self._free
 
     @property
     def n_unknowns(self) -> int:
         """Length of ``z``."""
-        return self.problem.n_unknowns
+        return int(self.problem.n_unknowns)
 
     def residual(self, z: FloatArray, p: float | None = None) -> FloatArray:
         """``G(z, p)``."""
-        return self.problem.residual(z, p)
+        return self.problem.residual(z, p)  # type: ignore[no-any-return]
 
     def jacobian(self, z: FloatArray, p: float | None = None) -> Any:
         """``dG/dz``."""
@@ -484,22 +487,38 @@ class ContinuedConnection:
 
     def dp(self, z: FloatArray, p: float | None = None) -> FloatArray:
         """``dG/dp``."""
-        return self.problem.dp(z, p)
+        return self.problem.dp(z, p)  # type: ignore[no-any-return]
 
     def linearize(self, z: FloatArray, p: float | None = None) -> Any:
         """``(G, dG/dz, dG/dp)``."""
         return self.problem.linearize(z, p)
 
     def stability(self, z: FloatArray, p: float | None = None) -> None:
-        """None (connections carry no stability eigenvalues)."""
+        """None (an orbit ending at a saddle carries no stability eigenvalues here)."""
         return None
 
     def record(self, z: FloatArray, p: float | None = None) -> dict[str, float]:
-        """Solved parameters, end distances, Riccati norm."""
-        return self.problem.record(z, p)
+        """The problem's record: solved parameters, end distances, Riccati norm."""
+        return self.problem.record(z, p)  # type: ignore[no-any-return]
+
+
+class ContinuedConnection(ContinuedOrbit):
+    """A :class:`HeteroclinicProblem` seen by the continuation driver (``free`` = ``vary``).
+
+    See :class:`ContinuedOrbit`; attributes not found here are the connection problem's.
+    """
+
+    def __init__(self, problem: HeteroclinicProblem) -> None:
+        if problem.vary is None:
+            raise ValueError("`problem.vary` is None: no continuation parameter")
+        super().__init__(problem, str(problem.vary))
+
+    #: The connection's derivatives come from its CasADi trace (automatic
+    #: differentiation): see :func:`~continuation.problem.exact_jacobian`.
+    exact_jacobian = True
 
     def __getattr__(self, name: str) -> Any:
-        if name == "problem":
+        if name in ("problem", "_free"):
             raise AttributeError(name)
         return getattr(self.problem, name)
 
@@ -611,6 +630,7 @@ def connection_at(branch: Any, index: int) -> ConnectionResult:
 
 __all__ = [
     "ContinuedConnection",
+    "ContinuedOrbit",
     "ConvergenceCheck",
     "check_convergence",
     "connection_at",
