@@ -164,3 +164,26 @@ def test_landing_result_is_the_connection_result_with_its_start(tmp_path):
     assert OrbitResult.load(path).s == s
     with pytest.raises(ValueError, match="does not hold a ConnectionResult"):
         ConnectionResult.load(path)
+
+
+def test_integral_phase_condition_closed_form(system):
+    # the phase row (phase_reference, shared by connections and cycles) against the
+    # closed form: reference x^(tau) = (sin 2 pi tau, cos 2 pi tau), orbit shifted by
+    # delta: int <x^(tau + delta) - x^(tau), x^'(tau)> dtau = 2 pi sin(2 pi delta);
+    # Gauss quadrature and the derivative of the degree-4 polynomial on 30 intervals are
+    # exact to O(h^4) = 1e-6 relative at most
+    from continuation.bvp.layout import phase_reference
+
+    mesh = CollocationMesh(30, 4, 1.0)
+    tau = mesh.tau
+    ref_X = np.column_stack([np.sin(2 * math.pi * tau), np.cos(2 * math.pi * tau)])
+    ref, dref = phase_reference(mesh, ref_X)
+    assert ref.shape == dref.shape == (mesh.n_intervals * mesh.degree, 2)
+    cyc = PeriodicOrbitProblem(system, system.params(p=0.3), "p", mesh, (0, 0),
+                               np.concatenate([ref_X.ravel(), [1.0]]))  # fmt: skip
+    for delta in (0.01, 0.1, 0.3):
+        X = np.column_stack([np.sin(2 * math.pi * (tau + delta)),
+                             np.cos(2 * math.pi * (tau + delta))])  # fmt: skip
+        g = cyc.residual(np.concatenate([X.ravel(), [1.0]]), 0.3)[-1]
+        exact = 2 * math.pi * math.sin(2 * math.pi * delta)
+        assert g == pytest.approx(exact, rel=1e-6)

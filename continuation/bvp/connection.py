@@ -74,6 +74,7 @@ from ..system import as_params
 from ..typing import FloatArray
 from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
+from .layout import phase_reference
 
 if TYPE_CHECKING:
     from .result import ConnectionResult
@@ -447,9 +448,7 @@ class HeteroclinicProblem:
                     "the integral phase condition needs a `reference` orbit; solve with "
                     "solve_connection(problem, guess) or set problem.replace(reference=...)"
                 )
-            ref_all = np.asarray(self.reference)
-            ref = ref_all[mesh.stage_mask].T
-            dref = mesh.derivative(ref_all).T
+            ref, dref = (a.T for a in phase_reference(mesh, self.reference))
             pin = 0.0
         else:
             ref = np.zeros((n, lay.n_stages))

@@ -66,7 +66,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..typing import FloatArray
-from .collocation import stage_points, stage_unknowns
+from .collocation import CollocationMesh, stage_points, stage_unknowns
 
 
 @dataclass(frozen=True)
@@ -207,6 +207,30 @@ class OrbitLayout:
         )
 
 
+def phase_reference(mesh: CollocationMesh, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+    r"""The reference of the integral phase condition of connections and cycles.
+
+    The condition (Doedel & Friedman 1989; AUTO-07p) is the Gauss quadrature at the
+    stages of :math:`\int_0^1 \langle x(\tau) - \hat x(\tau), \hat x'(\tau) \rangle
+    d\tau = 0`, i.e. :math:`\sum_j h_j \sum_k b_k \langle X_{j,k} - \hat X_{j,k},
+    \hat X'_{j,k} \rangle = 0`.
+
+    Parameters
+    ----------
+    mesh : CollocationMesh
+    X : ndarray, shape (M, n)
+        The reference orbit :math:`\hat x` at all points of ``mesh``.
+
+    Returns
+    -------
+    ref, dref : ndarray, shape (N m, n)
+        :math:`\hat X_{j,k}` and :math:`\hat X'_{j,k}` (``d/dtau`` of the collocation
+        polynomial) at the stages, in stage order.
+    """
+    X = np.asarray(X, dtype=float)
+    return X[_stage_points(mesh.n_intervals, mesh.degree)], mesh.derivative(X)
+
+
 @functools.lru_cache(maxsize=32)
 def _stage_points(N: int, m: int) -> np.ndarray:
     out = stage_points(N, m)
@@ -227,4 +251,4 @@ def _collocation_blocks(n: int, N: int, m: int) -> tuple[np.ndarray, np.ndarray]
     return rows, cols
 
 
-__all__ = ["OrbitLayout"]
+__all__ = ["OrbitLayout", "phase_reference"]

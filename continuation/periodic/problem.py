@@ -27,6 +27,7 @@ import numpy as np
 from .._jit import compiled
 from ..branch import SpecialKind, SpecialPoint
 from ..bvp.collocation import CollocationMesh, LocalError
+from ..bvp.layout import phase_reference
 from ..linalg import csc_with_data
 from ..params import Params
 from ..typing import ComplexArray, FloatArray
@@ -182,8 +183,8 @@ class PeriodicOrbitProblem:
             if res is not None:
                 self._slot.setdefault("rows", {})[key] = res
         X, _ = lay.split(np.asarray(z, dtype=float))
-        self._slot["ref"] = X[lay.stage_points].copy()
-        self._slot["dref"] = self.mesh.derivative(X)
+        # the connections' integral phase condition (continuation.bvp.layout)
+        self._slot["ref"], self._slot["dref"] = phase_reference(self.mesh, X)
         self._slot["cache"] = None
 
     def relabel(self, specials: Sequence[SpecialPoint]) -> tuple[SpecialPoint, ...]:
