@@ -608,28 +608,15 @@ class HeteroclinicProblem:
         newton_iters: int = 0,
         residual_norm: float | None = None,
     ) -> ConnectionResult:
-        """Wrap ``z`` (at ``vary = p``) as a :class:`ConnectionResult`."""
-        from .result import ConnectionResult
+        """Wrap ``z`` (at ``vary = p``) as a :class:`ConnectionResult` (:func:`.orbit_result`)."""
+        from .result import ConnectionResult, orbit_result
 
         parts = self.unpack(z)
-        if residual_norm is None:
-            residual_norm = float(np.max(np.abs(self.residual(z, p))))
-        return ConnectionResult(
-            params=self.params.with_vector(self.param_vector(z, p)),
-            free=self.free,
-            state_names=self.state_names,
-            t=self.mesh.t,
-            x=np.array(parts["X"]),
-            x_from=np.array(parts["x_from"]),
-            x_to=np.array(parts["x_to"]),
-            residual_norm=float(residual_norm),
-            mesh=self.mesh,
-            status=status,
-            message=message or status.value,
-            newton_iters=int(newton_iters),
-            z=np.array(z, dtype=float),
-            problem=self,
-        )
+        return orbit_result(ConnectionResult, self, z, p,
+                            params=self.params.with_vector(self.param_vector(z, p)),
+                            x_from=parts["x_from"], x_to=parts["x_to"], status=status,
+                            message=message, newton_iters=newton_iters,
+                            residual_norm=residual_norm)  # fmt: skip
 
 
 def _as_params(system: Any, params: Any) -> Params:

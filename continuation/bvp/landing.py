@@ -352,30 +352,15 @@ class LandingProblem:
         start condition recorded: ``x_from`` the start point ``x_0(s)``, ``s`` and
         ``start_name``.
         """
-        from .result import LandingResult
+        from .result import LandingResult, orbit_result
 
-        parts = self.unpack(z)
-        if residual_norm is None:
-            residual_norm = float(np.max(np.abs(self.residual(z, s))))
         s = self.s if s is None else float(s)
-        return LandingResult(
-            params=self.params.with_vector(self.param_vector(z)),
-            free=self.free,
-            state_names=self.state_names,
-            t=self.mesh.t,
-            x=np.array(parts["X"]),
-            x_from=np.array(self.x0(s)),
-            x_to=np.array(parts["x_end"]),
-            residual_norm=float(residual_norm),
-            mesh=self.mesh,
-            status=status,
-            message=message or status.value,
-            newton_iters=int(newton_iters),
-            z=np.array(z, dtype=float),
-            problem=self,
-            s=s,
-            start_name=self.start_name,
-        )
+        return orbit_result(LandingResult, self, z, s,
+                            params=self.params.with_vector(self.param_vector(z)),
+                            x_from=self.x0(s), x_to=self.unpack(z)["x_end"], status=status,
+                            message=message, newton_iters=newton_iters,
+                            residual_norm=residual_norm, s=s,
+                            start_name=self.start_name)  # fmt: skip
 
     # ------------------------------------------------------------------ starting data
     def initial_vector(self, guess: Any) -> FloatArray:

@@ -322,6 +322,48 @@ class OrbitResult:
         )
 
 
+def orbit_result(
+    kind: type[OrbitResult],
+    problem: Any,
+    z: FloatArray,
+    p: float | None,
+    *,
+    params: Params,
+    x_from: FloatArray,
+    x_to: FloatArray,
+    status: Status,
+    message: str,
+    newton_iters: int,
+    residual_norm: float | None,
+    **start: Any,
+) -> Any:
+    """The one ``to_result`` of connections and landings: ``z`` of ``problem`` as ``kind``.
+
+    ``x_from``/``x_to`` and ``start`` (a landing's ``s`` and ``start_name``) are what the
+    kinds differ in; the orbit, mesh and residual norm (``max |G(z, p)|`` when
+    ``residual_norm`` is None) are read from ``problem`` the same way.
+    """
+    if residual_norm is None:
+        residual_norm = float(np.max(np.abs(problem.residual(z, p))))
+    return kind(
+        params=params,
+        free=problem.free,
+        state_names=problem.state_names,
+        t=problem.mesh.t,
+        x=np.array(problem.unpack(z)["X"]),
+        x_from=np.array(x_from),
+        x_to=np.array(x_to),
+        residual_norm=float(residual_norm),
+        mesh=problem.mesh,
+        status=status,
+        message=message or status.value,
+        newton_iters=int(newton_iters),
+        z=np.array(z, dtype=float),
+        problem=problem,
+        **start,
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class ConnectionResult(OrbitResult):
     """A (possibly failed) connecting orbit from the saddle ``x_from`` to ``x_to``.
@@ -365,4 +407,4 @@ class LandingResult(OrbitResult):
         return {"s": self.s, "start_name": self.start_name}
 
 
-__all__ = ["ConnectionResult", "ErrorEstimates", "LandingResult", "OrbitResult"]
+__all__ = ["ConnectionResult", "ErrorEstimates", "LandingResult", "OrbitResult", "orbit_result"]
