@@ -1,5 +1,15 @@
 """Connecting orbits by Gauss-Legendre collocation, built once in CasADi.
 
+This package is also the one collocation core of every orbit the engine computes by
+collocation -- connections, landings and the periodic orbits of
+:mod:`continuation.periodic` (design: :mod:`continuation.bvp.layout`): one mesh and
+local error estimate (:mod:`~continuation.bvp.collocation`), one layout of the orbit's
+unknowns and rows with the integral phase condition (:mod:`~continuation.bvp.layout`),
+one condensation of the stage unknowns (:mod:`~continuation.bvp.condense`). A landing
+is a connection whose start condition is a point: the same CasADi functions, the same
+accuracy loop (:mod:`~continuation.bvp.accuracy`), the same result
+(:class:`OrbitResult`) and driver adapter.
+
 Names follow :func:`~continuation.equilibria.continue_equilibria`: ``free`` are the
 *solved* parameters, ``vary`` is the continuation parameter.
 

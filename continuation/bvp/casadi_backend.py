@@ -29,7 +29,10 @@ Unknowns, in this order (see :class:`ConnectionLayout`)::
 
 with ``X`` the ``(n, M)`` matrix of values at the ``M = N (m + 1) + 1`` mesh and
 collocation points (interval by interval, so the Jacobian is almost block
-banded). Equations, in this order::
+banded). The orbit block and the collocation and continuity rows are placed by
+:class:`~continuation.bvp.layout.OrbitLayout`, the layout periodic orbits use too (its
+matrices ``D kron I``, the stage selection and the continuity rows are built here
+from its index arrays). Equations, in this order::
 
     collocation   (1/(h_j T)) sum_l D[k,l] X_{j,l} - f(X_{j,k}, P)         (n N m)
     continuity    sum_l e[l] X_{j,l} - x_{j+1}                              (n N)

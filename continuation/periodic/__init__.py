@@ -1,5 +1,11 @@
 r"""Periodic orbits: collocation, Floquet multipliers, continuation, bifurcations of cycles.
 
+A cycle is collocated on the core it shares with connections and landings
+(:mod:`continuation.bvp.layout`): the same mesh, layout of unknowns and rows, integral
+phase condition, condensation and local error estimate; periodicity and the phase
+condition are its boundary conditions. Its residual and Jacobian values are filled by
+the compiled kernel :mod:`continuation.periodic._collocation_jit`.
+
 * :class:`PeriodicOrbitProblem` -- the collocation system (Gauss-Legendre, degree
   ``m``, ``N`` intervals on ``[0, 1]``, period unknown, integral phase condition,
   rotation orbits by a winding number per periodic state) as a continuation problem;
