@@ -39,7 +39,7 @@ from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, Resolves, controlled, extended_mesh, extended_orbit
 from .landing import LandingProblem
 from .result import LandingResult
-from .solve import ContinuedOrbit, _finish, _newton_solve
+from .solve import ContinuedOrbit, _finish, _newton_solve, branch_row
 
 DEFAULT_NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=True)
 
@@ -215,13 +215,7 @@ def continue_landing(
 
 def landing_at(branch: Any, index: int) -> LandingResult:
     """The :class:`LandingResult` at row ``index`` of a :func:`continue_landing` branch."""
-    prob = getattr(getattr(branch, "problem", None), "problem", None)
-    if not isinstance(prob, LandingProblem):
-        raise ValueError("`branch` was not computed by continue_landing")
-    n = len(branch.p)
-    if not -n <= index < n:
-        raise ValueError(f"`index` {index} out of range for a branch of {n} points")
-    z, s = np.asarray(branch.x[index], dtype=float), float(branch.p[index])
+    prob, z, s = branch_row(branch, index, LandingProblem, "continue_landing")
     new, z = prob.replace(s=s).rebased(z, s)
     return new.to_result(z, s, message=f"branch row {index}")
 

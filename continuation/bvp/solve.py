@@ -598,6 +598,22 @@ def continue_connection(
     )
 
 
+def branch_row(branch: Any, index: int, kind: type, command: str) -> tuple[Any, FloatArray, float]:
+    """The orbit problem of a connection's or landing's branch and its row ``index``.
+
+    Returns ``(problem, z, p)``; raises ValueError when ``branch`` was not computed by
+    ``command`` (its problem not a ``kind``) or ``index`` is out of range.
+    """
+    prob = getattr(branch, "problem", None)
+    prob = getattr(prob, "problem", prob)  # (the driver adapter's orbit problem)
+    if not isinstance(prob, kind):
+        raise ValueError(f"`branch` was not computed by {command}")
+    n = len(branch.p)
+    if not -n <= index < n:
+        raise ValueError(f"`index` {index} out of range for a branch of {n} points")
+    return prob, np.asarray(branch.x[index], dtype=float), float(branch.p[index])
+
+
 def connection_at(branch: Any, index: int) -> ConnectionResult:
     """The :class:`ConnectionResult` at row ``index`` of a branch from :func:`continue_connection`.
 
@@ -606,14 +622,7 @@ def connection_at(branch: Any, index: int) -> ConnectionResult:
     ``residual_norm`` is that of the branch's own residual at the row; ``errors``
     is None (re-solve with :func:`solve_connection` for estimates).
     """
-    prob = getattr(branch, "problem", None)
-    prob = getattr(prob, "problem", prob)
-    if not isinstance(prob, HeteroclinicProblem):
-        raise ValueError("`branch` was not computed by continue_connection")
-    n = len(branch.p)
-    if not -n <= index < n:
-        raise ValueError(f"`index` {index} out of range for a branch of {n} points")
-    z, p = np.asarray(branch.x[index], dtype=float), float(branch.p[index])
+    prob, z, p = branch_row(branch, index, HeteroclinicProblem, "continue_connection")
     rn = float(np.max(np.abs(prob.residual(z, p))))
     try:
         prob, z = prob.rebased(z, p)
