@@ -187,3 +187,11 @@ def test_integral_phase_condition_closed_form(system):
         g = cyc.residual(np.concatenate([X.ravel(), [1.0]]), 0.3)[-1]
         exact = 2 * math.pi * math.sin(2 * math.pi * delta)
         assert g == pytest.approx(exact, rel=1e-6)
+
+
+def test_both_kinds_print_with_their_estimates():
+    # the kinds keep OrbitResult's repr (value +- error, status, mesh), not a dataclass one
+    from continuation.bvp.result import ConnectionResult, LandingResult, OrbitResult
+
+    assert ConnectionResult.__repr__ is OrbitResult.__repr__
+    assert LandingResult.__repr__ is OrbitResult.__repr__

@@ -364,7 +364,7 @@ def orbit_result(
     )
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)  # (the repr of OrbitResult)
 class ConnectionResult(OrbitResult):
     """A (possibly failed) connecting orbit from the saddle ``x_from`` to ``x_to``.
 
@@ -373,7 +373,7 @@ class ConnectionResult(OrbitResult):
     """
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)  # (the repr of OrbitResult)
 class LandingResult(OrbitResult):
     """A (possibly failed) landing orbit: a connection whose start is a given point.
 
