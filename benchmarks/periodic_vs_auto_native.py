@@ -49,7 +49,9 @@ Run::
 
     benchmarks/_work/venv/bin/python benchmarks/periodic_vs_auto_native.py [--demos ab,bru]
 
-writes ``benchmarks/results/periodic_vs_auto_native.{json,md}``.
+writes ``benchmarks/results/periodic_vs_auto_native.{json,md}``. With
+``--broachkit-only`` it times broachkit's side alone (no AUTO needed) and prints JSON,
+for A/B runs of two checkouts (``benchmarks/README.md``).
 """
 
 from __future__ import annotations
@@ -507,8 +509,23 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--demos", default="ab,bru")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--out", default=str(HERE / "results" / "periodic_vs_auto_native"))
+    ap.add_argument("--broachkit-only", action="store_true",
+                    help="time broachkit's side only (no AUTO needed; JSON to stdout, no "
+                    "files): for A/B runs of two checkouts")  # fmt: skip
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
+    if args.broachkit_only:
+        bk = {}
+        for name in [s for s in args.demos.split(",") if s]:
+            if name not in DEMOS:
+                print(f"--demos: unknown demo {name!r}; choose from {sorted(DEMOS)}",
+                      file=sys.stderr)  # fmt: skip
+                return 2
+            r = bk_side(DEMOS[name], args.repeats)
+            r.pop("_branch")
+            bk[name] = r
+        print(json.dumps(bk))
+        return 0
     try:
         an.library_paths()
     except PeerUnavailable as exc:
