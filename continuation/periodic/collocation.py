@@ -224,6 +224,12 @@ _PATTERNS: dict[tuple[Any, ...], dict[str, Any]] = {}
 class CollocationLayout:
     """Index bookkeeping of the discretised cycle on one mesh (see module doc).
 
+    The orbit's unknowns and its collocation and continuity rows are those of every
+    collocated orbit (:attr:`orbit`, a :class:`~continuation.bvp.layout.OrbitLayout`);
+    this class adds the cycle's own unknown ``T`` (column :attr:`T_col`), its boundary
+    rows (periodicity from :attr:`row_period`, the phase row :attr:`row_phase`), the CSC
+    pattern of the compiled kernel and the condenser of the layout's stage blocks.
+
     Parameters
     ----------
     n : int
