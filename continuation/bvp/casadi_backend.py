@@ -76,8 +76,12 @@ from .layout import OrbitLayout
 
 
 @dataclass(frozen=True)
-class ConnectionLayout:
+class ConnectionLayout(OrbitLayout):
     """Sizes and positions of the unknowns of a discretised connection.
+
+    An :class:`~continuation.bvp.layout.OrbitLayout` (the orbit's unknowns and its
+    collocation and continuity rows, shared with cycles) with the connection's own
+    unknowns and boundary rows.
 
     Attributes
     ----------
@@ -119,16 +123,6 @@ class ConnectionLayout:
                 "equilibrium as the `x_to` block (k_minus=0, pin=None, separate_to=False)"
             )
 
-    @property
-    def n_points(self) -> int:
-        """``M = N (m + 1) + 1``."""
-        return self.n_intervals * (self.degree + 1) + 1
-
-    @property
-    def n_stages(self) -> int:
-        """``N m`` collocation points."""
-        return self.n_intervals * self.degree
-
     def _sizes(self) -> list[tuple[str, int]]:
         n, km, kp = self.n, self.k_minus, self.k_plus
         return [
@@ -158,7 +152,7 @@ class ConnectionLayout:
         """Rows of the start condition ``x(0) - x_0`` in ``G`` (a start-point layout)."""
         if not self.start_point:
             raise ValueError("a connection layout has no start-point rows")
-        a = self.n * (self.n_stages + self.n_intervals)
+        a = self.boundary_row
         return slice(a, a + self.n)
 
     def data_names(self) -> tuple[str, ...]:
