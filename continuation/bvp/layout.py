@@ -40,8 +40,22 @@ orbit is one whose ends are tied to each other.
 Because the stage values of interval ``j`` appear only in its own ``n m`` collocation
 rows, the stage blocks (:meth:`OrbitLayout.stage_blocks`) are eliminated interval by
 interval before a small LU (:class:`~continuation.bvp.condense.StageCondenser`, as
-AUTO-07p's condensation of parameters) -- one condensation for all three problems. The
-mesh error estimate of all three is :class:`~continuation.bvp.collocation.LocalError`.
+AUTO-07p's condensation of parameters) -- one condensation for all three problems.
+:class:`~continuation.bvp.casadi_backend.ConnectionLayout` (connections and landings) is
+an :class:`OrbitLayout`; :class:`~continuation.periodic.collocation.CollocationLayout`
+(cycles) holds one. The integral phase condition of connections and cycles takes its
+reference from :func:`phase_reference`.
+
+Accuracy: every adaptive mesh equidistributes the monitor of
+:class:`~continuation.bvp.collocation.LocalError`
+(:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`), and a cycle's
+error estimate (its records, its mesh refinement and its ``error_tol``) is that same
+estimate. Connections and landings then bound their *solved parameters* by re-solves
+on the halved mesh and on a longer interval (:func:`~continuation.bvp.accuracy.controlled`,
+one loop for both); a cycle has no truncation and reports the estimate of its orbit.
+Their results are one class body (:class:`~continuation.bvp.result.OrbitResult`; a
+landing's records its start condition) and one driver adapter
+(:class:`~continuation.bvp.solve.ContinuedOrbit`).
 
 What is *not* shared, and why: the values of the residual and Jacobian are filled by
 two engines. Connections and landings build theirs in CasADi
