@@ -54,7 +54,7 @@ estimate. Connections and landings then bound their *solved parameters* by re-so
 on the halved mesh and on a longer interval (:func:`~continuation.bvp.accuracy.controlled`,
 one loop for both); a cycle has no truncation and reports the estimate of its orbit.
 Their results are one class body (:class:`~continuation.bvp.result.OrbitResult`; a
-landing's records its start condition) and one driver adapter
+landing's result records its start condition) and one driver adapter
 (:class:`~continuation.bvp.solve.ContinuedOrbit`).
 
 What is *not* shared, and why: the values of the residual and Jacobian are filled by
