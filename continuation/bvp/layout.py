@@ -252,7 +252,9 @@ def _stage_points(N: int, m: int) -> np.ndarray:
     return out
 
 
-@functools.lru_cache(maxsize=16)
+#: (a few MB for the ship: 8 states, 90 intervals of degree 4; as many as the cycle
+#: layouts keep, continuation.periodic.collocation.PATTERNS_KEPT)
+@functools.lru_cache(maxsize=8)
 def _collocation_blocks(n: int, N: int, m: int) -> tuple[np.ndarray, np.ndarray]:
     m1 = m + 1
     j, k, l, i, ii = np.meshgrid(
