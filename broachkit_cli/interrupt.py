@@ -25,7 +25,19 @@ _state: dict[str, Any] = {
     "requested": threading.Event(),
     "done": threading.Event(),
     "seen": False,
+    "verbose": False,
 }
+
+
+def show_teardown(verbose: bool) -> None:
+    """Whether the noise of a stopped command's threads is shown (``--verbose``).
+
+    After a Ctrl-C the command's other threads (a Dask cluster's event loop, a cluster
+    start abandoned in a background thread) may die with an exception while the
+    process ends; without ``--verbose`` such exceptions are not printed
+    (:func:`sticky_interrupt`), the command's one line says what happened.
+    """
+    _state["verbose"] = bool(verbose)
 
 
 def was_interrupted() -> bool:
@@ -150,6 +162,9 @@ def sticky_interrupt(
     watcher: list[threading.Thread] = []
 
     def handler(signum: int, frame: Any) -> None:
+        if not _state["seen"] and not _state["verbose"]:
+            # the process is ending: a thread that dies of it is not the user's concern
+            threading.excepthook = _quiet_thread_exception
         _state["seen"] = True
         if not _state["done"].is_set():
             _state["requested"].set()
@@ -159,7 +174,7 @@ def sticky_interrupt(
             raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGINT, handler)
-    previous_hook = sys.unraisablehook
+    previous_hook, previous_thread_hook = sys.unraisablehook, threading.excepthook
     sys.unraisablehook = _quiet_unraisable_interrupt(previous_hook)
     dog: _Watchdog | None = None
     try:
@@ -171,8 +186,16 @@ def sticky_interrupt(
         _state["requested"].set()  # let the watcher end
         signal.signal(signal.SIGINT, previous)
         sys.unraisablehook = previous_hook
+        if not _state["seen"] or deadline is None:
+            # a command-line process keeps the quiet hook after a Ctrl-C: it is ending
+            threading.excepthook = previous_thread_hook
         if dog is not None and not _state["seen"]:
             dog.close()  # after a Ctrl-C it stays: the process is ending
+
+
+def _quiet_thread_exception(args: Any) -> None:
+    """``threading.excepthook`` after a Ctrl-C: a thread's exception is not printed."""
+    del args
 
 
 def _quiet_unraisable_interrupt(previous: Any) -> Any:
@@ -234,6 +257,7 @@ __all__ = [
     "INTERRUPTED_LINE",
     "acknowledge",
     "end_process",
+    "show_teardown",
     "sticky_interrupt",
     "was_interrupted",
 ]

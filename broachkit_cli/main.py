@@ -28,6 +28,7 @@ from .interrupt import (
     INTERRUPTED_LINE,
     acknowledge,
     end_process,
+    show_teardown,
     sticky_interrupt,
     was_interrupted,
 )
@@ -160,8 +161,10 @@ LIBRARY_LOGGERS = ("continuation", "ship_models", "studies", "capytaine")
 
 
 #: Dask's loggers: its own shutdown reports (workers "died" when a sweep is stopped)
-#: are not the user's concern; shown only with ``--verbose``.
-DASK_LOGGERS = ("distributed", "dask", "tornado")
+#: are not the user's concern; shown only with ``--verbose``. ``asyncio`` too: in this
+#: command line only Dask runs an event loop, and a stopped cluster's tasks report
+#: their cancellation there ("Task exception was never retrieved").
+DASK_LOGGERS = ("distributed", "dask", "tornado", "asyncio")
 
 
 def _quiet_libraries(record: logging.LogRecord) -> bool:
@@ -215,6 +218,7 @@ def _main(argv: list[str] | None, terminal: bool = False) -> int:
             args = parser.parse_args(argv)
             verbose = bool(getattr(args, "verbose", False))
             configure_logging(verbose)
+            show_teardown(verbose)
             name = args.command
             with warnings.catch_warnings():
                 if not verbose:

@@ -105,6 +105,43 @@ def test_an_interrupt_landing_in_a_weakref_callback_prints_nothing_and_is_raised
     assert time.monotonic() - t0 < 5.0
 
 
+@pytest.mark.skipif(os.name != "posix", reason="POSIX signals")
+@pytest.mark.parametrize("verbose", [False, True])
+def test_a_thread_that_dies_after_ctrl_c_is_silent_unless_verbose(monkeypatch, verbose):
+    """After a Ctrl-C, a thread that dies of the ending process (a stopped Dask
+    cluster's event loop) prints no traceback; with ``--verbose`` it does. Before the
+    Ctrl-C threads' exceptions are reported as usual, and the hook is restored after
+    the block (outside a command-line process, which ends instead).
+    """
+    from broachkit_cli.interrupt import show_teardown
+
+    reported: list[str] = []
+    monkeypatch.setattr(threading, "excepthook", lambda a: reported.append(repr(a.exc_value)))
+
+    def die() -> None:
+        raise RuntimeError("event loop is closed")
+
+    def run_thread() -> None:
+        t = threading.Thread(target=die)
+        t.start()
+        t.join()
+
+    show_teardown(verbose)
+    try:
+        with sticky_interrupt(repeat=0.1):
+            run_thread()  # before any Ctrl-C: reported
+            with contextlib.suppress(KeyboardInterrupt):
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(1.0)
+            acknowledge()  # the command handles it and ends
+            run_thread()  # a thread dying of the ending process
+    finally:
+        show_teardown(False)
+    assert len(reported) == (2 if verbose else 1), reported
+    run_thread()
+    assert len(reported) == (3 if verbose else 2), reported
+
+
 def test_outside_the_main_thread_it_does_nothing():
     seen: list[object] = []
 
