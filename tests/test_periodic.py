@@ -407,8 +407,9 @@ def test_pendulum_rotation_period_blows_up_at_homoclinic():
 
 @pytest.mark.slow
 def test_adaptive_segments_follow_the_period_blow_up_on_a_coarse_mesh():
-    """40 intervals: a uniform mesh misses the homoclinic parameter by > 1e-6, segments
-    with an equidistributed mesh every 10 steps hit it to 1e-8 (reference: shooting);
+    """40 intervals: a fixed uniform mesh (``error_tol=None``, AUTO's ``IAD = 0``; the
+    default adapts) misses the homoclinic parameter by > 1e-6, segments with an
+    equidistributed mesh every 10 steps hit it to 1e-8 (reference: shooting);
     the restart near the connection (fixed-parameter start correction, ill-conditioned
     there) fails and the branch says so."""
     g = 0.5
@@ -418,7 +419,7 @@ def test_adaptive_segments_follow_the_period_blow_up_on_a_coarse_mesh():
     orb = orbit_from_trajectory(s, P, tr, mesh=CollocationMesh(40, 4, 1.0), winding={"theta": 1})
     st = ContinuationSettings(ds=-0.02, ds_max=0.05, max_steps=300, p_min=0.0)
     I_hc = _pendulum_homoclinic(g)
-    uni = continue_periodic(s, orb, P, "I", st, period_max=40.0)
+    uni = continue_periodic(s, orb, P, "I", st, period_max=40.0, error_tol=None)
     ada = continue_periodic(s, orb, P, "I", st, period_max=40.0, adapt_every=10)
     assert abs(uni.p[-1] - I_hc) > 1e-6
     assert abs(ada.p[-1] - I_hc) < 1e-8
