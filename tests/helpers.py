@@ -9,10 +9,15 @@ from here (``from helpers import ...``); ``conftest.py`` holds only the fixtures
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from continuation.branch import SpecialKind
 from continuation.system import System
+
+#: The paper's 10 degree course (rad), where the ship tests place the heteroclinic Fn.
+CHI10 = math.radians(10.0)
 
 
 def fold_normal_form() -> System:
