@@ -368,6 +368,19 @@ def check_workers(value: Any, name: str = "--workers") -> int:
     return int(check(n, WORKERS_ENV))
 
 
+def backend_options(args: argparse.Namespace) -> dict[str, Any]:
+    """Where a sweep's tasks run, from ``--scheduler``, ``--workers``, ``--serial`` and
+    ``--processes`` (in that order of precedence): the keyword arguments of
+    :func:`continuation.sweep.run_sweep` naming the backend and its worker count."""
+    if args.scheduler:
+        return {"scheduler": args.scheduler}
+    if args.workers is not None:
+        return {"backend": "dask", "workers": check_workers(args.workers, "--workers")}
+    if args.serial:
+        return {"backend": "serial"}
+    return {"backend": "processes", "workers": check_workers(args.processes, "--processes")}
+
+
 def wave_changes(args: argparse.Namespace) -> dict[str, float]:
     """Checked ``H_over_lambda`` / ``lambda_over_L`` from the options that were given."""
     from ship_models.vessel import BREAKING_STEEPNESS
