@@ -82,16 +82,6 @@ from benchmarks.timing import cpu_children, cpu_self  # noqa: E402
 #: Reference meshes: this many times the demo's intervals.
 REF_FACTOR = 4
 
-_EMPTY_ROUTINES = """subroutine bcnd
-end subroutine bcnd
-subroutine icnd
-end subroutine icnd
-subroutine fopt
-end subroutine fopt
-subroutine pvls
-end subroutine pvls
-"""
-
 AB_F90 = (
     """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
   implicit none
@@ -120,7 +110,7 @@ subroutine stpnt(ndim, u, par, t)
   u(1:2) = 0d0
 end subroutine stpnt
 """
-    + _EMPTY_ROUTINES
+    + an.EMPTY_ROUTINES
 )
 
 BRU_F90 = (
@@ -148,7 +138,7 @@ subroutine stpnt(ndim, u, par, t)
   u(1:2) = (/ 1.5d0, 2d0 /)
 end subroutine stpnt
 """
-    + _EMPTY_ROUTINES
+    + an.EMPTY_ROUTINES
 )
 
 COMMON = {"NCOL": 4, "ISW": 1, "IPLT": 0, "NBC": 0, "NINT": 0, "MXBF": 10, "IID": 0,
