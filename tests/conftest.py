@@ -6,13 +6,7 @@ from __future__ import annotations
 import logging
 
 import pytest
-from helpers import (
-    brusselator,
-    fold_normal_form,
-    hopf_normal_form,
-    pitchfork,
-    transcritical,
-)
+from helpers import fold_normal_form
 
 from continuation.system import System
 
@@ -20,26 +14,6 @@ from continuation.system import System
 @pytest.fixture
 def fold_system() -> System:
     return fold_normal_form()
-
-
-@pytest.fixture
-def hopf_system() -> System:
-    return hopf_normal_form()
-
-
-@pytest.fixture
-def transcritical_system() -> System:
-    return transcritical()
-
-
-@pytest.fixture
-def pitchfork_system() -> System:
-    return pitchfork()
-
-
-@pytest.fixture
-def brusselator_system() -> System:
-    return brusselator()
 
 
 @pytest.fixture
