@@ -30,7 +30,7 @@ from .differentiation import fd_jacobian
 from .errors import ModelError
 from .linalg import csc_with_data
 from .ops import CASADI_OPS, NUMPY_OPS, Ops
-from .params import Params
+from .params import Params, name_index
 from .typing import FloatArray
 
 log = logging.getLogger(__name__)
@@ -313,21 +313,11 @@ class System:
 
     def state_index(self, name: str) -> int:
         """Position of state ``name``; raises ValueError listing valid names."""
-        try:
-            return self.state_names.index(name)
-        except ValueError:
-            raise ValueError(
-                f"unknown state name {name!r}; valid names are {self.state_names}"
-            ) from None
+        return name_index(self.state_names, name, "state")
 
     def param_index(self, name: str) -> int:
         """Position of parameter ``name``; raises ValueError listing valid names."""
-        try:
-            return self.param_names.index(name)
-        except ValueError:
-            raise ValueError(
-                f"unknown parameter name {name!r}; valid names are {self.param_names}"
-            ) from None
+        return name_index(self.param_names, name, "parameter")
 
     def params(self, **values: float) -> Params:
         """Named parameters: the defaults, updated by ``values``.
