@@ -129,6 +129,14 @@ def bratu(n: int) -> System:
     return System(rhs, tuple(f"u{i}" for i in range(n)), ("lam",), name=f"bratu{n}")
 
 
+def bratu_branch(n: int, **options):
+    """The Bratu equilibria (:func:`bratu`, ``n`` nodes) continued in ``lam`` from
+    ``u = 0`` at ``lam = 0``; ``options`` go to ``continue_equilibria``."""
+    from continuation.api import continue_equilibria
+
+    return continue_equilibria(bratu(n), np.zeros(n), {"lam": 0.0}, "lam", **options)
+
+
 def circle() -> System:
     """x' = x^2 + mu^2 - 1: the equilibria form the closed curve x^2 + mu^2 = 1."""
     return System(lambda x, p, ops: ops.stack([x[0] ** 2 + p[0] ** 2 - 1]), ("x",), ("mu",))
