@@ -52,16 +52,9 @@ from typing import Any
 import numpy as np
 from scipy.integrate import solve_ivp
 
-_STUBS = """
-subroutine bcnd
-end subroutine bcnd
-subroutine icnd
-end subroutine icnd
-subroutine fopt
-end subroutine fopt
-subroutine pvls
-end subroutine pvls
-"""
+from benchmarks.peers.auto_native import EMPTY_ROUTINES
+
+_STUBS = "\n" + EMPTY_ROUTINES  # a blank line before the stubs, as the files had
 
 _HEAD = """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
   implicit none

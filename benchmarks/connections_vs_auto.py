@@ -86,6 +86,27 @@ ADAPT_REFERENCE = 2
 
 # ======================================================================= broachkit side
 # Everything broachkit-specific is in these three functions.
+def smallest_meshes(
+    demo: Demo, system: Any, accept: Callable[[Any, int, float | None, int], Any]
+) -> list[Any]:
+    """For each end time (``T_FACTORS``) and adaptation count (``ADAPT_ROUNDS``), the
+    pick of the smallest mesh of ``N_CANDIDATES`` that passes.
+
+    ``accept(result, N, T, adapt)`` gets :func:`bk_solve`'s result on each candidate
+    mesh in turn and returns the pick (None: not passed, try the next N).
+    """
+    picks = []
+    for f in T_FACTORS:
+        T = None if f is None else f * demo.T
+        for adapt in ADAPT_ROUNDS:
+            for N in N_CANDIDATES:
+                pick = accept(bk_solve(demo, system, N, T, adapt), N, T, adapt)
+                if pick is not None:
+                    picks.append(pick)
+                    break
+    return picks
+
+
 def bk_solve(demo: Demo, system: Any, N: int, T: float | None, adapt: int) -> Any:
     """One broachkit connection from the saddle alone: ``find_connection`` (homoclinic,
     ``N`` intervals of degree 4, ``T`` or its own, ``adapt`` rounds of mesh adaptation,
@@ -315,20 +336,14 @@ def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
     }
     # ---- (a) broachkit at equal accuracy: for each T and number of adaptation rounds
     # the smallest N whose error is at most AUTO's; of those, the fastest
-    passing: list[tuple[int, float | None, int]] = []
     scan = []
-    for f in T_FACTORS:
-        T = None if f is None else f * demo.T
-        for adapt in ADAPT_ROUNDS:
-            for N in N_CANDIDATES:
-                r = bk_solve(demo, system, N, T, adapt)
-                err = abs(r.value(demo.solved) - ref["value"]) if r.success else math.inf
-                scan.append(
-                    {"N": N, "T": r.mesh.T, "adapt": adapt, "status": r.status.name, "error": err}
-                )
-                if err <= a_err:
-                    passing.append((N, T, adapt))
-                    break
+
+    def solve_passes(r: Any, N: int, T: float | None, adapt: int) -> Any:
+        err = abs(r.value(demo.solved) - ref["value"]) if r.success else math.inf
+        scan.append({"N": N, "T": r.mesh.T, "adapt": adapt, "status": r.status.name, "error": err})
+        return (N, T, adapt) if err <= a_err else None
+
+    passing: list[tuple[int, float | None, int]] = smallest_meshes(demo, system, solve_passes)
     bk: dict[str, Any] = {"scan": scan}
     if not passing:
         bk["status"] = "did not reach AUTO's error on any candidate mesh"
@@ -411,24 +426,20 @@ def bench_demo(demo: Demo, work: pathlib.Path, repeats: int) -> dict[str, Any]:
     else:
         ref_bk = ref_end["value"]
     bc["reference_at_end"] = ref_bk
-    picks = []
-    for f in T_FACTORS:
-        TT = None if f is None else f * demo.T
-        for ad in ADAPT_ROUNDS:
-            for NN in N_CANDIDATES:
-                start = bk_solve(demo, system, NN, TT, ad)
-                row: dict[str, Any] = {"N": NN, "T": start.mesh.T, "adapt": ad}
-                if not start.success:
-                    bc["scan"].append({**row, "status": start.status.name})
-                    continue
-                br = bk_continue(start, demo, end, cc["DS"], cc["DSMAX"])
-                p_end = float(br.p[-1])
-                v_end = float(br.records[demo.solved][-1])
-                err = abs(v_end - ref_bk) if abs(p_end - end_bk) < 1e-12 else math.inf
-                bc["scan"].append({**row, "status": br.status.name, "end": p_end, "error": err})
-                if err <= a_err_end:
-                    picks.append((NN, ad, start, p_end, v_end, err))
-                    break
+
+    def continuation_passes(start: Any, NN: int, TT: float | None, ad: int) -> Any:
+        row: dict[str, Any] = {"N": NN, "T": start.mesh.T, "adapt": ad}
+        if not start.success:
+            bc["scan"].append({**row, "status": start.status.name})
+            return None
+        br = bk_continue(start, demo, end, cc["DS"], cc["DSMAX"])
+        p_end = float(br.p[-1])
+        v_end = float(br.records[demo.solved][-1])
+        err = abs(v_end - ref_bk) if abs(p_end - end_bk) < 1e-12 else math.inf
+        bc["scan"].append({**row, "status": br.status.name, "end": p_end, "error": err})
+        return (NN, ad, start, p_end, v_end, err) if err <= a_err_end else None
+
+    picks = smallest_meshes(demo, system, continuation_passes)
     if not picks:
         bc["status"] = "did not reach AUTO's error at the end on any candidate mesh"
     else:

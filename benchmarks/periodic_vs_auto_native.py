@@ -84,16 +84,6 @@ from benchmarks.timing import cpu_children, cpu_self  # noqa: E402
 #: Reference meshes: this many times the demo's intervals.
 REF_FACTOR = 4
 
-_EMPTY_ROUTINES = """subroutine bcnd
-end subroutine bcnd
-subroutine icnd
-end subroutine icnd
-subroutine fopt
-end subroutine fopt
-subroutine pvls
-end subroutine pvls
-"""
-
 AB_F90 = (
     """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
   implicit none
@@ -122,7 +112,7 @@ subroutine stpnt(ndim, u, par, t)
   u(1:2) = 0d0
 end subroutine stpnt
 """
-    + _EMPTY_ROUTINES
+    + an.EMPTY_ROUTINES
 )
 
 BRU_F90 = (
@@ -150,7 +140,7 @@ subroutine stpnt(ndim, u, par, t)
   u(1:2) = (/ 1.5d0, 2d0 /)
 end subroutine stpnt
 """
-    + _EMPTY_ROUTINES
+    + an.EMPTY_ROUTINES
 )
 
 COMMON = {"NCOL": 4, "ISW": 1, "IPLT": 0, "NBC": 0, "NINT": 0, "MXBF": 10, "IID": 0,
@@ -200,6 +190,35 @@ def _bru_rhs(x: Any, p: Any, ops: Any) -> Any:
 
 RHS: dict[str, Callable[..., Any]] = {"ab": _ab_rhs, "bru": _bru_rhs}
 
+#: AUTO constants shared by both runs of ``ab`` (problem size, Newton tolerances).
+_AB_BOTH = {
+    **COMMON,
+    "NDIM": 2,
+    "NPAR": 3,
+    "ISP": 1,
+    "IAD": 3,
+    "ITNW": 5,
+    "EPSL": 1e-7,
+    "EPSU": 1e-7,
+    "EPSS": 1e-5,
+    "DSMIN": 0.001,
+}
+
+#: AUTO constants shared by both runs of ``bru`` (problem size, mesh, tolerances).
+_BRU_BOTH = {
+    **COMMON,
+    "NDIM": 2,
+    "NPAR": 2,
+    "NTST": 40,
+    "IAD": 0,
+    "ITNW": 7,
+    "EPSL": 1e-10,
+    "EPSU": 1e-10,
+    "EPSS": 1e-8,
+    "DS": 0.02,
+    "DSMIN": 1e-4,
+}
+
 DEMOS = {
     "ab": Demo(
         name="ab",
@@ -210,43 +229,25 @@ DEMOS = {
         x0=(0.0, 0.0),
         free="D",
         equilibria={
-            **COMMON,
-            "NDIM": 2,
-            "NPAR": 3,
+            **_AB_BOTH,
             "IPS": 1,
             "IRS": 0,
             "ILP": 1,
             "ICP": [1],
             "NTST": 50,
-            "ISP": 1,
             "NMX": 400,
-            "IAD": 3,
-            "ITNW": 5,
-            "EPSL": 1e-7,
-            "EPSU": 1e-7,
-            "EPSS": 1e-5,
             "DS": 0.1,
-            "DSMIN": 0.001,
             "DSMAX": 0.05,
             "UZSTOP": {1: 0.25},
         },
         periodic={
-            **COMMON,
-            "NDIM": 2,
-            "NPAR": 3,
+            **_AB_BOTH,
             "IPS": 2,
             "ILP": 0,
             "ICP": [1, 11],
             "NTST": 70,
-            "ISP": 1,
             "NMX": 500,
-            "IAD": 3,
-            "ITNW": 5,
-            "EPSL": 1e-7,
-            "EPSU": 1e-7,
-            "EPSS": 1e-5,
             "DS": 0.01,
-            "DSMIN": 0.001,
             "DSMAX": 0.5,
             "THL": {11: 0.0},
             "UZR": {1: [0.17, 0.22]},
@@ -276,43 +277,23 @@ DEMOS = {
         x0=(1.5, 2.0),
         free="B",
         equilibria={
-            **COMMON,
-            "NDIM": 2,
-            "NPAR": 2,
+            **_BRU_BOTH,
             "IPS": 1,
             "IRS": 0,
             "ILP": 1,
             "ICP": [2],
-            "NTST": 40,
             "ISP": 1,
             "NMX": 100,
-            "IAD": 0,
-            "ITNW": 7,
-            "EPSL": 1e-10,
-            "EPSU": 1e-10,
-            "EPSS": 1e-8,
-            "DS": 0.02,
-            "DSMIN": 1e-4,
             "DSMAX": 0.05,
             "UZSTOP": {2: 4.0},
         },
         periodic={
-            **COMMON,
-            "NDIM": 2,
-            "NPAR": 2,
+            **_BRU_BOTH,
             "IPS": 2,
             "ILP": 1,
             "ICP": [2, 11],
-            "NTST": 40,
             "ISP": 2,
             "NMX": 500,
-            "IAD": 0,
-            "ITNW": 7,
-            "EPSL": 1e-10,
-            "EPSU": 1e-10,
-            "EPSS": 1e-8,
-            "DS": 0.02,
-            "DSMIN": 1e-4,
             "DSMAX": 0.1,
             "UZR": {2: [4.0, 4.9]},
             "UZSTOP": {2: 5.0},

@@ -11,6 +11,9 @@ its ``summary.json`` is written: a folder with the marker (or without
 from __future__ import annotations
 
 import contextlib
+import csv
+import io
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -57,9 +60,23 @@ def is_complete(folder: Path, summary: str = "summary.json") -> bool:
     return (folder / summary).is_file() and not (folder / INCOMPLETE_MARKER).exists()
 
 
+def csv_text(columns: Mapping[str, Any], meta: Mapping[str, Any]) -> str:
+    """CSV text of equal-length ``columns`` (header = their names), after one
+    ``# key: value`` line per entry of ``meta``; values as ``repr(float)`` (exact)."""
+    buf = io.StringIO()
+    for k, v in meta.items():
+        buf.write(f"# {k}: {v}\n")
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(list(columns))
+    for row in zip(*columns.values(), strict=True):
+        w.writerow([repr(float(v)) for v in row])
+    return buf.getvalue()
+
+
 __all__ = [
     "INCOMPLETE_MARKER",
     "atomic_path",
+    "csv_text",
     "is_complete",
     "mark_complete",
     "mark_incomplete",

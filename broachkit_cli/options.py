@@ -79,54 +79,52 @@ def add_vessel(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _float_option(
+    parser: argparse.ArgumentParser, flag: str, dest: str, help_: str, default: Any = None
+) -> None:
+    """One float option ``flag`` stored in ``args.<dest>``."""
+    parser.add_argument(flag, dest=dest, type=float, default=default, help=help_)
+
+
 def add_wave(parser: argparse.ArgumentParser) -> None:
     """``--h-over-lambda`` and ``--lambda-over-l`` (default: the vessel file's wave)."""
-    parser.add_argument(
+    _float_option(
+        parser,
         "--h-over-lambda",
-        dest="H_over_lambda",
-        type=float,
-        default=None,
-        help="wave steepness H/lambda (default: the vessel's; at most 1/7, breaking)",
+        "H_over_lambda",
+        "wave steepness H/lambda (default: the vessel's; at most 1/7, breaking)",
     )
-    parser.add_argument(
+    _float_option(
+        parser,
         "--lambda-over-l",
-        dest="lambda_over_L",
-        type=float,
-        default=None,
-        help="wavelength over ship length lambda/L (default: the vessel's)",
+        "lambda_over_L",
+        "wavelength over ship length lambda/L (default: the vessel's)",
     )
 
 
 def add_chi_c(parser: argparse.ArgumentParser, default: float = 10.0) -> None:
     """``--chi-c DEG``: one autopilot course in degrees."""
-    parser.add_argument(
+    _float_option(
+        parser,
         "--chi-c",
-        dest="chi_c",
-        type=float,
-        default=default,
-        help=f"autopilot course chi_c in degrees (default {default:g})",
+        "chi_c",
+        f"autopilot course chi_c in degrees (default {default:g})",
+        default,
     )
 
 
 def add_fn(parser: argparse.ArgumentParser) -> None:
     """``--fn``: the nominal Froude number (default: the model's, ``paper.PAPER_FN``)."""
-    parser.add_argument(
-        "--fn",
-        dest="Fn",
-        type=float,
-        default=None,
-        help="nominal Froude number Fn (default: the model's)",
-    )
+    _float_option(parser, "--fn", "Fn", "nominal Froude number Fn (default: the model's)")
 
 
 def add_fn_guess(parser: argparse.ArgumentParser) -> None:
     """``--fn-guess``: the Fn of the simulation that seeds a connecting orbit."""
-    parser.add_argument(
+    _float_option(
+        parser,
         "--fn-guess",
-        dest="Fn_guess",
-        type=float,
-        default=None,
-        help="Fn of the unstable-manifold simulation that seeds the orbit (default: model's)",
+        "Fn_guess",
+        "Fn of the unstable-manifold simulation that seeds the orbit (default: model's)",
     )
 
 
@@ -366,6 +364,19 @@ def check_workers(value: Any, name: str = "--workers") -> int:
     except ValueError:
         raise ValueError(f"{WORKERS_ENV} must be a positive integer, got {raw!r}") from None
     return int(check(n, WORKERS_ENV))
+
+
+def backend_options(args: argparse.Namespace) -> dict[str, Any]:
+    """Where a sweep's tasks run, from ``--scheduler``, ``--workers``, ``--serial`` and
+    ``--processes`` (in that order of precedence): the keyword arguments of
+    :func:`continuation.sweep.run_sweep` naming the backend and its worker count."""
+    if args.scheduler:
+        return {"scheduler": args.scheduler}
+    if args.workers is not None:
+        return {"backend": "dask", "workers": check_workers(args.workers, "--workers")}
+    if args.serial:
+        return {"backend": "serial"}
+    return {"backend": "processes", "workers": check_workers(args.processes, "--processes")}
 
 
 def wave_changes(args: argparse.Namespace) -> dict[str, float]:

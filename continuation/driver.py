@@ -344,6 +344,33 @@ def _empty_branch(
 
 
 # ---------------------------------------------------------------------------- entry point
+def check_run_arguments(
+    settings: ContinuationSettings | None,
+    algorithm: ContinuationAlgorithm | None,
+    events: Sequence[Event],
+) -> tuple[ContinuationSettings, ContinuationAlgorithm, tuple[Event, ...]]:
+    """The checked ``settings``, ``algorithm`` and ``events`` of a continuation run.
+
+    ``None`` gives the defaults (:class:`ContinuationSettings`, :class:`PALC`).
+
+    Raises
+    ------
+    ValueError
+        One line naming the argument of the wrong type.
+    """
+    settings = settings if settings is not None else ContinuationSettings()
+    if not isinstance(settings, ContinuationSettings):
+        raise ValueError(f"`settings` must be a ContinuationSettings, got {type(settings)}")
+    algorithm = algorithm if algorithm is not None else PALC()
+    if not isinstance(algorithm, ContinuationAlgorithm):
+        raise ValueError(f"`algorithm` must be a ContinuationAlgorithm, got {algorithm!r}")
+    events = tuple(events)
+    for e in events:
+        if not isinstance(e, Event):
+            raise ValueError(f"`events` must contain Event instances, got {e!r}")
+    return settings, algorithm, events
+
+
 def continue_branch(
     problem: Any,
     z0: Any,
@@ -505,18 +532,9 @@ def _checked_inputs(
     ValueError
         One line naming the argument (see :func:`continue_branch`).
     """
-    settings = settings if settings is not None else ContinuationSettings()
-    if not isinstance(settings, ContinuationSettings):
-        raise ValueError(f"`settings` must be a ContinuationSettings, got {type(settings)}")
-    algorithm = algorithm if algorithm is not None else PALC()
-    if not isinstance(algorithm, ContinuationAlgorithm):
-        raise ValueError(f"`algorithm` must be a ContinuationAlgorithm, got {algorithm!r}")
+    settings, algorithm, events = check_run_arguments(settings, algorithm, events)
     if direction not in ("forward", "backward", "both"):
         raise ValueError(f"`direction` must be 'forward', 'backward' or 'both', got {direction!r}")
-    events = tuple(events)
-    for e in events:
-        if not isinstance(e, Event):
-            raise ValueError(f"`events` must contain Event instances, got {e!r}")
     n = int(problem.n_unknowns)
     z = np.asarray(z0, dtype=float)
     if z.shape != (n,):

@@ -66,18 +66,14 @@ def _ca_stack(xs: Sequence[Any]) -> Any:
     return ca.vertcat(*xs)
 
 
+#: The functions of one argument that NumPy and CasADi both name as :class:`Ops` does.
+_SAME_NAMES = ("sin", "cos", "tan", "exp", "log", "sqrt", "tanh", "sign")
+
 NUMPY_OPS = Ops(
     name="numpy",
-    sin=np.sin,
-    cos=np.cos,
-    tan=np.tan,
-    exp=np.exp,
-    log=np.log,
-    sqrt=np.sqrt,
-    tanh=np.tanh,
+    **{f: getattr(np, f) for f in _SAME_NAMES},
     arctan=np.arctan,
     abs=np.abs,
-    sign=np.sign,
     atan2=np.arctan2,
     fmax=np.maximum,
     fmin=np.minimum,
@@ -87,16 +83,9 @@ NUMPY_OPS = Ops(
 
 CASADI_OPS = Ops(
     name="casadi",
-    sin=ca.sin,
-    cos=ca.cos,
-    tan=ca.tan,
-    exp=ca.exp,
-    log=ca.log,
-    sqrt=ca.sqrt,
-    tanh=ca.tanh,
+    **{f: getattr(ca, f) for f in _SAME_NAMES},
     arctan=ca.atan,
     abs=ca.fabs,
-    sign=ca.sign,
     atan2=ca.atan2,
     fmax=ca.fmax,
     fmin=ca.fmin,

@@ -10,6 +10,20 @@ import numpy as np
 from .typing import FloatArray
 
 
+def name_index(names: Sequence[str], name: str, what: str) -> int:
+    """Position of ``name`` in ``names``.
+
+    Raises
+    ------
+    ValueError
+        ``unknown <what> name ...; valid names are ...`` when ``name`` is not there.
+    """
+    try:
+        return names.index(name)
+    except ValueError:
+        raise ValueError(f"unknown {what} name {name!r}; valid names are {names}") from None
+
+
 @dataclass(frozen=True, eq=False)
 class Params(Mapping[str, float]):
     """An immutable vector of named parameters.
@@ -69,12 +83,7 @@ class Params(Mapping[str, float]):
 
     def index(self, name: str) -> int:
         """Position of parameter ``name``; raises ValueError listing valid names."""
-        try:
-            return self.names.index(name)
-        except ValueError:
-            raise ValueError(
-                f"unknown parameter name {name!r}; valid names are {self.names}"
-            ) from None
+        return name_index(self.names, name, "parameter")
 
     def __getitem__(self, name: str) -> float:
         return float(self.values[self.index(name)])
@@ -108,4 +117,4 @@ class Params(Mapping[str, float]):
         return f"Params({inner})"
 
 
-__all__ = ["Params"]
+__all__ = ["Params", "name_index"]

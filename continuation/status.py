@@ -66,4 +66,19 @@ class Status(enum.Enum):
         )
 
 
-__all__ = ["Status"]
+class StatusResult:
+    """Mixin of a result that carries a ``status``: ``success`` means ``SUCCESS``.
+
+    What ``SUCCESS`` promises (converged within the stated error, valid) is said by
+    each result class where it documents its ``status``.
+    """
+
+    status: Status
+
+    @property
+    def success(self) -> bool:
+        """True when ``status`` is ``SUCCESS``."""
+        return self.status is Status.SUCCESS
+
+
+__all__ = ["Status", "StatusResult"]

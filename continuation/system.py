@@ -30,7 +30,7 @@ from .differentiation import fd_jacobian
 from .errors import ModelError
 from .linalg import csc_with_data
 from .ops import CASADI_OPS, NUMPY_OPS, Ops
-from .params import Params
+from .params import Params, name_index
 from .typing import FloatArray
 
 log = logging.getLogger(__name__)
@@ -190,6 +190,21 @@ class BorderedEvaluator:
         return self.r[:n].copy(), top[:, :n], top[:, n]
 
 
+def _finite_vector(arr: FloatArray, names: tuple[str, ...], kind: str, name: str) -> FloatArray:
+    """``arr`` if it holds one finite value per name in ``names``.
+
+    Else a ValueError naming the argument ``name`` and the ``kind`` of vector
+    (``"states"``, ``"parameters"``).
+    """
+    if arr.shape != (len(names),):
+        raise ValueError(
+            f"`{name}` must have shape ({len(names)},) for {kind} {names}, got {arr.shape}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"`{name}` contains NaN or inf: {arr}")
+    return arr
+
+
 class System:
     r"""An autonomous ODE :math:`\dot x = f(x, p)` with named states and parameters.
 
@@ -298,21 +313,11 @@ class System:
 
     def state_index(self, name: str) -> int:
         """Position of state ``name``; raises ValueError listing valid names."""
-        try:
-            return self.state_names.index(name)
-        except ValueError:
-            raise ValueError(
-                f"unknown state name {name!r}; valid names are {self.state_names}"
-            ) from None
+        return name_index(self.state_names, name, "state")
 
     def param_index(self, name: str) -> int:
         """Position of parameter ``name``; raises ValueError listing valid names."""
-        try:
-            return self.param_names.index(name)
-        except ValueError:
-            raise ValueError(
-                f"unknown parameter name {name!r}; valid names are {self.param_names}"
-            ) from None
+        return name_index(self.param_names, name, "parameter")
 
     def params(self, **values: float) -> Params:
         """Named parameters: the defaults, updated by ``values``.
@@ -326,15 +331,7 @@ class System:
     # ------------------------------------------------------------------ checking
     def check_state(self, x: Any, name: str = "x") -> FloatArray:
         """Return ``x`` as a float array of shape ``(n,)``; raise ValueError if not."""
-        arr = np.asarray(x, dtype=float)
-        if arr.shape != (self.n_states,):
-            raise ValueError(
-                f"`{name}` must have shape ({self.n_states},) for states {self.state_names}, "
-                f"got {arr.shape}"
-            )
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(f"`{name}` contains NaN or inf: {arr}")
-        return arr
+        return _finite_vector(np.asarray(x, dtype=float), self.state_names, "states", name)
 
     def check_params(self, p: Any, name: str = "p") -> FloatArray:
         """Return a parameter vector of shape ``(m,)`` from an array, Params or mapping."""
@@ -354,14 +351,7 @@ class System:
                 return np.array(base.replace(**p).values)
             return np.array(Params.from_mapping(self.param_names, p).values)
         arr = np.asarray(p, dtype=float).reshape(-1) if np.ndim(p) else np.asarray([p], float)
-        if arr.shape != (self.n_params,):
-            raise ValueError(
-                f"`{name}` must have shape ({self.n_params},) for parameters "
-                f"{self.param_names}, got {arr.shape}"
-            )
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(f"`{name}` contains NaN or inf: {arr}")
-        return arr
+        return _finite_vector(arr, self.param_names, "parameters", name)
 
     def as_params(self, p: Any = None, name: str = "params") -> Params:
         """Named parameters from a Params, a mapping or an array, checked.

@@ -120,6 +120,12 @@ def offsets_path(v: VesselData) -> Path | None:
     return _named_file(v, "hull_offsets")
 
 
+def _particulars(v: VesselData, *names: str) -> dict[str, float]:
+    """The vessel's principal particulars ``names`` as keyword arguments of the hull
+    builders (``L`` is ``particulars.L_pp``, the others their own names)."""
+    return {n: v.get(f"particulars.{'L_pp' if n == 'L' else n}") for n in names}
+
+
 def offsets_hull(v: VesselData) -> OffsetsHull:
     """The strip hull of the vessel's ``[vessel] hull_offsets`` table, checked against
     the particulars (C_b, l.c.b., B); VesselFileError naming the contradiction."""
@@ -130,10 +136,7 @@ def offsets_hull(v: VesselData) -> OffsetsHull:
         table = read_offsets(p)
         hull = hull_from_offsets(
             table,
-            L=v.get("particulars.L_pp"),
-            D=v.get("particulars.D"),
-            d_f=v.get("particulars.d_f"),
-            d_a=v.get("particulars.d_a"),
+            **_particulars(v, "L", "D", "d_f", "d_a"),
             n_per_interval=max(2, int(v.get("hull.n_stations")) // max(1, table.x.size - 1)),
         )
         check_particulars(
@@ -196,13 +199,7 @@ def mesh_hull(v: VesselData) -> MeshHull:
             _hull_from_mesh_file,
             str(p),
             digest,
-            L=v.get("particulars.L_pp"),
-            D=v.get("particulars.D"),
-            d_f=v.get("particulars.d_f"),
-            d_a=v.get("particulars.d_a"),
-            B=v.get("particulars.B"),
-            C_b=v.get("particulars.C_b"),
-            lcb_aft=v.get("particulars.lcb_aft"),
+            **_particulars(v, "L", "D", "d_f", "d_a", "B", "C_b", "lcb_aft"),
             n_per_interval=2,
             n_stations=max(41, int(v.get("hull.n_stations")) + 1),
         )
@@ -221,12 +218,7 @@ def _hull(v: VesselData, C_wp: float) -> HullForm:
     if mesh_is_hull(v):
         return mesh_hull(v)
     return parametric_hull(
-        L=v.get("particulars.L_pp"),
-        B=v.get("particulars.B"),
-        D=v.get("particulars.D"),
-        d_f=v.get("particulars.d_f"),
-        d_a=v.get("particulars.d_a"),
-        C_b=v.get("particulars.C_b"),
+        **_particulars(v, "L", "B", "D", "d_f", "d_a", "C_b"),
         lcb=-v.get("particulars.lcb_aft"),
         C_M=v.get("hull.C_M"),
         C_wp=C_wp,

@@ -45,6 +45,7 @@ which records them with status ``estimated`` and the method in ``source``.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import tomllib
@@ -350,13 +351,8 @@ class Coefficient:
     status: str
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain dictionary (for JSON)."""
-        return {
-            "value": self.value,
-            "unit": self.unit,
-            "source": self.source,
-            "status": self.status,
-        }
+        """Plain dictionary of the four fields (for JSON)."""
+        return dataclasses.asdict(self)
 
 
 @dataclass(frozen=True)
@@ -584,6 +580,34 @@ def validate(coeffs: Mapping[str, Coefficient]) -> None:
     _check_consistency(coeffs)
 
 
+#: The method choices of a ``[vessel]`` section and what each may be (the first is
+#: the default).
+METHOD_CHOICES: dict[str, tuple[str, ...]] = {
+    "wave_surge_model": WAVE_SURGE_MODELS,
+    "resistance_method": RESISTANCE_METHODS,
+    "propeller_method": PROPELLER_METHODS,
+    "heel_derivatives_method": HEEL_METHODS,
+}
+
+
+class _MethodChoice:
+    """A method choice of :class:`VesselData` (read-only attribute of the same name):
+    ``[vessel] <name>``, or the first of :data:`METHOD_CHOICES` ``[name]`` when the
+    file names none."""
+
+    def __init__(self, doc: str) -> None:
+        self.__doc__ = doc
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+        self.__doc__ = f"{self.__doc__[:-1]} (``[vessel] {name}``)."
+
+    def __get__(self, obj: Any, objtype: type | None = None) -> Any:
+        if obj is None:
+            return self
+        return str(obj.meta.get(self.name, METHOD_CHOICES[self.name][0]))
+
+
 @dataclass(frozen=True)
 class VesselData(Mapping[str, Coefficient]):
     """An immutable, validated vessel description.
@@ -620,17 +644,7 @@ class VesselData(Mapping[str, Coefficient]):
 
         check_plausible(coeffs)
         meta = dict(self.meta)
-        model = meta.get("wave_surge_model", WAVE_SURGE_MODELS[0])
-        if model not in WAVE_SURGE_MODELS:
-            raise VesselFileError(
-                f"`vessel.wave_surge_model` must be one of {WAVE_SURGE_MODELS}, got {model!r}"
-            )
-        for key, allowed in (
-            ("resistance_method", RESISTANCE_METHODS),
-            ("propeller_method", PROPELLER_METHODS),
-            ("heel_derivatives_method", HEEL_METHODS),
-            ("hull_type", HULL_TYPES),
-        ):
+        for key, allowed in (*METHOD_CHOICES.items(), ("hull_type", HULL_TYPES)):
             if key in meta and meta[key] not in allowed:
                 raise VesselFileError(f"`vessel.{key}` must be one of {allowed}, got {meta[key]!r}")
         curves = dict(self.curves)
@@ -651,25 +665,10 @@ class VesselData(Mapping[str, Coefficient]):
         object.__setattr__(self, "meta", meta)
         object.__setattr__(self, "uncertainties", unc)
 
-    @property
-    def resistance_method(self) -> str:
-        """The selected resistance method (``[vessel] resistance_method``)."""
-        return str(self.meta.get("resistance_method", RESISTANCE_METHODS[0]))
-
-    @property
-    def propeller_method(self) -> str:
-        """The selected open-water propeller model (``[vessel] propeller_method``)."""
-        return str(self.meta.get("propeller_method", PROPELLER_METHODS[0]))
-
-    @property
-    def heel_derivatives_method(self) -> str:
-        """The selected heel-derivative estimate (``[vessel] heel_derivatives_method``)."""
-        return str(self.meta.get("heel_derivatives_method", HEEL_METHODS[0]))
-
-    @property
-    def wave_surge_model(self) -> str:
-        """The selected wave surge-force model (``[vessel] wave_surge_model``)."""
-        return str(self.meta.get("wave_surge_model", WAVE_SURGE_MODELS[0]))
+    resistance_method = _MethodChoice("The selected resistance method.")
+    propeller_method = _MethodChoice("The selected open-water propeller model.")
+    heel_derivatives_method = _MethodChoice("The selected heel-derivative estimate.")
+    wave_surge_model = _MethodChoice("The selected wave surge-force model.")
 
     def sigma(self, key: str) -> float | None:
         """Standard uncertainty of ``key`` in the coefficient's unit (None if none given)."""

@@ -27,6 +27,7 @@ import logging
 import math
 import os
 import sys
+import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -34,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from continuation.atomic import atomic_path, write_atomic, write_atomic_group, write_json
+from ship_models.columns import ANGLE_STATES, RATE_STATES, state_columns
 
 log = logging.getLogger(__name__)
 
@@ -206,6 +208,50 @@ def study_main(
     return 0
 
 
+def finish_summary(
+    out: str | os.PathLike[str], summary: dict[str, Any], started: float, **kw: Any
+) -> dict[str, Any]:
+    """Stamp the step's wall time, write its summary, return it.
+
+    Sets ``summary["seconds"]`` to the seconds since ``started`` (a
+    :func:`time.perf_counter` reading, rounded to 0.01 s) and writes the summary with
+    :func:`write_summary` (``**kw`` as there).
+    """
+    summary["seconds"] = round(time.perf_counter() - started, 2)
+    write_summary(out, summary, **kw)
+    return summary
+
+
+def rows_main(
+    doc: str,
+    name: str,
+    run: Callable[..., list[dict[str, Any]]],
+    argv: Sequence[str] | None = None,
+    *,
+    quick_help: str,
+    line: Callable[[dict[str, Any]], str] | None = None,
+) -> int:
+    """The command line of a study that returns table rows: ``--out DIR``, ``--quick``.
+
+    Runs ``run(output_dir(name, DIR), quick=...)`` and prints one line per row,
+    ``key=value`` pairs (values as ``.6g`` unless ``line`` formats the row).
+
+    Returns
+    -------
+    int
+        0 (a failure raises).
+    """
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--out", default=None, help="output root (default ./out)")
+    ap.add_argument("--quick", action="store_true", help=quick_help)
+    a = ap.parse_args(argv)
+    rows = run(output_dir(name, a.out), quick=a.quick)
+    for r in rows:
+        text = line(r) if line is not None else " ".join(f"{k}={v:.6g}" for k, v in r.items())
+        sys.stdout.write(text + "\n")
+    return 0
+
+
 def output_dir(name: str = "", root: str | os.PathLike[str] | None = None) -> Path:
     """The folder ``root/name``, created if needed.
 
@@ -275,10 +321,9 @@ def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int | None = Non
 
 
 # ------------------------------------------------------------ the paper's planes
-#: States that are angles (written in degrees, ``<name>_deg``, in every CSV) and
-#: angular rates (``<name>_deg_s``).
-ANGLE_STATES = ("chi", "phi", "delta")
-RATE_STATES = ("r", "p_roll")
+# The states that are angles (written in degrees, ``<name>_deg``, in every CSV) and
+# angular rates (``<name>_deg_s``): ANGLE_STATES, RATE_STATES and state_columns come
+# from ship_models.columns and are re-exported here.
 
 #: Axis labels of the paper's quantities (symbol list of Umeda 1999).
 PLANE_LABELS: dict[str, str] = {
@@ -336,24 +381,6 @@ def insert_breaks(y: np.ndarray, xi: np.ndarray, low: float) -> np.ndarray:
     return np.insert(np.asarray(y, dtype=float), jumps + 1, np.nan)
 
 
-def state_columns(names: Sequence[str], x: np.ndarray) -> dict[str, np.ndarray]:
-    """CSV columns of states ``x`` (N, n): angles in degrees, angular rates in deg/s.
-
-    One angle unit in every CSV of the studies: ``chi_deg``, ``phi_deg``, ``delta_deg``,
-    ``r_deg_s``, ``p_roll_deg_s``; the other states as they are (SI, xi_G in wavelengths).
-    """
-    x = np.atleast_2d(np.asarray(x, dtype=float))
-    cols: dict[str, np.ndarray] = {}
-    for k, n in enumerate(names):
-        if n in ANGLE_STATES:
-            cols[f"{n}_deg"] = np.degrees(x[:, k])
-        elif n in RATE_STATES:
-            cols[f"{n}_deg_s"] = np.degrees(x[:, k])
-        else:
-            cols[n] = x[:, k]
-    return cols
-
-
 def _meta_lines(meta: Mapping[str, Any] | None) -> list[str]:
     lines = []
     for k, v in (meta or {}).items():
@@ -391,16 +418,9 @@ def save_csv(
     for k, a in arrays.items():
         if a.size != n:
             raise ValueError(f"`columns[{k!r}]` has {a.size} values, expected {n}")
-    p = Path(path)
-    with atomic_path(p) as tmp, tmp.open("w", newline="") as fh:
-        for line in _meta_lines(meta):
-            fh.write(line + "\n")
-        w = csv.writer(fh)
-        w.writerow(list(arrays))
-        data = np.column_stack(list(arrays.values()))
-        for row in data:
-            w.writerow([repr(float(x)) if math.isfinite(x) else "nan" for x in row])
-    return p
+    data = np.column_stack(list(arrays.values()))
+    rows = [[float(x) if math.isfinite(x) else math.nan for x in row] for row in data]
+    return save_table(path, list(arrays), rows, meta=meta)
 
 
 def read_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
@@ -458,7 +478,9 @@ __all__ = [
     "state_columns",
     "wrap_position",
     "new_figure",
+    "finish_summary",
     "output_dir",
+    "rows_main",
     "read_csv",
     "save_csv",
     "save_figure",

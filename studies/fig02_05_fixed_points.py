@@ -38,12 +38,12 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
 
 from ship_models.paper import PAPER_FN
 from studies._common import (
+    finish_summary,
     new_figure,
     save_figure,
     save_table,
     study_main,
     write_atomic_group,
-    write_summary,
 )
 
 FN = PAPER_FN
@@ -251,9 +251,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         }
         for label, br in fn_branches.items()
     }
-    summary["seconds"] = round(time.perf_counter() - t0, 2)
-    write_summary(out, summary)
-    return summary
+    return finish_summary(out, summary, t0)
 
 
 def main(argv: list[str] | None = None) -> int:

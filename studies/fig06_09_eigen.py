@@ -35,11 +35,11 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
 
 from ship_models.paper import PAPER_FN
 from studies._common import (
+    finish_summary,
     new_figure,
     save_figure,
     save_table,
     study_main,
-    write_summary,
 )
 
 FN = PAPER_FN
@@ -136,9 +136,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
         header = list(rows[0])
         save_table(out / fname, header, [[r[h] for h in header] for r in rows], meta=meta)
     summary["figures"] = figures
-    summary["seconds"] = round(time.perf_counter() - t0, 2)
-    write_summary(out, summary)
-    return summary
+    return finish_summary(out, summary, t0)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -40,6 +40,7 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
 from ship_models.paper import PAPER_FN
 from studies._common import (
     PLANE_LABELS,
+    finish_summary,
     new_figure,
     paper_quantities,
     save_csv,
@@ -47,7 +48,6 @@ from studies._common import (
     state_columns,
     study_main,
     write_results,
-    write_summary,
 )
 
 CHI_C_DEG = 10.0
@@ -292,9 +292,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     }
     summary["figures"] = figures
     summary["data"] = data
-    summary["seconds"] = round(time.perf_counter() - t0, 2)
-    write_summary(out, summary, default=str)
-    return summary
+    return finish_summary(out, summary, t0, default=str)
 
 
 def main(argv: list[str] | None = None) -> int:

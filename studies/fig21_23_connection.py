@@ -38,6 +38,7 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
 from ship_models.paper import PAPER_FN_BRACKET
 from studies._common import (
     PLANE_LABELS,
+    finish_summary,
     new_figure,
     paper_quantities,
     save_csv,
@@ -46,7 +47,6 @@ from studies._common import (
     state_columns,
     study_main,
     write_atomic,
-    write_summary,
 )
 
 CHI_C_DEG = 10.0
@@ -254,9 +254,7 @@ def compute(
     fig.legend(loc="outside lower center", ncol=1, fontsize=7, frameon=False)
     save_figure(fig, out / "critical_curve_methods.png")
     summary["figures"] = ["fig21_connection.png", "critical_curve_methods.png"]
-    summary["seconds"] = round(time.perf_counter() - t_all, 2)
-    write_summary(out, summary)
-    return summary
+    return finish_summary(out, summary, t_all)
 
 
 def main(argv: list[str] | None = None) -> int:

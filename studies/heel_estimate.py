@@ -28,7 +28,6 @@ only. Run: ``python studies/heel_estimate.py [--out DIR] [--quick]``.
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from pathlib import Path
@@ -129,16 +128,16 @@ def run(out: Path, *, quick: bool = False) -> list[dict[str, Any]]:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``--out DIR``, ``--quick``."""
-    from studies._common import output_dir
+    from studies._common import rows_main
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=None, help="output root (default ./out)")
-    ap.add_argument("--quick", action="store_true", help="primes, fold and 10 deg only")
-    a = ap.parse_args(argv)
-    rows = run(output_dir("heel_estimate", a.out), quick=a.quick)
-    for r in rows:
-        sys.stdout.write(" ".join(f"{k}={v}" for k, v in r.items() if not k.startswith("_")) + "\n")
-    return 0
+    return rows_main(
+        __doc__,
+        "heel_estimate",
+        run,
+        argv,
+        quick_help="primes, fold and 10 deg only",
+        line=lambda r: " ".join(f"{k}={v}" for k, v in r.items() if not k.startswith("_")),
+    )
 
 
 if __name__ == "__main__":

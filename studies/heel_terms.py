@@ -37,7 +37,6 @@ Run: ``python studies/heel_terms.py [--out DIR] [--quick]``.
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from pathlib import Path
@@ -144,16 +143,9 @@ def run(out: Path, *, quick: bool = False) -> list[dict[str, float]]:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``--out DIR``, ``--quick``."""
-    from studies._common import output_dir
+    from studies._common import rows_main
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=None, help="output root (default ./out)")
-    ap.add_argument("--quick", action="store_true", help="extreme values only, no curves")
-    a = ap.parse_args(argv)
-    rows = run(output_dir("heel_terms", a.out), quick=a.quick)
-    for r in rows:
-        sys.stdout.write(" ".join(f"{k}={v:.6g}" for k, v in r.items()) + "\n")
-    return 0
+    return rows_main(__doc__, "heel_terms", run, argv, quick_help="extreme values only, no curves")
 
 
 if __name__ == "__main__":

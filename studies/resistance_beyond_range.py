@@ -26,7 +26,6 @@ Run: ``python studies/resistance_beyond_range.py [--out DIR] [--quick]``.
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from pathlib import Path
@@ -108,15 +107,9 @@ def run(out: Path, *, quick: bool = False) -> list[dict[str, float]]:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``--out DIR``, ``--quick``."""
-    from studies._common import output_dir
+    from studies._common import rows_main
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=None, help="output root (default ./out)")
-    ap.add_argument("--quick", action="store_true", help="two cases only")
-    a = ap.parse_args(argv)
-    for r in run(output_dir("resistance_beyond_range", a.out), quick=a.quick):
-        sys.stdout.write(" ".join(f"{k}={v:.6g}" for k, v in r.items()) + "\n")
-    return 0
+    return rows_main(__doc__, "resistance_beyond_range", run, argv, quick_help="two cases only")
 
 
 if __name__ == "__main__":

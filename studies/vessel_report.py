@@ -353,26 +353,50 @@ def _panel_wave(
     Hl: float,
     lL: float,
 ) -> None:
-    fs = 1e-3 if np.max(amp[:, :2]) < 5e6 else 1e-6
-    fu = "kN" if fs == 1e-3 else "MN"
-    ax_f.plot(chi_deg, amp[:, 0] * fs, "-", color="tab:blue", label="X_w (surge)")
-    ax_f.plot(chi_deg, amp[:, 1] * fs, "-", color="tab:orange", label="Y_w (sway), with lift")
-    ax_f.plot(chi_deg, amp_fk[:, 1] * fs, "--", color="tab:orange", label="Y_w, Froude-Krylov only")
-    ax_f.set_xlabel("heading from wave direction chi (deg)")
-    ax_f.set_ylabel(f"amplitude ({fu})")
-    ax_f.set_title(f"Wave-force amplitudes, H/lambda = 1/{1 / Hl:.3g}, lambda/L = {lL:g}")
-    ax_f.set_xlim(0.0, 180.0)
-    ax_f.legend(loc="upper right", fontsize=7)
-    ms = 1e-3 if np.max(amp[:, 2:]) < 5e6 else 1e-6
-    mu = "kN m" if ms == 1e-3 else "MN m"
-    ax_m.plot(chi_deg, amp[:, 2] * ms, "-", color="tab:green", label="N_w (yaw), with lift")
-    ax_m.plot(chi_deg, amp_fk[:, 2] * ms, "--", color="tab:green", label="N_w, Froude-Krylov only")
-    ax_m.plot(chi_deg, amp[:, 3] * ms, "-", color="tab:red", label="K_w (roll), with lift")
-    ax_m.set_xlabel("heading from wave direction chi (deg)")
-    ax_m.set_ylabel(f"amplitude ({mu})")
-    ax_m.set_title("Wave-moment amplitudes (u = wave celerity)")
-    ax_m.set_xlim(0.0, 180.0)
-    ax_m.legend(loc="upper right", fontsize=7)
+    _amplitudes(
+        ax_f,
+        chi_deg,
+        amp[:, :2],
+        "N",
+        [
+            (amp[:, 0], "-", "tab:blue", "X_w (surge)"),
+            (amp[:, 1], "-", "tab:orange", "Y_w (sway), with lift"),
+            (amp_fk[:, 1], "--", "tab:orange", "Y_w, Froude-Krylov only"),
+        ],
+        f"Wave-force amplitudes, H/lambda = 1/{1 / Hl:.3g}, lambda/L = {lL:g}",
+    )
+    _amplitudes(
+        ax_m,
+        chi_deg,
+        amp[:, 2:],
+        "N m",
+        [
+            (amp[:, 2], "-", "tab:green", "N_w (yaw), with lift"),
+            (amp_fk[:, 2], "--", "tab:green", "N_w, Froude-Krylov only"),
+            (amp[:, 3], "-", "tab:red", "K_w (roll), with lift"),
+        ],
+        "Wave-moment amplitudes (u = wave celerity)",
+    )
+
+
+def _amplitudes(
+    ax: Any,
+    chi_deg: np.ndarray,
+    sized_by: np.ndarray,
+    unit: str,
+    curves: list[tuple[np.ndarray, str, str, str]],
+    title: str,
+) -> None:
+    """Amplitude curves ``(values, line style, colour, label)`` against the heading, in
+    k``unit`` or M``unit`` (M when ``sized_by`` reaches 5e6)."""
+    scale = 1e-3 if np.max(sized_by) < 5e6 else 1e-6
+    for y, style, color, label in curves:
+        ax.plot(chi_deg, y * scale, style, color=color, label=label)
+    ax.set_xlabel("heading from wave direction chi (deg)")
+    ax.set_ylabel(f"amplitude ({'k' if scale == 1e-3 else 'M'}{unit})")
+    ax.set_title(title)
+    ax.set_xlim(0.0, 180.0)
+    ax.legend(loc="upper right", fontsize=7)
 
 
 def _panel_status(ax: Any, data: VesselModelData) -> None:

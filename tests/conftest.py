@@ -6,13 +6,7 @@ from __future__ import annotations
 import logging
 
 import pytest
-from helpers import (
-    brusselator,
-    fold_normal_form,
-    hopf_normal_form,
-    pitchfork,
-    transcritical,
-)
+from helpers import fold_normal_form
 
 from continuation.system import System
 
@@ -20,26 +14,6 @@ from continuation.system import System
 @pytest.fixture
 def fold_system() -> System:
     return fold_normal_form()
-
-
-@pytest.fixture
-def hopf_system() -> System:
-    return hopf_normal_form()
-
-
-@pytest.fixture
-def transcritical_system() -> System:
-    return transcritical()
-
-
-@pytest.fixture
-def pitchfork_system() -> System:
-    return pitchfork()
-
-
-@pytest.fixture
-def brusselator_system() -> System:
-    return brusselator()
 
 
 @pytest.fixture
@@ -80,3 +54,34 @@ def _cli_log_handler_removed():
             root.removeHandler(h)
             h.close()
     root.setLevel(level)
+
+
+@pytest.fixture(scope="module")
+def model():
+    """Umeda's purse seiner (one instance per test module)."""
+    from ship_models import purse_seiner
+
+    return purse_seiner()
+
+
+@pytest.fixture(scope="module")
+def orbit(model):
+    """The purse seiner's periodic orbit at the paper's first initial controls
+    (Fn = 0.1, chi_c = 0), by shooting."""
+    from ship_models.analysis.sudden_change import periodic_orbit
+
+    o = periodic_orbit(model, model.default_params().replace(Fn=0.1, chi_c=0.0))
+    assert o.success, o.message
+    return o
+
+
+@pytest.fixture(scope="module")
+def fn_het(model):
+    """Heteroclinic-bifurcation Fn at chi_c = 10 deg by collocation (independent method)."""
+    from helpers import CHI10
+
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
+
+    conn = critical_fn_bvp(CHI10, model=model)
+    assert conn.success
+    return float(conn.Fn)

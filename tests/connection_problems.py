@@ -14,7 +14,7 @@ published values). Sources:
   speed is still ``sqrt2 (1/2 - a)`` (a change of coordinates keeps the orbit).
 * ``pendulum_cylinder``: ``theta'' + gamma theta' + sin theta = F`` on the cylinder,
   saddle to the saddle shifted by ``2 pi``; reference ``F`` by shooting
-  (``tests.test_connection.shooting_F``, 1e-12).
+  (:func:`shooting_F`, 1e-12).
 * ``pendulum_separatrix``: the undamped separatrix between (-pi, 0) and (pi, 0),
   ``gamma = 0`` (Guckenheimer & Holmes 1983, sec. 4.5).
 * ``kdv``: ``u'' = u - u^2 + mu u'``, homoclinic only at ``mu = 0``.
@@ -44,6 +44,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from continuation.system import System
 
@@ -228,9 +230,53 @@ def _phi4_saddles(h: float) -> tuple[float, float]:
     return float(r[0]), float(r[2])
 
 
+def shooting_F(gamma: float) -> float:
+    """F(gamma) by shooting along the unstable manifold and Brent's bracketing method.
+
+    The manifold of the saddle theta_u - 2 pi (theta_u = pi - asin F) leaves with
+    omega > 0. Its fate: it passes theta_u (F too large; g = omega^2 there) or turns
+    back with omega = 0 first (F too small; g = -|cos theta_u| (theta_u - theta)^2).
+    g is continuous with a simple zero at the connection. Independent of the BVP code.
+    """
+
+    def g(F: float) -> float:
+        thu = np.pi - np.arcsin(F)
+        th0 = thu - 2 * np.pi
+        J = np.array([[0.0, 1.0], [-np.cos(th0), -gamma]])
+        ev, V = np.linalg.eig(J)
+        v = V[:, np.argmax(ev.real)].real
+        v *= np.sign(v[1]) / np.linalg.norm(v)
+        x0 = np.array([th0, 0.0]) + 1e-8 * v
+
+        def over(t, x):
+            return x[0] - thu
+
+        def back(t, x):
+            return x[1]
+
+        over.terminal = True
+        back.terminal, back.direction = True, -1
+        sol = solve_ivp(
+            lambda t, x: [x[1], F - gamma * x[1] - np.sin(x[0])],
+            (0.0, 400.0),
+            x0,
+            events=(over, back),
+            rtol=1e-12,
+            atol=1e-14,
+            method="DOP853",
+        )
+        if sol.t_events[0].size:
+            return float(sol.y_events[0][0][1] ** 2)
+        if sol.t_events[1].size:
+            return float(-abs(np.cos(thu)) * (thu - sol.y_events[1][0][0]) ** 2)
+        raise RuntimeError("unstable manifold met neither event")
+
+    F_mel = 4 * gamma / np.pi
+    return float(brentq(g, 0.5 * F_mel, min(0.95, 1.2 * F_mel), xtol=1e-14, rtol=1e-14))
+
+
 def cases() -> list[ConnectionCase]:
     """Every connecting-orbit problem with a reference value (built fresh each call)."""
-    from tests.test_connection import shooting_F
 
     gamma = 0.3
     F_ref = shooting_F(gamma)

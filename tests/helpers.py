@@ -9,10 +9,15 @@ from here (``from helpers import ...``); ``conftest.py`` holds only the fixtures
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from continuation.branch import SpecialKind
 from continuation.system import System
+
+#: The paper's 10 degree course (rad), where the ship tests place the heteroclinic Fn.
+CHI10 = math.radians(10.0)
 
 
 def fold_normal_form() -> System:
@@ -122,6 +127,14 @@ def bratu(n: int) -> System:
         return ops.stack(out)
 
     return System(rhs, tuple(f"u{i}" for i in range(n)), ("lam",), name=f"bratu{n}")
+
+
+def bratu_branch(n: int, **options):
+    """The Bratu equilibria (:func:`bratu`, ``n`` nodes) continued in ``lam`` from
+    ``u = 0`` at ``lam = 0``; ``options`` go to ``continue_equilibria``."""
+    from continuation.api import continue_equilibria
+
+    return continue_equilibria(bratu(n), np.zeros(n), {"lam": 0.0}, "lam", **options)
 
 
 def circle() -> System:

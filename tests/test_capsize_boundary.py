@@ -12,38 +12,15 @@ import math
 
 import numpy as np
 import pytest
+from helpers import CHI10
 
 from continuation.status import Status
-from ship_models import purse_seiner
 from ship_models.analysis.capsize_boundary import (
     ROW_HEADER,
     capsizing_boundary_bvp,
     landing_guess,
 )
-from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.analysis.events import capsize_angle
-from ship_models.analysis.sudden_change import periodic_orbit
-
-CHI10 = math.radians(10.0)
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
-
-
-@pytest.fixture(scope="module")
-def orbit(model):
-    o = periodic_orbit(model, model.default_params().replace(Fn=0.1, chi_c=0.0))
-    assert o.success, o.message
-    return o
-
-
-@pytest.fixture(scope="module")
-def fn_het(model):
-    conn = critical_fn_bvp(CHI10, model=model)
-    assert conn.success
-    return float(conn.Fn)
 
 
 def _check_point(p, model):

@@ -15,15 +15,9 @@ import pytest
 
 from broachkit_cli.main import main
 from continuation.equilibria import solve_equilibrium
-from ship_models import purse_seiner
 from ship_models.analysis.critical import critical_fn
 from ship_models.analysis.eigen import paper_scales
 from ship_models.analysis.events import vanishing_angle
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
 
 
 def _json(capsys, argv):

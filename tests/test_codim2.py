@@ -272,6 +272,20 @@ def _branch(system, x0, params, free, **kw):
     return continue_equilibria(system, x0, params, free, **kw)
 
 
+def _da_branch(system, x0, B):
+    """Equilibria of a CSTR-type ``system`` from ``Da = 0`` forward to 0.3 (beta = 2)."""
+    return _branch(
+        system,
+        x0,
+        {"Da": 0.0, "B": B, "beta": 2.0},
+        "Da",
+        p_min=0.0,
+        p_max=0.3,
+        ds=0.01,
+        direction="forward",
+    )
+
+
 def _only(branch, kind):
     pts = branch.find(kind)
     assert len(pts) == 1, pts
@@ -468,16 +482,7 @@ class TestCSTR:
     @pytest.fixture(scope="class")
     @classmethod
     def branch(cls):
-        return _branch(
-            CSTR,
-            [0.0, 0.0],
-            {"Da": 0.0, "B": cls.B, "beta": 2.0},
-            "Da",
-            p_min=0.0,
-            p_max=0.3,
-            ds=0.01,
-            direction="forward",
-        )
+        return _da_branch(CSTR, [0.0, 0.0], cls.B)
 
     def _bt_points(self):
         r = np.roots([-self.B, self.B, 0.0, -1.0])
@@ -792,16 +797,7 @@ class TestEmbeddedCSTR:
             return ops.stack([sum(Q[i, k] * F[k] for k in range(n)) for i in range(n)])
 
         sysn = System(rhs, tuple(f"y{i}" for i in range(n)), ("Da", "B", "beta"))
-        br = _branch(
-            sysn,
-            np.zeros(n),
-            {"Da": 0.0, "B": cls.B, "beta": 2.0},
-            "Da",
-            p_min=0.0,
-            p_max=0.3,
-            ds=0.01,
-            direction="forward",
-        )
+        br = _da_branch(sysn, np.zeros(n), cls.B)
         return Q, br
 
     def test_fold_curve(self, setup):

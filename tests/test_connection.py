@@ -31,7 +31,6 @@ import matplotlib
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 from continuation.bvp.accuracy import ConnectionAccuracy
 from continuation.bvp.collocation import CollocationMesh
@@ -43,7 +42,7 @@ from continuation.errors import ConvergenceError
 from continuation.settings import NewtonSettings
 from continuation.status import Status
 from continuation.system import System
-from tests.connection_problems import nagumo, nagumo4, pendulum
+from tests.connection_problems import nagumo, nagumo4, pendulum, shooting_F
 
 matplotlib.use("Agg")
 
@@ -97,51 +96,6 @@ def separatrix_guess(T: float = 40.0) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ---------------------------------------------------------------------------- shooting
-def shooting_F(gamma: float) -> float:
-    """F(gamma) by shooting along the unstable manifold and Brent's bracketing method.
-
-    The manifold of the saddle theta_u - 2 pi (theta_u = pi - asin F) leaves with
-    omega > 0. Its fate: it passes theta_u (F too large; g = omega^2 there) or turns
-    back with omega = 0 first (F too small; g = -|cos theta_u| (theta_u - theta)^2).
-    g is continuous with a simple zero at the connection. Independent of the BVP code.
-    """
-
-    def g(F: float) -> float:
-        thu = np.pi - np.arcsin(F)
-        th0 = thu - 2 * np.pi
-        J = np.array([[0.0, 1.0], [-np.cos(th0), -gamma]])
-        ev, V = np.linalg.eig(J)
-        v = V[:, np.argmax(ev.real)].real
-        v *= np.sign(v[1]) / np.linalg.norm(v)
-        x0 = np.array([th0, 0.0]) + 1e-8 * v
-
-        def over(t, x):
-            return x[0] - thu
-
-        def back(t, x):
-            return x[1]
-
-        over.terminal = True
-        back.terminal, back.direction = True, -1
-        sol = solve_ivp(
-            lambda t, x: [x[1], F - gamma * x[1] - np.sin(x[0])],
-            (0.0, 400.0),
-            x0,
-            events=(over, back),
-            rtol=1e-12,
-            atol=1e-14,
-            method="DOP853",
-        )
-        if sol.t_events[0].size:
-            return float(sol.y_events[0][0][1] ** 2)
-        if sol.t_events[1].size:
-            return float(-abs(np.cos(thu)) * (thu - sol.y_events[1][0][0]) ** 2)
-        raise RuntimeError("unstable manifold met neither event")
-
-    F_mel = 4 * gamma / np.pi
-    return float(brentq(g, 0.5 * F_mel, min(0.95, 1.2 * F_mel), xtol=1e-14, rtol=1e-14))
-
-
 # ---------------------------------------------------------------------------- tests
 @pytest.mark.parametrize("a", [0.1, 0.25, 0.4])
 def test_nagumo_speed_closed_form(a):

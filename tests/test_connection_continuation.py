@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 from continuation.bvp.collocation import CollocationMesh
 from continuation.bvp.connection import HeteroclinicProblem
@@ -23,44 +21,9 @@ from continuation.bvp.solve import connection_at, continue_connection, solve_con
 from continuation.events import Event
 from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
-from tests.connection_problems import nagumo, pendulum
+from tests.connection_problems import nagumo, pendulum, shooting_F
 
 SQ2 = np.sqrt(2.0)
-
-
-def shooting_F(gamma: float) -> float:
-    """F(gamma) by shooting on the unstable manifold + Brent on its signed fate."""
-
-    def g(F: float) -> float:
-        thu = np.pi - np.arcsin(F)
-        th0 = thu - 2 * np.pi
-        ev, V = np.linalg.eig(np.array([[0.0, 1.0], [-np.cos(th0), -gamma]]))
-        v = V[:, np.argmax(ev.real)].real
-        v *= np.sign(v[1]) / np.linalg.norm(v)
-
-        def over(t, x):
-            return x[0] - thu
-
-        def back(t, x):
-            return x[1]
-
-        over.terminal = True
-        back.terminal, back.direction = True, -1
-        sol = solve_ivp(
-            lambda t, x: [x[1], F - gamma * x[1] - np.sin(x[0])],
-            (0.0, 400.0),
-            np.array([th0, 0.0]) + 1e-8 * v,
-            events=(over, back),
-            rtol=1e-12,
-            atol=1e-14,
-            method="DOP853",
-        )
-        if sol.t_events[0].size:
-            return float(sol.y_events[0][0][1] ** 2)
-        return float(-abs(np.cos(thu)) * (thu - sol.y_events[1][0][0]) ** 2)
-
-    F_mel = 4 * gamma / np.pi
-    return float(brentq(g, 0.5 * F_mel, min(0.95, 1.2 * F_mel), xtol=1e-14, rtol=1e-14))
 
 
 @pytest.fixture(scope="module")

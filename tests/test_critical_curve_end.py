@@ -19,7 +19,6 @@ import pytest
 from continuation.bvp import connection_at, continue_connection, solve_connection
 from continuation.settings import ContinuationSettings, NewtonSettings
 from continuation.status import Status
-from ship_models import purse_seiner
 from ship_models.analysis.boundary_check import boundary_refusal
 from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.analysis.critical_curve import critical_curve
@@ -27,11 +26,6 @@ from ship_models.analysis.events import vanishing_angle
 
 DEG = math.pi / 180.0
 COURSES = np.array([0.0, 30.0, 38.0, 40.0, 45.0])
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
 
 
 @pytest.fixture(scope="module")

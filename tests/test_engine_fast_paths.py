@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.linalg import block_diag
 
 from continuation.driver import continue_branch
 from continuation.params import Params
@@ -49,13 +50,7 @@ def test_dense_stability_complex_pairs_and_tolerances() -> None:
         np.array([[1e-12]]),  # below eig_tol: counts as stable
         np.array([[-3.0]]),
     ]
-    n = sum(b.shape[0] for b in blocks)
-    J = np.zeros((n, n))
-    k = 0
-    for b in blocks:
-        m = b.shape[0]
-        J[k : k + m, k : k + m] = b
-        k += m
+    J = block_diag(*blocks)
     ev, counts = dense_stability(J, 1e-10, 1e-8)
     assert counts == (1, 1)
     expected = np.array([1 + 2j, 1 - 2j, 0.5, 1e-12, -1 + 1j, -1 - 1j, -3.0])

@@ -5,6 +5,7 @@ iteration itself, against products with known eigenvalues."""
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import block_diag
 
 from continuation.periodic.floquet import dominance_basis, periodic_eigenvalues
 
@@ -18,13 +19,8 @@ def _factors(blocks: list[np.ndarray], G: int, seed: int = 0) -> np.ndarray:
     """``G`` factors ``V_{j+1} D V_j^{-1}`` (``V_G = V_0``) whose product is similar to
     the block-diagonal ``D^G`` (``D`` holds the ``G``-th roots of the blocks)."""
     rng = np.random.default_rng(seed)
-    n = sum(b.shape[0] for b in blocks)
-    D = np.zeros((n, n))
-    i = 0
-    for b in blocks:
-        k = b.shape[0]
-        D[i : i + k, i : i + k] = b
-        i += k
+    D = block_diag(*blocks)
+    n = D.shape[0]
     V = [np.eye(n) + 0.3 * rng.standard_normal((n, n)) for _ in range(G)]
     V.append(V[0])
     return np.array([V[j + 1] @ D @ np.linalg.inv(V[j]) for j in range(G)])

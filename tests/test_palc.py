@@ -10,6 +10,7 @@ import pytest
 from helpers import (
     assert_invariants,
     bratu,
+    bratu_branch,
     brusselator,
     circle,
     fold_normal_form,
@@ -82,17 +83,14 @@ def test_natural_matches_palc_on_monotone_branch():
     np.testing.assert_allclose(np.interp(nat.p, pal.p, pal.x[:, 1]), nat.x[:, 1], atol=1e-12)
 
 
+def _brusselator_in_B(**options):
+    """The Brusselator's equilibria continued in ``B`` from ``(x, y) = (1, 0.5)`` at
+    ``A = 1, B = 0.5``."""
+    return continue_equilibria(brusselator(), [1.0, 0.5], {"A": 1.0, "B": 0.5}, "B", **options)
+
+
 def test_step_grows_to_ds_max_and_bounds_are_exact():
-    br = continue_equilibria(
-        brusselator(),
-        [1.0, 0.5],
-        {"A": 1.0, "B": 0.5},
-        "B",
-        p_min=0.2,
-        p_max=3.0,
-        ds=1e-3,
-        ds_max=0.08,
-    )
+    br = _brusselator_in_B(p_min=0.2, p_max=3.0, ds=1e-3, ds_max=0.08)
     assert br.status is Status.PARAM_BOUND
     assert br.p[0] == pytest.approx(0.2, abs=1e-12) and br.p[-1] == pytest.approx(3.0, abs=1e-12)
     assert np.all(np.diff(br.p) > 0)  # ordered from the backward end
@@ -135,15 +133,7 @@ def test_keyboard_interrupt_returns_partial_branch():
         if len(calls) == 5:
             raise KeyboardInterrupt
 
-    br = continue_equilibria(
-        brusselator(),
-        [1.0, 0.5],
-        {"A": 1.0, "B": 0.5},
-        "B",
-        p_max=3.0,
-        progress=progress,
-        throw=True,
-    )
+    br = _brusselator_in_B(p_max=3.0, progress=progress, throw=True)
     assert br.status is Status.INTERRUPTED
     assert len(br) == 5  # backward direction interrupted: forward never started
     assert np.all(np.diff(br.p) > 0)
@@ -184,11 +174,8 @@ def test_bratu_200_uses_sparse_lu_and_shift_invert(monkeypatch):
 
     monkeypatch.setattr(linalg.spla, "splu", splu)
     monkeypatch.setattr(linalg, "_getrf", getrf)
-    br = continue_equilibria(
-        bratu(n),
-        np.zeros(n),
-        {"lam": 0.0},
-        "lam",
+    br = bratu_branch(
+        n,
         ds=0.1,
         ds_max=0.5,
         max_steps=6,
@@ -462,11 +449,8 @@ def test_hermite_predictor_same_branch_fewer_newton_iterations():
     fewer corrector iterations (O(ds^4) against O(ds^2) prediction error)."""
     runs = {}
     for predictor in ("tangent", "hermite"):
-        br = continue_equilibria(
-            bratu(20),
-            np.zeros(20),
-            {"lam": 0.0},
-            "lam",
+        br = bratu_branch(
+            20,
             p_min=0.0,
             p_max=4.0,
             ds=0.01,

@@ -37,6 +37,17 @@ from continuation.system import System
 SQ2 = np.sqrt(2.0)
 
 
+def _codim2_curve(br, point, free2, window, *, ds, max_steps):
+    """The codim-2 curve from ``point`` of ``br`` in ``free2`` over ``window``
+    ``(p_min, p_max)`` with steps ``ds = (ds, ds_max)``; asserts that it ran."""
+    settings = ContinuationSettings(
+        ds=ds[0], ds_max=ds[1], p_min=window[0], p_max=window[1], max_steps=max_steps
+    )
+    curve = continue_codim2(br, point, free2, settings)
+    assert curve.status.ok, curve.message
+    return curve
+
+
 def _one(branch, kind):
     """The single located special point of ``kind`` on ``branch``."""
     found = branch.find(kind)
@@ -115,13 +126,7 @@ def test_lorenz_hopf_curve_in_sigma():
         p_max=30.0,
         direction="forward",
     )
-    curve = continue_codim2(
-        br,
-        _one(br, "hopf"),
-        "sigma",
-        ContinuationSettings(ds=0.05, ds_max=0.5, p_min=5.0, p_max=30.0, max_steps=400),
-    )
-    assert curve.status.ok, curve.message
+    curve = _codim2_curve(br, _one(br, "hopf"), "sigma", (5.0, 30.0), ds=(0.05, 0.5), max_steps=400)
     sg = curve.p
     assert sg.min() == pytest.approx(5.0) and sg.max() == pytest.approx(30.0)
     r_h = _lorenz_hopf_r(sg, beta)
@@ -235,13 +240,7 @@ def test_rosenzweig_macarthur_hopf_curve():
     br = continue_equilibria(
         s, [2 / 3, 0.9], {"K": 2.0, "m": m, "d": d}, "K", p_max=4.0, direction="forward"
     )
-    curve = continue_codim2(
-        br,
-        _one(br, "hopf"),
-        "d",
-        ContinuationSettings(ds=0.01, ds_max=0.05, p_min=0.05, p_max=0.9, max_steps=400),
-    )
-    assert curve.status.ok, curve.message
+    curve = _codim2_curve(br, _one(br, "hopf"), "d", (0.05, 0.9), ds=(0.01, 0.05), max_steps=400)
     dd = curve.p
     assert dd.min() == pytest.approx(0.05) and dd.max() == pytest.approx(0.9)
     np.testing.assert_allclose(curve.records["K"], (m + dd) / (m - dd), rtol=1e-10)
@@ -323,13 +322,7 @@ def test_rossler_fold_curve_zero_hopf_and_bogdanov_takens():
         s, _rossler_inner(a, b, 5.7), {"a": a, "b": b, "c": 5.7}, "c", p_min=0.1, p_max=10.0,
         max_steps=2000,
     )  # fmt: skip
-    curve = continue_codim2(
-        br,
-        _one(br, "fold"),
-        "a",
-        ContinuationSettings(ds=0.01, ds_max=0.1, p_min=0.05, p_max=3.0, max_steps=500),
-    )
-    assert curve.status.ok, curve.message
+    curve = _codim2_curve(br, _one(br, "fold"), "a", (0.05, 3.0), ds=(0.01, 0.1), max_steps=500)
     np.testing.assert_allclose(curve.records["c"] ** 2, 4 * curve.p * b, rtol=1e-10)
     zh = _one(curve, "zh")
     assert zh.p == pytest.approx(b, rel=1e-9)
@@ -381,13 +374,7 @@ def test_spruce_budworm_folds_and_cusp():
     for f, x in zip(folds, xf, strict=True):
         assert f.p == pytest.approx(2 * x**3 / (1 + x**2) ** 2, rel=1e-10)
         assert f.x[0] == pytest.approx(x, rel=1e-6)  # sqrt of the locator tolerance
-    curve = continue_codim2(
-        br,
-        folds[0],
-        "k",
-        ContinuationSettings(ds=0.05, ds_max=0.2, p_min=3.0, p_max=20.0, max_steps=500),
-    )
-    assert curve.status.ok, curve.message
+    curve = _codim2_curve(br, folds[0], "k", (3.0, 20.0), ds=(0.05, 0.2), max_steps=500)
     xx = curve.x[:, 0]
     np.testing.assert_allclose(curve.records["r"], 2 * xx**3 / (1 + xx**2) ** 2, rtol=1e-10)
     np.testing.assert_allclose(curve.p, 2 * xx**3 / (xx**2 - 1), rtol=1e-10)
@@ -428,13 +415,7 @@ def test_mean_field_magnet_pitchfork_folds_and_cusp():
     assert len(folds) == 2 and all(f.located for f in folds)
     assert folds[0].p == pytest.approx(h_f, rel=1e-10)
     assert folds[1].p == pytest.approx(-h_f, rel=1e-10)
-    curve = continue_codim2(
-        br,
-        folds[0],
-        "beta",
-        ContinuationSettings(ds=0.02, ds_max=0.1, p_min=0.5, p_max=3.0, max_steps=500),
-    )
-    assert curve.status.ok, curve.message
+    curve = _codim2_curve(br, folds[0], "beta", (0.5, 3.0), ds=(0.02, 0.1), max_steps=500)
     m, b = curve.x[:, 0], curve.p
     np.testing.assert_allclose(b * (1 - m**2), 1.0, rtol=1e-10)
     np.testing.assert_allclose(curve.records["h"], np.arctanh(m) - b * m, atol=1e-12)

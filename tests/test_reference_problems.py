@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import assert_invariants, bratu, brusselator, cstr, lorenz84, selkov
+from helpers import assert_invariants, bratu, bratu_branch, brusselator, cstr, lorenz84, selkov
 from scipy.optimize import fsolve
 
 from continuation.algorithms.palc import PALC
@@ -182,9 +182,9 @@ BRATU_LAMBDA_STAR = 3.513830719125161  # continuous fold (e.g. Mohsen 2014, Boyd
 
 def _bratu_branch(n: int, stop: Event, *, ds: float):
     """Bratu's branch from the trivial solution at lambda = 0, up to the event ``stop``."""
-    return continue_equilibria(bratu(n), np.zeros(n), {"lam": 0.0}, "lam", p_min=0.0,
-                               p_max=4.0, ds=ds, ds_max=0.5, direction="forward",
-                               events=[stop])  # fmt: skip
+    return bratu_branch(
+        n, p_min=0.0, p_max=4.0, ds=ds, ds_max=0.5, direction="forward", events=[stop]
+    )
 
 
 def _bratu_fold(n: int) -> float:
@@ -226,11 +226,8 @@ def test_discrete_bratu_symmetry_breaking_branch_point():
     # which at this conditioning (rcond ~ 1e-12 at the point) decides how the locator's
     # trial points fall around the crossing branch
     for ds_max, alg in [(d, PALC(kernel=k)) for d in steps for k in (True, False)]:
-        br = continue_equilibria(
-            bratu(n),
-            np.zeros(n),
-            {"lam": 0.0},
-            "lam",
+        br = bratu_branch(
+            n,
             p_min=0.0,
             p_max=4.0,
             ds=ds_max,

@@ -26,7 +26,7 @@ from scipy.integrate import solve_ivp
 from continuation.bvp.solve import check_convergence
 from continuation.dynamics import SimEvent, simulate
 from continuation.status import Status
-from ship_models import purse_seiner, purse_seiner_surge
+from ship_models import purse_seiner_surge
 from ship_models.analysis.critical_bisection import upslope_bisection
 from ship_models.analysis.critical_bvp import check_critical_bvp, critical_fn_bvp
 from ship_models.analysis.critical_curve import critical_curve
@@ -35,11 +35,6 @@ from ship_models.analysis.outcomes import ShipOutcome
 from ship_models.analysis.upslope import UPSLOPE_SHIFT, upslope_branch
 
 DEG = math.pi / 180
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,6 @@ import pytest
 
 from continuation.errors import ContinuationError
 from continuation.status import Status
-from ship_models import purse_seiner
 from ship_models.analysis.critical import critical_fn
 from ship_models.analysis.critical_bisection import RETURNED, first_passage, outcome
 from ship_models.analysis.manifold import SaddleVisit, ShipFate, unstable_manifold
@@ -28,11 +27,6 @@ from ship_models.registry import get_vessel_data
 from ship_models.umeda_4dof import Umeda4DOF
 
 CHI_C = math.radians(10.0)
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
 
 
 @pytest.fixture(scope="module")

@@ -12,11 +12,11 @@ import math
 
 import numpy as np
 import pytest
+from helpers import CHI10
 
 from continuation.bvp.collocation import CollocationMesh
 from continuation.periodic.continuation import solve_orbit
 from continuation.status import Status
-from ship_models import purse_seiner
 from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.analysis.cycles import (
     compare_with_shooting,
@@ -28,13 +28,6 @@ from ship_models.analysis.cycles import (
 )
 from ship_models.analysis.events import capsize_angle
 from ship_models.analysis.sudden_change import periodic_orbit
-
-CHI10 = math.radians(10.0)
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
 
 
 @pytest.fixture(scope="module")

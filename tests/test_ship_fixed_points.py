@@ -20,7 +20,6 @@ import scipy.optimize as so
 
 from continuation.equilibria import solve_equilibrium
 from continuation.settings import NewtonSettings
-from ship_models import purse_seiner
 from ship_models.analysis.eigen import eigen_structure, paper_scales
 from ship_models.analysis.events import capsize_event, vanishing_angle
 from ship_models.analysis.fixed_points import (
@@ -34,11 +33,6 @@ from ship_models.analysis.fixed_points import (
 )
 
 TIGHT = NewtonSettings(tol=1e-11, step_tol=1e-12, max_iter=50, damping=True)
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
 
 
 @pytest.fixture(scope="module")

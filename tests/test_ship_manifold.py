@@ -21,7 +21,6 @@ import pytest
 import scipy.integrate as si
 from scipy.spatial import cKDTree
 
-from ship_models import purse_seiner
 from ship_models.analysis.events import vanishing_angle
 from ship_models.analysis.fixed_points import find_fixed_point, surge_model_of
 from ship_models.analysis.global_picture import build_global_picture, compare_pictures
@@ -39,11 +38,6 @@ def _polyline_distance(curve, q):
         s = np.clip(np.sum((q - curve[a]) * seg, axis=1) / L2, 0.0, 1.0)
         best = np.minimum(best, np.linalg.norm(q - (curve[a] + s[:, None] * seg), axis=1))
     return best
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
 
 
 @pytest.fixture(scope="module")

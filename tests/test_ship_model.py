@@ -8,14 +8,8 @@ import pytest
 from continuation.newton import newton
 from continuation.settings import NewtonSettings
 from continuation.system import System, check_jacobian
-from ship_models import purse_seiner
 from ship_models.surge import SurgeModel
 from ship_models.umeda_4dof import PARAM_NAMES, STATE_NAMES, Umeda4DOF
-
-
-@pytest.fixture(scope="module")
-def model() -> Umeda4DOF:
-    return purse_seiner()
 
 
 @pytest.fixture(scope="module")

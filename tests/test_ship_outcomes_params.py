@@ -16,15 +16,10 @@ import pytest
 
 from continuation.dynamics import FateKind
 from continuation.status import Status
-from ship_models import PAPER_FN, purse_seiner
+from ship_models import PAPER_FN
 from ship_models.analysis.critical_result import CriticalFn
 from ship_models.analysis.outcomes import CAPTURED_BY_WAVE, ShipOutcome
 from ship_models.analysis.params import course, ship_params
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
 
 
 def test_outcomes_and_fate_kinds():

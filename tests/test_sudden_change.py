@@ -19,11 +19,11 @@ import math
 
 import numpy as np
 import pytest
+from helpers import CHI10
 from scipy.integrate import solve_ivp
 
 from continuation.errors import ContinuationError
 from continuation.status import Status
-from ship_models import purse_seiner
 from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.analysis.eigen import paper_scales
 from ship_models.analysis.outcomes import ShipOutcome
@@ -36,33 +36,11 @@ from ship_models.analysis.sudden_change import (
     sudden_change_map,
 )
 
-CHI10 = math.radians(10.0)
-
-
-@pytest.fixture(scope="module")
-def model():
-    return purse_seiner()
-
 
 @pytest.fixture(scope="module")
 def p_from(model):
     """The paper's first initial controls: Fn = 0.1, chi_c = 0."""
     return model.default_params().replace(Fn=0.1, chi_c=0.0)
-
-
-@pytest.fixture(scope="module")
-def orbit(model, p_from):
-    o = periodic_orbit(model, p_from)
-    assert o.success, o.message
-    return o
-
-
-@pytest.fixture(scope="module")
-def fn_het(model):
-    """Heteroclinic-bifurcation Fn at chi_c = 10 deg by collocation (independent method)."""
-    conn = critical_fn_bvp(CHI10, model=model)
-    assert conn.success
-    return float(conn.Fn)
 
 
 def _dop853_return(model, params, x, section, period_guess, rtol=1e-12):

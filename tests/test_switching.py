@@ -14,7 +14,7 @@ from functools import cache
 
 import numpy as np
 import pytest
-from helpers import bratu, pitchfork, transcritical
+from helpers import bratu, bratu_branch, pitchfork, transcritical
 
 import continuation.switching.switch as sw
 from continuation.algorithms.base import theta_weights
@@ -337,10 +337,9 @@ def test_bratu_symmetry_breaking_pitchfork():
     either sign) and symmetric only at the branch point."""
     n = 20
     stop = Event("far", lambda x, p: float(np.max(x)) - 21.0, terminal=True)
-    br = continue_equilibria(
-        bratu(n), np.zeros(n), {"lam": 0.0}, "lam", p_min=0.0, p_max=4.0, ds=0.5,
-        ds_max=0.5, direction="forward", events=[stop],
-    )  # fmt: skip
+    br = bratu_branch(
+        n, p_min=0.0, p_max=4.0, ds=0.5, ds_max=0.5, direction="forward", events=[stop]
+    )
     (bp,) = br.find("bp")
     chord = np.append(br.x[bp.index + 1] - br.x[bp.index], br.p[bp.index + 1] - br.p[bp.index])
     for kernel in ("svd", "bordered"):

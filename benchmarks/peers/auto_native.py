@@ -31,6 +31,18 @@ from typing import Any
 
 from .common import PeerUnavailable
 
+#: The user routines AUTO-07p links against that the benchmarks' equation files leave
+#: empty (boundary and integral conditions, optimisation, user values).
+EMPTY_ROUTINES = """subroutine bcnd
+end subroutine bcnd
+subroutine icnd
+end subroutine icnd
+subroutine fopt
+end subroutine fopt
+subroutine pvls
+end subroutine pvls
+"""
+
 
 def library_paths() -> tuple[pathlib.Path, pathlib.Path]:
     """``(main.o, libbifpy.a)`` of the installed bifpy; PeerUnavailable if missing."""

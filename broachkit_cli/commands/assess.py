@@ -124,19 +124,12 @@ def _floats(name: str, text: str, low: float, high: float) -> list[float]:
 def _sweep_options(args: argparse.Namespace, out: Path | None) -> dict[str, Any]:
     """Where the exact threshold's tasks run (as ``broachkit sweep``); checkpoints in
     ``OUT/checkpoints`` with ``--out`` (a rerun resumes)."""
-    from ..options import check_workers
+    from ..options import backend_options
 
     opts: dict[str, Any] = {"vessel": args.vessel, "progress": False if args.json else None}
     if out is not None:
         opts["store"] = out / "checkpoints"
-    if args.scheduler:
-        opts["scheduler"] = args.scheduler
-    elif args.workers is not None:
-        opts.update(backend="dask", workers=check_workers(args.workers, "--workers"))
-    elif args.serial:
-        opts["backend"] = "serial"
-    else:
-        opts.update(backend="processes", workers=check_workers(args.processes, "--processes"))
+    opts.update(backend_options(args))
     return opts
 
 

@@ -22,8 +22,6 @@ Degrees on the command line and in the output (``*_deg``), radians inside.
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import math
 from pathlib import Path
 from typing import Any
@@ -31,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..cycle_options import START_FN, add_branch_options, check_branch_options, emit, roll_verdict
-from ..files import write_atomic, write_json, write_text
+from ..files import csv_text, write_atomic, write_json, write_text
 from ..options import (
     add_out,
     add_ship,
@@ -186,17 +184,6 @@ def _rows(cb: Any, key: str, scale: float) -> dict[str, np.ndarray]:
     }
 
 
-def _csv_text(rows: dict[str, np.ndarray], meta: dict[str, Any]) -> str:
-    buf = io.StringIO()
-    for k, v in meta.items():
-        buf.write(f"# {k}: {v}\n")
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(list(rows))
-    for i in range(len(next(iter(rows.values())))):
-        w.writerow([repr(float(col[i])) for col in rows.values()])
-    return buf.getvalue()
-
-
 def _plot(path: Path, rows: dict[str, np.ndarray], key: str, doc: dict[str, Any]) -> None:
     import matplotlib
 
@@ -241,7 +228,7 @@ def write_files(out: Path, doc: dict[str, Any], cb: Any) -> list[Path]:
     meta = {k: doc[k] for k in ("vessel", "Fn", "chi_c_deg", "status")}
     branch = {k: v.tolist() for k, v in rows.items()}
     paths = [
-        write_text(out / f"{stem}.csv", _csv_text(rows, meta)),
+        write_text(out / f"{stem}.csv", csv_text(rows, meta)),
         write_json(out / f"{stem}.json", {**doc, "branch": branch}),
     ]
     _plot(out / f"{stem}.png", rows, key, doc)

@@ -18,8 +18,6 @@ With ``--out DIR``: ``periodic.csv`` (one period of the states, angles in degree
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import math
 from pathlib import Path
 from typing import Any
@@ -27,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..cycle_options import START_FN, emit, roll_verdict
-from ..files import write_atomic, write_json, write_text
+from ..files import csv_text, write_atomic, write_json, write_text
 from ..options import (
     add_out,
     add_ship,
@@ -40,11 +38,6 @@ from .cycles import _start_cycle
 
 NAME = "periodic"
 HELP = "one overtaken-by-waves cycle: its period, Floquet multipliers and stability"
-
-#: States reported in degrees.
-ANGLES = ("chi", "phi", "delta")
-#: Rates reported in degrees per second.
-RATES = ("r", "p_roll")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -117,26 +110,9 @@ def _samples(orbit: Any) -> dict[str, np.ndarray]:
     model = orbit.system
     t = np.linspace(0.0, orbit.T, 401)
     x = orbit(t)
-    cols: dict[str, np.ndarray] = {"t": t}
-    for i, name in enumerate(model.state_names):
-        if name in ANGLES:
-            cols[f"{name}_deg"] = np.degrees(x[:, i])
-        elif name in RATES:
-            cols[f"{name}_deg_s"] = np.degrees(x[:, i])
-        else:
-            cols[name] = x[:, i]
-    return cols
+    from ship_models.columns import state_columns
 
-
-def _csv_text(cols: dict[str, np.ndarray], meta: dict[str, Any]) -> str:
-    buf = io.StringIO()
-    for k, v in meta.items():
-        buf.write(f"# {k}: {v}\n")
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(list(cols))
-    for i in range(len(cols["t"])):
-        w.writerow([repr(float(c[i])) for c in cols.values()])
-    return buf.getvalue()
+    return {"t": t, **state_columns(model.state_names, x)}
 
 
 def _plot(path: Path, cols: dict[str, np.ndarray], doc: dict[str, Any]) -> None:
@@ -171,7 +147,7 @@ def write_files(out: Path, doc: dict[str, Any], orbit: Any) -> list[Path]:
     meta = {k: doc[k] for k in ("vessel", "Fn", "chi_c_deg", "T")}
     cycle = {k: c.tolist() for k, c in cols.items()}
     paths = [
-        write_text(out / "periodic.csv", _csv_text(cols, meta)),
+        write_text(out / "periodic.csv", csv_text(cols, meta)),
         write_json(out / "periodic.json", {**doc, "cycle": cycle}),
     ]
     _plot(out / "periodic.png", cols, doc)

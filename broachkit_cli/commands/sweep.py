@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from ..files import write_json, write_text
-from ..options import MAX_LIST_VALUES, check_workers, parse_list, prepare_out
+from ..options import MAX_LIST_VALUES, backend_options, parse_list, prepare_out
 
 NAME = "sweep"
 HELP = "parallel, resumable sweeps: sudden-change boundary, Fig. 23 squares, critical surface"
@@ -152,14 +152,7 @@ def _run_options(args: argparse.Namespace) -> dict[str, Any]:
         "progress": args.progress,
         "retry_failed": args.retry_failed,
     }
-    if args.scheduler:
-        opts["scheduler"] = args.scheduler
-    elif args.workers is not None:
-        opts.update(backend="dask", workers=check_workers(args.workers, "--workers"))
-    elif args.serial:
-        opts["backend"] = "serial"
-    else:
-        opts.update(backend="processes", workers=check_workers(args.processes, "--processes"))
+    opts.update(backend_options(args))
     return opts
 
 

@@ -324,6 +324,31 @@ class AugmentedProblem:
         )
 
 
+def start_inputs(
+    system: System, params: Params | Mapping[str, float], free1: str, free2: str, x: Any
+) -> tuple[Params, FloatArray, FloatArray]:
+    r"""The checked inputs of ``from_state``: parameters, state and the Jacobian there.
+
+    Returns
+    -------
+    params : Params
+    x : ndarray, shape (n,)
+    J : ndarray, shape (n, n)
+        :math:`\partial f/\partial x` at ``(x, params)``.
+
+    Raises
+    ------
+    ValueError
+        A state of the wrong shape, or ``free1``/``free2`` not a parameter name.
+    """
+    params = as_params(system, params)
+    x = system.check_state(x, "x") if hasattr(system, "check_state") else np.asarray(x)
+    for arg, val in (("free1", free1), ("free2", free2)):
+        if val not in params.names:
+            raise ValueError(f"`{arg}` must be one of {params.names}, got {val!r}")
+    return params, x, np.asarray(system.jacobian(x, params.values), dtype=float)
+
+
 def _check_start(branch: Any, sp: Any, free2: str, kind: str) -> tuple[Any, Params, str]:
     """Validate ``(branch, sp, free2)``; return ``(system, params, free1)``."""
     problem = getattr(branch, "problem", None)

@@ -126,8 +126,6 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
     and ``data`` with the first parameter (and ``omega``, ``kappa`` on Hopf curves)
     and the test-function value ``g`` at the located point.
     """
-    from ..branch import SpecialPoint
-
     counters: dict[str, int] = {}
     out = []
     for sp in branch.special_points:
@@ -152,21 +150,8 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
                 branch.free,
                 *sp.bracket,
             )
-        out.append(
-            SpecialPoint(
-                kind=_KIND[kind],
-                index=sp.index,
-                p=sp.p,
-                x=sp.x,
-                located=sp.located,
-                bracket=sp.bracket,
-                delta_unstable=sp.delta_unstable,
-                label=f"{_LABEL[kind]}{counters[kind]}",
-                data=data,
-                s=sp.s,
-                tangent=sp.tangent,
-            )
-        )
+        label = f"{_LABEL[kind]}{counters[kind]}"
+        out.append(dataclasses.replace(sp, kind=_KIND[kind], label=label, data=data))
     kept = tuple(n for n in getattr(branch, "event_names", ()) if not n.startswith(_PREFIX))
     return dataclasses.replace(branch, special_points=tuple(out), event_names=kept)
 

@@ -43,9 +43,16 @@ import numpy as np
 
 from ..params import Params
 from ..settings import NewtonSettings
-from ..system import System, as_params
+from ..system import System
 from ..typing import FloatArray
-from ._base import AugmentedProblem, adjugate, null_vector, scaled_adjugate, signed_product
+from ._base import (
+    AugmentedProblem,
+    adjugate,
+    null_vector,
+    scaled_adjugate,
+    signed_product,
+    start_inputs,
+)
 from ._build import fold_recipe
 
 
@@ -120,13 +127,7 @@ class FoldProblem(AugmentedProblem):
         FoldProblem
             With ``z0 = (x, p1, v)`` (``v`` the unit null vector of ``J``) and ``p0``.
         """
-        params = as_params(system, params)
-        x = system.check_state(x, "x") if hasattr(system, "check_state") else np.asarray(x)
-        if free1 not in params.names:
-            raise ValueError(f"`free1` must be one of {params.names}, got {free1!r}")
-        if free2 not in params.names:
-            raise ValueError(f"`free2` must be one of {params.names}, got {free2!r}")
-        J = np.asarray(system.jacobian(x, params.values), dtype=float)
+        params, x, J = start_inputs(system, params, free1, free2, x)
         v = null_vector(J)
         z0 = np.concatenate([x, [params[free1]], v])
         prob = cls(system, params, free1, free2, sparse=sparse, z0=z0, p0=params[free2])

@@ -52,9 +52,9 @@ import numpy as np
 
 from ..params import Params
 from ..settings import NewtonSettings
-from ..system import System, as_params
+from ..system import System
 from ..typing import FloatArray
-from ._base import AugmentedProblem, signed_product
+from ._base import AugmentedProblem, signed_product, start_inputs
 from ._build import hopf_recipe
 from .fold import _pair_sum_product
 
@@ -212,12 +212,7 @@ class HopfProblem(AugmentedProblem):
         ValueError
             If ``J(x)`` has no complex eigenvalue pair.
         """
-        params = as_params(system, params)
-        x = system.check_state(x, "x") if hasattr(system, "check_state") else np.asarray(x)
-        for arg, val in (("free1", free1), ("free2", free2)):
-            if val not in params.names:
-                raise ValueError(f"`{arg}` must be one of {params.names}, got {val!r}")
-        J = np.asarray(system.jacobian(x, params.values), dtype=float)
+        params, x, J = start_inputs(system, params, free1, free2, x)
         eigs, vecs = np.linalg.eig(J)
         scale = max(1.0, float(np.max(np.abs(eigs))))
         cand = np.flatnonzero(eigs.imag > 1e-12 * scale)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import csv
+import dataclasses
 import json
 import logging
 import math
@@ -117,17 +118,11 @@ class TaskRecord:
         }
 
     def to_json(self) -> dict[str, Any]:
-        """JSON-ready record (as stored)."""
-        return {
-            "id": self.id,
-            "key": self.key,
-            "status": self.status,
-            "value": self.value,
-            "errors": list(self.errors),
-            "attempts": self.attempts,
-            "elapsed_s": self.elapsed_s,
-            "worker": self.worker,
-        }
+        """JSON-ready record (as stored): every field but ``reused``, in field order."""
+        rec = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        del rec["reused"]
+        rec["errors"] = list(self.errors)
+        return rec
 
 
 @dataclass(frozen=True, eq=False)

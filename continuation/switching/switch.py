@@ -25,9 +25,8 @@ from typing import Any, Literal
 import numpy as np
 
 from ..algorithms.base import ContinuationAlgorithm, theta_norm, theta_weights
-from ..algorithms.palc import PALC
 from ..branch import Branch, BranchPoint, SpecialKind, SpecialPoint
-from ..driver import continue_branch
+from ..driver import check_run_arguments, continue_branch
 from ..errors import ContinuationError, ConvergenceError
 from ..events import Event
 from ..problem import difference, linearize
@@ -380,15 +379,7 @@ def switch_branch(
             raise ValueError(f"`amplitude` must be a positive finite number, got {amplitude!r}")
     if settings is None:
         settings = branch.settings if branch.settings is not None else ContinuationSettings()
-    if not isinstance(settings, ContinuationSettings):
-        raise ValueError(f"`settings` must be a ContinuationSettings, got {type(settings)}")
-    algorithm = algorithm if algorithm is not None else PALC()
-    if not isinstance(algorithm, ContinuationAlgorithm):
-        raise ValueError(f"`algorithm` must be a ContinuationAlgorithm, got {algorithm!r}")
-    events = tuple(events)
-    for e in events:
-        if not isinstance(e, Event):
-            raise ValueError(f"`events` must contain Event instances, got {e!r}")
+    settings, algorithm, events = check_run_arguments(settings, algorithm, events)
     n = int(problem.n_unknowns)
     z_star = np.asarray(sp_.x, dtype=float)
     if z_star.shape != (n,) or not np.all(np.isfinite(z_star)):

@@ -62,7 +62,7 @@ from continuation.dynamics import simulate
 from continuation.dynamics.shooting import ShootingOrbit
 from continuation.errors import ContinuationError
 from continuation.settings import ContinuationSettings, NewtonSettings
-from continuation.status import Status
+from continuation.status import Status, StatusResult
 from continuation.typing import FloatArray
 
 from ..contracts import VesselModel
@@ -85,7 +85,7 @@ _NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=True)
 
 
 @dataclass(frozen=True)
-class BoundaryPoint:
+class BoundaryPoint(StatusResult):
     """The boundary at one initial position, by the BVP and by bisection.
 
     Attributes
@@ -126,11 +126,6 @@ class BoundaryPoint:
     end_distance: float = math.nan
     max_roll_deg: float = math.nan
     orbit: LandingResult | None = field(default=None, repr=False)
-
-    @property
-    def success(self) -> bool:
-        """The landing is solved, within its estimates and physical."""
-        return self.status is Status.SUCCESS
 
     @property
     def difference(self) -> float:

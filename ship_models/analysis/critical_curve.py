@@ -31,7 +31,7 @@ from continuation.bvp import continue_connection, solve_connection
 from continuation.casadi_compile import compiling
 from continuation.errors import ContinuationError
 from continuation.settings import ContinuationSettings, NewtonSettings
-from continuation.status import Status
+from continuation.status import Status, StatusResult
 from continuation.sweep.backends import check_workers
 from continuation.sweep.forked import ForkedTasks
 from continuation.typing import FloatArray
@@ -50,7 +50,7 @@ COURSES_PER_TASK = 8
 
 
 @dataclass(frozen=True, eq=False)
-class CriticalCurve:
+class CriticalCurve(StatusResult):
     """Critical ``Fn`` against the course: the paper's Fig. 23 line.
 
     Attributes
@@ -71,6 +71,8 @@ class CriticalCurve:
     start : CriticalFn
         The one-shot solve the branch started from.
     status : Status
+        ``SUCCESS`` (``success``) when every existing requested course converged to a
+        valid boundary.
     message : str
     elapsed : float
         Wall time (s), the start solve included.
@@ -112,11 +114,6 @@ class CriticalCurve:
     end_Fn: float = math.nan
     crest_end_chi_c: float = math.nan
     fold_error: float = math.nan
-
-    @property
-    def success(self) -> bool:
-        """True when every existing requested course converged to a valid boundary."""
-        return self.status is Status.SUCCESS
 
     @property
     def chi_c_deg(self) -> FloatArray:

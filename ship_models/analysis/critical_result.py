@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from continuation.status import Status
+from continuation.status import Status, StatusResult
 from continuation.typing import FloatArray
 
 #: The methods of the critical Fn.
@@ -39,7 +39,7 @@ class FateEvaluation:
 
 
 @dataclass(frozen=True, eq=False)
-class CriticalFn:
+class CriticalFn(StatusResult):
     """The critical nominal Froude number of one autopilot course.
 
     Attributes
@@ -105,11 +105,6 @@ class CriticalFn:
     criterion: str = ""
     branch: str = "upslope"
     tol: float = math.nan
-
-    @property
-    def success(self) -> bool:
-        """True when ``status`` is ``SUCCESS``."""
-        return self.status is Status.SUCCESS
 
     @property
     def chi_c_deg(self) -> float:

@@ -32,6 +32,7 @@ which is smooth, :math:`2\pi`-periodic and odd, and evaluates with CasADi.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -343,21 +344,63 @@ def gz_curve(
     zB0 = float(hull.w @ Mz) / V0
     I_T = float(hull.w @ (ch**3 / 12.0))
     zeta_G = zB0 + I_T / V0 - GM
+    phis, gz = heeled_gz(
+        lambda ph, guess: heeled_equilibrium(hull, poly, ph, V0, xB0, guess),
+        "hydrostatic equilibrium",
+        zeta_G,
+        phi_max,
+        heel_step,
+    )
+    coeffs = fit_sine_series(phis, gz, n_terms, GM)
+    return GZCurve(phis, gz, coeffs, float(GM), float(zeta_G), V0, float(topside_height))
+
+
+def heeled_gz(
+    equilibrium: Callable[[float, tuple[float, float]], HeeledState],
+    what: str,
+    zeta_G: float,
+    phi_max: float,
+    heel_step: float,
+) -> tuple[FloatArray, FloatArray]:
+    r"""GZ at the heels ``0, heel_step, ..., phi_max`` from the free-floating equilibria:
+    :math:`GZ = y_B \cos\phi + (\zeta_B - \zeta_G) \sin\phi`.
+
+    Parameters
+    ----------
+    equilibrium : callable
+        ``equilibrium(phi, guess) -> HeeledState`` at heel ``phi`` (rad), ``guess`` the
+        ``(h0, theta)`` of the previous heel.
+    what : str
+        The equilibrium's name in the error message.
+    zeta_G : float
+        Height of G (m), as the equilibria measure ``zeta_B``.
+    phi_max, heel_step : float
+        Largest heel and heel step (rad).
+
+    Returns
+    -------
+    phis, gz : ndarray, shape (n + 1,)
+        Heels (rad) and GZ (m); exactly 0 upright and at 180 deg.
+
+    Raises
+    ------
+    ValueError
+        The equilibrium fails at some heel (names the heel in degrees).
+    """
     n = int(round(phi_max / heel_step))
     phis = np.linspace(0.0, phi_max, n + 1)
     gz = np.zeros_like(phis)
     guess = (0.0, 0.0)
     for k, ph in enumerate(phis):
-        st = heeled_equilibrium(hull, poly, ph, V0, xB0, guess)
+        st = equilibrium(ph, guess)
         if not st.converged:
-            raise ValueError(f"hydrostatic equilibrium failed at heel {np.rad2deg(ph):.1f} deg")
+            raise ValueError(f"{what} failed at heel {np.rad2deg(ph):.1f} deg")
         guess = (st.h0, st.theta)
         gz[k] = st.y_B * np.cos(ph) + (st.zeta_B - zeta_G) * np.sin(ph)
     gz[0] = 0.0
     if abs(phi_max - np.pi) < 1e-12:
         gz[-1] = 0.0
-    coeffs = fit_sine_series(phis, gz, n_terms, GM)
-    return GZCurve(phis, gz, coeffs, float(GM), float(zeta_G), V0, float(topside_height))
+    return phis, gz
 
 
 #: IMO 2008 Intact Stability Code, Part A, 2.2 (general criteria; formerly Res.
@@ -449,6 +492,7 @@ __all__ = [
     "fit_sine_series",
     "gz_curve",
     "heeled_equilibrium",
+    "heeled_gz",
     "IS_CODE_GENERAL",
     "is_code_criteria",
     "is_code_margin",

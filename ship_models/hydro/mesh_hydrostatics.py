@@ -61,7 +61,7 @@ import numpy as np
 
 from continuation.typing import FloatArray, IntArray
 
-from .hydrostatics import GZCurve, HeeledState, fit_sine_series
+from .hydrostatics import GZCurve, HeeledState, fit_sine_series, heeled_gz
 from .upright import Hydrostatics
 
 
@@ -303,20 +303,13 @@ def mesh_gz_curve(
     up = clipped_integrals(V, T, 0.0, 0.0)
     V0, xB0, zB0 = up.volume, float(up.centre[0]), float(up.centre[2])
     zeta_G = zB0 + hs.BM - GM
-    n = int(round(phi_max / heel_step))
-    phis = np.linspace(0.0, phi_max, n + 1)
-    gz = np.zeros_like(phis)
-    guess = (0.0, 0.0)
-    for k, ph in enumerate(phis):
-        st = mesh_heeled_equilibrium(V, T, ph, V0, xB0, guess, free_trim=free_trim)
-        if not st.converged:
-            raise ValueError(f"hydrostatic equilibrium of the mesh failed at heel "
-                             f"{np.rad2deg(ph):.1f} deg")  # fmt: skip
-        guess = (st.h0, st.theta)
-        gz[k] = st.y_B * np.cos(ph) + (st.zeta_B - zeta_G) * np.sin(ph)
-    gz[0] = 0.0
-    if abs(phi_max - np.pi) < 1e-12:
-        gz[-1] = 0.0
+    phis, gz = heeled_gz(
+        lambda ph, guess: mesh_heeled_equilibrium(V, T, ph, V0, xB0, guess, free_trim=free_trim),
+        "hydrostatic equilibrium of the mesh",
+        zeta_G,
+        phi_max,
+        heel_step,
+    )
     coeffs = fit_sine_series(phis, gz, n_terms, GM)
     return GZCurve(phis, gz, coeffs, float(GM), float(zeta_G), V0, 0.0)
 

@@ -12,14 +12,14 @@ import scipy.optimize as so
 
 from continuation.dynamics import SimEvent, simulate
 from continuation.errors import ContinuationError
-from continuation.status import Status
+from continuation.status import Status, StatusResult
 from continuation.typing import FloatArray
 
 log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
-class SurgeThreshold:
+class SurgeThreshold(StatusResult):
     """Critical Fn of the uncoupled surge model (``chi_c = 0``) at one wave.
 
     Attributes
@@ -30,8 +30,8 @@ class SurgeThreshold:
     Fn_range : (float, float)
         Nominal Froude numbers with surf-riding fixed points (nan if none).
     status : Status
-        ``SUCCESS``, or ``NO_BRACKET`` (no surf-riding, or the branch's fate does not
-        change in ``Fn_range``).
+        ``SUCCESS`` (``success``: converged to the tolerance), or ``NO_BRACKET`` (no
+        surf-riding, or the branch's fate does not change in ``Fn_range``).
     message : str
     n_runs : int
         Simulations of the manifold.
@@ -42,11 +42,6 @@ class SurgeThreshold:
     status: Status
     message: str
     n_runs: int = 0
-
-    @property
-    def success(self) -> bool:
-        """Converged to the tolerance."""
-        return self.status is Status.SUCCESS
 
 
 def surf_riding_range(

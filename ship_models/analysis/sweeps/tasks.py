@@ -16,6 +16,28 @@ from .surge import SurgeThreshold, surge_threshold
 log = logging.getLogger(__name__)
 
 
+def _bracketed(b: Any, n_runs: int, **extra: Any) -> dict[str, Any]:
+    """The record of a bracketing search ``b``: its Fn (None unless it succeeded), the
+    final bracket, ``extra`` fields, the count of runs, status and message.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        The search was interrupted (the task is not finished).
+    """
+    if b.status is Status.INTERRUPTED:
+        raise KeyboardInterrupt
+    return {
+        "Fn": b.Fn if b.success else None,
+        "Fn_lower": b.bracket[0],
+        "Fn_upper": b.bracket[1],
+        **extra,
+        "n_runs": n_runs,
+        "status": b.status.name,
+        "message": b.message,
+    }
+
+
 def _boundary(key: dict[str, Any]) -> dict[str, Any]:
     from ..sudden_change import sudden_change_boundary
 
@@ -31,19 +53,7 @@ def _boundary(key: dict[str, Any]) -> dict[str, Any]:
         if b.status is not Status.NO_BRACKET:
             break
     assert b is not None
-    if b.status is Status.INTERRUPTED:
-        raise KeyboardInterrupt
-    ok = b.success
-    return {
-        "Fn": b.Fn if ok else None,
-        "Fn_lower": b.bracket[0],
-        "Fn_upper": b.bracket[1],
-        "outcome_lower": b.outcomes[0],
-        "outcome_upper": b.outcomes[1],
-        "n_runs": b.n_runs,
-        "status": b.status.name,
-        "message": b.message,
-    }
+    return _bracketed(b, b.n_runs, outcome_lower=b.outcomes[0], outcome_upper=b.outcomes[1])
 
 
 def _outcome(key: dict[str, Any]) -> dict[str, Any]:
@@ -96,16 +106,7 @@ def _bisect(key: dict[str, Any]) -> dict[str, Any]:
         Fn_bracket=(float(key["Fn_bracket"][0]), float(key["Fn_bracket"][1])),
         tol=float(key["tol"]), t_max=float(key.get("t_max", 600.0)),
     )  # fmt: skip
-    if b.status is Status.INTERRUPTED:
-        raise KeyboardInterrupt
-    return {
-        "Fn": b.Fn if b.success else None,
-        "Fn_lower": b.bracket[0],
-        "Fn_upper": b.bracket[1],
-        "n_runs": b.n_evaluations,
-        "status": b.status.name,
-        "message": b.message,
-    }
+    return _bracketed(b, b.n_evaluations)
 
 
 def _threshold(key: dict[str, Any]) -> dict[str, Any]:
