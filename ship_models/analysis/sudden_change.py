@@ -57,7 +57,7 @@ from continuation.typing import FloatArray
 from ..contracts import VesselModel
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
-from .fixed_points import fixed_points
+from .fixed_points import FixedPointsInFn, fixed_points
 from .manifold import ShipFate, classify_ship_fate
 from .outcomes import CAPTURED_BY_WAVE, SUDDEN_CHANGE_OUTCOMES, ShipOutcome
 from .params import ship_params
@@ -545,6 +545,8 @@ def sudden_change_boundary(
     orb = _orbit_for(model, params_from, orbit)
     base = orb.params.replace(chi_c=chi)
     n_runs = 0
+    # every fixed point at each Fn: traced at the bracket's ends, tracked by Newton between
+    points_at = FixedPointsInFn(model, base)
 
     ends: list[ShipOutcome] = []
 
@@ -552,9 +554,7 @@ def sudden_change_boundary(
         nonlocal n_runs
         pt = base.replace(Fn=fn)
         options.setdefault("points", None)
-        opts = (
-            {**options, "points": fixed_points(model, pt)} if options["points"] is None else options
-        )
+        opts = {**options, "points": points_at(fn)} if options["points"] is None else options
         r = sudden_change(model, None, pt, xi_0, orbit=orb, t_max=t_max, **opts)
         n_runs += 1
         if r.outcome == ShipOutcome.UNDECIDED and r.fate.status is not Status.INTERRUPTED:
