@@ -430,6 +430,10 @@ class SuddenChangeBoundary:
     status : Status
     message : str
     elapsed : float
+    end_runs : tuple of (float, str, float)
+        ``(Fn, outcome, t)`` of the first run at each end of the bracket (before any
+        retry of an undecided run): the same run as an outcome map's cell at that ``Fn``
+        and position (:func:`sudden_change_map`), so a map can take it from here.
     """
 
     Fn: float
@@ -441,6 +445,7 @@ class SuddenChangeBoundary:
     status: Status
     message: str = ""
     elapsed: float = 0.0
+    end_runs: tuple[tuple[float, str, float], ...] = ()
 
     @property
     def success(self) -> bool:
@@ -549,6 +554,7 @@ def sudden_change_boundary(
     points_at = FixedPointsInFn(model, base)
 
     ends: list[ShipOutcome] = []
+    end_runs: list[tuple[float, str, float]] = []
 
     def run(fn: float) -> Any:
         nonlocal n_runs
@@ -557,6 +563,8 @@ def sudden_change_boundary(
         opts = {**options, "points": points_at(fn)} if options["points"] is None else options
         r = sudden_change(model, None, pt, xi_0, orbit=orb, t_max=t_max, **opts)
         n_runs += 1
+        if len(ends) < 2 and r.fate.status is not Status.INTERRUPTED:
+            end_runs.append((float(fn), str(r.outcome), float(r.t)))
         if r.outcome == ShipOutcome.UNDECIDED and r.fate.status is not Status.INTERRUPTED:
             # close to the boundary the transient lingers near the crest saddle and the
             # attractor below it has several returns: one more try with twice the time
@@ -581,7 +589,7 @@ def sudden_change_boundary(
             raise ContinuationError(f"sudden_change_boundary: {msg}")
         return SuddenChangeBoundary(
             0.5 * (bracket[0] + bracket[1]), bracket, out, chi, xi_0, n_runs, status, msg,
-            time.perf_counter() - t_start,
+            time.perf_counter() - t_start, tuple(end_runs),
         )  # fmt: skip
 
     try:
