@@ -525,7 +525,9 @@ def sudden_change_boundary(
     progress : callable, optional
         ``progress(message)`` after each run.
     **options
-        Passed to :func:`sudden_change`.
+        Passed to :func:`sudden_change`. Without ``points``, the fixed points at each
+        ``Fn`` are traced in full at the bracket's ends and tracked by Newton between
+        anchors at most 0.01 apart (:class:`~ship_models.analysis.fixed_points.FixedPointsInFn`).
 
     Returns
     -------
