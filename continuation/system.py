@@ -295,6 +295,18 @@ class System:
         elif backend == "casadi":
             raise ValueError("`rhs` must accept an `ops` argument for backend='casadi'")
 
+    def __getstate__(self) -> dict[str, Any]:
+        """The state to pickle, without the evaluators built on first use.
+
+        ``_ca_lin`` and ``_ca_lin_free`` hold buffer evaluators that cannot be pickled
+        (a system that ran a continuation could otherwise not be sent to another process
+        or saved with an orbit); they are rebuilt on first use after unpickling.
+        """
+        state = dict(self.__dict__)
+        for key in ("_ca_lin", "_ca_lin_free"):
+            state.pop(key, None)
+        return state
+
     # ------------------------------------------------------------------ sizes/names
     @property
     def n_states(self) -> int:

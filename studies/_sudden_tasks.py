@@ -118,8 +118,10 @@ def task(key: dict[str, Any]) -> dict[str, Any]:
     over ``key["xi_0"]``); ``"boundary"``: the bisection
     :func:`~ship_models.analysis.sudden_change.sudden_change_boundary` at
     ``key["xi_0"]``, trying the brackets ``key["Fn_brackets"]`` in turn until one
-    brackets a change. Both from the orbit ``key["orbit"]`` of the pickle
-    ``key["orbits"]``, to the new course ``key["chi_c"]`` (rad).
+    brackets a change; its ``"end_runs"`` are the first runs at that bracket's ends
+    (``[Fn, outcome, t]``), the map's cells at those ``Fn`` and this position. Both
+    from the orbit ``key["orbit"]`` of the pickle ``key["orbits"]``, to the new course
+    ``key["chi_c"]`` (rad).
 
     Raises
     ------
@@ -157,7 +159,9 @@ def task(key: dict[str, Any]) -> dict[str, Any]:
         assert b is not None
         if b.status is Status.INTERRUPTED:
             raise KeyboardInterrupt
-        return b.to_json()
+        # the first runs at the bracket's ends: cells of the outcome map (end rows)
+        ends = [[fn, out, _none_if_nan(t)] for fn, out, t in b.end_runs]
+        return {**b.to_json(), "end_runs": ends}
     raise ValueError(f"`task` must be 'row' or 'boundary', got {key['task']!r}")
 
 

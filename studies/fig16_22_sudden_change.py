@@ -97,6 +97,41 @@ def _bvp_boundary(
     return curve
 
 
+def _end_row(
+    value: dict[str, Any],
+    key: str,
+    orb_name: str,
+    fn: float,
+    xi_grid: Any,
+    model: Any,
+    orbits: dict[str, Any],
+) -> dict[str, Any]:
+    """A map row at an end of the bisections' bracket, from their first runs there.
+
+    The bisection at each position starts with the same run as the map's cell at the
+    bracket's ends (:attr:`~ship_models.analysis.sudden_change.SuddenChangeBoundary.end_runs`:
+    the same function, arguments and fixed points), so these two rows are not run
+    again; a cell missing there (a bisection that did not reach its ends) is run here.
+    """
+    from ship_models.analysis.sudden_change import sudden_change_map
+
+    outcomes: list[str] = []
+    times: list[float | None] = []
+    for xi in xi_grid:
+        runs = value[f"{key}/b/{float(xi):g}"].get("end_runs", [])
+        hit = [r for r in runs if r[0] == fn]
+        if hit:
+            outcomes.append(hit[0][1])
+            times.append(hit[0][2])
+            continue
+        mp = sudden_change_map(model, None, math.radians(CHI_TO_DEG), [float(xi)], [fn],
+                               orbit=orbits[orb_name])  # fmt: skip
+        outcomes.append(str(mp.outcomes[0, 0]))
+        t = float(mp.times[0, 0])
+        times.append(t if math.isfinite(t) else None)
+    return {"outcomes": outcomes, "times": times, "elapsed_s": 0.0}
+
+
 def _map_rows(mp: Any) -> list[list[Any]]:
     return [
         [float(xi), float(fn), str(mp.outcomes[i, j]), float(mp.times[i, j])]
@@ -314,6 +349,8 @@ def _compute(
                 "Fn_brackets": [[fn_het + lo_d, fn_het + hi_d]], **common,
             })  # fmt: skip
         for i, dv in enumerate(deltas):
+            if dv in (lo_d, hi_d):
+                continue  # the bisections' first runs at the bracket's ends (_map_row)
             keys.append({
                 "task": "row", "name": f"{key}/row/{i}", "orbit": orb_name, "chi_c": chi10,
                 "Fn": float(fn_het + dv), "xi_0": [float(v) for v in xi_grid], **common,
@@ -349,7 +386,11 @@ def _compute(
     maps: dict[str, Any] = {}
     for key, orb_name, deltas, fig_name, title in cases:
         say(f"{key}: outcome map {len(deltas)} Fn x {xi_grid.size} positions")
-        rows_v = [value[f"{key}/row/{i}"] for i in range(len(deltas))]
+        rows_v = [
+            value.get(f"{key}/row/{i}")
+            or _end_row(value, key, orb_name, float(fn_het + dv), xi_grid, model, orbits)
+            for i, dv in enumerate(deltas)
+        ]
         mp = SuddenChangeMap(
             np.array([float(v) for v in xi_grid]), np.asarray(fn_het + np.array(deltas), float),
             np.array([r["outcomes"] for r in rows_v], dtype=object),

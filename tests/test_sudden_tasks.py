@@ -60,8 +60,15 @@ def test_tasks_on_two_workers_equal_the_serial_calls(tmp_path) -> None:
     b = sudden_change_boundary(model, None, chi, 0.5, bracket, 2e-3, orbit=orb).to_json()
     got = dict(by_task["boundary"])
     got.pop("elapsed_s"), b.pop("elapsed_s")
+    ends = got.pop("end_runs")
     assert got == b
     assert b["n_runs"] >= 3  # a real bisection, not a trivial bracket failure
+    # its first runs at the bracket's ends are the map's cells there (the study takes
+    # the map's end rows from them): the same outcome and time, bit for bit
+    assert [e[0] for e in ends] == list(bracket)
+    for fn, out, t in ends:
+        cell = sudden_change_map(model, None, chi, [0.5], [fn], orbit=orb)
+        assert out == str(cell.outcomes[0, 0]) and t == float(cell.times[0, 0])
 
     mp = sudden_change_map(model, None, chi, xi, [0.305], orbit=orb)
     assert by_task["row"]["outcomes"] == [str(v) for v in mp.outcomes[0]]

@@ -285,6 +285,29 @@ class _SideSteps:
             fut.cancel()
 
 
+def _pool_start(studies: Path | None) -> str:
+    """Start method of the job's pool: ``"fork"`` after loading what every worker needs.
+
+    Every worker imports the studies and the ship model and builds the default vessel's
+    model (:func:`studies._model.default_model`), about 1.5 CPU-s each when spawned.
+    The sweep step needs all of it in this process too, so it is loaded here first and
+    the workers are forked from this process (Linux, one thread running, as
+    :func:`continuation.sweep.forked.can_fork` requires): they start with it in memory.
+    The steps compute the same numbers either way (the model holds functions, not
+    results; :mod:`studies._model`). Elsewhere, or with ``--studies`` (scripts loaded
+    by path), the workers are spawned.
+    """
+    from continuation.sweep.forked import can_fork
+
+    if studies is not None or not can_fork():
+        return "spawn"
+    import studies._common  # noqa: F401 - the plotting helpers every study imports
+    from studies._model import default_model
+
+    default_model()
+    return "fork" if can_fork() else "spawn"
+
+
 def _workers(args: argparse.Namespace) -> int:
     """``--workers``, else ``$BROACHKIT_WORKERS`` when set, else one per core (checked)."""
     return check_workers(args.workers)
@@ -576,7 +599,7 @@ def _run(args: argparse.Namespace) -> int:
         others = [(k, modules.get(k)) for _, k, _, _ in todo if k != SWEEP_STEP]
         for k, _ in others:
             mark_incomplete(out / k)
-        pool = open_backend("processes", workers=workers)
+        pool = open_backend("processes", workers=workers, start_method=_pool_start(args.studies))
         side = _SideSteps(pool, others, out, args.studies)
         todo = [t for t in todo if t[1] == SWEEP_STEP]
         log.info("steps %s run on %d worker processes", ", ".join(k for k, _ in others), workers)

@@ -69,7 +69,7 @@ from continuation.status import Status
 
 from ..contracts import VesselModel
 from .critical_result import CriticalFn, FateEvaluation
-from .fixed_points import FixedPoint, find_fixed_point, fixed_points, polish
+from .fixed_points import FixedPoint, FixedPointsInFn, find_fixed_point, polish
 from .manifold import BRANCH_SIGNS, ShipFate, unstable_manifold
 from .outcomes import ShipOutcome
 from .params import course, ship_model, ship_params
@@ -163,6 +163,8 @@ class _FateAt:
         self.label = start.label
         self.known: dict[float, FixedPoint] = {params["Fn"]: start}
         self.evaluations: list[FateEvaluation] = []
+        # every fixed point at each Fn: traced at the first Fn's and tracked in between
+        self.points = FixedPointsInFn(model, params)
 
     def saddle(self, fn: float) -> FixedPoint | None:
         nearest = min(self.known, key=lambda f: abs(f - fn))
@@ -185,7 +187,7 @@ class _FateAt:
         if sp is None:
             return None
         par = self.params.replace(Fn=fn)
-        others = [fp for fp in fixed_points(self.model, par) if fp.label != self.label]
+        others = [fp for fp in self.points(fn) if fp.label != self.label]
         opts = dict(self.options)
         t_max = float(opts.pop("t_max", T_MAX))
         for _ in range(1 + UNDECIDED_RETRIES):

@@ -377,6 +377,125 @@ def fixed_points(
     return labelled
 
 
+#: Widest Fn interval between two full traces across which :class:`FixedPointsInFn` tracks
+#: the fixed points by Newton instead of tracing again.
+MAX_TRACKED_GAP = 0.01
+
+
+class FixedPointsInFn:
+    r""":func:`fixed_points` at many ``Fn`` of one sea state and course, traced once per anchor.
+
+    A bisection or scan in ``Fn`` needs every fixed point at each ``Fn`` it visits (the
+    fate of a manifold names the points it reaches). :func:`fixed_points` traces each
+    ``chi_c = 0`` surge root in the course every time (about 0.05 s). Here the full
+    trace runs only at *anchors*; at an ``Fn`` strictly between two anchors ``a < b``
+    with ``b - a <= max_gap`` whose point sets have the same signature (the same
+    labels with the same saddle indices, in the same order), each point of the nearer
+    anchor is polished by Newton's method at ``Fn`` (:func:`polish`) and accepted only
+    if every one converges, keeps its label (:func:`position_label`) and saddle index,
+    stays distinct from the others (``tol``) and lies near the chord between its two
+    anchor points,
+
+    .. math::  \|x(Fn) - [(1 - w)\, x_a + w\, x_b]\|_\infty \le
+               \tfrac{1}{4} \|x_b - x_a\|_\infty + 10^{-7}, \quad w = \frac{Fn - a}{b - a},
+
+    (the same branch of fixed points, not a neighbouring one); otherwise, and at every
+    ``Fn`` outside such an interval, the full trace runs and its result becomes an anchor.
+    Only anchors serve as starting points (no chain of tracked results).
+
+    Claim: the result equals :func:`fixed_points` (to the Newton tolerance) unless a pair
+    of fixed points is born and dies again inside one interval of at most ``max_gap``
+    between two anchors (a fold in ``Fn`` on each side with the same set at both ends;
+    a pair born or lost once changes the signature at one end, and a point of a tracked
+    branch passing a fold changes its saddle index). This is the resolution the fate
+    scans state for the fates themselves (``coarse_step`` 0.01 between plain points in
+    :mod:`~ship_models.analysis.threshold`).
+
+    Parameters
+    ----------
+    model : VesselModel
+    params : Params
+        The sea state and course; ``Fn`` is replaced per call.
+    max_gap : float
+        Widest anchor interval tracked across (nominal Froude number).
+    tol : float
+        As :func:`fixed_points`.
+    """
+
+    def __init__(
+        self,
+        model: VesselModel,
+        params: Params,
+        *,
+        max_gap: float = MAX_TRACKED_GAP,
+        tol: float = 1e-7,
+    ) -> None:
+        if not (isinstance(max_gap, (int, float)) and math.isfinite(max_gap) and max_gap >= 0):
+            raise ValueError(f"`max_gap` must be a non-negative number, got {max_gap!r}")
+        self.model = model
+        self.params = ship_params(model, params)
+        self.max_gap = float(max_gap)
+        self.tol = tol
+        self.anchors: dict[float, list[FixedPoint]] = {}
+        #: Calls answered by tracking from an anchor / by the full trace.
+        self.n_tracked = 0
+        self.n_traced = 0
+
+    @staticmethod
+    def _signature(pts: list[FixedPoint]) -> tuple[tuple[str, int], ...]:
+        return tuple((fp.label, fp.saddle_index) for fp in pts)
+
+    def add(self, Fn: float, points: list[FixedPoint]) -> None:
+        """Record the result of a full :func:`fixed_points` at ``Fn`` as an anchor."""
+        self.anchors[float(Fn)] = list(points)
+
+    def _tracked(self, Fn: float) -> list[FixedPoint] | None:
+        below = [f for f in self.anchors if f < Fn]
+        above = [f for f in self.anchors if f > Fn]
+        if not below or not above:
+            return None
+        a, b = max(below), min(above)
+        if b - a > self.max_gap + 1e-12:
+            return None
+        pa, pb = self.anchors[a], self.anchors[b]
+        if not pa or self._signature(pa) != self._signature(pb):
+            return None
+        near = pa if Fn - a <= b - Fn else pb
+        par = self.params.replace(Fn=Fn)
+        w = (Fn - a) / (b - a)
+        m = self.model
+        out: list[FixedPoint] = []
+        for src, xa, xb in zip(near, pa, pb, strict=True):
+            fp = polish(m, src.x, par)
+            if fp is None or fp.saddle_index != src.saddle_index:
+                return None
+            if position_label(fp.x[0]) != src.label.split("-")[0]:
+                return None
+            chord = xa.x + w * np.asarray(m.difference(xb.x, xa.x), dtype=float)
+            off = float(np.max(np.abs(m.difference(fp.x, chord))))
+            span = float(np.max(np.abs(m.difference(xb.x, xa.x))))
+            if off > 0.25 * span + 1e-7:
+                return None
+            out.append(FixedPoint(src.label, fp.x, fp.params, fp.eigen, fp.residual_norm))
+        if len(unique_equilibria(m, [fp.x for fp in out], tol=self.tol)) != len(out):
+            return None
+        return out
+
+    def __call__(self, Fn: float) -> list[FixedPoint]:
+        """Every fixed point at ``Fn`` (as :func:`fixed_points`; class notes)."""
+        Fn = float(Fn)
+        if Fn in self.anchors:
+            return list(self.anchors[Fn])
+        pts = self._tracked(Fn)
+        if pts is not None:
+            self.n_tracked += 1
+            return pts
+        self.n_traced += 1
+        pts = fixed_points(self.model, self.params.replace(Fn=Fn), tol=self.tol)
+        self.add(Fn, pts)
+        return list(pts)
+
+
 def find_fixed_point(
     model: VesselModel, params: Params | None = None, label: str = "crest", **kwargs: Any
 ) -> FixedPoint:
@@ -400,7 +519,9 @@ def find_fixed_point(
 
 __all__ = [
     "CHI_C_MAX",
+    "MAX_TRACKED_GAP",
     "FixedPoint",
+    "FixedPointsInFn",
     "find_fixed_point",
     "fixed_points",
     "lift_surge_point",

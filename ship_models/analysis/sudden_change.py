@@ -57,7 +57,7 @@ from continuation.typing import FloatArray
 from ..contracts import VesselModel
 from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
-from .fixed_points import fixed_points
+from .fixed_points import FixedPointsInFn, fixed_points
 from .manifold import ShipFate, classify_ship_fate
 from .outcomes import CAPTURED_BY_WAVE, SUDDEN_CHANGE_OUTCOMES, ShipOutcome
 from .params import ship_params
@@ -430,6 +430,10 @@ class SuddenChangeBoundary:
     status : Status
     message : str
     elapsed : float
+    end_runs : tuple of (float, str, float)
+        ``(Fn, outcome, t)`` of the first run at each end of the bracket (before any
+        retry of an undecided run): the same run as an outcome map's cell at that ``Fn``
+        and position (:func:`sudden_change_map`), so a map can take it from here.
     """
 
     Fn: float
@@ -441,6 +445,7 @@ class SuddenChangeBoundary:
     status: Status
     message: str = ""
     elapsed: float = 0.0
+    end_runs: tuple[tuple[float, str, float], ...] = ()
 
     @property
     def success(self) -> bool:
@@ -520,7 +525,9 @@ def sudden_change_boundary(
     progress : callable, optional
         ``progress(message)`` after each run.
     **options
-        Passed to :func:`sudden_change`.
+        Passed to :func:`sudden_change`. Without ``points``, the fixed points at each
+        ``Fn`` are traced in full at the bracket's ends and tracked by Newton between
+        anchors at most 0.01 apart (:class:`~ship_models.analysis.fixed_points.FixedPointsInFn`).
 
     Returns
     -------
@@ -545,18 +552,21 @@ def sudden_change_boundary(
     orb = _orbit_for(model, params_from, orbit)
     base = orb.params.replace(chi_c=chi)
     n_runs = 0
+    # every fixed point at each Fn: traced at the bracket's ends, tracked by Newton between
+    points_at = FixedPointsInFn(model, base)
 
     ends: list[ShipOutcome] = []
+    end_runs: list[tuple[float, str, float]] = []
 
     def run(fn: float) -> Any:
         nonlocal n_runs
         pt = base.replace(Fn=fn)
         options.setdefault("points", None)
-        opts = (
-            {**options, "points": fixed_points(model, pt)} if options["points"] is None else options
-        )
+        opts = {**options, "points": points_at(fn)} if options["points"] is None else options
         r = sudden_change(model, None, pt, xi_0, orbit=orb, t_max=t_max, **opts)
         n_runs += 1
+        if len(ends) < 2 and r.fate.status is not Status.INTERRUPTED:
+            end_runs.append((float(fn), str(r.outcome), float(r.t)))
         if r.outcome == ShipOutcome.UNDECIDED and r.fate.status is not Status.INTERRUPTED:
             # close to the boundary the transient lingers near the crest saddle and the
             # attractor below it has several returns: one more try with twice the time
@@ -581,7 +591,7 @@ def sudden_change_boundary(
             raise ContinuationError(f"sudden_change_boundary: {msg}")
         return SuddenChangeBoundary(
             0.5 * (bracket[0] + bracket[1]), bracket, out, chi, xi_0, n_runs, status, msg,
-            time.perf_counter() - t_start,
+            time.perf_counter() - t_start, tuple(end_runs),
         )  # fmt: skip
 
     try:

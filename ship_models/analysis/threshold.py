@@ -45,6 +45,11 @@ not resolved; "survives" means no capsize within ``t_max`` (retried at 2x and 4x
 the fate is still undecided); a branch undecided after that is reported, and the result
 is then not ``SUCCESS``. Above ``Fn_c`` the fates need not be monotone (survival windows
 above a capsizing window are reported when the ``+check_distance`` check finds one).
+The fixed points a fate can reach are traced in full at the scan's points and tracked by
+Newton between two of them at most 0.01 apart
+(:class:`~ship_models.analysis.fixed_points.FixedPointsInFn`): a pair of fixed points
+born and gone again inside such an interval is not seen, the same resolution as the
+scan's ``coarse_step``.
 """
 
 from __future__ import annotations
