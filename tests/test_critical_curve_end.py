@@ -188,8 +188,17 @@ def test_cli_critical_bvp_no_traceback(capsys):
 def test_cli_critical_curve_end(capsys):
     from broachkit_cli.main import main
 
-    rc = main(["critical-curve", "--chi-c", "0,45"])
+    """The heteroclinic line's end is a fact, not a failure (exit 0 without thresholds);
+    with the capsizing threshold (default every 5 deg), 45 deg has none inside the
+    window (the upslope branch already capsizes where the crest saddle first exists),
+    which is a result not found: exit 1, said in the summary line."""
+    rc = main(["critical-curve", "--chi-c", "0,45", "--threshold-step", "0"])
     out = capsys.readouterr()
     assert rc == 0
     assert "fold of the critical curve" in out.out
     assert "the crest saddle does not exist beyond chi_c" in out.out
+    rc = main(["critical-curve", "--chi-c", "45"])
+    out = capsys.readouterr()
+    assert rc == 1
+    assert "the crest saddle does not exist beyond chi_c" in out.out
+    assert "not SUCCESS at chi_c = 45 deg (NO_BRACKET)" in out.out
