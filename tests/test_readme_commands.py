@@ -40,7 +40,7 @@ QUICK = {"fixed-points", "manifold", "vessels", "demo"}
 
 #: Short forms of the long commands (option -> value replaced), for the slow run.
 SHORT = {
-    "--chi-c": {"0:50": "10:20"},
+    "--chi-c": {"0:40": "10:20"},
     "--positions": {"21": "2", "4": "1"},
     "--fn": {"0.1:0.35": "0.25:0.3"},
 }
