@@ -28,7 +28,6 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -41,26 +40,17 @@ from ..system import as_params
 from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, _linear_flow
 from .collocation import CollocationMesh
-from .connection import DEFAULT_N_INTERVALS, HeteroclinicProblem, PinPhase, _refine_equilibrium
+from .connection import (
+    DEFAULT_N_INTERVALS,
+    HeteroclinicProblem,
+    PinPhase,
+    _refine_equilibrium,
+    _shift_vector,
+)
 from .result import ConnectionResult
 from .solve import solve_connection
 
 log = logging.getLogger(__name__)
-
-
-def _shift_vector(system: Any, shift: Any) -> FloatArray:
-    n = system.n_states
-    if isinstance(shift, Mapping):
-        vec = np.zeros(n)
-        for k, v in shift.items():
-            vec[system.state_index(k)] = float(v)
-        return vec
-    if np.ndim(shift) == 0:
-        return np.zeros(n) if float(shift) == 0.0 else np.full(n, np.nan)
-    vec = np.asarray(shift, dtype=float).reshape(-1)
-    if vec.shape != (n,):
-        raise ValueError(f"`shift` must have shape ({n},), a mapping or 0, got {vec.shape}")
-    return vec
 
 
 def _window_min(d: FloatArray, i_low: int, level: float) -> int:
