@@ -43,14 +43,16 @@ gives the linear Eq. (11) of the paper.
 from __future__ import annotations
 
 import math
+import weakref
 from pathlib import Path
 from typing import Any
 
+import casadi as ca
 import numpy as np
 import scipy.optimize as so
 
 from continuation.newton import NewtonResult, newton
-from continuation.ops import NUMPY_OPS, Ops
+from continuation.ops import CASADI_OPS, NUMPY_OPS, Ops
 from continuation.params import Params
 from continuation.settings import NewtonSettings
 from continuation.system import System
@@ -95,6 +97,29 @@ def rebuilt_data(template: VesselModelData, data: VesselModelData | VesselData) 
             f"`data` must be VesselData or VesselModelData, got a {type(data).__name__}"
         )
     return build_vessel_model(data, waves=template.wave_builder)
+
+
+#: ``T - R + X_w`` as a CasADi function per model and grid size (built on first use).
+_SURGE_BALANCE: weakref.WeakKeyDictionary[Any, dict[int, ca.Function]] = weakref.WeakKeyDictionary()
+
+
+def _surge_balance_function(model: Umeda4DOF, size: int) -> ca.Function:
+    """``(xi (size,), u, chi_c, n, H/lambda, lambda/L) -> T(u; n) - R(u) + X_w(xi)`` (N).
+
+    The same force expressions as the right-hand side (the wave-force model traced
+    with CasADi, without lift), evaluated on a whole grid of ``xi_G/lambda`` in one
+    call (:meth:`Umeda4DOF.surge_balance` scans 201 positions per starting guess).
+    """
+    per = _SURGE_BALANCE.setdefault(model, {})
+    fn = per.get(size)
+    if fn is None:
+        F = model.forces
+        xi, u, chi, n, Hl, lL = (ca.SX.sym(k) for k in ("xi", "u", "chi", "n", "Hl", "lL"))
+        X = F.waves.forces(xi, u, chi, Hl, lL, CASADI_OPS, lift=False)[0]
+        net = F.thrust_force(u, n, CASADI_OPS) - F.resistance_force(u, CASADI_OPS) + X
+        one = ca.Function("surge_balance", [xi, u, chi, n, Hl, lL], [net])
+        fn = per[size] = one.map(size)
+    return fn
 
 
 class Umeda4DOF(System):
@@ -272,8 +297,8 @@ class Umeda4DOF(System):
         u = c / np.cos(chi_c)
         n = F.revolutions(Fn)
         xi = np.atleast_1d(np.asarray(xi, dtype=float))
-        X = np.array([F.waves.forces(s, u, chi_c, Hl, lL, lift=False)[0] for s in xi])
-        return F.thrust_force(u, n) - F.resistance_force(u) + X
+        fn = _surge_balance_function(self, xi.size)
+        return np.asarray(fn(xi, u, chi_c, n, Hl, lL), dtype=float).reshape(-1)
 
     def equilibrium_guess(self, params: Params | FloatArray, where: str = "crest") -> FloatArray:
         """Starting guess for a surf-riding equilibrium near the crest or the trough.
