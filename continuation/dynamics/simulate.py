@@ -48,7 +48,7 @@ from .integrators import (
     sigint_recorded,
     sigints_counted,
 )
-from .trajectory import EventHits, Trajectory
+from .trajectory import EventHits, Trajectory, hermite
 
 log = logging.getLogger(__name__)
 
@@ -66,6 +66,15 @@ _CHUNK = 50
 #: :mod:`continuation.dynamics.integrators`.)
 _CHUNK_GROWTH = 4
 _CHUNK_MAX = 1000
+#: Points per output interval of the solution used to locate an event with CVODES:
+#: the first exact value an event asks for inside an interval integrates the whole
+#: interval once, with this many outputs, and the later ones are cubic Hermite
+#: interpolants between them (with ``f`` at both ends). For the purse seiner at
+#: ``dt = 0.05`` and ``rtol = 1e-9`` they match a re-integration to the point to
+#: 1.5e-9 of each state's range (the noise of re-integration itself, for 4 to 32
+#: points), and one call replaces the about 2.7 calls (each a CVODES restart) of
+#: re-integrating to every iterate of the root finder.
+_FINE = 4
 #: Number of halvings used to get as close as possible to an integrator failure.
 _FAILURE_BISECTIONS = 12
 
@@ -208,8 +217,30 @@ class Simulator:
             be = self._backend
             chunk_span = (t1 - t0) * min(_CHUNK, n_samples) / n_samples
 
+            h = (t1 - t0) / n_samples  # the output interval (negative backwards)
+            fine: dict[float, tuple[FloatArray, FloatArray]] = {}
+
             def interp(ta: float, t: float, xa: FloatArray) -> FloatArray:
-                return be.advance(xa, t - ta, chunk_span)
+                # inside an output interval: one CVODES call gives the states at
+                # _FINE points of it, then cubic Hermite between them (module notes)
+                s = (t - ta) / h
+                if not 0.0 <= s <= 1.0:
+                    return be.advance(xa, t - ta, chunk_span)
+                got = fine.get(ta)
+                if got is None:
+                    if len(fine) > 16:
+                        fine.clear()
+                    try:
+                        xs = np.vstack([xa, be.run(xa, h, _FINE, chunk_span)])
+                    except _IntegrationFailure:  # e.g. a blow-up inside the interval
+                        return be.advance(xa, t - ta, chunk_span)
+                    got = fine[ta] = (xs, self.derivatives(xs))
+                xs, fs = got
+                i = min(int(s * _FINE), _FINE - 1)
+                d = h / _FINE
+                return np.asarray(
+                    hermite(s * _FINE - i, d, xs[i], fs[i], xs[i + 1], fs[i + 1]), dtype=float
+                )
 
             k0 = 0
             x = x0
