@@ -25,4 +25,24 @@ def default_model() -> Any:
     return purse_seiner()
 
 
-__all__ = ["default_model"]
+@functools.lru_cache(maxsize=4)
+def heteroclinic(chi_c_deg: float = 10.0) -> Any:
+    """The default vessel's heteroclinic connection at ``chi_c_deg`` (one solve per process).
+
+    :func:`~ship_models.analysis.critical_bvp.critical_fn_bvp` on :func:`default_model`
+    at its defaults. Four steps of the main job start from the connection at 10 deg
+    (Figs. 21-23, Figs. 16-22, the sensitivities, the cycles); they share one solve in
+    each process, and the main job solves it before its worker processes are forked
+    (:func:`broachkit_cli.commands.reproduce`), so they inherit it with the solver's
+    functions already built. The result is frozen (its users read it, the curve continues from
+    it), and the solver is deterministic, so a shared
+    and a new solve give the same numbers.
+    """
+    import math
+
+    from ship_models.analysis.critical_bvp import critical_fn_bvp
+
+    return critical_fn_bvp(math.radians(chi_c_deg), model=default_model())
+
+
+__all__ = ["default_model", "heteroclinic"]

@@ -86,17 +86,16 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     source); the CSVs have angles in degrees (``*_deg``), as every CSV of the job.
     """
     say = progress or (lambda msg: None)
-    from ship_models.analysis.critical_bvp import critical_fn_bvp
     from ship_models.analysis.cycles import cycle_at, cycle_branch, simulated_cycle
     from ship_models.analysis.events import capsize_angle
-    from studies._model import default_model
+    from studies._model import default_model, heteroclinic
 
     out.mkdir(parents=True, exist_ok=True)
     model = default_model()  # the default vessel, one per process
     chi = math.radians(CHI_C_DEG)
     t0 = time.perf_counter()
     say("connection at 10 deg")
-    fn_het = float(critical_fn_bvp(chi, model=model).Fn)
+    fn_het = float(heteroclinic(CHI_C_DEG).Fn)  # solved once per process (studies._model)
     say("cycle at Fn 0.1 (simulated, then collocated)")
     o = simulated_cycle(model, model.default_params().replace(Fn=0.1, chi_c=chi))
     t1 = time.perf_counter()

@@ -260,6 +260,7 @@ def _compute(
         sudden_change,
     )
     from ship_models.analysis.sweeps import vessel_context
+    from studies._model import default_model, heteroclinic
 
     chi10 = math.radians(CHI_TO_DEG)
     base = model.default_params()
@@ -273,7 +274,10 @@ def _compute(
         orbit_info = compute_orbits(orbits_path, FROM_1, FROM_2)
 
     say("heteroclinic Fn (collocation) and the critical curve 0-30 deg")
-    conn = critical_fn_bvp(chi10, model=model)
+    if model is default_model():  # solved once per process (studies._model)
+        conn = heteroclinic(CHI_TO_DEG)
+    else:
+        conn = critical_fn_bvp(chi10, model=model)
     fn_het = float(conn.Fn)
     courses_deg = np.arange(0.0, 31.0, 5.0)
     curve = critical_curve(np.radians(courses_deg), model=model, start=conn)

@@ -110,11 +110,11 @@ def compute(
     """Solve the connection, the curve and the bisection checks; write figures and data."""
     from continuation.dynamics import simulate
     from ship_models.analysis.critical_bisection import upslope_bisection
-    from ship_models.analysis.critical_bvp import check_critical_bvp, critical_fn_bvp
+    from ship_models.analysis.critical_bvp import check_critical_bvp
     from ship_models.analysis.critical_curve import critical_curve
     from ship_models.analysis.events import capsize_event
     from ship_models.analysis.upslope import upslope_branch
-    from studies._model import default_model
+    from studies._model import default_model, heteroclinic
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
@@ -124,7 +124,7 @@ def compute(
     summary: dict[str, Any] = {"chi_c_deg": CHI_C_DEG, "paper_Fn_10deg": list(PAPER_FN)}
 
     say("critical Fn at chi_c = 10 deg by the boundary-value problem")
-    conn = critical_fn_bvp(chi10, model=model)
+    conn = heteroclinic(CHI_C_DEG)  # solved once per process (studies._model)
     t_bvp = conn.elapsed
     # the check of critical_fn_bvp(check=True) on this solution (not solved again)
     chk = check_critical_bvp(conn) if conn.orbit is not None and conn.orbit.success else None

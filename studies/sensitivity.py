@@ -144,6 +144,7 @@ def compute(
     """
     from ship_models.analysis.sensitivity import critical_fn_sensitivity, uncertainty_band
     from ship_models.vessel import load_vessel
+    from studies._model import default_model, heteroclinic
 
     say = progress or (lambda msg: None)
     t0 = time.perf_counter()
@@ -151,8 +152,12 @@ def compute(
     if keys is None and not every_coefficient:
         keys = main_job_keys(vessel)
     say(f"critical Fn at chi_c = {CHI_C_DEG:g} deg and its derivative in every coefficient")
-    sens = critical_fn_sensitivity(math.radians(CHI_C_DEG), vessel=vessel, keys=keys,
-                                   progress=lambda k: say(f"  d Fn*/d {k}"))  # fmt: skip
+    # the default vessel's model and its connection, shared with the other steps of
+    # this process (studies._model); the rebuilt models start from the same file
+    sens = critical_fn_sensitivity(
+        math.radians(CHI_C_DEG), vessel=vessel, keys=keys, model=default_model(),
+        connection=heteroclinic(CHI_C_DEG), progress=lambda k: say(f"  d Fn*/d {k}"),
+    )  # fmt: skip
     band = uncertainty_band(sens, vessel)
     lo, hi = band.band
     say(f"  Fn = {sens.Fn:.6f}, sigma = {band.sigma_linear:.4f}, band [{lo:.4f}, {hi:.4f}]")

@@ -285,7 +285,11 @@ class _SideSteps:
             fut.cancel()
 
 
-def _pool_start(studies: Path | None) -> str:
+#: The steps that start from the connection at 10 deg (:func:`studies._model.heteroclinic`).
+CONNECTION_STEPS = ("fig21_23", "fig16_22", "sensitivity", "cycles")
+
+
+def _pool_start(studies: Path | None, connection: bool = False) -> str:
     """Start method of the job's pool: ``"fork"`` after loading what every worker needs.
 
     Every worker imports the studies and the ship model and builds the default vessel's
@@ -296,15 +300,25 @@ def _pool_start(studies: Path | None) -> str:
     The steps compute the same numbers either way (the model holds functions, not
     results; :mod:`studies._model`). Elsewhere, or with ``--studies`` (scripts loaded
     by path), the workers are spawned.
+
+    With ``connection``, the heteroclinic connection at 10 deg that four steps start
+    from (:func:`studies._model.heteroclinic`) is solved here first, once, about 1 s:
+    every worker inherits it and the connection solver's functions, instead of each
+    step solving it again. If it fails, the steps solve it and report it themselves.
     """
     from continuation.sweep.forked import can_fork
 
     if studies is not None or not can_fork():
         return "spawn"
     import studies._common  # noqa: F401 - the plotting helpers every study imports
-    from studies._model import default_model
+    from studies._model import default_model, heteroclinic
 
     default_model()
+    if connection:
+        try:
+            heteroclinic(10.0)
+        except Exception as exc:  # noqa: BLE001 - the steps solve it again and report it
+            log.info("the shared connection at 10 deg failed here: %s", exc)
     return "fork" if can_fork() else "spawn"
 
 
@@ -599,7 +613,9 @@ def _run(args: argparse.Namespace) -> int:
         others = [(k, modules.get(k)) for _, k, _, _ in todo if k != SWEEP_STEP]
         for k, _ in others:
             mark_incomplete(out / k)
-        pool = open_backend("processes", workers=workers, start_method=_pool_start(args.studies))
+        shared = any(k in CONNECTION_STEPS for _, k, _, _ in todo)
+        start = _pool_start(args.studies, connection=shared)
+        pool = open_backend("processes", workers=workers, start_method=start)
         side = _SideSteps(pool, others, out, args.studies)
         todo = [t for t in todo if t[1] == SWEEP_STEP]
         log.info("steps %s run on %d worker processes", ", ".join(k for k, _ in others), workers)
