@@ -14,6 +14,7 @@ computes the same numbers with a shared or a new instance.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from typing import Any
 
 
@@ -45,4 +46,35 @@ def heteroclinic(chi_c_deg: float = 10.0) -> Any:
     return critical_fn_bvp(math.radians(chi_c_deg), model=default_model())
 
 
-__all__ = ["default_model", "heteroclinic"]
+def bisection_near(
+    run: Callable[[tuple[float, float]], Any],
+    guess: float,
+    half_width: float,
+    wide: tuple[float, float],
+) -> Any:
+    """A bisection of fates by simulation near ``guess`` (width ``2 half_width``), else ``wide``.
+
+    ``run(bracket)`` bisects in ``bracket = (Fn_lo, Fn_hi)`` and returns a result with
+    a ``status``; it simulates the fates at both ends first and returns ``NO_BRACKET``
+    when they are not those of a bracket. The narrow bracket about ``guess`` (the
+    collocation value of the switch), ``(guess - 2w/3, guess + 4w/3)`` with
+    ``w = half_width``, is tried first (``guess`` lies at a third of it, which no
+    halving reaches: the fate is never asked exactly at the connection, where it is
+    decided by rounding). When its ends hold, the
+    bisection still finds the switch of the fates by simulation alone, and the guess
+    only saves the halvings down to its neighbourhood (about 8 of 15 from a 0.05 wide
+    bracket to 1e-6). Otherwise (no guess, or the switch farther away) ``wide`` is
+    bisected.
+    """
+    import math
+
+    from continuation.status import Status
+
+    if math.isfinite(guess):
+        b = run((guess - 2.0 * half_width / 3.0, guess + 4.0 * half_width / 3.0))
+        if b.status is not Status.NO_BRACKET:
+            return b
+    return run(wide)
+
+
+__all__ = ["bisection_near", "default_model", "heteroclinic"]

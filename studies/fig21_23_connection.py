@@ -76,34 +76,6 @@ def _planes(model: Any, c: float) -> list[tuple[str, str, Callable[[np.ndarray],
     ]
 
 
-def _bisection_near(
-    bisect: Callable[..., Any],
-    chi_c: float,
-    model: Any,
-    Fn_guess: float,
-    half_width: float,
-    wide: tuple[float, float],
-    tol: float,
-) -> Any:
-    """Bisection by simulation in ``Fn_guess -+ half_width``, else in ``wide``.
-
-    The fates at both ends of the narrow bracket are simulated first: only when they
-    differ as a bracket requires (periodic below, captured above) is it used, so the
-    bisection still finds the switch of the fates by simulation alone; the collocation
-    value only saves the halvings down to its neighbourhood (7 instead of 15 to 1e-6).
-    When the narrow bracket does not hold (no collocation value, or the switch is
-    farther away), the wide bracket is bisected as before.
-    """
-    from continuation.status import Status
-
-    if math.isfinite(Fn_guess):
-        near = (Fn_guess - half_width, Fn_guess + half_width)
-        b = bisect(chi_c, model=model, Fn_bracket=near, tol=tol)
-        if b.status is not Status.NO_BRACKET:
-            return b
-    return bisect(chi_c, model=model, Fn_bracket=wide, tol=tol)
-
-
 def compute(
     out: Path, progress: Callable[[str], None] | None = None, *, quick: bool = False
 ) -> dict[str, Any]:
@@ -114,7 +86,7 @@ def compute(
     from ship_models.analysis.critical_curve import critical_curve
     from ship_models.analysis.events import capsize_event
     from ship_models.analysis.upslope import upslope_branch
-    from studies._model import default_model, heteroclinic
+    from studies._model import bisection_near, default_model, heteroclinic
 
     say = progress or (lambda msg: None)
     out.mkdir(parents=True, exist_ok=True)
@@ -129,7 +101,10 @@ def compute(
     # the check of critical_fn_bvp(check=True) on this solution (not solved again)
     chk = check_critical_bvp(conn) if conn.orbit is not None and conn.orbit.success else None
     say(f"  Fn = {conn.Fn:.8f} ({t_bvp:.2f} s); bisection by simulation to 1e-6")
-    bis = _bisection_near(upslope_bisection, chi10, model, conn.Fn, 5e-5, (0.28, 0.33), 1e-6)
+    bis = bisection_near(
+        lambda b: upslope_bisection(chi10, model=model, Fn_bracket=b, tol=1e-6),
+        conn.Fn, 5e-5, (0.28, 0.33),
+    )  # fmt: skip
     say(f"  bisection: Fn in [{bis.bracket[0]:.8f}, {bis.bracket[1]:.8f}] ({bis.elapsed:.2f} s)")
     summary["bvp"] = conn.to_json()
     if chk is not None:
@@ -242,9 +217,10 @@ def compute(
     for deg in CHECK_COURSES_DEG if not quick else (30.0,):
         say(f"  bisection check at {deg:g} deg")
         k = int(np.argmin(np.abs(curve.chi_c_deg - deg)))
-        b = _bisection_near(
-            upslope_bisection, math.radians(deg), model, float(curve.Fn[k]), 5e-4, (0.295, 0.315),
-            1e-5,
+        chi = math.radians(deg)
+        b = bisection_near(
+            lambda b, c=chi: upslope_bisection(c, model=model, Fn_bracket=b, tol=1e-5),
+            float(curve.Fn[k]), 5e-4, (0.295, 0.315),
         )  # fmt: skip
         checks.append([deg, b.Fn, b.bracket[0], b.bracket[1], float(curve.Fn[k]), b.status.name])
     save_table(
