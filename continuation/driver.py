@@ -261,16 +261,7 @@ def _merge(back: _Run, fwd: _Run) -> tuple[list[Row], list[float], list[SpecialP
     specials: list[SpecialPoint] = []
     s_back = back.arclength
     for sp in back.specials:
-        specials.append(
-            dataclasses.replace(
-                sp,
-                index=m - sp.index - 1,
-                bracket=(sp.bracket[1], sp.bracket[0]),
-                delta_unstable=(-sp.delta_unstable[0], -sp.delta_unstable[1]),
-                s=s_back - sp.s,
-                tangent=None if sp.tangent is None else -sp.tangent,
-            )
-        )
+        specials.append(sp.reversed(m - sp.index - 1, s_back - sp.s))
     specials.reverse()
     for k, row in enumerate(fwd.rows):
         rows.append(row)
