@@ -45,7 +45,6 @@ Unknowns and equations (``M = N (m + 1) + 1`` points, ``k = dim W^u(x_e)``)::
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -53,6 +52,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
+from ..arguments import finite_number
 from ..params import Params
 from ..status import Status
 from ..typing import FloatArray
@@ -150,12 +150,7 @@ class LandingProblem:
         if not unk:
             raise ValueError(f"`free` must be one or more distinct parameters, got {unk}")
         object.__setattr__(self, "free", unk)
-        try:
-            s = float(self.s)
-        except (TypeError, ValueError):
-            raise ValueError(f"`s` must be a finite number, got {self.s!r}") from None
-        if not math.isfinite(s):
-            raise ValueError(f"`s` must be a finite number, got {self.s!r}")
+        s = finite_number("s", self.s)
         object.__setattr__(self, "s", s)
         if not isinstance(self.start_name, str) or not self.start_name:
             raise ValueError(f"`start_name` must be a non-empty string, got {self.start_name!r}")
