@@ -173,6 +173,31 @@ class SpecialPoint:
             tangent=None if d.get("tangent") is None else np.asarray(d["tangent"], float),
         )
 
+    def reversed(self, index: int, s: float) -> SpecialPoint:
+        """The same point on its branch traversed the other way.
+
+        Parameters
+        ----------
+        index : int
+            The row before the point in the reversed order (the caller renumbers).
+        s : float
+            Its arclength position in the reversed order.
+
+        Returns
+        -------
+        SpecialPoint
+            With ``index`` and ``s``, the bracket swapped and ``delta_unstable`` and
+            ``tangent`` negated.
+        """
+        return dataclasses.replace(
+            self,
+            index=index,
+            bracket=(self.bracket[1], self.bracket[0]),
+            delta_unstable=(-self.delta_unstable[0], -self.delta_unstable[1]),
+            s=s,
+            tangent=None if self.tangent is None else -np.asarray(self.tangent),
+        )
+
     def __repr__(self) -> str:
         extra = "".join(f", {k}={v:.6g}" for k, v in self.data.items())
         return (
@@ -372,6 +397,31 @@ class Branch:
     def arclength(self) -> FloatArray:
         """Cumulative pseudo-arclength ``cumsum(ds)``, shape ``(N,)``."""
         return np.cumsum(self.ds)
+
+    def reversed(self, **changes: Any) -> Branch:
+        """The branch in the opposite order, with further fields ``changes``.
+
+        Rows, steps (``ds[k]`` of the reversed branch is the step between its rows
+        ``k - 1`` and ``k``), records and special points (:meth:`SpecialPoint.reversed`:
+        row ``N - 2 - index``, position ``arclength[-1] - s``) are reversed.
+        """
+        N = len(self)
+        ds = np.zeros(N)
+        ds[1:] = self.ds[1:][::-1]
+        total = float(self.arclength[-1]) if N else 0.0
+        sps = [sp.reversed(max(N - 2 - sp.index, 0), total - sp.s) for sp in self.special_points]
+        return dataclasses.replace(
+            self,
+            p=self.p[::-1],
+            x=self.x[::-1],
+            eigenvalues=self.eigenvalues[::-1],
+            n_unstable=self.n_unstable[::-1],
+            ds=ds,
+            newton_iters=self.newton_iters[::-1],
+            records={k: v[::-1] for k, v in self.records.items()},
+            special_points=tuple(sps[::-1]),
+            **changes,
+        )
 
     @property
     def n_unknowns(self) -> int:

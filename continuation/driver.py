@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -32,6 +31,7 @@ from .algorithms.base import RETRY, ContinuationAlgorithm, adapt_ds
 from .algorithms.corrector import CorrectorResult, correct
 from .algorithms.palc import PALC
 from .algorithms.point import make_point
+from .arguments import finite_number
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .detection import ProgressFn, Row, RunContext
 from .errors import ContinuationError, ConvergenceError
@@ -261,16 +261,7 @@ def _merge(back: _Run, fwd: _Run) -> tuple[list[Row], list[float], list[SpecialP
     specials: list[SpecialPoint] = []
     s_back = back.arclength
     for sp in back.specials:
-        specials.append(
-            dataclasses.replace(
-                sp,
-                index=m - sp.index - 1,
-                bracket=(sp.bracket[1], sp.bracket[0]),
-                delta_unstable=(-sp.delta_unstable[0], -sp.delta_unstable[1]),
-                s=s_back - sp.s,
-                tangent=None if sp.tangent is None else -sp.tangent,
-            )
-        )
+        specials.append(sp.reversed(m - sp.index - 1, s_back - sp.s))
     specials.reverse()
     for k, row in enumerate(fwd.rows):
         rows.append(row)
@@ -541,12 +532,7 @@ def _checked_inputs(
         raise ValueError(f"`z0` must have shape ({n},), got {z.shape}")
     if not np.all(np.isfinite(z)):
         raise ValueError(f"`z0` contains NaN or inf: {z}")
-    try:
-        p0 = float(p0)
-    except (TypeError, ValueError):
-        raise ValueError(f"`p0` must be a float, got {p0!r}") from None
-    if not math.isfinite(p0):
-        raise ValueError(f"`p0` must be finite, got {p0}")
+    p0 = finite_number("p0", p0)
     if not settings.p_min <= p0 <= settings.p_max:
         raise ValueError(
             f"`p0`={p0} lies outside [p_min, p_max] = [{settings.p_min}, {settings.p_max}]"

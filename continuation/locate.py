@@ -39,6 +39,7 @@ from .algorithms.step import palc_point
 from .linalg import inf_norm as _inf_norm
 from .problem import linearize
 from .settings import NewtonSettings
+from .typing import FloatArray
 
 log = logging.getLogger(__name__)
 
@@ -68,6 +69,42 @@ class LocateResult:
     located: bool
     iterations: int
     message: str = ""
+
+
+def _chord_point(
+    z: FloatArray,
+    p: float,
+    lin: tuple[FloatArray, Any, FloatArray],
+    ua: FloatArray,
+    ub: FloatArray,
+    c: FloatArray,
+    w: Any,
+    iters: int = 0,
+    residual_norm: float | None = None,
+) -> PointInfo:
+    """The point ``(z, p)`` where the bordered matrix is exactly singular.
+
+    An exact branch point: the tangent is not unique there, so it is the chord
+    direction from ``ua`` to ``ub`` (``theta``-normalised), and the BP test is zero.
+    ``lin = (G, Gz, Gp)`` at the point; ``residual_norm`` default ``max |G|``.
+    """
+    G, Gz, Gp = lin
+    tau = (ub - ua) / max(theta_norm(ub - ua, w), 1e-300)
+    return PointInfo(
+        z=z,
+        p=p,
+        tau=tau,
+        G=G,
+        Gz=Gz,
+        Gp=Gp,
+        lu=None,
+        border=c,
+        t_raw=tau,
+        bp_sign=0.0,
+        _bp_logdet=-math.inf,
+        iters=iters,
+        residual_norm=_inf_norm(G) if residual_norm is None else residual_norm,
+    )
 
 
 def point_at(
@@ -120,25 +157,7 @@ def point_at(
     if got.singular and res.lin is not None:
         if same_branch:
             return None  # (no tangent to check: the caller interpolates instead)
-        # exactly singular bordered matrix: an exact branch point; the tangent is not
-        # unique there, so take the chord direction, and set the BP test to zero
-        G, Gz, Gp = res.lin
-        tau = (ub - ua) / max(theta_norm(ub - ua, w), 1e-300)
-        return PointInfo(
-            z=res.z,
-            p=res.p,
-            tau=tau,
-            G=G,
-            Gz=Gz,
-            Gp=Gp,
-            lu=None,
-            border=c,  # type: ignore[arg-type]
-            t_raw=tau,
-            bp_sign=0.0,
-            _bp_logdet=-math.inf,
-            iters=res.iters,
-            residual_norm=res.residual_norm,
-        )
+        return _chord_point(res.z, res.p, res.lin, ua, ub, c, w, res.iters, res.residual_norm)
     if pt is None:
         return None
     if same_branch and not tangent_agrees(pt, a, b, w):
@@ -316,11 +335,7 @@ def _interpolated_zero(
     try:
         pt = make_point(z, p, lin, c, w, u=u)
     except np.linalg.LinAlgError:
-        q0, q1 = end_lo[1], end_hi[1]
-        tau = (q1.u - q0.u) / max(theta_norm(q1.u - q0.u, w), 1e-300)
-        G, Gz, Gp = lin
-        pt = PointInfo(z=z, p=p, tau=tau, G=G, Gz=Gz, Gp=Gp, lu=None, border=c, t_raw=tau,
-                       bp_sign=0.0, _bp_logdet=-math.inf, residual_norm=_inf_norm(G))  # fmt: skip
+        pt = _chord_point(z, p, lin, end_lo[1].u, end_hi[1].u, c, w)
     g = float(test(pt, s / sigma_b))
     if not math.isfinite(g):
         return None

@@ -66,29 +66,32 @@ def _ca_stack(xs: Sequence[Any]) -> Any:
     return ca.vertcat(*xs)
 
 
-#: The functions of one argument that NumPy and CasADi both name as :class:`Ops` does.
-_SAME_NAMES = ("sin", "cos", "tan", "exp", "log", "sqrt", "tanh", "sign")
+#: The elementwise functions of :class:`Ops` by its names: ``(NumPy's name, CasADi's name)``.
+_NAMES = {
+    **{f: (f, f) for f in ("sin", "cos", "tan", "exp", "log", "sqrt", "tanh", "sign")},
+    "arctan": ("arctan", "atan"),
+    "abs": ("abs", "fabs"),
+    "atan2": ("arctan2", "atan2"),
+    "fmax": ("maximum", "fmax"),
+    "fmin": ("minimum", "fmin"),
+}
+
+
+def _functions(module: Any, which: int) -> dict[str, Any]:
+    """The functions of :data:`_NAMES` in ``module`` (``which``: 0 NumPy, 1 CasADi)."""
+    return {f: getattr(module, names[which]) for f, names in _NAMES.items()}
+
 
 NUMPY_OPS = Ops(
     name="numpy",
-    **{f: getattr(np, f) for f in _SAME_NAMES},
-    arctan=np.arctan,
-    abs=np.abs,
-    atan2=np.arctan2,
-    fmax=np.maximum,
-    fmin=np.minimum,
+    **_functions(np, 0),
     if_else=lambda c, a, b: np.where(c, a, b),
     stack=_np_stack,
 )
 
 CASADI_OPS = Ops(
     name="casadi",
-    **{f: getattr(ca, f) for f in _SAME_NAMES},
-    arctan=ca.atan,
-    abs=ca.fabs,
-    atan2=ca.atan2,
-    fmax=ca.fmax,
-    fmin=ca.fmin,
+    **_functions(ca, 1),
     if_else=lambda c, a, b: ca.if_else(c, a, b),
     stack=_ca_stack,
 )

@@ -266,6 +266,21 @@ class CorrectorResult:
         return self.u_full
 
 
+def _evaluate(
+    run: Any, nv: Any, r: FloatArray, u: FloatArray
+) -> tuple[float, float, float, float, bool]:
+    """Run a fused evaluator; ``(max|r|, max|u|, max|G|, sum M_ij^2, r finite)``.
+
+    The norms come from the evaluator's ``norms`` buffer ``nv`` when it has one (``max|G|``
+    and ``sum M_ij^2`` are NaN, unknown, otherwise).
+    """
+    run()
+    if nv is not None:
+        rn, rr, un, gn, mm = nv.tolist()
+        return rn, un, gn, mm, rr < math.inf
+    return _inf_norm(r), _inf_norm(u), math.nan, math.nan, float(r.dot(r)) < math.inf
+
+
 def _correct_fused(
     ev: Any,
     u_pred: FloatArray,
@@ -288,7 +303,6 @@ def _correct_fused(
     n = u_pred.size - 1
     u, r, M, nv = ev.u, ev.r, ev.M, ev.norms
     run = getattr(ev, "run", ev)  # (the compiled call itself, without the wrapper)
-    gn = mm = math.nan  # max |f| and sum M_ij^2 of the last evaluation, when known
     rt_ev: FloatArray | None = getattr(ev, "rt", None)
     own_rt = rt_ev is None  # an evaluator without the two-column buffer: copy r into one
     if rt_ev is None:
@@ -300,13 +314,8 @@ def _correct_fused(
     ev.c[:] = c  # (ev.set_border, inlined: the hot path of small problems)
     ev.h[0] = float(c.dot(u_ref)) + sigma
     tol, step_tol, max_iter = newton.tol, newton.step_tol, newton.max_iter
-    run()
-    if nv is not None:
-        rn, rr, un, gn, mm = nv.tolist()
-        finite = rr < math.inf
-    else:
-        finite = float(r.dot(r)) < math.inf
-        rn, un = _inf_norm(r), _inf_norm(u)
+    # (gn, mm: max |f| and sum M_ij^2 of the last evaluation, when known)
+    rn, un, gn, mm, finite = _evaluate(run, nv, r, u)
     rn0, rn_prev, step, it = rn, math.inf, math.inf, 0
     # the componentwise step test (_step_ok, bounds as in _step_bounds; inlined)
     a = min(1.0, un) + _TINY
@@ -340,13 +349,9 @@ def _correct_fused(
             if dn_ok:
                 u -= du
                 if exact:
-                    run()
+                    rn, _, gn, mm, finite = _evaluate(run, nv, r, u)
                     lin = ev.lin()
-                    if nv is not None:
-                        rn, rr, un, gn, mm = nv.tolist()
-                    else:
-                        rr, rn = float(r.dot(r)), _inf_norm(r)
-                    rn = rn if rr < math.inf else math.inf
+                    rn = rn if finite else math.inf
                     if own_rt:
                         rt[:, 0] = r
                     f_lu, f_piv, x, info = _gesv(M, rt)
@@ -367,13 +372,7 @@ def _correct_fused(
         if msg:
             return CorrectorResult(False, u[:n].copy(), float(u[n]), None, it, rn, msg)
         rn_prev = rn
-        run()
-        if nv is not None:
-            rn, rr, un, gn, mm = nv.tolist()
-            finite = rr < math.inf
-        else:
-            finite = float(r.dot(r)) < math.inf
-            rn = _inf_norm(r)
+        rn, _, gn, mm, finite = _evaluate(run, nv, r, u)
 
 
 def correct(

@@ -60,6 +60,7 @@ The numeric inputs after ``w`` and ``P`` are :meth:`ConnectionLayout.data_names`
 from __future__ import annotations
 
 import weakref
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -146,6 +147,49 @@ class ConnectionLayout(OrbitLayout):
     def n_unknowns(self) -> int:
         """Length of ``w``."""
         return sum(s for _, s in self._sizes())
+
+    # ------------------------------------------------------------------ packing
+    def checked(self, z: Any) -> FloatArray:
+        """``z`` as a float array, checked to have shape ``(n_unknowns,)``.
+
+        Raises
+        ------
+        ValueError
+            If it has another shape (the message names ``z``).
+        """
+        z = np.asarray(z, dtype=float)
+        if z.shape != (self.n_unknowns,):
+            raise ValueError(f"`z` must have shape ({self.n_unknowns},), got {z.shape}")
+        return z
+
+    def orbit_unknowns(self, X: Any) -> FloatArray:
+        """A zero ``z``, shape ``(n_unknowns,)``, with the orbit ``X`` (M, n) in its orbit block.
+
+        Raises
+        ------
+        ValueError
+            If ``X`` does not have shape ``(M, n)`` (the message names ``X``).
+        """
+        X = np.asarray(X, dtype=float)
+        if X.shape != (self.n_points, self.n):
+            raise ValueError(f"`X` must have shape ({self.n_points}, {self.n}), got {X.shape}")
+        z = np.zeros(self.n_unknowns)
+        z[self.slices()["orbit"]] = X.reshape(-1)  # row-major (M, n) == column-major (n, M)
+        return z
+
+    def orbit_of(self, z: FloatArray) -> FloatArray:
+        """The orbit block of ``z`` (checked by :meth:`checked`) as ``X``, shape ``(M, n)``."""
+        return z[self.slices()["orbit"]].reshape(self.n_points, self.n)
+
+    def solved_params(self, z: FloatArray, free: Sequence[str]) -> dict[str, float]:
+        """The solved parameters of ``z`` by name (``free``, in the order of the block)."""
+        return dict(zip(free, z[self.slices()["params"]].tolist(), strict=True))
+
+    def full_params(self, values: Any, z: FloatArray) -> FloatArray:
+        """A copy of the full parameter vector ``values`` with the solved ones from ``z``."""
+        v = np.array(values, dtype=float)
+        v[list(self.unknown_param_index)] = np.asarray(z)[self.slices()["params"]]
+        return v
 
     @property
     def start_rows(self) -> slice:

@@ -391,12 +391,7 @@ class HeteroclinicProblem:
         Omitted blocks default to the problem's data (saddles, parameter guesses, R = 0).
         """
         lay, sl = self.layout, self.layout.slices()
-        n = lay.n
-        X = np.asarray(X, dtype=float)
-        if X.shape != (lay.n_points, n):
-            raise ValueError(f"`X` must have shape ({lay.n_points}, {n}), got {X.shape}")
-        z = np.zeros(lay.n_unknowns)
-        z[sl["orbit"]] = X.reshape(-1)  # row-major (M, n) == column-major (n, M)
+        z = lay.orbit_unknowns(X)
         z[sl["x_from"]] = self.saddle_from if x_from is None else x_from
         if lay.separate_to:
             z[sl["x_to"]] = self.saddle_to if x_to is None else x_to
@@ -412,29 +407,25 @@ class HeteroclinicProblem:
     def unpack(self, z: FloatArray) -> dict[str, Any]:
         """Split ``z``: ``X`` (M, n), ``x_from``, ``x_to``, ``R_minus``, ``R_plus``, ``params``."""
         lay, sl = self.layout, self.layout.slices()
-        z = np.asarray(z, dtype=float)
-        if z.shape != (lay.n_unknowns,):
-            raise ValueError(f"`z` must have shape ({lay.n_unknowns},), got {z.shape}")
+        z = lay.checked(z)
         n = lay.n
         x_from = z[sl["x_from"]]
         x_to = z[sl["x_to"]] if lay.separate_to else x_from + np.asarray(self.shift)
         km, kp = lay.k_minus, lay.k_plus
         return {
-            "X": z[sl["orbit"]].reshape(lay.n_points, n),
+            "X": lay.orbit_of(z),
             "x_from": x_from,
             "x_to": x_to,
             "R_minus": z[sl["R_minus"]].reshape((n - km, km), order="F"),
             "R_plus": z[sl["R_plus"]].reshape((n - kp, kp), order="F"),
-            "params": dict(zip(self.free, z[sl["params"]].tolist(), strict=True)),
+            "params": lay.solved_params(z, self.free),
         }
 
     def param_vector(self, z: FloatArray, p: float | None = None) -> FloatArray:
         """Full parameter vector: ``params``, ``vary`` set to ``p``, ``free`` from ``z``."""
-        v = np.array(self.params.values, dtype=float)
-        if self.vary is not None and p is not None:
+        v = self.layout.full_params(self.params.values, z)
+        if self.vary is not None and p is not None:  # (never a `free` one: __post_init__)
             v[self.system.param_index(self.vary)] = float(p)
-        sl = self.layout.slices()
-        v[list(self.layout.unknown_param_index)] = np.asarray(z)[sl["params"]]
         return v
 
     # ------------------------------------------------------------------ residual
@@ -461,13 +452,11 @@ class HeteroclinicProblem:
         return [mesh.h, mesh.T, Qm, Qp, shift, ref, dref, pin]
 
     def _args(self, z: FloatArray, p: float | None) -> list[Any]:
-        z = np.asarray(z, dtype=float)
+        z = self.layout.checked(z)
         cache = self.__dict__.get("_data_cache")
         if cache is None:  # flattened once: the evaluator reads NumPy buffers
             cache = self.functions.flat_args([z, self.param_vector(z, p), *self._data()])[2:]
             object.__setattr__(self, "_data_cache", cache)
-        if z.shape != (self.layout.n_unknowns,):
-            raise ValueError(f"`z` must have shape ({self.layout.n_unknowns},), got {z.shape}")
         return [np.ascontiguousarray(z), self.param_vector(z, p), *cache]
 
     def residual(self, z: FloatArray, p: float | None = None) -> FloatArray:

@@ -45,7 +45,6 @@ Unknowns and equations (``M = N (m + 1) + 1`` points, ``k = dim W^u(x_e)``)::
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -53,6 +52,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
+from ..arguments import finite_number
 from ..params import Params
 from ..status import Status
 from ..typing import FloatArray
@@ -150,12 +150,7 @@ class LandingProblem:
         if not unk:
             raise ValueError(f"`free` must be one or more distinct parameters, got {unk}")
         object.__setattr__(self, "free", unk)
-        try:
-            s = float(self.s)
-        except (TypeError, ValueError):
-            raise ValueError(f"`s` must be a finite number, got {self.s!r}") from None
-        if not math.isfinite(s):
-            raise ValueError(f"`s` must be a finite number, got {self.s!r}")
+        s = finite_number("s", self.s)
         object.__setattr__(self, "s", s)
         if not isinstance(self.start_name, str) or not self.start_name:
             raise ValueError(f"`start_name` must be a non-empty string, got {self.start_name!r}")
@@ -268,11 +263,7 @@ class LandingProblem:
              values: Any = None, R: FloatArray | None = None) -> FloatArray:  # fmt: skip
         """``z`` from the orbit ``X`` (M, n), the equilibrium, the parameters and ``R``."""
         lay, sl = self.layout, self.layout.slices()
-        X = np.asarray(X, dtype=float)
-        if X.shape != (lay.n_points, lay.n):
-            raise ValueError(f"`X` must have shape ({lay.n_points}, {lay.n}), got {X.shape}")
-        z = np.zeros(lay.n_unknowns)
-        z[sl["orbit"]] = X.reshape(-1)
+        z = lay.orbit_unknowns(X)
         z[sl["x_to"]] = self.saddle if x_eq is None else x_eq
         if R is not None:
             z[sl["R_plus"]] = np.asarray(R, dtype=float).reshape(-1, order="F")
@@ -283,29 +274,23 @@ class LandingProblem:
     def unpack(self, z: FloatArray) -> dict[str, Any]:
         """``X`` (M, n), ``x_eq``, ``x_end`` (= x_eq + shift), ``R``, ``params`` of ``z``."""
         lay, sl = self.layout, self.layout.slices()
-        z = np.asarray(z, dtype=float)
-        if z.shape != (lay.n_unknowns,):
-            raise ValueError(f"`z` must have shape ({lay.n_unknowns},), got {z.shape}")
+        z = lay.checked(z)
         k = lay.k_plus
         return {
-            "X": z[sl["orbit"]].reshape(lay.n_points, lay.n),
+            "X": lay.orbit_of(z),
             "x_eq": z[sl["x_to"]],
             "x_end": z[sl["x_to"]] + self.shift,
             "R": z[sl["R_plus"]].reshape((lay.n - k, k), order="F"),
-            "params": dict(zip(self.free, z[sl["params"]].tolist(), strict=True)),
+            "params": lay.solved_params(z, self.free),
         }
 
     def param_vector(self, z: FloatArray) -> FloatArray:
         """The full parameter vector with the solved parameters from ``z``."""
-        v = np.array(self.params.values, dtype=float)
-        v[list(self.layout.unknown_param_index)] = np.asarray(z)[self.layout.slices()["params"]]
-        return v
+        return self.layout.full_params(self.params.values, z)
 
     # ------------------------------------------------------------------ residual
     def _args(self, z: FloatArray, s: float | None) -> list[Any]:
-        z = np.asarray(z, dtype=float)
-        if z.shape != (self.layout.n_unknowns,):
-            raise ValueError(f"`z` must have shape ({self.layout.n_unknowns},), got {z.shape}")
+        z = self.layout.checked(z)
         return [z, np.array(self.params.values, dtype=float), self.mesh.h, self.mesh.T,
                 self.bases, self.shift, self.x0(s)]  # fmt: skip
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Self
 
 import numpy as np
 
@@ -214,9 +214,73 @@ class AugmentedProblem:
 
     # ----------------------------------------------------------------- starting
     @classmethod
-    def from_state(cls, *args: Any, **kwargs: Any) -> AugmentedProblem:  # pragma: no cover
-        """Build from a state at the codim-1 point (implemented by subclasses)."""
-        raise NotImplementedError(f"{cls.__name__} does not implement from_state")
+    def from_state(
+        cls,
+        system: System,
+        params: Params | Mapping[str, float],
+        free1: str,
+        free2: str,
+        x: Any,
+        *,
+        refine: bool = True,
+        newton_settings: NewtonSettings | None = None,
+        sparse: bool | None = None,
+        **start: Any,
+    ) -> Self:
+        """A problem started from a state ``x`` at (or near) its codim-1 point.
+
+        Parameters
+        ----------
+        system : System
+        params : Params or mapping
+            Parameter values; ``params[free1]`` is the initial guess of the first
+            parameter and ``params[free2]`` the starting continuation parameter.
+        free1, free2 : str
+            First (solved-for) and second (continuation) parameter names.
+        x : array_like, shape (n,)
+            The state at the point, or a guess of it.
+        refine : bool
+            Solve the augmented system at fixed ``free2`` by Newton's method
+            (raises :class:`~continuation.errors.ConvergenceError` on failure).
+        newton_settings : NewtonSettings, optional
+        sparse : bool or None
+        **start
+            Options of the kind's start (:meth:`_start`): ``omega`` of a
+            :class:`HopfProblem` (expected frequency: selects the eigenvalue nearest
+            ``i omega``; default the complex eigenvalue with ``Im > 0`` and the
+            smallest ``|Re|``); none for a :class:`FoldProblem`.
+
+        Returns
+        -------
+        FoldProblem or HopfProblem
+            With ``z0 = (x, p1, extra..., v)`` (``v`` from the Jacobian at ``x``: the
+            unit null vector of a fold, a vector of the critical plane of a Hopf
+            point) and ``p0 = params[free2]``.
+
+        Raises
+        ------
+        ValueError
+            If ``x`` or ``free1``/``free2`` are not valid, or ``J(x)`` has no
+            eigenvalue of the kind (a Hopf start: no complex pair).
+        """
+        params, x, J = start_inputs(system, params, free1, free2, x)
+        z0, fields = cls._start(x, params[free1], J, **start)
+        p0 = params[free2]
+        prob = cls(system, params, free1, free2, sparse=sparse, z0=z0, p0=p0, **fields)
+        if refine:
+            res = prob.solve(settings=newton_settings, throw=True)
+            prob = cls(system, params, free1, free2, sparse=sparse, z0=res.z, p0=p0, **fields)
+        return prob
+
+    @classmethod
+    def _start(cls, x: FloatArray, p1: float, J: FloatArray) -> tuple[FloatArray, dict[str, Any]]:
+        """``z0`` at the state ``x`` (Jacobian ``J``) and the kind's further fields."""
+        raise NotImplementedError(f"{cls.__name__} does not implement _start")  # pragma: no cover
+
+    @classmethod
+    def _point_start(cls, sp: Any) -> dict[str, Any]:
+        """The options of :meth:`_start` taken from a located special point (none)."""
+        return {}
 
     @classmethod
     def from_point(
@@ -261,11 +325,6 @@ class AugmentedProblem:
         """
         system, params, free1 = _check_start(branch, sp, free2, cls.kind)
         params = params.replace(**{free1: float(sp.p)})
-        kwargs: dict[str, Any] = {}
-        if cls.kind == "hopf":
-            om = dict(getattr(sp, "data", {}) or {}).get("omega")
-            if om is not None and np.isfinite(om) and om > 0:
-                kwargs["omega"] = float(om)
         x = np.asarray(sp.x, dtype=float)
         return cls.from_state(
             system,
@@ -276,7 +335,7 @@ class AugmentedProblem:
             refine=refine,
             newton_settings=newton_settings,
             sparse=sparse,
-            **kwargs,
+            **cls._point_start(sp),
         )
 
     # ----------------------------------------------------------------- solving

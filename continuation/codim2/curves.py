@@ -170,38 +170,6 @@ def _curve_settings(settings: ContinuationSettings | None) -> ContinuationSettin
 
 
 # ---------------------------------------------------------------------------- stitching
-def _reverse(br: Any) -> Any:
-    """The same branch in the opposite order (special points re-indexed)."""
-    N = len(br)
-    total = float(np.sum(br.ds))
-    ds = np.zeros(N)
-    if N > 1:
-        ds[1:] = br.ds[1:][::-1]
-    sps = []
-    for sp in reversed(br.special_points):
-        sps.append(
-            dataclasses.replace(
-                sp,
-                index=max(N - 2 - sp.index, 0),
-                bracket=(sp.bracket[1], sp.bracket[0]),
-                delta_unstable=(-sp.delta_unstable[0], -sp.delta_unstable[1]),
-                s=total - sp.s,
-                tangent=None if sp.tangent is None else -np.asarray(sp.tangent),
-            )
-        )
-    return dataclasses.replace(
-        br,
-        p=br.p[::-1],
-        x=br.x[::-1],
-        eigenvalues=br.eigenvalues[::-1],
-        n_unstable=br.n_unstable[::-1],
-        ds=ds,
-        newton_iters=br.newton_iters[::-1],
-        records={k: v[::-1] for k, v in br.records.items()},
-        special_points=tuple(sps),
-    )
-
-
 def _concat(pieces: Sequence[Any], status: Any, message: str) -> Any:
     """Join branches whose first row repeats the previous one's last row."""
     first = pieces[0]
@@ -452,7 +420,7 @@ def continue_codim2(
     if direction == "both":
         back = _one_direction(problem, -sgn, st, run, max_restarts)
         if back.status is Status.INTERRUPTED:
-            curve = _reverse(back)
+            curve = back.reversed()
         else:
             try:
                 fwd = _one_direction(problem, sgn, st, run, max_restarts)
@@ -465,7 +433,7 @@ def continue_codim2(
             if Status.INTERRUPTED in (back.status, fwd.status):
                 status = Status.INTERRUPTED
             msg = f"backward: {back.message}; forward: {fwd.message}"
-            curve = _concat([_reverse(back), fwd], status, msg)
+            curve = _concat([back.reversed(), fwd], status, msg)
     else:
         s = sgn if direction == "forward" else -sgn
         curve = _one_direction(problem, s, st, run, max_restarts)

@@ -35,15 +35,11 @@ Methods for Bifurcations of Dynamical Equilibria", SIAM, Ch. 4), each smooth in
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
-from ..params import Params
-from ..settings import NewtonSettings
-from ..system import System
 from ..typing import FloatArray
 from ._base import (
     AugmentedProblem,
@@ -51,7 +47,6 @@ from ._base import (
     null_vector,
     scaled_adjugate,
     signed_product,
-    start_inputs,
 )
 from ._build import fold_recipe
 
@@ -92,54 +87,9 @@ class FoldProblem(AugmentedProblem):
     test_names: ClassVar[tuple[str, ...]] = ("bt", "cusp", "zh")
 
     @classmethod
-    def from_state(
-        cls,
-        system: System,
-        params: Params | Mapping[str, float],
-        free1: str,
-        free2: str,
-        x: Any,
-        *,
-        refine: bool = True,
-        newton_settings: NewtonSettings | None = None,
-        sparse: bool | None = None,
-    ) -> FoldProblem:
-        """A fold problem started from a state ``x`` at (or near) a fold.
-
-        Parameters
-        ----------
-        system : System
-        params : Params or mapping
-            Parameter values; ``params[free1]`` is the initial guess of the first
-            parameter and ``params[free2]`` the starting continuation parameter.
-        free1, free2 : str
-            First (solved-for) and second (continuation) parameter names.
-        x : array_like, shape (n,)
-            The state at the fold, or a guess of it.
-        refine : bool
-            Solve the augmented system at fixed ``free2`` by Newton's method
-            (raises :class:`~continuation.errors.ConvergenceError` on failure).
-        newton_settings : NewtonSettings, optional
-        sparse : bool or None
-
-        Returns
-        -------
-        FoldProblem
-            With ``z0 = (x, p1, v)`` (``v`` the unit null vector of ``J``) and ``p0``.
-        """
-        params, x, J = start_inputs(system, params, free1, free2, x)
-        v = null_vector(J)
-        z0 = np.concatenate([x, [params[free1]], v])
-        prob = cls(system, params, free1, free2, sparse=sparse, z0=z0, p0=params[free2])
-        if refine:
-            res = prob.solve(settings=newton_settings, throw=True)
-            prob = cls(system, params, free1, free2, sparse=sparse, z0=res.z, p0=prob.p0)
-        return prob
-
-    # ----------------------------------------------------------------- records
-    def record(self, z: FloatArray, p: float) -> Mapping[str, float]:
-        """``{free1: p1}`` at the curve point."""
-        return {self.free1: self.p1(z)}
+    def _start(cls, x: FloatArray, p1: float, J: FloatArray) -> tuple[FloatArray, dict[str, Any]]:
+        """``z0 = (x, p1, v)``, ``v`` the unit null vector of ``J``; no further fields."""
+        return np.concatenate([x, [p1], null_vector(J)]), {}
 
     # ----------------------------------------------------------------- codim 2
     def quadratic_coefficient(self, z: FloatArray, p: float) -> float:

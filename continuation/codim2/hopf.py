@@ -50,11 +50,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ..params import Params
-from ..settings import NewtonSettings
-from ..system import System
 from ..typing import FloatArray
-from ._base import AugmentedProblem, signed_product, start_inputs
+from ._base import AugmentedProblem, signed_product
 from ._build import hopf_recipe
 from .fold import _pair_sum_product
 
@@ -176,43 +173,26 @@ class HopfProblem(AugmentedProblem):
         return self._cdata  # type: ignore[attr-defined,no-any-return]
 
     @classmethod
-    def from_state(
-        cls,
-        system: System,
-        params: Params | Mapping[str, float],
-        free1: str,
-        free2: str,
-        x: Any,
-        *,
-        omega: float | None = None,
-        refine: bool = True,
-        newton_settings: NewtonSettings | None = None,
-        sparse: bool | None = None,
-    ) -> HopfProblem:
-        """A Hopf problem started from a state ``x`` at (or near) a Hopf point.
+    def _start(
+        cls, x: FloatArray, p1: float, J: FloatArray, *, omega: float | None = None
+    ) -> tuple[FloatArray, dict[str, Any]]:
+        """``z0 = (x, p1, kappa, v)`` and the normalisation ``c``, ``sigma`` at ``x``.
 
         Parameters
         ----------
-        system : System
-        params : Params or mapping
-            ``params[free1]`` is the guess of the first parameter,
-            ``params[free2]`` the starting continuation parameter.
-        free1, free2 : str
-        x : array_like, shape (n,)
+        x : ndarray, shape (n,)
+        p1 : float
+        J : ndarray, shape (n, n)
+            The Jacobian at ``x``.
         omega : float, optional
             Expected frequency: selects the eigenvalue nearest ``i omega``. Default:
             the complex eigenvalue (``Im > 0``) with the smallest ``|Re|``.
-        refine : bool
-            Solve the augmented system at fixed ``free2`` by Newton's method.
-        newton_settings : NewtonSettings, optional
-        sparse : bool or None
 
         Raises
         ------
         ValueError
-            If ``J(x)`` has no complex eigenvalue pair.
+            If ``J`` has no complex eigenvalue pair.
         """
-        params, x, J = start_inputs(system, params, free1, free2, x)
         eigs, vecs = np.linalg.eig(J)
         scale = max(1.0, float(np.max(np.abs(eigs))))
         cand = np.flatnonzero(eigs.imag > 1e-12 * scale)
@@ -232,13 +212,15 @@ class HopfProblem(AugmentedProblem):
         q = q * np.exp(-0.5j * np.angle(q @ q))  # now |Re q| >= |Im q| > 0
         kappa = float(-(lam**2).real)
         vh, c, sigma = normalisation(J, q.real, kappa)
-        z0 = np.concatenate([x, [params[free1]], [kappa], vh])
-        p0 = params[free2]
-        prob = cls(system, params, free1, free2, sparse, z0, p0, c, sigma)
-        if refine:
-            res = prob.solve(settings=newton_settings, throw=True)
-            prob = cls(system, params, free1, free2, sparse, res.z, p0, c, sigma)
-        return prob
+        return np.concatenate([x, [p1], [kappa], vh]), {"c": c, "sigma": sigma}
+
+    @classmethod
+    def _point_start(cls, sp: Any) -> dict[str, Any]:
+        """``omega`` of the located Hopf point ``sp`` when it recorded a valid one."""
+        om = dict(getattr(sp, "data", {}) or {}).get("omega")
+        if om is not None and np.isfinite(om) and om > 0:
+            return {"omega": float(om)}
+        return {}
 
     # ----------------------------------------------------------------- unpacking
     def kappa(self, z: FloatArray) -> float:

@@ -277,15 +277,6 @@ def classify_fate(
     params: Any,
     traj_or_x0: Any,
     *,
-    equilibria: Sequence[Any] | Mapping[str, Any] = (),
-    events: Sequence[Any] = (),
-    poincare: PoincareSection | str | None = "auto",
-    tol: float = 1e-6,
-    saddle_radius: float = 1e-2,
-    scale: Any = None,
-    t_max: float = 1000.0,
-    segment: float | None = None,
-    dt: float | None = None,
     progress: Callable[[float, FloatArray], None] | None = None,
     **options: Any,
 ) -> Fate:
@@ -297,12 +288,13 @@ def classify_fate(
         The system and its parameter values.
     traj_or_x0 : array_like (n,) or Trajectory
         Initial state, or a trajectory to analyse and continue.
-    equilibria, events, poincare, tol, saddle_radius, scale, t_max, segment, dt
-        See :class:`FateClassifier`.
     progress : callable, optional
         ``progress(t, x)`` after each integration segment.
     **options
-        ``max_multiplicity``, ``min_amplitude``, ``method``, ``rtol``, ``atol``.
+        The options of :class:`FateClassifier` (``equilibria``, ``events``,
+        ``poincare``, ``tol``, ``saddle_radius``, ``scale``, ``t_max``, ``segment``,
+        ``dt``, ``max_multiplicity``, ``min_amplitude``, ``method``, ``rtol``, ``atol``),
+        with its defaults.
 
     Returns
     -------
@@ -317,21 +309,7 @@ def classify_fate(
     >>> fate.label
     'equilibrium:down@+1'
     """
-    clf = FateClassifier(
-        system,
-        params,
-        equilibria=equilibria,
-        events=events,
-        poincare=poincare,
-        tol=tol,
-        saddle_radius=saddle_radius,
-        scale=scale,
-        t_max=t_max,
-        segment=segment,
-        dt=dt,
-        **options,
-    )
-    return clf.classify(traj_or_x0, progress=progress)
+    return FateClassifier(system, params, **options).classify(traj_or_x0, progress=progress)
 
 
 __all__ = ["FateClassifier", "classify_fate"]

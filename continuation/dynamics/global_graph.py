@@ -92,13 +92,7 @@ def build_global_graph(
     params: Any,
     equilibria: Sequence[Any] | Mapping[str, Any],
     *,
-    events: Sequence[Any] = (),
-    poincare: Any = "auto",
     eps: float = 1e-6,
-    t_max: float = 1000.0,
-    tol: float = 1e-6,
-    saddle_radius: float = 1e-2,
-    scale: Any = None,
     match_tol: float | None = None,
     orient: str | int | None = None,
     progress: Callable[[str, int, Fate], None] | None = None,
@@ -116,8 +110,6 @@ def build_global_graph(
         The equilibria (named ``E0, E1, ...`` unless a mapping), each once modulo the
         periods. Their stability is computed; the unstable manifold of every saddle of
         index 1 is computed and classified.
-    events, poincare, tol, saddle_radius, scale, t_max
-        Options of :class:`~continuation.dynamics.fates.FateClassifier`.
     eps : float
         Start distance of the manifold branches.
     match_tol : float, optional
@@ -128,7 +120,9 @@ def build_global_graph(
     progress : callable, optional
         ``progress(saddle_name, sign, fate)`` after each branch.
     **classifier_options
-        Further options of the classifier (``segment``, ``dt``, ``method``, ...).
+        The options of :class:`~continuation.dynamics.fates.FateClassifier`
+        (``events``, ``poincare``, ``tol``, ``saddle_radius``, ``scale``, ``t_max``,
+        ``segment``, ``dt``, ``method``, ...), with its defaults.
 
     Returns
     -------
@@ -141,18 +135,7 @@ def build_global_graph(
         saddles passed), ``t``, ``kind``, ``fate``. ``graph.graph`` holds ``params``,
         ``state_names``, ``eps`` and ``status`` (``INTERRUPTED`` if stopped early).
     """
-    clf = FateClassifier(
-        system,
-        params,
-        equilibria=equilibria,
-        events=events,
-        poincare=poincare,
-        tol=tol,
-        saddle_radius=saddle_radius,
-        scale=scale,
-        t_max=t_max,
-        **classifier_options,
-    )
+    clf = FateClassifier(system, params, equilibria=equilibria, **classifier_options)
     match = float(match_tol) if match_tol is not None else 1e3 * clf.tol
     if not match > 0:
         raise ValueError(f"`match_tol` must be positive, got {match_tol!r}")

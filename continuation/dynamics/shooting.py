@@ -40,6 +40,7 @@ from continuation.errors import ContinuationError
 from continuation.status import Status
 from continuation.typing import FloatArray
 
+from ..arguments import finite_number
 from .events import PoincareSection
 from .simulate import simulate
 from .trajectory import Trajectory
@@ -192,12 +193,7 @@ class ShootingOrbit:
         ContinuationError
             If the orbit did not converge, or does not cross ``level``.
         """
-        try:
-            level = float(level)
-        except (TypeError, ValueError):
-            raise ValueError(f"`level` must be a finite number, got {level!r}") from None
-        if not math.isfinite(level):
-            raise ValueError(f"`level` must be a finite number, got {level!r}")
+        level = finite_number("level", level)
         if not self.success:
             raise ContinuationError(f"the periodic orbit did not converge: {self.message}")
         known = self._levels.get(level)
@@ -380,12 +376,7 @@ def shoot_orbit(
         i = int(state)
     else:
         raise ValueError(f"`state` must be a state name or index, got {state!r}")
-    try:
-        section = float(section)
-    except (TypeError, ValueError):
-        raise ValueError(f"`section` must be a finite number, got {section!r}") from None
-    if not math.isfinite(section):
-        raise ValueError(f"`section` must be a finite number, got {section!r}")
+    section = finite_number("section", section)
     if direction not in (None, 1, -1):
         raise ValueError(f"`direction` must be None, 1 or -1, got {direction!r}")
     x0 = system.check_state(x_guess, "x_guess")

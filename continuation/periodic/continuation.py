@@ -347,37 +347,12 @@ def _segments_of(br: Branch) -> tuple[list[PeriodicOrbitProblem], list[int]]:
 def _reverse(br: Branch) -> Branch:
     """The branch in the opposite order (rows, steps, special points, segments)."""
     N = len(br)
-    ds = np.zeros(N)
-    ds[1:] = br.ds[1:][::-1]
-    L = float(br.arclength[-1])
-    sps = [
-        dataclasses.replace(
-            sp,
-            index=N - 2 - sp.index,
-            s=L - sp.s,
-            bracket=(sp.bracket[1], sp.bracket[0]),
-            delta_unstable=(-sp.delta_unstable[0], -sp.delta_unstable[1]),
-            tangent=None if sp.tangent is None else -np.asarray(sp.tangent),
-        )
-        for sp in reversed(br.special_points)
-    ]
     probs, first = _segments_of(br)
     ends = [f - 1 for f in first[1:]] + [N - 1]  # last row of each segment
     problem: Any = br.problem
     if len(probs) > 1:
         problem = CycleSegments(tuple(probs[::-1]), tuple(N - 1 - e for e in ends[::-1]))
-    return dataclasses.replace(
-        br,
-        problem=problem,
-        p=br.p[::-1],
-        x=br.x[::-1],
-        eigenvalues=br.eigenvalues[::-1],
-        n_unstable=br.n_unstable[::-1],
-        ds=ds,
-        newton_iters=br.newton_iters[::-1],
-        records={k: v[::-1] for k, v in br.records.items()},
-        special_points=tuple(sps),
-    )
+    return br.reversed(problem=problem)
 
 
 def _continue_once(

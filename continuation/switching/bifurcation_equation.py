@@ -29,6 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..algorithms.base import theta_norm, theta_weights
+from ..arguments import finite_number
 from ..errors import ContinuationError
 from ..problem import linearize
 from ..status import Status
@@ -228,12 +229,7 @@ def solve_crossing_tangents(
     z = np.asarray(z, dtype=float)
     if z.shape != (n,) or not np.all(np.isfinite(z)):
         raise ValueError(f"`z` must be a finite array of shape ({n},), got {z!r}")
-    try:
-        p = float(p)
-    except (TypeError, ValueError):
-        raise ValueError(f"`p` must be a float, got {p!r}") from None
-    if not math.isfinite(p):
-        raise ValueError(f"`p` must be finite, got {p}")
+    p = finite_number("p", p)
     ref = np.asarray(reference, dtype=float)
     if ref.shape != (n + 1,) or not np.all(np.isfinite(ref)) or not np.any(ref):
         raise ValueError(f"`reference` must be a finite non-zero array of shape ({n + 1},)")
