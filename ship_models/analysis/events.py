@@ -13,6 +13,7 @@ hydrostatic curve it was fitted to gives nearly the same value
 from __future__ import annotations
 
 import math
+import weakref
 from typing import Any
 
 import numpy as np
@@ -21,6 +22,9 @@ import scipy.optimize as so
 from continuation.events import Event
 
 from ..contracts import VesselModel
+
+#: :func:`vanishing_angle` per model (its GZ curve is fixed when it is built).
+_PHI_V: weakref.WeakKeyDictionary[Any, dict[int, float]] = weakref.WeakKeyDictionary()
 
 
 def vanishing_angle(model: VesselModel, *, n_grid: int = 3600) -> float:
@@ -32,8 +36,19 @@ def vanishing_angle(model: VesselModel, *, n_grid: int = 3600) -> float:
     Returns
     -------
     float
-        ``phi_v`` in (0, pi]; ``pi`` if GZ stays positive (no vanishing angle).
+        ``phi_v`` in (0, pi]; ``pi`` if GZ stays positive (no vanishing angle). Computed
+        once per model and grid (every fate classification asks for it).
     """
+    try:
+        known = _PHI_V.setdefault(model, {})
+    except TypeError:  # a model that cannot be weakly referenced: not cached
+        known = {}
+    if n_grid not in known:
+        known[n_grid] = _vanishing_angle(model, n_grid)
+    return known[n_grid]
+
+
+def _vanishing_angle(model: VesselModel, n_grid: int) -> float:
     gz = model.forces.gz
     phi = np.linspace(0.0, math.pi, n_grid + 1)[1:]
     g = np.asarray(gz(phi), dtype=float)
