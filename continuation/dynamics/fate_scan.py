@@ -159,18 +159,32 @@ class _ScanState:
     def _track_visits(self, t: FloatArray, x: FloatArray, D: FloatArray) -> None:
         # hysteresis: a visit starts within r and ends beyond 2 r, so a trajectory that
         # lingers around the sphere of radius r makes one visit, not many
+        # (sample by sample in effect: each pass jumps to the next entry, or to the
+        # next exit taking the closest sample on the way, the first one of equals)
         r = self.c.saddle_radius
         for i in self.saddles:
             col = D[:, i]
-            for k in range(col.size):
+            k, n = 0, col.size
+            while k < n:
                 cur = self.inside.get(i)
-                if cur is not None:
-                    if col[k] > _EXIT * r:
-                        self._close_visit(i, x[k])
-                    elif col[k] < cur[0]:
-                        self.inside[i] = (float(col[k]), float(t[k]), np.array(x[k]))
-                elif col[k] <= r:
+                if cur is None:
+                    enter = np.flatnonzero(col[k:] <= r)
+                    if enter.size == 0:
+                        break
+                    k += int(enter[0])
                     self.inside[i] = (float(col[k]), float(t[k]), np.array(x[k]))
+                    k += 1
+                    continue
+                leave = np.flatnonzero(col[k:] > _EXIT * r)
+                end = k + int(leave[0]) if leave.size else n
+                if end > k:
+                    j = k + int(np.argmin(col[k:end]))
+                    if col[j] < cur[0]:
+                        self.inside[i] = (float(col[j]), float(t[j]), np.array(x[j]))
+                if end == n:
+                    break
+                self._close_visit(i, x[end])
+                k = end + 1
         self.visits.sort(key=lambda v: v.t)
 
     def _periodic(self, seg: Trajectory, full: Trajectory) -> Fate | None:
