@@ -32,16 +32,12 @@ figures and every 5 deg with a tighter tolerance, several minutes).
 from __future__ import annotations
 
 import math
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-if __package__ in (None, ""):  # run as a script: make the `studies` package importable
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from continuation.status import Status
 from continuation.sweep import check_workers, default_workers, open_backend
