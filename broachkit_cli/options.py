@@ -14,6 +14,7 @@ point (:func:`broachkit_cli.main.main`) prints it and exits with status 2.
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import math
 import os
@@ -454,6 +455,23 @@ def json_safe(obj: Any) -> Any:
     return safe(obj)
 
 
+def print_json(doc: Any) -> None:
+    """Print a command's result ``doc`` as one JSON document (``--json``) on stdout.
+
+    Non-finite floats become ``null`` (:func:`json_safe`); indented by 2.
+    """
+    sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
+
+
+def emit(args: argparse.Namespace, doc: dict[str, Any], text: Callable[[dict], str]) -> None:
+    """``doc`` as JSON with ``--json``, else its text (``text(doc)``) and the files written."""
+    if args.json:
+        print_json(doc)
+        return
+    lines = [text(doc)] + [f"  wrote {f}" for f in doc.get("files", [])]
+    sys.stdout.write("\n".join(lines) + "\n")
+
+
 __all__ = [
     "CHI_C_MAX_DEG",
     "LAMBDA_OVER_L_RANGE",
@@ -471,12 +489,14 @@ __all__ = [
     "check_fn",
     "WORKERS_ENV",
     "check_workers",
+    "emit",
     "finite",
     "fn_limit",
     "json_safe",
     "load_model",
     "prepare_out",
     "prepare_out_file",
+    "print_json",
     "ship_from_args",
     "wave_changes",
 ]

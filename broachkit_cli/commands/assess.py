@@ -15,12 +15,11 @@ The scatter table ``W2`` (IACS Rec. 34, North Atlantic) is not shipped: give it 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
-from ..options import add_json, add_out, add_vessel, finite, json_safe, load_model, prepare_out
+from ..options import add_json, add_out, add_vessel, finite, load_model, prepare_out, print_json
 from ..progress import StatusLine
 
 NAME = "assess"
@@ -175,7 +174,7 @@ def run(args: argparse.Namespace) -> int:
     if out is not None:
         doc["files"] = _write(a, doc, out)
     if args.json:
-        sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
+        print_json(doc)
         return 0
     lines = [
         f"{doc['vessel']} (L = {doc['L']:g} m) at Fn = {doc['Fn_service']:g}",
