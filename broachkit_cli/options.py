@@ -367,6 +367,29 @@ def check_workers(value: Any, name: str = "--workers") -> int:
     return int(check(n, WORKERS_ENV))
 
 
+def add_backend(parser: argparse.ArgumentParser, what: str) -> None:
+    """Where ``what`` runs (read by :func:`backend_options`), one of four exclusive options.
+
+    ``--processes N`` (local processes; default ``$BROACHKIT_WORKERS``, else one per
+    core), ``--workers N`` (a Dask ``LocalCluster`` of ``N``), ``--scheduler ADDRESS``
+    (a running Dask scheduler) or ``--serial`` (this process).
+    """
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--processes",
+        type=int,
+        default=None,
+        help=f"{what} on N local processes (default: ${WORKERS_ENV}, else one per core)",
+    )
+    where.add_argument(
+        "--workers", type=int, default=None, help=f"{what} on a Dask LocalCluster of N"
+    )
+    where.add_argument(
+        "--scheduler", default=None, help=f"{what} on a Dask scheduler tcp://HOST:PORT"
+    )
+    where.add_argument("--serial", action="store_true", help=f"{what} in this process (debugging)")
+
+
 def backend_options(args: argparse.Namespace) -> dict[str, Any]:
     """Where a sweep's tasks run, from ``--scheduler``, ``--workers``, ``--serial`` and
     ``--processes`` (in that order of precedence): the keyword arguments of
@@ -476,6 +499,7 @@ __all__ = [
     "CHI_C_MAX_DEG",
     "LAMBDA_OVER_L_RANGE",
     "OneLineParser",
+    "add_backend",
     "add_chi_c",
     "add_fn",
     "add_fn_guess",

@@ -19,7 +19,16 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..options import add_json, add_out, add_vessel, finite, load_model, prepare_out, print_json
+from ..options import (
+    add_backend,
+    add_json,
+    add_out,
+    add_vessel,
+    finite,
+    load_model,
+    prepare_out,
+    print_json,
+)
 from ..progress import StatusLine
 
 NAME = "assess"
@@ -75,23 +84,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="dC/dtheta of the coefficients with a stated uncertainty (needs --scatter)",
     )
-    where = parser.add_mutually_exclusive_group()
-    where.add_argument(
-        "--processes",
-        type=int,
-        default=None,
-        help="exact threshold on N local processes (default: $BROACHKIT_WORKERS, else one "
-        "per core)",
-    )
-    where.add_argument(
-        "--workers", type=int, default=None, help="exact threshold on a Dask LocalCluster of N"
-    )
-    where.add_argument(
-        "--scheduler", default=None, help="exact threshold on a Dask scheduler tcp://HOST:PORT"
-    )
-    where.add_argument(
-        "--serial", action="store_true", help="exact threshold in this process (debugging)"
-    )
+    add_backend(parser, "exact threshold")
     add_out(parser, None, "the figures and assessment.json")
     add_json(parser)
 
