@@ -44,6 +44,8 @@ from continuation.sweep import check_workers, default_workers, open_backend
 from ship_models.paper import PAPER_FN_BRACKET
 from studies._common import (
     PLANE_LABELS,
+    begin_step,
+    finish_summary,
     new_figure,
     paper_quantities,
     save_csv,
@@ -51,7 +53,6 @@ from studies._common import (
     save_table,
     state_columns,
     study_main,
-    write_summary,
 )
 from studies._sudden_tasks import compute_orbits, load_orbits, task
 
@@ -212,9 +213,7 @@ def compute(
     """
     from studies._model import default_model
 
-    say = progress or (lambda msg: None)
-    out.mkdir(parents=True, exist_ok=True)
-    t_all = time.perf_counter()
+    say, t_all = begin_step(out, progress)
     model = default_model()  # one per process (shared by the steps it runs)
     workers = default_workers() if workers is None else int(check_workers(workers))
     sweep_dir = out / SWEEP_DIR
@@ -568,9 +567,7 @@ def _compute(
         "fig16_map.png", "fig17_20_transient.png", "fig21_final_stage.png", "fig22_map.png",
         "fig23_critical_condition.png",
     ]  # fmt: skip
-    summary["seconds"] = round(time.perf_counter() - t_all, 2)
-    write_summary(out, summary, default=float)
-    return summary
+    return finish_summary(out, summary, t_all, default=float)
 
 
 def main(argv: list[str] | None = None) -> int:
