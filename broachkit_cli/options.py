@@ -373,6 +373,13 @@ def add_backend(parser: argparse.ArgumentParser, what: str) -> None:
     ``--processes N`` (local processes; default ``$BROACHKIT_WORKERS``, else one per
     core), ``--workers N`` (a Dask ``LocalCluster`` of ``N``), ``--scheduler ADDRESS``
     (a running Dask scheduler) or ``--serial`` (this process).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's parser.
+    what : str
+        What runs there, the start of each help text (``"exact threshold"``).
     """
     where = parser.add_mutually_exclusive_group()
     where.add_argument(
@@ -481,7 +488,11 @@ def json_safe(obj: Any) -> Any:
 def print_json(doc: Any) -> None:
     """Print a command's result ``doc`` as one JSON document (``--json``) on stdout.
 
-    Non-finite floats become ``null`` (:func:`json_safe`); indented by 2.
+    Parameters
+    ----------
+    doc : object
+        JSON-serialisable result; non-finite floats are written as ``null``
+        (:func:`json_safe`), indented by 2.
     """
     sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
 
