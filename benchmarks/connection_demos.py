@@ -52,24 +52,9 @@ from typing import Any
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from benchmarks.peers.auto_native import EMPTY_ROUTINES
+from benchmarks.peers.auto_native import EMPTY_ROUTINES, FUNC_HEAD, STPNT_HEAD
 
 _STUBS = "\n" + EMPTY_ROUTINES  # a blank line before the stubs, as the files had
-
-_HEAD = """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
-  implicit none
-  integer, intent(in) :: ndim, icp(*), ijac
-  double precision, intent(in) :: u(ndim), par(*)
-  double precision, intent(out) :: f(ndim)
-  double precision, intent(inout) :: dfdu(ndim, ndim), dfdp(ndim, *)
-"""
-
-_STPNT_HEAD = """subroutine stpnt(ndim, u, par, t)
-  implicit none
-  integer, intent(in) :: ndim
-  double precision, intent(inout) :: u(ndim), par(*)
-  double precision, intent(in) :: t
-"""
 
 # Settings every demo run shares (HomCont's IPS = 9; the demos' own values).
 AUTO_BASE: dict[str, Any] = {
@@ -167,7 +152,7 @@ def _kpr_saddle(p: np.ndarray) -> np.ndarray:
 
 
 _KPR_F90 = (
-    _HEAD
+    FUNC_HEAD
     + """  f(1) = par(3) * (par(2) * u(2) - u(1)**3 + 3d0 * u(1) - par(1))
   f(2) = u(1) - 2d0 * u(2) + u(3)
   f(3) = u(2) - u(3)
@@ -181,7 +166,7 @@ _KPR_F90 = (
   dfdp(:, 3) = (/ par(2) * u(2) - u(1)**3 + 3d0 * u(1) - par(1), 0d0, 0d0 /)
 end subroutine func
 """
-    + _STPNT_HEAD
+    + STPNT_HEAD
     + """  par(1) = -1.851185124d0
   par(2) = -0.15d0
   par(3) = 10d0
@@ -257,7 +242,7 @@ def _cir_rhs(x: Any, p: Any, ops: Any) -> Any:
 
 
 _CIR_F90 = (
-    _HEAD
+    FUNC_HEAD
     + """  double precision :: nu, be, ga, r, a3, b3, d2, d3
   nu = par(1); be = par(2); ga = par(3); r = par(4); a3 = par(5); b3 = par(6)
   d2 = (u(2) - u(1))**2
@@ -279,7 +264,7 @@ _CIR_F90 = (
   dfdp(:, 6) = (/ d3 / r, -d3, 0d0 /)
 end subroutine func
 """
-    + _STPNT_HEAD
+    + STPNT_HEAD
     + """  par(1) = NU0
   par(2) = 0.6d0
   par(3) = 0d0
@@ -357,7 +342,7 @@ def _san_rhs(x: Any, p: Any, ops: Any) -> Any:
 
 
 _SAN_F90 = (
-    _HEAD
+    FUNC_HEAD
     + """  double precision :: w
   w = par(8) - par(4) * u(3)
   f(1) = par(1) * u(1) + par(2) * u(2) - par(1) * u(1)**2 + w * u(1) * (2d0 - 3d0 * u(1))
@@ -374,7 +359,7 @@ _SAN_F90 = (
                   -2d0 * par(4) * par(5) * u(2), par(3) + par(6) * u(1) /)
 end subroutine func
 """
-    + _STPNT_HEAD
+    + STPNT_HEAD
     + """  double precision :: s, e
   par(1:8) = (/ 0d0, 1d0, -2d0, 0d0, 1d0, 0d0, 0d0, 0d0 /)
   par(11) = 20d0

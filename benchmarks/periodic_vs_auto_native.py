@@ -85,13 +85,8 @@ from benchmarks.timing import cpu_children, cpu_self  # noqa: E402
 REF_FACTOR = 4
 
 AB_F90 = (
-    """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
-  implicit none
-  integer, intent(in) :: ndim, icp(*), ijac
-  double precision, intent(in) :: u(ndim), par(*)
-  double precision, intent(out) :: f(ndim)
-  double precision, intent(inout) :: dfdu(ndim, ndim), dfdp(ndim, *)
-  double precision :: e
+    an.FUNC_HEAD
+    + """  double precision :: e
   e = exp(u(2))
   f(1) = -u(1) + par(1) * (1d0 - u(1)) * e
   f(2) = -u(2) + par(1) * par(2) * (1d0 - u(1)) * e - par(3) * u(2)
@@ -103,12 +98,9 @@ AB_F90 = (
   dfdp(:, 2) = (/ 0d0, par(1) * (1d0 - u(1)) * e /)
   dfdp(:, 3) = (/ 0d0, -u(2) /)
 end subroutine func
-subroutine stpnt(ndim, u, par, t)
-  implicit none
-  integer, intent(in) :: ndim
-  double precision, intent(inout) :: u(ndim), par(*)
-  double precision, intent(in) :: t
-  par(1:3) = (/ 0d0, 14d0, 3d0 /)
+"""
+    + an.STPNT_HEAD
+    + """  par(1:3) = (/ 0d0, 14d0, 3d0 /)
   u(1:2) = 0d0
 end subroutine stpnt
 """
@@ -116,13 +108,8 @@ end subroutine stpnt
 )
 
 BRU_F90 = (
-    """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
-  implicit none
-  integer, intent(in) :: ndim, icp(*), ijac
-  double precision, intent(in) :: u(ndim), par(*)
-  double precision, intent(out) :: f(ndim)
-  double precision, intent(inout) :: dfdu(ndim, ndim), dfdp(ndim, *)
-  f(1) = par(1) - (par(2) + 1d0) * u(1) + u(1)**2 * u(2)
+    an.FUNC_HEAD
+    + """  f(1) = par(1) - (par(2) + 1d0) * u(1) + u(1)**2 * u(2)
   f(2) = par(2) * u(1) - u(1)**2 * u(2)
   if (ijac == 0) return
   dfdu(1, :) = (/ -(par(2) + 1d0) + 2d0 * u(1) * u(2), u(1)**2 /)
@@ -131,12 +118,9 @@ BRU_F90 = (
   dfdp(:, 1) = (/ 1d0, 0d0 /)
   dfdp(:, 2) = (/ -u(1), u(1) /)
 end subroutine func
-subroutine stpnt(ndim, u, par, t)
-  implicit none
-  integer, intent(in) :: ndim
-  double precision, intent(inout) :: u(ndim), par(*)
-  double precision, intent(in) :: t
-  par(1:2) = (/ 1.5d0, 3d0 /)
+"""
+    + an.STPNT_HEAD
+    + """  par(1:2) = (/ 1.5d0, 3d0 /)
   u(1:2) = (/ 1.5d0, 2d0 /)
 end subroutine stpnt
 """
@@ -219,6 +203,20 @@ _BRU_BOTH = {
     "DSMIN": 1e-4,
 }
 
+
+def _equilibria_run(both: dict[str, Any], icp: int, more: dict[str, Any]) -> dict[str, Any]:
+    """AUTO constants of run 1: equilibria (``IPS = 1``) in ``PAR(icp)`` from the
+    analytic start (``IRS = 0``), folds detected (``ILP = 1``), then ``more``."""
+    return {**both, "IPS": 1, "IRS": 0, "ILP": 1, "ICP": [icp], **more}
+
+
+def _periodic_run(both: dict[str, Any], icp: int, ilp: int, more: dict[str, Any]) -> dict[str, Any]:
+    """AUTO constants of run 2: cycles (``IPS = 2``) in ``PAR(icp)`` and the period
+    ``PAR(11)``, folds detected if ``ilp = 1``, then ``more`` (``IRS``, the label of the
+    Hopf point, is added when it is known: :func:`auto_side`)."""
+    return {**both, "IPS": 2, "ILP": ilp, "ICP": [icp, 11], **more}
+
+
 DEMOS = {
     "ab": Demo(
         name="ab",
@@ -228,31 +226,23 @@ DEMOS = {
         params0={"D": 0.0, "B": 14.0, "beta": 3.0},
         x0=(0.0, 0.0),
         free="D",
-        equilibria={
-            **_AB_BOTH,
-            "IPS": 1,
-            "IRS": 0,
-            "ILP": 1,
-            "ICP": [1],
-            "NTST": 50,
-            "NMX": 400,
-            "DS": 0.1,
-            "DSMAX": 0.05,
-            "UZSTOP": {1: 0.25},
-        },
-        periodic={
-            **_AB_BOTH,
-            "IPS": 2,
-            "ILP": 0,
-            "ICP": [1, 11],
-            "NTST": 70,
-            "NMX": 500,
-            "DS": 0.01,
-            "DSMAX": 0.5,
-            "THL": {11: 0.0},
-            "UZR": {1: [0.17, 0.22]},
-            "UZSTOP": {1: 0.25, 11: 200.0},
-        },
+        equilibria=_equilibria_run(
+            _AB_BOTH, 1, {"NTST": 50, "NMX": 400, "DS": 0.1, "DSMAX": 0.05, "UZSTOP": {1: 0.25}}
+        ),
+        periodic=_periodic_run(
+            _AB_BOTH,
+            1,
+            0,
+            {
+                "NTST": 70,
+                "NMX": 500,
+                "DS": 0.01,
+                "DSMAX": 0.5,
+                "THL": {11: 0.0},
+                "UZR": {1: [0.17, 0.22]},
+                "UZSTOP": {1: 0.25, 11: 200.0},
+            },
+        ),
         checks=(0.17, 0.22),
         eq_settings={"ds": 0.05, "ds_max": 0.05, "p_min": 0.0, "p_max": 0.25},
         bk_settings={
@@ -276,28 +266,15 @@ DEMOS = {
         params0={"A": 1.5, "B": 3.0},
         x0=(1.5, 2.0),
         free="B",
-        equilibria={
-            **_BRU_BOTH,
-            "IPS": 1,
-            "IRS": 0,
-            "ILP": 1,
-            "ICP": [2],
-            "ISP": 1,
-            "NMX": 100,
-            "DSMAX": 0.05,
-            "UZSTOP": {2: 4.0},
-        },
-        periodic={
-            **_BRU_BOTH,
-            "IPS": 2,
-            "ILP": 1,
-            "ICP": [2, 11],
-            "ISP": 2,
-            "NMX": 500,
-            "DSMAX": 0.1,
-            "UZR": {2: [4.0, 4.9]},
-            "UZSTOP": {2: 5.0},
-        },
+        equilibria=_equilibria_run(
+            _BRU_BOTH, 2, {"ISP": 1, "NMX": 100, "DSMAX": 0.05, "UZSTOP": {2: 4.0}}
+        ),
+        periodic=_periodic_run(
+            _BRU_BOTH,
+            2,
+            1,
+            {"ISP": 2, "NMX": 500, "DSMAX": 0.1, "UZR": {2: [4.0, 4.9]}, "UZSTOP": {2: 5.0}},
+        ),
         checks=(4.0, 4.9),
         eq_settings={"ds": 0.02, "ds_max": 0.05, "p_min": 2.5, "p_max": 4.0},
         bk_settings={"ds": 0.02, "ds_min": 1e-4, "ds_max": 0.1, "p_max": 5.0, "max_steps": 500},

@@ -156,6 +156,24 @@ class BenchmarkProblem:
         """Start value of the free parameter."""
         return float(self.params[self.free])
 
+    def step_settings(self) -> dict[str, float]:
+        """The settings every tool takes from the problem, as keyword arguments.
+
+        Returns
+        -------
+        dict
+            ``ds``, ``ds_min``, ``ds_max`` (step sizes), ``p_min``, ``p_max`` (window of
+            the free parameter) and ``max_steps`` (step cap).
+        """
+        return {
+            "ds": self.ds,
+            "ds_min": self.ds_min,
+            "ds_max": self.ds_max,
+            "p_min": self.p_min,
+            "p_max": self.p_max,
+            "max_steps": self.max_steps,
+        }
+
     def param_vector(self, p_free: float | None = None) -> FloatArray:
         """Full parameter vector, shape ``(m,)``, with the free entry set to ``p_free``."""
         v = np.array([float(self.params[k]) for k in self.param_names])

@@ -183,12 +183,7 @@ class _Ours(_Runner):
             p.x0,
             dict(p.params),
             p.free,
-            ds=p.ds,
-            ds_min=p.ds_min,
-            ds_max=p.ds_max,
-            p_min=p.p_min,
-            p_max=p.p_max,
-            max_steps=p.max_steps,
+            **p.step_settings(),
             direction="forward",
             events=self.events,
         )

@@ -415,13 +415,8 @@ def palc_problem(problem: Any, **overrides: Any) -> PalcResult:
     ``ds_min``, ``ds_max``, ``p_min``, ``p_max``, ``norm_max``, ``max_steps``, ``sparse``).
     """
     kw: dict[str, Any] = {
-        "ds": problem.ds,
-        "ds_min": problem.ds_min,
-        "ds_max": problem.ds_max,
-        "p_min": problem.p_min,
-        "p_max": problem.p_max,
+        **problem.step_settings(),
         "norm_max": problem.norm_max,
-        "max_steps": problem.max_steps,
         "sparse": problem.sparse,
     }
     kw.update(overrides)

@@ -10,12 +10,9 @@ output from here, so that the three say the same thing the same way.
 from __future__ import annotations
 
 import argparse
-import json
-import sys
-from collections.abc import Callable
 from typing import Any
 
-from .options import finite, json_safe
+from .options import emit, finite
 
 #: Fn of the start cycle when ``--fn`` is not given (simulation settles there).
 START_FN = 0.1
@@ -57,15 +54,6 @@ def roll_verdict(doc: dict[str, Any]) -> str:
         f"  max roll {doc['max_roll_deg']:.3g} deg vs vanishing stability "
         f"{doc['vanishing_angle_deg']:.3g} deg: {verdict}"
     )
-
-
-def emit(args: argparse.Namespace, doc: dict[str, Any], text: Callable[[dict], str]) -> None:
-    """``doc`` as JSON with ``--json``, else its text (``text(doc)``) and the files written."""
-    if args.json:
-        sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
-        return
-    lines = [text(doc)] + [f"  wrote {f}" for f in doc.get("files", [])]
-    sys.stdout.write("\n".join(lines) + "\n")
 
 
 __all__ = [

@@ -14,6 +14,7 @@ point (:func:`broachkit_cli.main.main`) prints it and exits with status 2.
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import math
 import os
@@ -366,6 +367,36 @@ def check_workers(value: Any, name: str = "--workers") -> int:
     return int(check(n, WORKERS_ENV))
 
 
+def add_backend(parser: argparse.ArgumentParser, what: str) -> None:
+    """Where ``what`` runs (read by :func:`backend_options`), one of four exclusive options.
+
+    ``--processes N`` (local processes; default ``$BROACHKIT_WORKERS``, else one per
+    core), ``--workers N`` (a Dask ``LocalCluster`` of ``N``), ``--scheduler ADDRESS``
+    (a running Dask scheduler) or ``--serial`` (this process).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's parser.
+    what : str
+        What runs there, the start of each help text (``"exact threshold"``).
+    """
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--processes",
+        type=int,
+        default=None,
+        help=f"{what} on N local processes (default: ${WORKERS_ENV}, else one per core)",
+    )
+    where.add_argument(
+        "--workers", type=int, default=None, help=f"{what} on a Dask LocalCluster of N"
+    )
+    where.add_argument(
+        "--scheduler", default=None, help=f"{what} on a Dask scheduler tcp://HOST:PORT"
+    )
+    where.add_argument("--serial", action="store_true", help=f"{what} in this process (debugging)")
+
+
 def backend_options(args: argparse.Namespace) -> dict[str, Any]:
     """Where a sweep's tasks run, from ``--scheduler``, ``--workers``, ``--serial`` and
     ``--processes`` (in that order of precedence): the keyword arguments of
@@ -454,10 +485,32 @@ def json_safe(obj: Any) -> Any:
     return safe(obj)
 
 
+def print_json(doc: Any) -> None:
+    """Print a command's result ``doc`` as one JSON document (``--json``) on stdout.
+
+    Parameters
+    ----------
+    doc : object
+        JSON-serialisable result; non-finite floats are written as ``null``
+        (:func:`json_safe`), indented by 2.
+    """
+    sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
+
+
+def emit(args: argparse.Namespace, doc: dict[str, Any], text: Callable[[dict], str]) -> None:
+    """``doc`` as JSON with ``--json``, else its text (``text(doc)``) and the files written."""
+    if args.json:
+        print_json(doc)
+        return
+    lines = [text(doc)] + [f"  wrote {f}" for f in doc.get("files", [])]
+    sys.stdout.write("\n".join(lines) + "\n")
+
+
 __all__ = [
     "CHI_C_MAX_DEG",
     "LAMBDA_OVER_L_RANGE",
     "OneLineParser",
+    "add_backend",
     "add_chi_c",
     "add_fn",
     "add_fn_guess",
@@ -471,12 +524,14 @@ __all__ = [
     "check_fn",
     "WORKERS_ENV",
     "check_workers",
+    "emit",
     "finite",
     "fn_limit",
     "json_safe",
     "load_model",
     "prepare_out",
     "prepare_out_file",
+    "print_json",
     "ship_from_args",
     "wave_changes",
 ]

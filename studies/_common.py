@@ -1,8 +1,9 @@
 """Shared output helpers for the study scripts: output folder, figure style, PNG and CSV.
 
 Study modules import this one as ``from studies._common import ...`` (``studies`` is
-a package installed with broachkit; ``python studies/<script>.py`` puts the folder
-above it on ``sys.path``). Everything here is generic: nothing knows about ships.
+a package installed with broachkit, so ``python -m studies.<script>`` and
+``python studies/<script>.py`` both find it). Everything here is generic: nothing
+knows about ships.
 Every file is written atomically (a temporary file renamed onto the final name,
 :mod:`continuation.atomic`), so an interrupted study never leaves a truncated file.
 
@@ -206,6 +207,33 @@ def study_main(
     s = compute(args.out, progress=lambda m: sys.stdout.write(m + "\n"), **options)
     sys.stdout.write(json.dumps(s if shown is None else {k: s[k] for k in shown}, indent=2) + "\n")
     return 0
+
+
+def begin_step(
+    out: Path, progress: Callable[[str], None] | None = None
+) -> tuple[Callable[[str], None], float]:
+    """Start a figure step: create its folder, return its progress callback and start time.
+
+    Parameters
+    ----------
+    out : Path
+        The step's output folder (created with its parents).
+    progress : callable, optional
+        ``progress(message)``; None: messages are dropped.
+
+    Returns
+    -------
+    say : callable
+        ``progress``, or a callable that ignores its message.
+    started : float
+        A :func:`time.perf_counter` reading, for :func:`finish_summary`.
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    return progress or _quiet, time.perf_counter()
+
+
+def _quiet(msg: str) -> None:
+    """A progress callback that drops ``msg``."""
 
 
 def finish_summary(
@@ -481,6 +509,7 @@ __all__ = [
     "finish_summary",
     "output_dir",
     "rows_main",
+    "begin_step",
     "read_csv",
     "save_csv",
     "save_figure",

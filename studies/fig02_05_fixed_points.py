@@ -25,19 +25,15 @@ from __future__ import annotations
 
 import json
 import math
-import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script: make the `studies` package importable
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 from ship_models.paper import PAPER_FN
 from studies._common import (
+    begin_step,
     finish_summary,
     new_figure,
     save_figure,
@@ -185,9 +181,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     from ship_models.analysis import find_fixed_point, trace_in_chi_c, trace_in_fn
     from studies._model import default_model
 
-    say = progress or (lambda msg: None)
-    out.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
+    say, t0 = begin_step(out, progress)
     model = default_model()  # one per process (shared by the steps it runs)
     params = model.default_params().replace(Fn=FN, chi_c=math.radians(CHI_C_DEG))
     c = model.celerity(params)

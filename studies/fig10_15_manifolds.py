@@ -26,20 +26,16 @@ Run: ``python studies/fig10_15_manifolds.py [--out DIR]``.
 from __future__ import annotations
 
 import math
-import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script: make the `studies` package importable
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 from ship_models.paper import PAPER_FN
 from studies._common import (
     PLANE_LABELS,
+    begin_step,
     finish_summary,
     new_figure,
     paper_quantities,
@@ -203,9 +199,7 @@ def compute(out: Path, progress: Callable[[str], None] | None = None) -> dict[st
     from ship_models.analysis.global_picture import compare_pictures
     from studies._model import default_model
 
-    say = progress or (lambda msg: None)
-    out.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
+    say, t0 = begin_step(out, progress)
     model = default_model()  # one per process (shared by the steps it runs)
     base = model.default_params().replace(chi_c=math.radians(CHI_C_DEG))
     c = model.celerity(base)

@@ -32,7 +32,6 @@ figures and every 5 deg with a tighter tolerance, several minutes).
 from __future__ import annotations
 
 import math
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -40,14 +39,13 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script: make the `studies` package importable
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 from continuation.status import Status
 from continuation.sweep import check_workers, default_workers, open_backend
 from ship_models.paper import PAPER_FN_BRACKET
 from studies._common import (
     PLANE_LABELS,
+    begin_step,
+    finish_summary,
     new_figure,
     paper_quantities,
     save_csv,
@@ -55,7 +53,6 @@ from studies._common import (
     save_table,
     state_columns,
     study_main,
-    write_summary,
 )
 from studies._sudden_tasks import compute_orbits, load_orbits, task
 
@@ -216,9 +213,7 @@ def compute(
     """
     from studies._model import default_model
 
-    say = progress or (lambda msg: None)
-    out.mkdir(parents=True, exist_ok=True)
-    t_all = time.perf_counter()
+    say, t_all = begin_step(out, progress)
     model = default_model()  # one per process (shared by the steps it runs)
     workers = default_workers() if workers is None else int(check_workers(workers))
     sweep_dir = out / SWEEP_DIR
@@ -576,9 +571,7 @@ def _compute(
         "fig16_map.png", "fig17_20_transient.png", "fig21_final_stage.png", "fig22_map.png",
         "fig23_critical_condition.png",
     ]  # fmt: skip
-    summary["seconds"] = round(time.perf_counter() - t_all, 2)
-    write_summary(out, summary, default=float)
-    return summary
+    return finish_summary(out, summary, t_all, default=float)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -24,20 +24,16 @@ Run: ``python studies/fig21_23_connection.py [--out DIR] [--quick]``.
 from __future__ import annotations
 
 import math
-import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script: make the `studies` package importable
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 from ship_models.paper import PAPER_FN_BRACKET
 from studies._common import (
     PLANE_LABELS,
+    begin_step,
     finish_summary,
     new_figure,
     paper_quantities,
@@ -88,9 +84,7 @@ def compute(
     from ship_models.analysis.upslope import upslope_branch
     from studies._model import bisection_near, default_model, heteroclinic
 
-    say = progress or (lambda msg: None)
-    out.mkdir(parents=True, exist_ok=True)
-    t_all = time.perf_counter()
+    say, t_all = begin_step(out, progress)
     model = default_model()  # one per process (shared by the steps it runs)
     chi10 = math.radians(CHI_C_DEG)
     summary: dict[str, Any] = {"chi_c_deg": CHI_C_DEG, "paper_Fn_10deg": list(PAPER_FN)}

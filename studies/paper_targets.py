@@ -49,9 +49,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-if __package__ in (None, ""):
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 import numpy as np
 
 #: Frames read from the OCR: (name, figure, (x_lo, x_hi), (y_lo, y_hi), how read).

@@ -43,9 +43,6 @@ import argparse
 import sys
 from pathlib import Path
 
-if __package__ in (None, ""):
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 import numpy as np
 
 #: Pitch ratios of the study: the range of the Wageningen B-series regression.

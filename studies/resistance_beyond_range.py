@@ -27,12 +27,8 @@ Run: ``python studies/resistance_beyond_range.py [--out DIR] [--quick]``.
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 from typing import Any
-
-if __package__ in (None, ""):
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np
 

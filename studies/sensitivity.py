@@ -26,9 +26,6 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-if __package__ in (None, ""):  # run as a script: make the `studies` package importable
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 from continuation.atomic import atomic_path
 from ship_models.paper import PAPER_FN_BRACKET
 from studies._common import write_results, write_summary

@@ -38,9 +38,6 @@ from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):  # run as a script: make the `studies` package importable
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 from ship_models import get_vessel_data
 from ship_models.estimation import VesselModelData
 from ship_models.hydro.hydrostatics import is_code_criteria

@@ -36,25 +36,6 @@ def test_periodic_cycle_agrees_with_the_shooting_solver(capsys, tmp_path):
         assert (tmp_path / name).stat().st_size > 0
 
 
-@pytest.mark.parametrize(
-    ("argv", "needle"),
-    [
-        (["periodic", "--fn", "nan"], "--fn"),
-        (["periodic", "--chi-c", "400"], "--chi-c"),
-        (["periodic-branch", "--fn", "0.1:0.35", "--chi-c", "0:20"], "exactly one range"),
-        (["periodic-branch", "--fn", "0.3:0.1"], "--fn range must increase"),
-        (["periodic-branch", "--fn", "0.1:x"], "--fn must be a number or a range"),
-        (["periodic-branch", "--fn", "0.3", "--chi-c", "10:10"], "--chi-c range"),
-        (["periodic-branch", "--fn", "0.3", "--chi-c", "0:30", "--compare"], "--compare"),
-    ],
-)
-def test_bad_input_is_one_line_and_exit_2(capsys, argv, needle):
-    rc, out, err = _run(capsys, *argv)
-    assert rc == 2
-    assert needle in err and "Traceback" not in err
-    assert len(err.strip().splitlines()) == 1
-
-
 def test_periodic_branch_over_a_short_fn_range(capsys):
     """0.1 -> 0.2 at 10 deg: the whole range is covered by stable cycles whose period
     grows with Fn (the ship is overtaken more slowly), without the blow-up of 0.3016."""

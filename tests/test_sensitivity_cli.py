@@ -9,22 +9,6 @@ import pytest
 from broachkit_cli.main import main
 
 
-@pytest.mark.parametrize(
-    ("argv", "match"),
-    [
-        (["calibrate", "--target", "Fn=abc"], "--target"),
-        (["calibrate", "--target", "speed=0.3"], "fn_crit=VALUE"),
-        (["calibrate", "--target", "fn_crit=0.32", "--curve", "0:30:-5"], "--curve"),
-        (["sensitivity", "--chi-c", "100"], "--chi-c"),
-        (["sensitivity", "--samples", "-1"], "--samples"),
-    ],
-)
-def test_bad_options_exit_2_with_one_line(capsys, argv, match):
-    assert main(argv) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and match in err[0] and "Traceback" not in err[0]
-
-
 @pytest.mark.slow
 def test_sensitivity_json_and_files(capsys, tmp_path):
     keys = "hydrodynamics.wave_surge_scale,factor.R_surf"

@@ -31,6 +31,27 @@ from typing import Any
 
 from .common import PeerUnavailable
 
+#: Opening of an equation file's ``FUNC`` (AUTO-07p's interface: the right-hand side
+#: ``f`` and, per ``ijac``, its Jacobians ``dfdu``, ``dfdp``); the body and
+#: ``end subroutine func`` follow.
+FUNC_HEAD = """subroutine func(ndim, u, icp, par, ijac, f, dfdu, dfdp)
+  implicit none
+  integer, intent(in) :: ndim, icp(*), ijac
+  double precision, intent(in) :: u(ndim), par(*)
+  double precision, intent(out) :: f(ndim)
+  double precision, intent(inout) :: dfdu(ndim, ndim), dfdp(ndim, *)
+"""
+
+#: Opening of an equation file's ``STPNT`` (the starting state ``u`` and parameters
+#: ``par``, at ``t`` for a periodic or connecting start); the body and
+#: ``end subroutine stpnt`` follow.
+STPNT_HEAD = """subroutine stpnt(ndim, u, par, t)
+  implicit none
+  integer, intent(in) :: ndim
+  double precision, intent(inout) :: u(ndim), par(*)
+  double precision, intent(in) :: t
+"""
+
 #: The user routines AUTO-07p links against that the benchmarks' equation files leave
 #: empty (boundary and integral conditions, optimisation, user values).
 EMPTY_ROUTINES = """subroutine bcnd

@@ -15,12 +15,20 @@ The scatter table ``W2`` (IACS Rec. 34, North Atlantic) is not shipped: give it 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
-from ..options import add_json, add_out, add_vessel, finite, json_safe, load_model, prepare_out
+from ..options import (
+    add_backend,
+    add_json,
+    add_out,
+    add_vessel,
+    finite,
+    load_model,
+    prepare_out,
+    print_json,
+)
 from ..progress import StatusLine
 
 NAME = "assess"
@@ -76,23 +84,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="dC/dtheta of the coefficients with a stated uncertainty (needs --scatter)",
     )
-    where = parser.add_mutually_exclusive_group()
-    where.add_argument(
-        "--processes",
-        type=int,
-        default=None,
-        help="exact threshold on N local processes (default: $BROACHKIT_WORKERS, else one "
-        "per core)",
-    )
-    where.add_argument(
-        "--workers", type=int, default=None, help="exact threshold on a Dask LocalCluster of N"
-    )
-    where.add_argument(
-        "--scheduler", default=None, help="exact threshold on a Dask scheduler tcp://HOST:PORT"
-    )
-    where.add_argument(
-        "--serial", action="store_true", help="exact threshold in this process (debugging)"
-    )
+    add_backend(parser, "exact threshold")
     add_out(parser, None, "the figures and assessment.json")
     add_json(parser)
 
@@ -175,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
     if out is not None:
         doc["files"] = _write(a, doc, out)
     if args.json:
-        sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
+        print_json(doc)
         return 0
     lines = [
         f"{doc['vessel']} (L = {doc['L']:g} m) at Fn = {doc['Fn_service']:g}",

@@ -22,7 +22,6 @@ Degrees on the command line, radians inside.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from collections.abc import Callable
@@ -33,8 +32,8 @@ from ..options import (
     add_ship,
     check_fn,
     finite,
-    json_safe,
     numerical_failure_exit,
+    print_json,
     ship_from_args,
 )
 from ..progress import StatusLine
@@ -290,7 +289,7 @@ def _run(args: argparse.Namespace) -> int:
     result.update(wave_force_fields(model, params))  # issue 25: which wave forces were used
     ok = result["status"] == "SUCCESS" and result.get("Fn") is not None
     if args.json:
-        sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
+        print_json(result)
     elif args.method == "threshold" and result["Fn"] is None:
         sys.stderr.write(
             f"broachkit critical: no capsizing threshold in --fn-min/--fn-max = "

@@ -18,7 +18,6 @@ Examples::
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import time
@@ -37,10 +36,10 @@ from ..options import (
     add_wave,
     check_workers,
     finite,
-    json_safe,
     numerical_failure_exit,
     parse_list,
     prepare_out,
+    print_json,
     ship_from_args,
 )
 from ..progress import StatusLine
@@ -204,7 +203,7 @@ def _run(args: argparse.Namespace) -> int:
             names.append("threshold_curve.csv")
         result["files"] = [str(out / n) for n in names]
     if args.json:
-        sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
+        print_json(result)
     else:
         sys.stdout.write(
             f"{model.vessel.name}: heteroclinic Fn by continuing the connection "

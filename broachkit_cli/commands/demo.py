@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -11,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..files import write_atomic, write_atomic_group, write_json
-from ..options import add_json, add_out, json_safe, prepare_out
+from ..options import add_json, add_out, prepare_out, print_json
 
 NAME = "demo"
 HELP = "continue the Bratu problem (fold) and the Brusselator (Hopf); write figures and data"
@@ -125,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     out = prepare_out(args.out)
     summary = compute(out)
     if args.json:
-        sys.stdout.write(json.dumps(json_safe(summary), indent=2) + "\n")
+        print_json(summary)
     else:
         for name, s in summary.items():
             sys.stdout.write(f"{name}: {s}\n")

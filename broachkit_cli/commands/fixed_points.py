@@ -11,11 +11,11 @@ The ship options are the shared ones of :mod:`broachkit_cli.options`.
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import sys
+from collections.abc import Sequence
+from typing import Any
 
-from ..options import add_ship, json_safe, ship_from_args
+from ..options import add_ship, emit, ship_from_args
 
 NAME = "fixed-points"
 HELP = "fixed points (surf-riding equilibria) of the ship at one Fn and autopilot course"
@@ -40,24 +40,25 @@ def run(args: argparse.Namespace) -> int:
         "time_scale_L_over_c": model.forces.L / model.celerity(params),
         "fixed_points": [fp.to_json() for fp in pts],
     }
-    if args.json:
-        sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
-    else:
-        sys.stdout.write(
-            f"{model.vessel.name}: Fn = {params['Fn']:.6g}, chi_c = {args.chi_c:g} deg: "
-            f"{len(pts)} fixed point(s)\n"
-        )
-        for fp in pts:
-            x = fp.x
-            lam = fp.eigen.values[0]
-            sys.stdout.write(
-                f"  {fp.label:10s} xi_G/lambda={x[0]:.5f} u={x[1]:.4f} m/s v={x[2]:.4f} m/s "
-                f"chi={math.degrees(x[3]):.3f} phi={math.degrees(x[5]):.3f} "
-                f"delta={math.degrees(x[7]):.3f} deg | saddle index {fp.saddle_index}, "
-                f"largest Re(lambda) = {lam.real:.5g} 1/s\n"
-            )
-            if fp.saddle_index >= 1 and lam.imag == 0:
-                sys.stdout.write(
-                    f"  {'':10s} dominant: {', '.join(fp.eigen.dominant_components())}\n"
-                )
+    emit(args, result, lambda doc: _text(doc, pts, args.chi_c))
     return 0 if pts else 1
+
+
+def _text(doc: dict[str, Any], pts: Sequence[Any], chi_c_deg: float) -> str:
+    """The fixed points ``pts`` of the result ``doc``, one line each (angles in degrees)."""
+    lines = [
+        f"{doc['vessel']}: Fn = {doc['params']['Fn']:.6g}, chi_c = {chi_c_deg:g} deg: "
+        f"{len(pts)} fixed point(s)"
+    ]
+    for fp in pts:
+        x = fp.x
+        lam = fp.eigen.values[0]
+        lines.append(
+            f"  {fp.label:10s} xi_G/lambda={x[0]:.5f} u={x[1]:.4f} m/s v={x[2]:.4f} m/s "
+            f"chi={math.degrees(x[3]):.3f} phi={math.degrees(x[5]):.3f} "
+            f"delta={math.degrees(x[7]):.3f} deg | saddle index {fp.saddle_index}, "
+            f"largest Re(lambda) = {lam.real:.5g} 1/s"
+        )
+        if fp.saddle_index >= 1 and lam.imag == 0:
+            lines.append(f"  {'':10s} dominant: {', '.join(fp.eigen.dominant_components())}")
+    return "\n".join(lines)

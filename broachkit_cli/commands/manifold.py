@@ -12,12 +12,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import sys
 
 from ..files import write_atomic
-from ..options import add_out, add_ship, finite, json_safe, prepare_out, ship_from_args
+from ..options import add_out, add_ship, finite, prepare_out, print_json, ship_from_args
 from ..progress import StatusLine
 
 NAME = "manifold"
@@ -95,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
             files[name] = str(write_atomic(out / f"manifold_{name}.csv", br.trajectory.to_csv))
         result["files"] = files
     if args.json:
-        sys.stdout.write(json.dumps(json_safe(result), indent=2) + "\n")
+        print_json(result)
     else:
         sp = man.saddle
         sys.stdout.write(

@@ -64,7 +64,7 @@ from typing import Any
 
 from ..files import is_complete, mark_complete, mark_incomplete, write_json
 from ..interrupt import acknowledge
-from ..options import add_json, add_out, check_workers, json_safe, prepare_out
+from ..options import add_json, add_out, check_workers, prepare_out, print_json
 from ..step_inputs import INPUTS_FILE, compare, read_record, step_inputs, vessel_file
 from . import demo
 
@@ -709,7 +709,7 @@ def _run(args: argparse.Namespace) -> int:
         doc["report"] = str(write_report(out, results, doc))
     write_json(out / "reproduce.json", doc)
     if args.json:
-        sys.stdout.write(json.dumps(json_safe(doc), indent=2) + "\n")
+        print_json(doc)
     else:
         sys.stdout.write(_summary_text(doc))
     return 0

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from ..files import write_json, write_text
-from ..options import MAX_LIST_VALUES, backend_options, parse_list, prepare_out
+from ..options import MAX_LIST_VALUES, add_backend, backend_options, parse_list, prepare_out
 
 NAME = "sweep"
 HELP = "parallel, resumable sweeps: sudden-change boundary, Fig. 23 squares, critical surface"
@@ -84,18 +84,7 @@ def parse_initial(text: str) -> tuple[float, float]:
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--vessel", default="purse_seiner", help="vessel name or TOML file")
     p.add_argument("--out", type=Path, required=True, help="folder for CSV, JSON, PNG, checkpoints")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument(
-        "--workers", type=int, default=None, help="start a Dask LocalCluster of N workers"
-    )
-    where.add_argument("--scheduler", default=None, help="Dask scheduler address tcp://HOST:PORT")
-    where.add_argument(
-        "--processes",
-        type=int,
-        default=None,
-        help="N local processes (default: $BROACHKIT_WORKERS, else one per core)",
-    )
-    where.add_argument("--serial", action="store_true", help="run in this process (debugging)")
+    add_backend(p, "the tasks")
     p.add_argument(
         "--retry-failed", action="store_true", help="rerun tasks whose checkpoint is a failure"
     )
