@@ -34,7 +34,7 @@ import numpy as np
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.typing import FloatArray
 
-from .contracts import WaveForceModel
+from .contracts import SeaState, WaveForceModel
 from .hydro.propeller import revolutions, thrust
 from .hydro.resistance import ResistanceFit
 
@@ -178,15 +178,17 @@ class ShipForces:
         u: Any,
         chi: Any,
         n: Any,
-        H_over_lambda: Any,
-        lambda_over_L: Any,
+        sea: SeaState,
         ops: Ops = NUMPY_OPS,
         *,
         X_w: Any = None,
     ) -> Any:
-        """Eq. (5): ``(T(u; n) - R(u) + X_w) / (m + m_x)`` (m/s^2)."""
+        """Eq. (5): ``(T(u; n) - R(u) + X_w) / (m + m_x)`` (m/s^2).
+
+        ``X_w`` is :attr:`waves` at ``(xi, u, chi, sea)`` (without lift) unless given.
+        """
         if X_w is None:
-            X_w = self.waves.forces(xi, u, chi, H_over_lambda, lambda_over_L, ops, lift=False)[0]
+            X_w = self.waves.forces(xi, u, chi, sea, ops, lift=False)[0]
         return (self.thrust_force(u, n, ops) - self.resistance_force(u, ops) + X_w) / (
             self.mass + self.m_x
         )

@@ -33,7 +33,7 @@ from continuation.settings import NewtonSettings
 from continuation.system import System
 from continuation.typing import FloatArray
 
-from .contracts import WaveForceBuilder
+from .contracts import SeaState, WaveForceBuilder
 from .estimation import VesselModelData
 from .forces import ShipForces
 from .paper import PAPER_FN
@@ -110,7 +110,7 @@ class SurgeModel(System):
         Fn, Hl, lL = p[0], p[1], p[2]
         n = F.revolutions(Fn, ops)
         f1 = (u - F.celerity(lL, ops)) / F.wavelength(lL)
-        f2 = F.surge_acceleration(xi, u, 0.0, n, Hl, lL, ops)
+        f2 = F.surge_acceleration(xi, u, 0.0, n, SeaState(Hl, lL), ops)
         return ops.stack([f1, f2])
 
     @property
@@ -142,7 +142,8 @@ class SurgeModel(System):
         F = self.forces
         n = F.revolutions(pv[0])
         xi = np.asarray(xi, dtype=float)
-        X = np.vectorize(lambda s: F.waves.forces(s, u, 0.0, pv[1], pv[2], lift=False)[0])(xi)
+        sea = SeaState(pv[1], pv[2])
+        X = np.vectorize(lambda s: F.waves.forces(s, u, 0.0, sea, lift=False)[0])(xi)
         return F.thrust_force(u, n) - F.resistance_force(u) + X
 
     def fixed_points(

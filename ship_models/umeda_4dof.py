@@ -56,7 +56,7 @@ from continuation.settings import NewtonSettings
 from continuation.system import System
 from continuation.typing import FloatArray
 
-from .contracts import WaveForceBuilder
+from .contracts import SeaState, WaveForceBuilder
 from .estimation import VesselModelData, build_vessel_model, resolve_vessel
 from .forces import ShipForces
 from .paper import PAPER_CHI_C, PAPER_FN
@@ -176,7 +176,8 @@ class Umeda4DOF(System):
         lam = F.wavelength(lL)
         c = F.celerity(lL, ops)
         n = F.revolutions(Fn, ops)
-        Xw, Yw, Nw, Kw = F.waves.forces(xi, u, chi, Hl, lL, ops, lift=self.wave_lift)
+        sea = SeaState(Hl, lL)
+        Xw, Yw, Nw, Kw = F.waves.forces(xi, u, chi, sea, ops, lift=self.wave_lift)
         FN = F.rudder_normal_force(u, v, r, delta, n, ops)
         YR = -(1.0 + F.a_H) * FN
         NR = -(F.x_R + F.a_H * F.x_H) * FN
@@ -185,7 +186,7 @@ class Umeda4DOF(System):
         Nv, Nr = F.N_v1 * u, F.N_r1 * u
         u2 = u * u
         f1 = (u * ops.cos(chi) - v * ops.sin(chi) - c) / lam
-        f2 = F.surge_acceleration(xi, u, chi, n, Hl, lL, ops, X_w=Xw)
+        f2 = F.surge_acceleration(xi, u, chi, n, sea, ops, X_w=Xw)
         f3 = (-(F.mass + F.m_x) * u * r + Yv * v + Yr * r + F.Y_phi2 * u2 * phi + YR + Yw) / (
             F.mass + F.m_y
         )
@@ -272,7 +273,8 @@ class Umeda4DOF(System):
         u = c / np.cos(chi_c)
         n = F.revolutions(Fn)
         xi = np.atleast_1d(np.asarray(xi, dtype=float))
-        X = np.array([F.waves.forces(s, u, chi_c, Hl, lL, lift=False)[0] for s in xi])
+        sea = SeaState(Hl, lL)
+        X = np.array([F.waves.forces(s, u, chi_c, sea, lift=False)[0] for s in xi])
         return F.thrust_force(u, n) - F.resistance_force(u) + X
 
     def equilibrium_guess(self, params: Params | FloatArray, where: str = "crest") -> FloatArray:

@@ -42,6 +42,7 @@ if __package__ in (None, ""):  # run as a script: make the `studies` package imp
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ship_models import get_vessel_data
+from ship_models.contracts import SeaState
 from ship_models.estimation import VesselModelData
 from ship_models.hydro.hydrostatics import is_code_criteria
 from studies._common import figure_style, new_figure, output_dir, save_csv, save_figure, save_table
@@ -103,8 +104,8 @@ def wave_amplitudes(
     speed = float(F.celerity(lL)) if u is None else float(u)
     out = np.zeros((np.size(chi), 4))
     for i, c in enumerate(np.atleast_1d(chi)):
-        f0 = np.array(F.waves.forces(0.0, speed, c, Hl, lL, lift=lift), dtype=float)
-        f1 = np.array(F.waves.forces(0.25, speed, c, Hl, lL, lift=lift), dtype=float)
+        f0 = np.array(F.waves.forces(0.0, speed, c, SeaState(Hl, lL), lift=lift), dtype=float)
+        f1 = np.array(F.waves.forces(0.25, speed, c, SeaState(Hl, lL), lift=lift), dtype=float)
         out[i] = np.hypot(f0, f1)
     return out
 

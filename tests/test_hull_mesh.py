@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from ship_models import get_vessel_data
+from ship_models.contracts import SeaState
 from ship_models.hydro.hydrostatics import gz_curve
 from ship_models.hydro.mesh import check_wetted_mesh, mesh_volume
 from ship_models.hydro.mesh_hull import (
@@ -40,6 +41,9 @@ from ship_models.hydro.offsets import (
 )
 from ship_models.hydro.upright import hydrostatics
 from ship_models.hydro.waves import WaveStrips
+
+#: The purse seiner's wave (H/lambda = 1/9.2, lambda/L = 1.5) for the force checks.
+SEA = SeaState(1 / 9.2, 1.5)
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "examples"
 L, B, T, D = 34.5, 7.0, 2.6, 3.6  # the Wigley example
@@ -163,7 +167,7 @@ def test_form_parameter_hull_as_a_mesh_gives_the_strip_forces_of_the_offsets(sei
         w = WaveStrips.from_hull(hull, x_G=seiner.info["x_G"], zeta_G=seiner.info["zeta_G"],
                                  m22=np.interp(hull.x, seiner.hull.x, w0.m22), z_H=w0.z_H,
                                  rho=w0.rho, g=w0.g, n_depth=8)  # fmt: skip
-        out.append(np.array([w.forces(s, 8.0, 0.3, 1 / 9.2, 1.5, lift=False) for s in xi]))
+        out.append(np.array([w.forces(s, 8.0, 0.3, SEA, lift=False) for s in xi]))
     err = np.max(np.abs(out[1] - out[0]), axis=0) / np.max(np.abs(out[0]), axis=0)
     assert np.all(err < 3e-3), err
 
@@ -247,7 +251,7 @@ def test_panel_froude_krylov_on_the_mesh_equals_its_strips():
         tab = panel_table(Vw, F, L=L, x_G=0.0, zeta_G=-0.16, rho=1025.0, g=9.80665,
                           lambda_over_L=[1.5], chi_deg=[30.0], solve=False,
                           cache=False)  # fmt: skip
-        ref = np.array([st.forces(s, 8.0, math.radians(30.0), 1 / 9.2, 1.5, lift=False)
+        ref = np.array([st.forces(s, 8.0, math.radians(30.0), SEA, lift=False)
                         for s in xi])  # fmt: skip
         got = np.array([[-a * np.real(tab.fk[n, 0, 0] * np.exp(2j * np.pi * s))
                          for n in range(4)] for s in xi])  # fmt: skip

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from ship_models import get_vessel_data
+from ship_models.contracts import SeaState
 from ship_models.estimation import build_vessel_model
 from ship_models.hydro.hull import parametric_hull
 from ship_models.hydro.hydrostatics import gz_curve
@@ -25,6 +26,9 @@ from ship_models.hydro.offsets import (
 from ship_models.hydro.upright import check_particulars, hydrostatics
 from ship_models.hydro.waves import WaveStrips
 from ship_models.vessel import VesselData, VesselFileError, dump_vessel, load_vessel
+
+#: The purse seiner's wave (H/lambda = 1/9.2, lambda/L = 1.5) for the force checks.
+SEA = SeaState(1 / 9.2, 1.5)
 
 L, B, T, D = 34.5, 7.0, 2.6, 3.6
 WIGLEY = {  # closed forms of the Wigley hull (see wigley_offsets)
@@ -73,7 +77,7 @@ def test_form_parameter_hull_written_as_offsets_gives_the_same_forces(seiner):
     kw = _particulars(seiner.vessel)
     w0 = seiner.forces.waves
     xi = np.linspace(0.0, 1.0, 16, endpoint=False)
-    ref = np.array([w0.forces(s, 8.0, 0.3, 1 / 9.2, 1.5, lift=False) for s in xi])
+    ref = np.array([w0.forces(s, 8.0, 0.3, SEA, lift=False) for s in xi])
     errs = []
     for n in ((41, 21), (81, 41)):
         t = form_parameter_offsets(**kw, n_stations=n[0], n_waterlines=n[1])
@@ -82,7 +86,7 @@ def test_form_parameter_hull_written_as_offsets_gives_the_same_forces(seiner):
         w1 = WaveStrips.from_hull(oh, x_G=seiner.info["x_G"], zeta_G=seiner.info["zeta_G"],
                                   m22=np.interp(oh.x, seiner.hull.x, w0.m22), z_H=w0.z_H,
                                   rho=w0.rho, g=w0.g, n_depth=8)  # fmt: skip
-        got = np.array([w1.forces(s, 8.0, 0.3, 1 / 9.2, 1.5, lift=False) for s in xi])
+        got = np.array([w1.forces(s, 8.0, 0.3, SEA, lift=False) for s in xi])
         errs.append(np.max(np.abs(got - ref), axis=0) / np.max(np.abs(ref), axis=0))
     assert np.all(errs[1] < 2e-3)
     assert np.all(errs[1] < 0.35 * errs[0])  # converging (second order: 0.25)
