@@ -34,7 +34,7 @@ import numpy as np
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.typing import FloatArray
 
-from .contracts import SeaState, WaveForceModel
+from .contracts import WaveForceModel
 from .hydro.propeller import revolutions, thrust
 from .hydro.resistance import ResistanceFit
 
@@ -172,23 +172,18 @@ class ShipForces:
             return self.propeller.thrust(u, n, self.rho, ops)
         return thrust(u, n, rho=self.rho, D_p=self.D_p, w_P=self.w_P, t_P=self.t_P, k=self.kt)
 
-    def surge_acceleration(
-        self,
-        xi: Any,
-        u: Any,
-        chi: Any,
-        n: Any,
-        sea: SeaState,
-        ops: Ops = NUMPY_OPS,
-        *,
-        X_w: Any = None,
-    ) -> Any:
+    def surge_acceleration(self, u: Any, n: Any, X_w: Any, ops: Ops = NUMPY_OPS) -> Any:
         """Eq. (5): ``(T(u; n) - R(u) + X_w) / (m + m_x)`` (m/s^2).
 
-        ``X_w`` is :attr:`waves` at ``(xi, u, chi, sea)`` (without lift) unless given.
+        Parameters
+        ----------
+        u, n : scalar
+            Surge velocity (m/s) and propeller revolution (1/s).
+        X_w : scalar
+            Wave surge force (N): ``waves.forces(...)[0]`` (:attr:`waves`).
+        ops : Ops
+            NumPy or CasADi namespace.
         """
-        if X_w is None:
-            X_w = self.waves.forces(xi, u, chi, sea, ops, lift=False)[0]
         return (self.thrust_force(u, n, ops) - self.resistance_force(u, ops) + X_w) / (
             self.mass + self.m_x
         )

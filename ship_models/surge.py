@@ -110,7 +110,8 @@ class SurgeModel(System):
         Fn, Hl, lL = p[0], p[1], p[2]
         n = F.revolutions(Fn, ops)
         f1 = (u - F.celerity(lL, ops)) / F.wavelength(lL)
-        f2 = F.surge_acceleration(xi, u, 0.0, n, SeaState(Hl, lL), ops)
+        X_w = F.waves.forces(xi, u, 0.0, SeaState(Hl, lL), ops, lift=False)[0]
+        f2 = F.surge_acceleration(u, n, X_w, ops)
         return ops.stack([f1, f2])
 
     @property

@@ -176,8 +176,7 @@ class Umeda4DOF(System):
         lam = F.wavelength(lL)
         c = F.celerity(lL, ops)
         n = F.revolutions(Fn, ops)
-        sea = SeaState(Hl, lL)
-        Xw, Yw, Nw, Kw = F.waves.forces(xi, u, chi, sea, ops, lift=self.wave_lift)
+        Xw, Yw, Nw, Kw = F.waves.forces(xi, u, chi, SeaState(Hl, lL), ops, lift=self.wave_lift)
         FN = F.rudder_normal_force(u, v, r, delta, n, ops)
         YR = -(1.0 + F.a_H) * FN
         NR = -(F.x_R + F.a_H * F.x_H) * FN
@@ -186,7 +185,7 @@ class Umeda4DOF(System):
         Nv, Nr = F.N_v1 * u, F.N_r1 * u
         u2 = u * u
         f1 = (u * ops.cos(chi) - v * ops.sin(chi) - c) / lam
-        f2 = F.surge_acceleration(xi, u, chi, n, sea, ops, X_w=Xw)
+        f2 = F.surge_acceleration(u, n, Xw, ops)
         f3 = (-(F.mass + F.m_x) * u * r + Yv * v + Yr * r + F.Y_phi2 * u2 * phi + YR + Yw) / (
             F.mass + F.m_y
         )

@@ -54,7 +54,7 @@ from .boundary_check import boundary_refusal
 from .crest_saddle import crest_saddle
 from .critical_result import CriticalFn
 from .fixed_points import FixedPoint
-from .params import course, ship_model, ship_params
+from .params import course, replace_settings, ship_model, ship_params
 from .upslope import UpslopeRun, connection_guess, guess_run
 
 log = logging.getLogger(__name__)
@@ -127,10 +127,7 @@ class BVPSettings:
 
     def replace(self, **changes: Any) -> BVPSettings:
         """A copy with ``changes``; unknown names raise a ValueError naming them."""
-        bad = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
-        if bad:
-            raise ValueError(f"unknown BVP setting(s) {bad}")
-        return dataclasses.replace(self, **changes) if changes else self
+        return replace_settings(self, "BVP", **changes)
 
 
 def _pad_ends(

@@ -57,7 +57,6 @@ the slope: the first-passage criterion of :mod:`ship_models.analysis.critical`).
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 from collections.abc import Callable, Sequence
@@ -86,7 +85,7 @@ from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
 from .fixed_points import FixedPoint, find_fixed_point, fixed_points
 from .outcomes import ShipOutcome
-from .params import ship_params
+from .params import replace_settings, ship_params
 
 log = logging.getLogger(__name__)
 
@@ -317,10 +316,7 @@ class ShipFateSettings:
 
     def replace(self, **changes: Any) -> ShipFateSettings:
         """A copy with ``changes``; unknown names raise a ValueError naming them."""
-        bad = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
-        if bad:
-            raise ValueError(f"unknown fate setting(s) {bad}")
-        return dataclasses.replace(self, **changes) if changes else self
+        return replace_settings(self, "fate", **changes)
 
 
 def classify_ship_fate(

@@ -58,7 +58,7 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 from continuation.dynamics.lowest_fate import lowest_fate
@@ -71,7 +71,7 @@ from .fixed_points import find_fixed_point
 from .fn_window import fn_limit, surf_riding_window
 from .manifold import ShipFate
 from .outcomes import ShipOutcome
-from .params import course, ship_model, ship_params
+from .params import course, replace_settings, ship_model, ship_params
 
 log = logging.getLogger(__name__)
 
@@ -555,12 +555,7 @@ def capsizing_threshold(
     CapsizingThreshold
     """
     t0 = time.perf_counter()
-    cfg = settings or ThresholdSettings()
-    if options:
-        bad = sorted(set(options) - set(ThresholdSettings.__dataclass_fields__))
-        if bad:
-            raise ValueError(f"unknown threshold setting(s) {bad}")
-        cfg = replace(cfg, **options)
+    cfg = replace_settings(settings or ThresholdSettings(), "threshold", **options)
     m = ship_model(model)
     base = ship_params(m, params)
     chi = course(base["chi_c"] if chi_c is None else chi_c)
