@@ -14,6 +14,7 @@ pytest.importorskip("capytaine")
 from ship_models import get_vessel_data  # noqa: E402
 from ship_models.analysis.critical_bvp import critical_fn_bvp  # noqa: E402
 from ship_models.contracts import SeaState, wave_model_name  # noqa: E402
+from ship_models.estimation import form_parameters  # noqa: E402
 from ship_models.hydro.mesh import offsets_panels  # noqa: E402
 from ship_models.hydro.offsets import form_parameter_offsets, hull_from_offsets  # noqa: E402
 from ship_models.hydro.panel import PanelTable, PanelWaves, panel_table  # noqa: E402
@@ -30,14 +31,9 @@ def seiner():
 
 @pytest.fixture(scope="module")
 def hull(seiner):
-    g = seiner.vessel.get
-    kw = dict(
-        L=g("particulars.L_pp"), B=g("particulars.B"), D=g("particulars.D"),
-        d_f=g("particulars.d_f"), d_a=g("particulars.d_a"), C_b=g("particulars.C_b"),
-        lcb=-g("particulars.lcb_aft"), C_M=g("hull.C_M"), C_wp=g("hull.C_wp"),
-    )  # fmt: skip
-    t = form_parameter_offsets(**kw, n_stations=81, n_waterlines=41)
-    return hull_from_offsets(t, L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"])
+    fp = form_parameters(seiner.vessel)
+    t = form_parameter_offsets(fp, n_stations=81, n_waterlines=41)
+    return hull_from_offsets(t, L=fp.L, D=fp.D, d_f=fp.d_f, d_a=fp.d_a)
 
 
 @pytest.fixture(scope="module")
