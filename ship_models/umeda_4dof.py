@@ -211,10 +211,10 @@ class Umeda4DOF(VesselSystem):
 
     Attributes
     ----------
-    data : VesselModelData
-        Resolved vessel, hull, GZ curve and force coefficients.
-    forces : ShipForces
-        Shortcut for ``data.forces``.
+    data, forces, vessel
+        The resolved vessel and its forces (:class:`VesselSystem`).
+    saturation, saturation_order, wave_lift
+        The options above (:attr:`options`).
 
     Examples
     --------
