@@ -5,13 +5,15 @@ Every public function of :mod:`ship_models.analysis` takes ``params`` as a
 order; :func:`ship_params` turns any of them into a checked ``Params`` (and applies
 changes such as ``chi_c=...``), and :func:`course` checks one autopilot course.
 :func:`replace_settings` gives a copy of a settings dataclass with named fields
-changed, refusing unknown names.
+changed, refusing unknown names; :func:`check_positive_fields` checks its fields that
+must be positive numbers.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from continuation.params import Params
@@ -78,6 +80,27 @@ def course(value: Any, name: str = "chi_c") -> float:
     if not (math.isfinite(v) and abs(v) < math.pi / 2):
         raise ValueError(f"`{name}` must be a finite course in (-pi/2, pi/2) rad, got {value!r}")
     return v
+
+
+def check_positive_fields(settings: object, names: Iterable[str]) -> None:
+    """Check that the fields ``names`` of ``settings`` are finite numbers > 0.
+
+    Parameters
+    ----------
+    settings : object
+        A settings dataclass (checked in its ``__post_init__``).
+    names : iterable of str
+        The fields that must be positive.
+
+    Raises
+    ------
+    ValueError
+        Naming the first field that is not a finite positive number.
+    """
+    for name in names:
+        v = getattr(settings, name)
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"`{name}` must be a positive number, got {v!r}")
 
 
 def replace_settings(settings: _Settings, what: str, **changes: Any) -> _Settings:
@@ -153,4 +176,11 @@ def describe_params(params: Any) -> str:
     return ", ".join(parts)
 
 
-__all__ = ["course", "describe_params", "replace_settings", "ship_model", "ship_params"]
+__all__ = [
+    "check_positive_fields",
+    "course",
+    "describe_params",
+    "replace_settings",
+    "ship_model",
+    "ship_params",
+]
