@@ -5,12 +5,16 @@ inherit, a class that has the members conforms):
 
 :class:`WaveForceModel`
     The wave-induced surge and sway forces and the yaw and roll moments on the hull
-    in a regular wave, ``forces(xi_G/lambda, u, chi, H/lambda, lambda/L, ops, *,
-    lift) -> (X_w, Y_w, N_w, K_w)``, written once for NumPy and CasADi operands
-    (``ops``), so the right-hand side of the equations of motion (Umeda 1999,
-    Eqs. 5-8) stays symbolic. The default is the Froude-Krylov strip integration of
+    in a regular wave, ``forces(xi_G/lambda, u, chi, sea, ops, *, lift) -> (X_w, Y_w,
+    N_w, K_w)``, written once for NumPy and CasADi operands (``ops``), so the
+    right-hand side of the equations of motion (Umeda 1999, Eqs. 5-8) stays symbolic.
+    The default is the Froude-Krylov strip integration of
     :class:`~ship_models.hydro.waves.WaveStrips`; the panel-method table of
     :mod:`ship_models.hydro.panel` is another.
+:class:`SeaState`
+    The wave the forces are evaluated in, ``SeaState(H/lambda, lambda/L)`` (the two
+    wave parameters of the system, floats or CasADi symbols), with the wavelength,
+    wavenumber and amplitude it gives on a ship of length ``L``.
 :class:`WaveForceBuilder`
     How a wave-force model is made from the hull and the loading
     (:class:`WaveInputs`): :func:`ship_models.estimation.build_vessel_model` calls it
@@ -25,14 +29,14 @@ inherit, a class that has the members conforms):
 
 A new vessel with its own wave forces passes a builder:
 ``build_vessel_model(vessel, waves=my_builder)`` or ``Umeda4DOF(vessel,
-waves=my_builder)``; see ``docs/vessel_from_offsets.md`` and
-``tests/test_vessel_contracts.py``.
+waves=my_builder)``; see ``docs/vessel_with_own_wave_forces.md``,
+``docs/vessel_from_offsets.md`` and ``tests/test_vessel_contracts.py``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol, runtime_checkable
 
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.params import Params
@@ -46,6 +50,51 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     from .forces import ShipForces
     from .hydro.hull import HullForm
     from .vessel import VesselData
+
+
+class SeaState(NamedTuple):
+    r"""The regular wave a :class:`WaveForceModel` is evaluated in (Umeda 1999, Eqs. 5-8).
+
+    The two wave parameters of the system as one value: floats, or CasADi symbols
+    when the right-hand side is traced (the forces must then stay differentiable in
+    them). On a ship of length :math:`L` they give
+
+    .. math::
+
+        \lambda = (\lambda/L)\,L, \qquad k = 2\pi/\lambda, \qquad
+        a = \tfrac12\,(H/\lambda)\,\lambda
+
+    (:meth:`wave`; deep water, the wave height :math:`H = 2a`).
+
+    Attributes
+    ----------
+    H_over_lambda : scalar
+        Wave steepness :math:`H/\lambda`.
+    lambda_over_L : scalar
+        Wavelength over the ship length :math:`\lambda/L`.
+    """
+
+    H_over_lambda: Any
+    lambda_over_L: Any
+
+    def wave(self, L: float, ops: Ops = NUMPY_OPS) -> tuple[Any, Any, Any]:
+        r"""Wavelength, wavenumber and amplitude on a ship of length ``L``.
+
+        Parameters
+        ----------
+        L : float
+            Ship length the wavelength ratio refers to (m).
+        ops : Ops
+            NumPy or CasADi namespace (:mod:`continuation.ops`).
+
+        Returns
+        -------
+        lam, k, a : scalar
+            :math:`\lambda` (m), :math:`k = 2\pi/\lambda` (1/m) and the amplitude
+            :math:`a = H/2` (m), scalars or CasADi expressions like the fields.
+        """
+        lam = self.lambda_over_L * L
+        return lam, 2.0 * ops.pi / lam, 0.5 * self.H_over_lambda * lam
 
 
 @runtime_checkable
@@ -69,8 +118,7 @@ class WaveForceModel(Protocol):
         xi_over_lambda: Any,
         u: Any,
         chi: Any,
-        H_over_lambda: Any,
-        lambda_over_L: Any,
+        sea: SeaState,
         ops: Ops = NUMPY_OPS,
         *,
         lift: bool = True,
@@ -85,13 +133,19 @@ class WaveForceModel(Protocol):
             Surge velocity (m/s) (used by speed-dependent parts, e.g. wave lift).
         chi : scalar
             Heading from the wave direction (rad, + to starboard).
-        H_over_lambda, lambda_over_L : scalar
+        sea : SeaState
             Wave steepness and wavelength ratio (parameters of the system: the
             result must be differentiable in them with CasADi operands).
         ops : Ops
             NumPy or CasADi namespace (:mod:`continuation.ops`).
         lift : bool
             Include the hydrodynamic lift due to the wave particle velocity.
+
+        Returns
+        -------
+        X_w, Y_w, N_w, K_w : scalar
+            Surge and sway forces (N), yaw and roll moments (N m) about G, each a
+            scalar (a CasADi expression with CasADi operands).
         """
         ...
 
@@ -251,6 +305,7 @@ def wave_model_name(model: Any) -> str:
 
 
 __all__ = [
+    "SeaState",
     "VesselModel",
     "WaveForceBuilder",
     "WaveForceModel",

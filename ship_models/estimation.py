@@ -67,7 +67,7 @@ from .hydro.heel import (
     son_nomoto_heel_derivatives,
     son_nomoto_validity,
 )
-from .hydro.hull import HullForm, parametric_hull, schneekluth_cwp
+from .hydro.hull import FormParameters, HullForm, parametric_hull, schneekluth_cwp
 from .hydro.hydrostatics import GZCurve, gz_curve, is_code_margin, marginal_topside_height
 from .hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
 from .hydro.mesh_hull import MeshHull, hull_from_mesh
@@ -124,6 +124,29 @@ def _particulars(v: VesselData, *names: str) -> dict[str, float]:
     """The vessel's principal particulars ``names`` as keyword arguments of the hull
     builders (``L`` is ``particulars.L_pp``, the others their own names)."""
     return {n: v.get(f"particulars.{'L_pp' if n == 'L' else n}") for n in names}
+
+
+def form_parameters(v: VesselData, C_wp: float | None = None) -> FormParameters:
+    """The form parameters of the vessel's hull (``particulars.*``, ``hull.C_M``).
+
+    Parameters
+    ----------
+    v : VesselData
+    C_wp : float, optional
+        Waterplane coefficient (default ``hull.C_wp`` of the file; the resolved
+        vessel's estimate when the file has none).
+
+    Returns
+    -------
+    FormParameters
+        ``lcb`` from midship, forward + (the file's ``lcb_aft`` with its sign turned).
+    """
+    return FormParameters(
+        **_particulars(v, "L", "B", "D", "d_f", "d_a", "C_b"),
+        lcb=-v.get("particulars.lcb_aft"),
+        C_M=v.get("hull.C_M"),
+        C_wp=v.get("hull.C_wp") if C_wp is None else C_wp,
+    )
 
 
 def offsets_hull(v: VesselData) -> OffsetsHull:
@@ -218,10 +241,7 @@ def _hull(v: VesselData, C_wp: float) -> HullForm:
     if mesh_is_hull(v):
         return mesh_hull(v)
     return parametric_hull(
-        **_particulars(v, "L", "B", "D", "d_f", "d_a", "C_b"),
-        lcb=-v.get("particulars.lcb_aft"),
-        C_M=v.get("hull.C_M"),
-        C_wp=C_wp,
+        form_parameters(v, C_wp),
         n_stations=int(v.get("hull.n_stations")),
         beta_min=v.get("hull.beta_min"),
         beta_max=v.get("hull.beta_max"),
@@ -995,6 +1015,7 @@ __all__ = [
     "VesselModelData",
     "build_vessel_model",
     "derivatives_about_g",
+    "form_parameters",
     "resolve_vessel",
     "reuse_hydrostatics",
 ]

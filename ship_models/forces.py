@@ -172,21 +172,18 @@ class ShipForces:
             return self.propeller.thrust(u, n, self.rho, ops)
         return thrust(u, n, rho=self.rho, D_p=self.D_p, w_P=self.w_P, t_P=self.t_P, k=self.kt)
 
-    def surge_acceleration(
-        self,
-        xi: Any,
-        u: Any,
-        chi: Any,
-        n: Any,
-        H_over_lambda: Any,
-        lambda_over_L: Any,
-        ops: Ops = NUMPY_OPS,
-        *,
-        X_w: Any = None,
-    ) -> Any:
-        """Eq. (5): ``(T(u; n) - R(u) + X_w) / (m + m_x)`` (m/s^2)."""
-        if X_w is None:
-            X_w = self.waves.forces(xi, u, chi, H_over_lambda, lambda_over_L, ops, lift=False)[0]
+    def surge_acceleration(self, u: Any, n: Any, X_w: Any, ops: Ops = NUMPY_OPS) -> Any:
+        """Eq. (5): ``(T(u; n) - R(u) + X_w) / (m + m_x)`` (m/s^2).
+
+        Parameters
+        ----------
+        u, n : scalar
+            Surge velocity (m/s) and propeller revolution (1/s).
+        X_w : scalar
+            Wave surge force (N): ``waves.forces(...)[0]`` (:attr:`waves`).
+        ops : Ops
+            NumPy or CasADi namespace.
+        """
         return (self.thrust_force(u, n, ops) - self.resistance_force(u, ops) + X_w) / (
             self.mass + self.m_x
         )

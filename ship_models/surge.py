@@ -30,14 +30,12 @@ from continuation.newton import NewtonResult, newton
 from continuation.ops import Ops
 from continuation.params import Params
 from continuation.settings import NewtonSettings
-from continuation.system import System
 from continuation.typing import FloatArray
 
-from .contracts import WaveForceBuilder
+from .contracts import SeaState, WaveForceBuilder
 from .estimation import VesselModelData
-from .forces import ShipForces
 from .paper import PAPER_FN
-from .umeda_4dof import _as_vessel, rebuilt_data
+from .umeda_4dof import VesselSystem
 from .vessel import VesselData
 
 SURGE_STATE_NAMES = ("xi_G", "u")
@@ -66,7 +64,7 @@ class SurgeFixedPoint:
     newton: NewtonResult
 
 
-class SurgeModel(System):
+class SurgeModel(VesselSystem):
     """Uncoupled surge model (states ``xi_G``, ``u``) as a :class:`continuation.System`.
 
     Parameters
@@ -86,22 +84,17 @@ class SurgeModel(System):
         *,
         waves: WaveForceBuilder | None = None,
     ) -> None:
-        self.data = _as_vessel(vessel, waves)
-        self.forces: ShipForces = self.data.forces
-        self.vessel = self.data.vessel
-        defaults = {
-            "Fn": PAPER_FN,
-            "H_over_lambda": self.vessel.get("waves.H_over_lambda"),
-            "lambda_over_L": self.vessel.get("waves.lambda_over_L"),
-        }
         super().__init__(
-            self._rhs,
-            SURGE_STATE_NAMES,
-            SURGE_PARAM_NAMES,
-            periodic={"xi_G": 1.0},
-            defaults=defaults,
-            name=f"surge[{self.vessel.name}]",
-            backend="casadi",
+            vessel,
+            waves,
+            state_names=SURGE_STATE_NAMES,
+            param_names=SURGE_PARAM_NAMES,
+            defaults={
+                "Fn": PAPER_FN,
+                "H_over_lambda": "waves.H_over_lambda",
+                "lambda_over_L": "waves.lambda_over_L",
+            },
+            label="surge",
         )
 
     def _rhs(self, x: Any, p: Any, ops: Ops) -> Any:
@@ -110,29 +103,9 @@ class SurgeModel(System):
         Fn, Hl, lL = p[0], p[1], p[2]
         n = F.revolutions(Fn, ops)
         f1 = (u - F.celerity(lL, ops)) / F.wavelength(lL)
-        f2 = F.surge_acceleration(xi, u, 0.0, n, Hl, lL, ops)
+        X_w = F.waves.forces(xi, u, 0.0, SeaState(Hl, lL), ops, lift=False)[0]
+        f2 = F.surge_acceleration(u, n, X_w, ops)
         return ops.stack([f1, f2])
-
-    @property
-    def options(self) -> dict[str, Any]:
-        """Keyword options of the constructor (none besides the vessel)."""
-        return {}
-
-    def rebuild(self, data: VesselModelData | VesselData) -> SurgeModel:
-        """This model on other vessel data (VesselData resolved with its wave builder)."""
-        return type(self)(rebuilt_data(self.data, data))
-
-    def index(self, name: str) -> int:
-        """Index of a state name."""
-        return self.state_index(name)
-
-    def default_params(self) -> Params:
-        """Fn = PAPER_FN (0.3248) and the vessel's wave (Umeda 1999)."""
-        return self.params()
-
-    def celerity(self, params: Params | FloatArray) -> float:
-        """Wave celerity (m/s)."""
-        return float(self.forces.celerity(self.check_params(params)[2]))
 
     def surge_force(
         self, xi: FloatArray | float, u: float, params: Params | FloatArray
@@ -142,7 +115,8 @@ class SurgeModel(System):
         F = self.forces
         n = F.revolutions(pv[0])
         xi = np.asarray(xi, dtype=float)
-        X = np.vectorize(lambda s: F.waves.forces(s, u, 0.0, pv[1], pv[2], lift=False)[0])(xi)
+        sea = SeaState(pv[1], pv[2])
+        X = np.vectorize(lambda s: F.waves.forces(s, u, 0.0, sea, lift=False)[0])(xi)
         return F.thrust_force(u, n) - F.resistance_force(u) + X
 
     def fixed_points(

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -58,7 +59,7 @@ from continuation.settings import NewtonSettings
 from continuation.system import System
 from continuation.typing import FloatArray
 
-from .contracts import WaveForceBuilder
+from .contracts import SeaState, WaveForceBuilder
 from .estimation import VesselModelData, build_vessel_model, resolve_vessel
 from .forces import ShipForces
 from .paper import PAPER_CHI_C, PAPER_FN
@@ -115,14 +116,107 @@ def _surge_balance_function(model: Umeda4DOF, size: int) -> ca.Function:
     if fn is None:
         F = model.forces
         xi, u, chi, n, Hl, lL = (ca.SX.sym(k) for k in ("xi", "u", "chi", "n", "Hl", "lL"))
-        X = F.waves.forces(xi, u, chi, Hl, lL, CASADI_OPS, lift=False)[0]
+        X = F.waves.forces(xi, u, chi, SeaState(Hl, lL), CASADI_OPS, lift=False)[0]
         net = F.thrust_force(u, n, CASADI_OPS) - F.resistance_force(u, CASADI_OPS) + X
         one = ca.Function("surge_balance", [xi, u, chi, n, Hl, lL], [net])
         fn = per[size] = one.map(size)
     return fn
 
 
-class Umeda4DOF(System):
+class VesselSystem(System):
+    """A ship model on resolved vessel data, as a :class:`continuation.System`.
+
+    What :class:`Umeda4DOF` and :class:`~ship_models.surge.SurgeModel` share: the
+    vessel resolved once with its wave-force builder (:func:`_as_vessel`), the state
+    ``xi_G`` periodic with period 1, the CasADi backend, parameter defaults from the
+    paper and the vessel file, :meth:`rebuild` with the same options, and the wave
+    celerity. A subclass writes its right-hand side ``_rhs(x, p, ops)``.
+
+    Parameters
+    ----------
+    vessel : VesselData, str, Path or VesselModelData
+        A vessel description, the name/path of a vessel file, or resolved data.
+    waves : WaveForceBuilder or None
+        Builds the wave-force model (None: Froude-Krylov strips).
+    state_names, param_names : tuple of str
+        Names of the states (``xi_G`` first) and parameters (``lambda_over_L`` among
+        them).
+    defaults : mapping of str to float or str
+        Default of each parameter: a number, or the vessel-file key it is read from
+        (e.g. ``"waves.H_over_lambda"``).
+    label : str
+        Name of the system before the vessel's (``umeda_4dof`` gives
+        ``umeda_4dof[purse_seiner]``).
+
+    Attributes
+    ----------
+    data : VesselModelData
+        Resolved vessel, hull, GZ curve and force coefficients.
+    forces : ShipForces
+        Shortcut for ``data.forces``.
+    vessel : VesselData
+        Shortcut for ``data.vessel``.
+    """
+
+    def __init__(
+        self,
+        vessel: VesselData | str | Path | VesselModelData,
+        waves: WaveForceBuilder | None,
+        *,
+        state_names: tuple[str, ...],
+        param_names: tuple[str, ...],
+        defaults: Mapping[str, float | str],
+        label: str,
+    ) -> None:
+        self.data = _as_vessel(vessel, waves)
+        self.forces: ShipForces = self.data.forces
+        self.vessel = self.data.vessel
+        values = {k: self.vessel.get(d) if isinstance(d, str) else d for k, d in defaults.items()}
+        super().__init__(
+            self._rhs,
+            state_names,
+            param_names,
+            periodic={"xi_G": 1.0},
+            defaults=values,
+            name=f"{label}[{self.vessel.name}]",
+            backend="casadi",
+        )
+
+    def _rhs(self, x: Any, p: Any, ops: Ops) -> Any:
+        raise NotImplementedError  # pragma: no cover - written by each model
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """Keyword options of the constructor besides the vessel (none here)."""
+        return {}
+
+    def rebuild(self, data: VesselModelData | VesselData) -> VesselSystem:
+        """This model (same class, options and wave-force builder) on other vessel data.
+
+        Parameters
+        ----------
+        data : VesselModelData or VesselData
+            Resolved data used as it is, or a vessel resolved with this model's
+            wave-force builder (``self.data.wave_builder``).
+        """
+        return type(self)(rebuilt_data(self.data, data), **self.options)
+
+    def index(self, name: str) -> int:
+        """Index of a state name (``"xi_G"``, ``"u"``, ...)."""
+        return self.state_index(name)
+
+    def default_params(self) -> Params:
+        """The constructor's defaults: ``Fn = PAPER_FN`` (0.3248), ``chi_c = 10 deg`` (4-DOF),
+        the vessel file's wave and autopilot gains (Umeda 1999)."""
+        return self.params()
+
+    def celerity(self, params: Params | FloatArray) -> float:
+        """Wave celerity ``c`` (m/s) for these parameters."""
+        pv = self.check_params(params)
+        return float(self.forces.celerity(pv[self.param_names.index("lambda_over_L")]))
+
+
+class Umeda4DOF(VesselSystem):
     """Umeda's (1999) surge-sway-yaw-roll-rudder model as a :class:`continuation.System`.
 
     Parameters
@@ -142,10 +236,10 @@ class Umeda4DOF(System):
 
     Attributes
     ----------
-    data : VesselModelData
-        Resolved vessel, hull, GZ curve and force coefficients.
-    forces : ShipForces
-        Shortcut for ``data.forces``.
+    data, forces, vessel
+        The resolved vessel and its forces (:class:`VesselSystem`).
+    saturation, saturation_order, wave_lift
+        The options above (:attr:`options`).
 
     Examples
     --------
@@ -168,29 +262,24 @@ class Umeda4DOF(System):
             raise ValueError(
                 f"`saturation_order` must be an even integer >= 2, got {saturation_order}"
             )
-        self.data = _as_vessel(vessel, waves)
-        self.forces: ShipForces = self.data.forces
-        self.vessel = self.data.vessel
         self.saturation = bool(saturation)
         self.saturation_order = int(saturation_order)
         self.wave_lift = bool(wave_lift)
-        v = self.vessel
         defaults = {
             "Fn": PAPER_FN,
             "chi_c": PAPER_CHI_C,
-            "H_over_lambda": v.get("waves.H_over_lambda"),
-            "lambda_over_L": v.get("waves.lambda_over_L"),
-            "K_R": v.get("autopilot.K_R"),
-            "T_D": v.get("autopilot.T_D"),
+            "H_over_lambda": "waves.H_over_lambda",
+            "lambda_over_L": "waves.lambda_over_L",
+            "K_R": "autopilot.K_R",
+            "T_D": "autopilot.T_D",
         }
         super().__init__(
-            self._rhs,
-            STATE_NAMES,
-            PARAM_NAMES,
-            periodic={"xi_G": 1.0},
+            vessel,
+            waves,
+            state_names=STATE_NAMES,
+            param_names=PARAM_NAMES,
             defaults=defaults,
-            name=f"umeda_4dof[{v.name}]",
-            backend="casadi",
+            label="umeda_4dof",
         )
 
     # ------------------------------------------------------------------ equations
@@ -201,7 +290,7 @@ class Umeda4DOF(System):
         lam = F.wavelength(lL)
         c = F.celerity(lL, ops)
         n = F.revolutions(Fn, ops)
-        Xw, Yw, Nw, Kw = F.waves.forces(xi, u, chi, Hl, lL, ops, lift=self.wave_lift)
+        Xw, Yw, Nw, Kw = F.waves.forces(xi, u, chi, SeaState(Hl, lL), ops, lift=self.wave_lift)
         FN = F.rudder_normal_force(u, v, r, delta, n, ops)
         YR = -(1.0 + F.a_H) * FN
         NR = -(F.x_R + F.a_H * F.x_H) * FN
@@ -210,7 +299,7 @@ class Umeda4DOF(System):
         Nv, Nr = F.N_v1 * u, F.N_r1 * u
         u2 = u * u
         f1 = (u * ops.cos(chi) - v * ops.sin(chi) - c) / lam
-        f2 = F.surge_acceleration(xi, u, chi, n, Hl, lL, ops, X_w=Xw)
+        f2 = F.surge_acceleration(u, n, Xw, ops)
         f3 = (-(F.mass + F.m_x) * u * r + Yv * v + Yr * r + F.Y_phi2 * u2 * phi + YR + Yw) / (
             F.mass + F.m_y
         )
@@ -244,17 +333,6 @@ class Umeda4DOF(System):
             "wave_lift": self.wave_lift,
         }
 
-    def rebuild(self, data: VesselModelData | VesselData) -> Umeda4DOF:
-        """This model (same class, options and wave-force builder) on other vessel data.
-
-        Parameters
-        ----------
-        data : VesselModelData or VesselData
-            Resolved data used as it is, or a vessel resolved with this model's
-            wave-force builder (``self.data.wave_builder``).
-        """
-        return type(self)(rebuilt_data(self.data, data), **self.options)
-
     def check_params(self, p: Any, name: str = "p") -> FloatArray:
         """Parameter vector (as :meth:`continuation.System.check_params`).
 
@@ -269,19 +347,6 @@ class Umeda4DOF(System):
             self._validity_checked = key
             self.forces.check_validity(key[0], key[1], self.vessel.name)
         return arr
-
-    def index(self, name: str) -> int:
-        """Index of a state name (``"xi_G"``, ``"u"``, ...)."""
-        return self.state_index(name)
-
-    def default_params(self) -> Params:
-        """Fn = PAPER_FN (0.3248), chi_c = 10 deg, the vessel's wave and autopilot (Umeda 1999)."""
-        return self.params()
-
-    def celerity(self, params: Params | FloatArray) -> float:
-        """Wave celerity ``c`` (m/s) for these parameters."""
-        pv = self.check_params(params)
-        return float(self.forces.celerity(pv[PARAM_NAMES.index("lambda_over_L")]))
 
     def revolutions(self, params: Params | FloatArray) -> float:
         """Propeller revolution ``n(Fn)`` (1/s)."""
@@ -480,4 +545,11 @@ def _failed(res: NewtonResult, message: str, throw: bool) -> NewtonResult:
     return NewtonResult(res.z, False, res.iterations, res.residual_norm, status, message)
 
 
-__all__ = ["PARAM_NAMES", "STATE_NAMES", "Umeda4DOF", "rebuilt_data", "smooth_saturation"]
+__all__ = [
+    "PARAM_NAMES",
+    "STATE_NAMES",
+    "Umeda4DOF",
+    "VesselSystem",
+    "rebuilt_data",
+    "smooth_saturation",
+]

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from ship_models import get_vessel_data
+from ship_models.contracts import SeaState
 from ship_models.estimation import VesselModelData
 from ship_models.hydro.hydrostatics import is_code_criteria
 from studies._common import figure_style, new_figure, output_dir, save_csv, save_figure, save_table
@@ -100,8 +101,8 @@ def wave_amplitudes(
     speed = float(F.celerity(lL)) if u is None else float(u)
     out = np.zeros((np.size(chi), 4))
     for i, c in enumerate(np.atleast_1d(chi)):
-        f0 = np.array(F.waves.forces(0.0, speed, c, Hl, lL, lift=lift), dtype=float)
-        f1 = np.array(F.waves.forces(0.25, speed, c, Hl, lL, lift=lift), dtype=float)
+        f0 = np.array(F.waves.forces(0.0, speed, c, SeaState(Hl, lL), lift=lift), dtype=float)
+        f1 = np.array(F.waves.forces(0.25, speed, c, SeaState(Hl, lL), lift=lift), dtype=float)
         out[i] = np.hypot(f0, f1)
     return out
 

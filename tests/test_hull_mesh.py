@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 
 from ship_models import get_vessel_data
+from ship_models.contracts import SeaState
+from ship_models.estimation import form_parameters
 from ship_models.hydro.hydrostatics import gz_curve
 from ship_models.hydro.mesh import check_wetted_mesh, mesh_volume
 from ship_models.hydro.mesh_hull import (
@@ -40,6 +42,9 @@ from ship_models.hydro.offsets import (
 )
 from ship_models.hydro.upright import hydrostatics
 from ship_models.hydro.waves import WaveStrips
+
+#: The purse seiner's wave (H/lambda = 1/9.2, lambda/L = 1.5) for the force checks.
+SEA = SeaState(1 / 9.2, 1.5)
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "examples"
 L, B, T, D = 34.5, 7.0, 2.6, 3.6  # the Wigley example
@@ -133,22 +138,18 @@ def test_form_parameter_hull_as_a_mesh_gives_the_strip_forces_of_the_offsets(sei
     as a closed mesh: the mesh's strips are sliced from it at 81 stations, so they carry
     the slicing's interpolation error on top of the triangles': forces within 0.3 %,
     hydrostatics within 0.1 %, GZ within 1 mm."""
-    v = seiner.vessel
-    g = v.get
-    kw = dict(L=g("particulars.L_pp"), B=g("particulars.B"), D=g("particulars.D"),
-              d_f=g("particulars.d_f"), d_a=g("particulars.d_a"), C_b=g("particulars.C_b"),
-              lcb=-g("particulars.lcb_aft"), C_M=g("hull.C_M"), C_wp=g("hull.C_wp"))  # fmt: skip
-    tab = form_parameter_offsets(**kw, n_stations=81, n_waterlines=41)
-    oh = hull_from_offsets(tab, L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"])
-    V, Tr = offsets_closed_mesh(tab, L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"])
-    mh = hull_from_mesh((V, Tr), L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"],
-                        B=kw["B"], C_b=kw["C_b"], lcb_aft=-kw["lcb"])  # fmt: skip
+    fp = form_parameters(seiner.vessel)
+    tab = form_parameter_offsets(fp, n_stations=81, n_waterlines=41)
+    oh = hull_from_offsets(tab, L=fp.L, D=fp.D, d_f=fp.d_f, d_a=fp.d_a)
+    V, Tr = offsets_closed_mesh(tab, L=fp.L, D=fp.D, d_f=fp.d_f, d_a=fp.d_a)
+    mh = hull_from_mesh((V, Tr), L=fp.L, D=fp.D, d_f=fp.d_f, d_a=fp.d_a,
+                        B=fp.B, C_b=fp.C_b, lcb_aft=-fp.lcb)  # fmt: skip
     a, b = hydrostatics(oh), hydrostatics(mh)
     for k in ("volume", "A_wp", "I_T", "BM", "KB"):
         assert getattr(b, k) == pytest.approx(getattr(a, k), rel=1e-3), k
     # the mesh's x runs along the trimmed waterline, the table's along the baseline:
     # the LCBs differ by KB sin(trim) (10 mm here) plus the triangles' O(h^2)
-    trim = (kw["d_a"] - kw["d_f"]) / kw["L"]
+    trim = (fp.d_a - fp.d_f) / fp.L
     assert abs(b.lcb - a.lcb) < 1.5 * a.KB * trim
     assert mh.volume == pytest.approx(b.volume, rel=1e-3)  # strips vs exact mesh
     # GZ at heel with free sinkage and trim: the mesh's own (clipped at the inclined
@@ -163,7 +164,7 @@ def test_form_parameter_hull_as_a_mesh_gives_the_strip_forces_of_the_offsets(sei
         w = WaveStrips.from_hull(hull, x_G=seiner.info["x_G"], zeta_G=seiner.info["zeta_G"],
                                  m22=np.interp(hull.x, seiner.hull.x, w0.m22), z_H=w0.z_H,
                                  rho=w0.rho, g=w0.g, n_depth=8)  # fmt: skip
-        out.append(np.array([w.forces(s, 8.0, 0.3, 1 / 9.2, 1.5, lift=False) for s in xi]))
+        out.append(np.array([w.forces(s, 8.0, 0.3, SEA, lift=False) for s in xi]))
     err = np.max(np.abs(out[1] - out[0]), axis=0) / np.max(np.abs(out[0]), axis=0)
     assert np.all(err < 3e-3), err
 
@@ -174,12 +175,9 @@ def test_heeled_equilibrium_keeps_the_displacement_with_free_or_fixed_trim(seine
     is not zero and moves GZ."""
     from ship_models.hydro.mesh_hydrostatics import clipped_integrals, mesh_heeled_equilibrium
 
-    g = seiner.vessel.get
-    kw = dict(L=g("particulars.L_pp"), B=g("particulars.B"), D=g("particulars.D"),
-              d_f=g("particulars.d_f"), d_a=g("particulars.d_a"), C_b=g("particulars.C_b"),
-              lcb=-g("particulars.lcb_aft"), C_M=g("hull.C_M"), C_wp=g("hull.C_wp"))  # fmt: skip
-    tab = form_parameter_offsets(**kw, n_stations=41, n_waterlines=21)
-    V, Tr = offsets_closed_mesh(tab, L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"])
+    fp = form_parameters(seiner.vessel)
+    tab = form_parameter_offsets(fp, n_stations=41, n_waterlines=21)
+    V, Tr = offsets_closed_mesh(tab, L=fp.L, D=fp.D, d_f=fp.d_f, d_a=fp.d_a)
     up = clipped_integrals(V, Tr, 0.0, 0.0)
     phi = math.radians(40.0)
     free = mesh_heeled_equilibrium(V, Tr, phi, up.volume, up.centre[0])
@@ -187,7 +185,7 @@ def test_heeled_equilibrium_keeps_the_displacement_with_free_or_fixed_trim(seine
     assert free.converged and fixed.converged and fixed.theta == 0.0
     for st in (free, fixed):
         assert st.volume == pytest.approx(up.volume, rel=1e-10)
-    assert free.x_B == pytest.approx(up.centre[0], abs=1e-9 * kw["L"])
+    assert free.x_B == pytest.approx(up.centre[0], abs=1e-9 * fp.L)
     assert abs(free.theta) > 1e-4 and abs(fixed.x_B - up.centre[0]) > 1e-3
     assert abs(free.y_B - fixed.y_B) + abs(free.zeta_B - fixed.zeta_B) > 1e-4
 
@@ -247,7 +245,7 @@ def test_panel_froude_krylov_on_the_mesh_equals_its_strips():
         tab = panel_table(Vw, F, L=L, x_G=0.0, zeta_G=-0.16, rho=1025.0, g=9.80665,
                           lambda_over_L=[1.5], chi_deg=[30.0], solve=False,
                           cache=False)  # fmt: skip
-        ref = np.array([st.forces(s, 8.0, math.radians(30.0), 1 / 9.2, 1.5, lift=False)
+        ref = np.array([st.forces(s, 8.0, math.radians(30.0), SEA, lift=False)
                         for s in xi])  # fmt: skip
         got = np.array([[-a * np.real(tab.fk[n, 0, 0] * np.exp(2j * np.pi * s))
                          for n in range(4)] for s in xi])  # fmt: skip

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from ship_models import get_vessel_data
-from ship_models.estimation import build_vessel_model
+from ship_models.contracts import SeaState
+from ship_models.estimation import build_vessel_model, form_parameters
 from ship_models.hydro.hull import parametric_hull
 from ship_models.hydro.hydrostatics import gz_curve
 from ship_models.hydro.mesh import check_wetted_mesh, mesh_volume, offsets_panels
@@ -25,6 +26,9 @@ from ship_models.hydro.offsets import (
 from ship_models.hydro.upright import check_particulars, hydrostatics
 from ship_models.hydro.waves import WaveStrips
 from ship_models.vessel import VesselData, VesselFileError, dump_vessel, load_vessel
+
+#: The purse seiner's wave (H/lambda = 1/9.2, lambda/L = 1.5) for the force checks.
+SEA = SeaState(1 / 9.2, 1.5)
 
 L, B, T, D = 34.5, 7.0, 2.6, 3.6
 WIGLEY = {  # closed forms of the Wigley hull (see wigley_offsets)
@@ -53,15 +57,6 @@ def test_wigley_hydrostatics_converge_to_the_closed_forms_at_second_order():
     assert np.all(errs[-1] < 5e-4)
 
 
-def _particulars(v):
-    g = v.get
-    return dict(
-        L=g("particulars.L_pp"), B=g("particulars.B"), D=g("particulars.D"),
-        d_f=g("particulars.d_f"), d_a=g("particulars.d_a"), C_b=g("particulars.C_b"),
-        lcb=-g("particulars.lcb_aft"), C_M=g("hull.C_M"), C_wp=g("hull.C_wp"),
-    )  # fmt: skip
-
-
 @pytest.fixture(scope="module")
 def seiner():
     return get_vessel_data("purse_seiner")
@@ -70,19 +65,19 @@ def seiner():
 def test_form_parameter_hull_written_as_offsets_gives_the_same_forces(seiner):
     """Particulars-only path (form-parameter strips) and the same hull as offsets meet:
     wave forces and hydrostatics differ by the table's O(h^2) interpolation error."""
-    kw = _particulars(seiner.vessel)
+    fp = form_parameters(seiner.vessel)
     w0 = seiner.forces.waves
     xi = np.linspace(0.0, 1.0, 16, endpoint=False)
-    ref = np.array([w0.forces(s, 8.0, 0.3, 1 / 9.2, 1.5, lift=False) for s in xi])
+    ref = np.array([w0.forces(s, 8.0, 0.3, SEA, lift=False) for s in xi])
     errs = []
     for n in ((41, 21), (81, 41)):
-        t = form_parameter_offsets(**kw, n_stations=n[0], n_waterlines=n[1])
-        oh = hull_from_offsets(t, L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"])
+        t = form_parameter_offsets(fp, n_stations=n[0], n_waterlines=n[1])
+        oh = hull_from_offsets(t, L=fp.L, D=fp.D, d_f=fp.d_f, d_a=fp.d_a)
         assert hydrostatics(oh).volume == pytest.approx(seiner.hull.volume, rel=4e-3)
         w1 = WaveStrips.from_hull(oh, x_G=seiner.info["x_G"], zeta_G=seiner.info["zeta_G"],
                                   m22=np.interp(oh.x, seiner.hull.x, w0.m22), z_H=w0.z_H,
                                   rho=w0.rho, g=w0.g, n_depth=8)  # fmt: skip
-        got = np.array([w1.forces(s, 8.0, 0.3, 1 / 9.2, 1.5, lift=False) for s in xi])
+        got = np.array([w1.forces(s, 8.0, 0.3, SEA, lift=False) for s in xi])
         errs.append(np.max(np.abs(got - ref), axis=0) / np.max(np.abs(ref), axis=0))
     assert np.all(errs[1] < 2e-3)
     assert np.all(errs[1] < 0.35 * errs[0])  # converging (second order: 0.25)
@@ -90,10 +85,10 @@ def test_form_parameter_hull_written_as_offsets_gives_the_same_forces(seiner):
 
 def test_gz_by_direct_integration_of_the_offsets(seiner):
     """GZ of the offsets hull = GZ of the form-parameter hull (same topside), GZ'(0) = GM."""
-    kw = _particulars(seiner.vessel)
-    t = form_parameter_offsets(**kw, n_stations=81, n_waterlines=61)
-    oh = hull_from_offsets(t, L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"])
-    ph = parametric_hull(**kw, n_stations=80)
+    fp = form_parameters(seiner.vessel)
+    t = form_parameter_offsets(fp, n_stations=81, n_waterlines=61)
+    oh = hull_from_offsets(t, L=fp.L, D=fp.D, d_f=fp.d_f, d_a=fp.d_a)
+    ph = parametric_hull(fp, n_stations=80)
     GM, top = 1.0, 0.4
     a = gz_curve(oh, GM, topside_height=top)
     b = gz_curve(ph, GM, topside_height=top, n_side=200)
@@ -106,8 +101,8 @@ def test_gz_by_direct_integration_of_the_offsets(seiner):
 
 
 def test_offsets_file_round_trip_and_vessel_path(tmp_path, seiner):
-    kw = _particulars(seiner.vessel)
-    t = form_parameter_offsets(**kw, n_stations=41, n_waterlines=21)
+    fp = form_parameters(seiner.vessel)
+    t = form_parameter_offsets(fp, n_stations=41, n_waterlines=21)
     p = write_offsets(t, tmp_path / "hull.csv", "test")
     back = read_offsets(p)
     np.testing.assert_allclose(back.y, t.y, atol=1e-6)

@@ -13,7 +13,8 @@ pytest.importorskip("capytaine")
 
 from ship_models import get_vessel_data  # noqa: E402
 from ship_models.analysis.critical_bvp import critical_fn_bvp  # noqa: E402
-from ship_models.contracts import wave_model_name  # noqa: E402
+from ship_models.contracts import SeaState, wave_model_name  # noqa: E402
+from ship_models.estimation import form_parameters  # noqa: E402
 from ship_models.hydro.mesh import offsets_panels  # noqa: E402
 from ship_models.hydro.offsets import form_parameter_offsets, hull_from_offsets  # noqa: E402
 from ship_models.hydro.panel import PanelTable, PanelWaves, panel_table  # noqa: E402
@@ -30,14 +31,9 @@ def seiner():
 
 @pytest.fixture(scope="module")
 def hull(seiner):
-    g = seiner.vessel.get
-    kw = dict(
-        L=g("particulars.L_pp"), B=g("particulars.B"), D=g("particulars.D"),
-        d_f=g("particulars.d_f"), d_a=g("particulars.d_a"), C_b=g("particulars.C_b"),
-        lcb=-g("particulars.lcb_aft"), C_M=g("hull.C_M"), C_wp=g("hull.C_wp"),
-    )  # fmt: skip
-    t = form_parameter_offsets(**kw, n_stations=81, n_waterlines=41)
-    return hull_from_offsets(t, L=kw["L"], D=kw["D"], d_f=kw["d_f"], d_a=kw["d_a"])
+    fp = form_parameters(seiner.vessel)
+    t = form_parameter_offsets(fp, n_stations=81, n_waterlines=41)
+    return hull_from_offsets(t, L=fp.L, D=fp.D, d_f=fp.d_f, d_a=fp.d_a)
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +61,7 @@ def test_froude_krylov_part_equals_the_strip_integration(seiner, hull, strips, n
     a = 0.5 * HL * LL * hull.L
     xi = np.linspace(0.0, 1.0, 64, endpoint=False)
     for j, chi in ((0, 0.0), (1, math.radians(30.0))):
-        ref = np.array([strips.forces(s, 8.0, chi, HL, LL, lift=False) for s in xi])
+        ref = np.array([strips.forces(s, 8.0, chi, SeaState(HL, LL), lift=False) for s in xi])
         got = _series(tab.fk[:, 0, j], a, xi)
         scale = np.abs(ref).max(axis=0)
         n = 1 if chi == 0 else 4  # at chi = 0 only the surge force is not zero
@@ -130,8 +126,8 @@ def _strip_table(strips: WaveStrips, lL, chi_deg) -> PanelTable:
         a = 0.5 * HL * r * strips.L
         for j, c in enumerate(chi_deg):
             chi = math.radians(c)
-            f0 = np.array(strips.forces(0.0, 0.0, chi, HL, r, lift=False))
-            f1 = np.array(strips.forces(0.25, 0.0, chi, HL, r, lift=False))
+            f0 = np.array(strips.forces(0.0, 0.0, chi, SeaState(HL, r), lift=False))
+            f1 = np.array(strips.forces(0.25, 0.0, chi, SeaState(HL, r), lift=False))
             fk[:, i, j] = (-f0 + 1j * f1) / a  # X(s) = -a Re[F e^{2 pi i s}]
     return PanelTable(np.array(lL), np.radians(chi_deg), fk, np.zeros_like(fk), strips.L)
 
@@ -145,7 +141,8 @@ def test_tabulated_model_reproduces_the_strips_through_the_whole_chain(seiner):
     pw = PanelWaves.from_table(_strip_table(w0, lL, chi_deg), w0, diffraction=False)
     assert pw.fit_error < 1e-3
     for s, chi, r in ((0.3, 0.17, 1.5), (0.8, 0.5, 2.2), (0.1, 0.0, 1.13)):
-        np.testing.assert_allclose(pw.forces(s, 8.0, chi, HL, r), w0.forces(s, 8.0, chi, HL, r),
+        sea = SeaState(HL, r)
+        np.testing.assert_allclose(pw.forces(s, 8.0, chi, sea), w0.forces(s, 8.0, chi, sea),
                                    rtol=0, atol=2e-3 * 8e5)  # fmt: skip
     assert pw.in_range(1.5, 0.17) and not pw.in_range(3.5, 0.17)
 
@@ -215,7 +212,7 @@ def test_vessel_file_with_a_mesh_and_panel_froude_krylov(tmp_path, seiner):
         )
         data = build_vessel_model(load_vessel(tmp_path / "m.toml"), waves=builder)
         assert wave_model_name(data) == "panel_fk"
-        args = (0.3, 8.0, 0.2, HL, LL)
+        args = (0.3, 8.0, 0.2, SeaState(HL, LL))
         got = np.array(data.forces.waves.forces(*args, lift=False))
         ref = np.array(seiner.forces.waves.forces(*args, lift=False))
         assert abs(got[0] / ref[0] - 1) < 0.03  # 1,000 panels, 5 x 4 table fit

@@ -31,6 +31,7 @@ from ship_models.analysis.fixed_points import (
     trace_in_chi_c,
     trace_in_fn,
 )
+from ship_models.contracts import SeaState
 
 TIGHT = NewtonSettings(tol=1e-11, step_tol=1e-12, max_iter=50, damping=True)
 
@@ -102,7 +103,7 @@ def test_fn_fold_matches_closed_form_surge_threshold(model, params):
     c = model.celerity(p0)
 
     def xw(xi):
-        return float(F.waves.forces(xi, c, 0.0, Hl, lL, lift=False)[0])
+        return float(F.waves.forces(xi, c, 0.0, SeaState(Hl, lL), lift=False)[0])
 
     grid = np.linspace(0, 1, 401)
     k = int(np.argmax([xw(s) for s in grid]))

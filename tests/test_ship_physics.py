@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import scipy.optimize as so
 
+from ship_models.contracts import SeaState
 from ship_models.estimation import resolve_vessel
 from ship_models.hydro.added_mass import lewis_sway_added_mass
 from ship_models.hydro.hull import box_hull
@@ -14,6 +15,9 @@ from ship_models.hydro.resistance import ittc57_cf
 from ship_models.hydro.waves import WaveStrips
 from ship_models.umeda_4dof import Umeda4DOF
 from ship_models.vessel import load_vessel
+
+#: The purse seiner's wave (H/lambda = 1/9.2, lambda/L = 1.5) for the force checks.
+SEA = SeaState(1 / 9.2, 1.5)
 
 RHO, G = 1025.0, 9.80665
 
@@ -57,7 +61,7 @@ def test_froude_krylov_surge_on_barge_closed_form():
         sinc = np.sinc(k * B * s / 2 / np.pi)
         amp = RHO * G * a * (1 - np.exp(-k * d)) * B * sinc * 2 * np.sin(k * L * c / 2) / k
         for xi in (0.1, 0.25, 0.4, 0.77):
-            X, Y, N, K = strips.forces(xi, 5.0, chi, Hl, lL, lift=False)
+            X, Y, N, K = strips.forces(xi, 5.0, chi, SeaState(Hl, lL), lift=False)
             X_exact = -amp * np.sin(2 * np.pi * xi)
             assert X == pytest.approx(X_exact, rel=1e-10)
             if chi:
@@ -110,7 +114,7 @@ def test_froude_krylov_all_components_against_surface_pressure_integration(chi_d
     _, strips = _box_strips(L, B, d, zeta_G)
     chi = np.deg2rad(chi_deg)
     for xi in (0.13, 0.5, 0.81):
-        X, Y, N, K = strips.forces(xi, 5.0, chi, 1 / 12, 1.3, lift=False)
+        X, Y, N, K = strips.forces(xi, 5.0, chi, SeaState(1 / 12, 1.3), lift=False)
         F, M = _surface_integral_box(L, B, d, zeta_G, xi, chi, 1 / 12, 1.3)
         scale_f = np.max(np.abs(F)) + 1.0
         scale_m = np.max(np.abs(M)) + 1.0
@@ -124,7 +128,7 @@ def test_wave_forces_have_zero_mean_over_a_wavelength(data):
     strips = data.forces.waves
     xi = np.arange(64) / 64
     for chi in (0.0, 0.2, -0.5, 1.0):
-        vals = np.array([strips.forces(s, 8.5, chi, 1 / 9.2, 1.5) for s in xi])
+        vals = np.array([strips.forces(s, 8.5, chi, SEA) for s in xi])
         amp = np.max(np.abs(vals), axis=0) + 1.0
         assert np.all(np.abs(vals.mean(axis=0)) < 1e-12 * amp)
 
@@ -136,8 +140,8 @@ def test_strip_quadrature_converges(data):
     coarse = data.forces.waves
     for chi in (0.0, 0.3):
         for xi in (0.2, 0.45, 0.7):
-            a = np.array(coarse.forces(xi, 8.0, chi, 1 / 9.2, 1.5))
-            b = np.array(fine.forces(xi, 8.0, chi, 1 / 9.2, 1.5))
+            a = np.array(coarse.forces(xi, 8.0, chi, SEA))
+            b = np.array(fine.forces(xi, 8.0, chi, SEA))
             scale = np.max(np.abs(b))
             assert np.max(np.abs(a - b)) < 2e-3 * scale
 
@@ -262,13 +266,13 @@ def test_wave_lift_vanishes_without_speed_or_heading_and_is_linear_in_u(data):
     chi = 0, linear in u, and never a surge force."""
     w = data.forces.waves
     for xi in (0.1, 0.6):
-        with_l = np.array(w.forces(xi, 0.0, 0.4, 1 / 9.2, 1.5, lift=True))
-        without = np.array(w.forces(xi, 0.0, 0.4, 1 / 9.2, 1.5, lift=False))
+        with_l = np.array(w.forces(xi, 0.0, 0.4, SEA, lift=True))
+        without = np.array(w.forces(xi, 0.0, 0.4, SEA, lift=False))
         np.testing.assert_allclose(with_l, without, rtol=0, atol=0)
-        d1 = np.array(w.forces(xi, 4.0, 0.4, 1 / 9.2, 1.5)) - without
-        d2 = np.array(w.forces(xi, 8.0, 0.4, 1 / 9.2, 1.5)) - without
+        d1 = np.array(w.forces(xi, 4.0, 0.4, SEA)) - without
+        d2 = np.array(w.forces(xi, 8.0, 0.4, SEA)) - without
         np.testing.assert_allclose(d2, 2 * d1, rtol=1e-12, atol=1e-6)
         assert d1[0] == 0.0
         assert abs(d1[3] + w.z_H * d1[1]) < 1e-9 * abs(d1[1])  # K_L = -z_H Y_L
-        zero_heading = np.array(w.forces(xi, 8.0, 0.0, 1 / 9.2, 1.5))
+        zero_heading = np.array(w.forces(xi, 8.0, 0.0, SEA))
         assert np.all(np.abs(zero_heading[1:]) < 1e-9)

@@ -22,7 +22,13 @@ from ship_models import get_model, register_model
 from ship_models.analysis.critical_bvp import critical_fn_bvp
 from ship_models.analysis.fixed_points import find_fixed_point
 from ship_models.analysis.sensitivity import critical_fn_sensitivity, model_at
-from ship_models.contracts import VesselModel, WaveForceModel, WaveInputs, wave_model_name
+from ship_models.contracts import (
+    SeaState,
+    VesselModel,
+    WaveForceModel,
+    WaveInputs,
+    wave_model_name,
+)
 from ship_models.estimation import build_vessel_model
 from ship_models.hydro.waves import WaveStrips, strip_waves
 from ship_models.registry import unregister_model
@@ -50,15 +56,12 @@ class ScaledSurgeWaves:
         xi_over_lambda: Any,
         u: Any,
         chi: Any,
-        H_over_lambda: Any,
-        lambda_over_L: Any,
+        sea: SeaState,
         ops: Ops = NUMPY_OPS,
         *,
         lift: bool = True,
     ) -> tuple[Any, Any, Any, Any]:
-        X, Y, N, K = self.inner.forces(
-            xi_over_lambda, u, chi, H_over_lambda, lambda_over_L, ops, lift=lift
-        )
+        X, Y, N, K = self.inner.forces(xi_over_lambda, u, chi, sea, ops, lift=lift)
         return self.kappa * X, Y, N, K
 
 
@@ -109,7 +112,7 @@ def test_models_conform_to_the_protocols(toy, plain):
 
 
 def test_toy_forces_equal_the_reference_forces(toy, reference):
-    args = (0.37, 8.0, 0.3, 1 / 9.2, 1.5)
+    args = (0.37, 8.0, 0.3, SeaState(1 / 9.2, 1.5))
     np.testing.assert_allclose(
         toy.forces.waves.forces(*args), reference.forces.waves.forces(*args), rtol=1e-13
     )

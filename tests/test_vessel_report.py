@@ -122,13 +122,16 @@ def test_wave_amplitudes(report, common, vr, data):
     i90 = int(np.argmin(np.abs(chi - 90.0)))
     assert t["X_fk_amp_N"][i90] < 1e-9 * np.max(t["X_fk_amp_N"])
     # amplitude from two phases = maximum over a fine xi grid (independent evaluation)
+    from ship_models.contracts import SeaState
+
     F = data.forces
     Hl, lL = data.vessel.get("waves.H_over_lambda"), data.vessel.get("waves.lambda_over_L")
+    sea = SeaState(Hl, lL)
     c = float(F.celerity(lL))
     xi = np.linspace(0.0, 1.0, 4001)
     for ang in (0.0, 30.0, 65.0):
         k = int(np.argmin(np.abs(chi - ang)))
-        series = np.array([F.waves.forces(s, c, np.deg2rad(ang), Hl, lL) for s in xi])
+        series = np.array([F.waves.forces(s, c, np.deg2rad(ang), sea) for s in xi])
         brute = np.max(np.abs(series), axis=0)
         row = np.array([t["X_amp_N"][k], t["Y_amp_N"][k], t["N_amp_Nm"][k], t["K_amp_Nm"][k]])
         big = brute > 1e-9 * np.max(brute)

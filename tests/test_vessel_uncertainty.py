@@ -8,6 +8,7 @@ import tomllib
 
 import pytest
 
+from ship_models.contracts import SeaState
 from ship_models.estimation import build_vessel_model
 from ship_models.vessel import (
     DATA_DIR,
@@ -101,7 +102,7 @@ def test_wave_surge_scale_scales_the_surge_force_only():
     base = build_vessel_model(v)
     half = build_vessel_model(v.with_overrides({"hydrodynamics.wave_surge_scale": 0.5}))
     assert base.vessel.coefficient("hydrodynamics.wave_surge_scale").status == "assumed"
-    args = (0.3, 9.0, math.radians(10.0), 1 / 9.2, 1.5)
+    args = (0.3, 9.0, math.radians(10.0), SeaState(1 / 9.2, 1.5))
     X0, Y0, N0, K0 = base.forces.waves.forces(*args)
     X1, Y1, N1, K1 = half.forces.waves.forces(*args)
     assert X1 == pytest.approx(0.5 * X0, rel=1e-13)

@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from ship_models import load_vessel, resolve_vessel
+from ship_models.contracts import SeaState
 from ship_models.hydro.diffraction import (
     taylor_diffraction_ratio,
     taylor_long_wave_surge_force,
@@ -39,9 +40,10 @@ def _write(tmp_path: Path, extra_meta: str = "", extra_hydro: str = "") -> Path:
 
 def _amplitudes(strips, chi, lam_over_L, H_over_lambda=0.05):
     """Amplitudes of X_w, Y_w, N_w, K_w over xi_G (each is A sin(k xi_G + phase))."""
+    sea = SeaState(H_over_lambda, lam_over_L)
     out = []
     for xi in (0.0, 0.25):
-        out.append(np.array(strips.forces(xi, 5.0, chi, H_over_lambda, lam_over_L, lift=False)))
+        out.append(np.array(strips.forces(xi, 5.0, chi, sea, lift=False)))
     return np.hypot(out[0], out[1])
 
 

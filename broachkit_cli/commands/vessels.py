@@ -148,7 +148,7 @@ def hydrostatics_report(name: str) -> dict[str, Any]:
     """Hydrostatics, GZ and wave-force amplitudes of a vessel (JSON-ready)."""
     import numpy as np
 
-    from ship_models.contracts import wave_model_name
+    from ship_models.contracts import SeaState, wave_model_name
     from ship_models.estimation import hull_mesh_path, mesh_is_hull, offsets_path
     from ship_models.hydro.upright import hydrostatics
     from ship_models.registry import get_vessel_data
@@ -166,7 +166,7 @@ def hydrostatics_report(name: str) -> dict[str, Any]:
     amps = {}
     for deg in range(0, 61, 10):
         chi = math.radians(deg)
-        f = np.array([F.waves.forces(s, c, chi, Hl, lL) for s in xi], dtype=float)
+        f = np.array([F.waves.forces(s, c, chi, SeaState(Hl, lL)) for s in xi], dtype=float)
         amps[str(deg)] = dict(
             zip(("X_w", "Y_w", "N_w", "K_w"), np.abs(f).max(axis=0).tolist(), strict=True)
         )

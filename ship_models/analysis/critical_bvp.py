@@ -54,7 +54,7 @@ from .boundary_check import boundary_refusal
 from .crest_saddle import crest_saddle
 from .critical_result import CriticalFn
 from .fixed_points import FixedPoint
-from .params import course, ship_model, ship_params
+from .params import check_positive_fields, course, replace_settings, ship_model, ship_params
 from .upslope import UpslopeRun, connection_guess, guess_run
 
 log = logging.getLogger(__name__)
@@ -112,10 +112,7 @@ class BVPSettings:
     mesh_from_guess: bool = True
 
     def __post_init__(self) -> None:
-        for name in ("interval_length", "start_distance", "end_distance", "tol"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"`{name}` must be a positive number, got {v!r}")
+        check_positive_fields(self, ("interval_length", "start_distance", "end_distance", "tol"))
         n = self.n_intervals
         if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 2):
             raise ValueError(f"`n_intervals` must be an integer >= 2, got {n!r}")
@@ -127,10 +124,7 @@ class BVPSettings:
 
     def replace(self, **changes: Any) -> BVPSettings:
         """A copy with ``changes``; unknown names raise a ValueError naming them."""
-        bad = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
-        if bad:
-            raise ValueError(f"unknown BVP setting(s) {bad}")
-        return dataclasses.replace(self, **changes) if changes else self
+        return replace_settings(self, "BVP", **changes)
 
 
 def _pad_ends(

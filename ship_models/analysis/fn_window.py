@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 import scipy.optimize as so
 
-from ..contracts import VesselModel
+from ..contracts import SeaState, VesselModel
 from .fixed_points import surge_model_of
 from .params import ship_params
 
@@ -103,7 +103,8 @@ def surf_riding_window(model: VesselModel, params: Any = None, *, n_grid: int = 
     F = sm.forces
     c = sm.celerity(sp)
     xi = np.linspace(0.0, 1.0, n_grid, endpoint=False)
-    X = np.array([float(F.waves.forces(s, c, 0.0, pv[1], pv[2], lift=False)[0]) for s in xi])
+    sea = SeaState(pv[1], pv[2])
+    X = np.array([float(F.waves.forces(s, c, 0.0, sea, lift=False)[0]) for s in xi])
     x_max, x_min = float(X.max()), float(X.min())
 
     def net(Fn: float) -> float:

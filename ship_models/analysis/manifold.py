@@ -57,9 +57,7 @@ the slope: the first-passage criterion of :mod:`ship_models.analysis.critical`).
 
 from __future__ import annotations
 
-import dataclasses
 import logging
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -86,7 +84,7 @@ from .eigen import paper_scales
 from .events import capsize_angle as capsize_angle_of
 from .fixed_points import FixedPoint, find_fixed_point, fixed_points
 from .outcomes import ShipOutcome
-from .params import ship_params
+from .params import check_positive_fields, replace_settings, ship_params
 
 log = logging.getLogger(__name__)
 
@@ -307,20 +305,15 @@ class ShipFateSettings:
     atol: float = 1e-11
 
     def __post_init__(self) -> None:
-        for name in (
-            "t_max", "segment", "dt", "return_tol", "max_lag", "n_recurrent", "visit_radius",
-            "rtol", "atol",
-        ):  # fmt: skip
-            val = getattr(self, name)
-            if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
-                raise ValueError(f"`{name}` must be a positive number, got {val!r}")
+        check_positive_fields(
+            self,
+            ("t_max", "segment", "dt", "return_tol", "max_lag", "n_recurrent", "visit_radius",
+             "rtol", "atol"),
+        )  # fmt: skip
 
     def replace(self, **changes: Any) -> ShipFateSettings:
         """A copy with ``changes``; unknown names raise a ValueError naming them."""
-        bad = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
-        if bad:
-            raise ValueError(f"unknown fate setting(s) {bad}")
-        return dataclasses.replace(self, **changes) if changes else self
+        return replace_settings(self, "fate", **changes)
 
 
 def classify_ship_fate(

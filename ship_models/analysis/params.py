@@ -4,16 +4,26 @@ Every public function of :mod:`ship_models.analysis` takes ``params`` as a
 :class:`~continuation.params.Params`, a mapping by name or an array in the model's
 order; :func:`ship_params` turns any of them into a checked ``Params`` (and applies
 changes such as ``chi_c=...``), and :func:`course` checks one autopilot course.
+:func:`replace_settings` gives a copy of a settings dataclass with named fields
+changed, refusing unknown names; :func:`check_positive_fields` checks its fields that
+must be positive numbers.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from typing import Any
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from continuation.params import Params
 
 from ..contracts import VesselModel
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from _typeshed import DataclassInstance
+
+_Settings = TypeVar("_Settings", bound="DataclassInstance")
 
 
 def ship_params(
@@ -72,6 +82,56 @@ def course(value: Any, name: str = "chi_c") -> float:
     return v
 
 
+def check_positive_fields(settings: object, names: Iterable[str]) -> None:
+    """Check that the fields ``names`` of ``settings`` are finite numbers > 0.
+
+    Parameters
+    ----------
+    settings : object
+        A settings dataclass (checked in its ``__post_init__``).
+    names : iterable of str
+        The fields that must be positive.
+
+    Raises
+    ------
+    ValueError
+        Naming the first field that is not a finite positive number.
+    """
+    for name in names:
+        v = getattr(settings, name)
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"`{name}` must be a positive number, got {v!r}")
+
+
+def replace_settings(settings: _Settings, what: str, **changes: Any) -> _Settings:
+    """A copy of the settings dataclass ``settings`` with ``changes``.
+
+    Parameters
+    ----------
+    settings : dataclass instance
+        Frozen settings (:class:`~ship_models.analysis.critical_bvp.BVPSettings`, ...);
+        their checks (``__post_init__``) run again on the copy.
+    what : str
+        What they set, for the message (``"BVP"`` gives "unknown BVP setting(s) ...").
+    **changes
+        Fields replaced.
+
+    Returns
+    -------
+    dataclass instance
+        ``settings`` itself when there is no change.
+
+    Raises
+    ------
+    ValueError
+        Naming the keys of ``changes`` that are not fields of ``settings``.
+    """
+    bad = sorted(set(changes) - {f.name for f in dataclasses.fields(settings)})
+    if bad:
+        raise ValueError(f"unknown {what} setting(s) {bad}")
+    return dataclasses.replace(settings, **changes) if changes else settings
+
+
 def ship_model(model: VesselModel | None) -> VesselModel:
     """``model`` checked to be an Umeda4DOF-like System, or a new purse seiner if None.
 
@@ -116,4 +176,11 @@ def describe_params(params: Any) -> str:
     return ", ".join(parts)
 
 
-__all__ = ["course", "describe_params", "ship_model", "ship_params"]
+__all__ = [
+    "check_positive_fields",
+    "course",
+    "describe_params",
+    "replace_settings",
+    "ship_model",
+    "ship_params",
+]

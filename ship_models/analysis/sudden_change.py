@@ -60,7 +60,7 @@ from .events import capsize_angle as capsize_angle_of
 from .fixed_points import FixedPointsInFn, fixed_points
 from .manifold import ShipFate, classify_ship_fate
 from .outcomes import CAPTURED_BY_WAVE, SUDDEN_CHANGE_OUTCOMES, ShipOutcome
-from .params import ship_params
+from .params import course, ship_params
 
 log = logging.getLogger(__name__)
 
@@ -542,12 +542,7 @@ def sudden_change_boundary(
     t_start = time.perf_counter()
     lo, hi = _fn_bracket(fn_bracket)
     tol = _positive(tol, "tol")
-    try:
-        chi = float(chi_c_to)
-    except (TypeError, ValueError):
-        raise ValueError(f"`chi_c_to` must be a number (rad), got {chi_c_to!r}") from None
-    if not (math.isfinite(chi) and abs(chi) < math.pi / 2):
-        raise ValueError(f"`chi_c_to` must be a course in (-pi/2, pi/2) rad, got {chi_c_to!r}")
+    chi = course(chi_c_to, "chi_c_to")
     xi_0 = _position(xi_0)
     orb = _orbit_for(model, params_from, orbit)
     base = orb.params.replace(chi_c=chi)

@@ -58,7 +58,7 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 from continuation.dynamics.lowest_fate import lowest_fate
@@ -71,7 +71,7 @@ from .fixed_points import find_fixed_point
 from .fn_window import fn_limit, surf_riding_window
 from .manifold import ShipFate
 from .outcomes import ShipOutcome
-from .params import course, ship_model, ship_params
+from .params import check_positive_fields, course, replace_settings, ship_model, ship_params
 
 log = logging.getLogger(__name__)
 
@@ -128,10 +128,9 @@ class ThresholdSettings:
     locate_bifurcations: bool = True
 
     def __post_init__(self) -> None:
-        for name in ("step", "coarse_step", "depth", "tol", "check_distance", "t_max", "coincide"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"`{name}` must be a positive number, got {v!r}")
+        check_positive_fields(
+            self, ("step", "coarse_step", "depth", "tol", "check_distance", "t_max", "coincide")
+        )
         if not self.tol < self.step <= self.coarse_step:
             raise ValueError(
                 f"need tol < step <= coarse_step, got {self.tol}, {self.step}, {self.coarse_step}"
@@ -555,12 +554,7 @@ def capsizing_threshold(
     CapsizingThreshold
     """
     t0 = time.perf_counter()
-    cfg = settings or ThresholdSettings()
-    if options:
-        bad = sorted(set(options) - set(ThresholdSettings.__dataclass_fields__))
-        if bad:
-            raise ValueError(f"unknown threshold setting(s) {bad}")
-        cfg = replace(cfg, **options)
+    cfg = replace_settings(settings or ThresholdSettings(), "threshold", **options)
     m = ship_model(model)
     base = ship_params(m, params)
     chi = course(base["chi_c"] if chi_c is None else chi_c)

@@ -54,6 +54,7 @@ import numpy as np
 
 from continuation.typing import FloatArray
 
+from ..contracts import SeaState
 from ..forces import ShipForces
 
 N_QUADRATURE = 96
@@ -110,8 +111,9 @@ def froude_krylov_amplitude(F: ShipForces, lambda_over_L: FloatArray) -> FloatAr
     s_ref = 0.01  # any steepness: the force is linear in H
     out = np.empty_like(lam)
     for i, lL in enumerate(lam):
-        x0 = float(F.waves.forces(0.0, 0.0, 0.0, s_ref, lL, lift=False)[0])
-        x1 = float(F.waves.forces(0.25, 0.0, 0.0, s_ref, lL, lift=False)[0])
+        sea = SeaState(s_ref, lL)
+        x0 = float(F.waves.forces(0.0, 0.0, 0.0, sea, lift=False)[0])
+        x1 = float(F.waves.forces(0.25, 0.0, 0.0, sea, lift=False)[0])
         out[i] = math.hypot(x0, x1) / (s_ref * lL * F.L)
     return out
 

@@ -17,7 +17,7 @@ waterline the sides are vertical up to the deck at height ``D`` above the keel
 (wall-sided topsides, no sheer, no bulwark buoyancy).
 
 :func:`parametric_hull` generates such a hull from the principal particulars
-(L, B, D, drafts fore/aft, C_b, l.c.b., C_M, C_wp): waterline
+(:class:`FormParameters`: L, B, D, drafts fore/aft, C_b, l.c.b., C_M, C_wp): waterline
 :math:`b_{wl} = (B/2)(1 - |t|^q)` with :math:`q = C_{wp}/(1 - C_{wp})`, and a
 sectional-area curve :math:`A(t) = C_M B d_m (1 - |t|^{p})`, :math:`t = 2x/L`, whose
 exponents ``p_aft``, ``p_fore`` are solved so that the hull has exactly the
@@ -216,24 +216,15 @@ def _sections(
     return b_wl, beta
 
 
-def parametric_hull(
-    *,
-    L: float,
-    B: float,
-    D: float,
-    d_f: float,
-    d_a: float,
-    C_b: float,
-    lcb: float,
-    C_M: float,
-    C_wp: float,
-    n_stations: int = 40,
-    beta_min: float = 0.5,
-    beta_max: float = 0.98,
-) -> HullForm:
-    """Generate a strip hull matching the principal particulars.
+@dataclass(frozen=True)
+class FormParameters:
+    """The principal particulars and form coefficients of a form-parameter hull.
 
-    Parameters
+    What :func:`parametric_hull` and
+    :func:`~ship_models.hydro.offsets.form_parameter_offsets` build a hull from
+    (:func:`ship_models.estimation.form_parameters` reads them from a vessel file).
+
+    Attributes
     ----------
     L, B, D : float
         Length between perpendiculars, breadth, depth (m).
@@ -246,6 +237,37 @@ def parametric_hull(
         Longitudinal centre of buoyancy from midship, positive forward (m).
     C_M, C_wp : float
         Midship section and waterplane coefficients.
+    """
+
+    L: float
+    B: float
+    D: float
+    d_f: float
+    d_a: float
+    C_b: float
+    lcb: float
+    C_M: float
+    C_wp: float
+
+    @property
+    def d_m(self) -> float:
+        """Mean draft ``(d_f + d_a)/2`` (m)."""
+        return 0.5 * (self.d_f + self.d_a)
+
+
+def parametric_hull(
+    form: FormParameters,
+    *,
+    n_stations: int = 40,
+    beta_min: float = 0.5,
+    beta_max: float = 0.98,
+) -> HullForm:
+    """Generate a strip hull matching the principal particulars.
+
+    Parameters
+    ----------
+    form : FormParameters
+        Particulars and form coefficients (L, B, D, d_f, d_a, C_b, lcb, C_M, C_wp).
     n_stations : int
         Even number of strips: ``n_stations/2`` Gauss-Legendre nodes on each of the
         aft and fore bodies (the sectional-area curve has a kink at midship).
@@ -262,6 +284,8 @@ def parametric_hull(
     ValueError
         If no exponents reproduce C_b and l.c.b. (inconsistent particulars).
     """
+    L, B, D, d_f, d_a = form.L, form.B, form.D, form.d_f, form.d_a
+    C_b, lcb, C_M, C_wp = form.C_b, form.lcb, form.C_M, form.C_wp
     if n_stations % 2 or n_stations < 4:
         raise ValueError(f"`n_stations` must be even and >= 4, got {n_stations}")
     if not 0 < C_wp < 1 or not 0 < C_M <= 1 or not 0 < C_b < C_M:
@@ -271,7 +295,7 @@ def parametric_hull(
     x = np.concatenate([xa, xf])
     w = np.concatenate([wa, wf])
     t = 2.0 * x / L
-    d_m = 0.5 * (d_f + d_a)
+    d_m = form.d_m
     d = d_m - (d_a - d_f) * x / L
     q = C_wp / (1.0 - C_wp)
     V_target = C_b * L * B * d_m
@@ -310,6 +334,7 @@ def schneekluth_cwp(C_b: float) -> float:
 
 
 __all__ = [
+    "FormParameters",
     "HullForm",
     "box_hull",
     "gauss_stations",

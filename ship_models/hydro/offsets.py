@@ -49,7 +49,7 @@ import numpy as np
 
 from continuation.typing import FloatArray
 
-from .hull import HullForm, _sections, parametric_hull
+from .hull import FormParameters, HullForm, _sections, parametric_hull
 
 #: First line of an offsets file written by :func:`write_offsets`.
 OFFSETS_HEADER = "# broachkit offsets v1"
@@ -424,16 +424,8 @@ def offsets_of_hull(hull: HullForm, n_stations: int = 41, n_waterlines: int = 21
 
 
 def form_parameter_offsets(
+    form: FormParameters,
     *,
-    L: float,
-    B: float,
-    D: float,
-    d_f: float,
-    d_a: float,
-    C_b: float,
-    lcb: float,
-    C_M: float,
-    C_wp: float,
     n_stations: int = 41,
     n_waterlines: int = 21,
     beta_min: float = 0.5,
@@ -446,17 +438,27 @@ def form_parameter_offsets(
     ``C_b L B d_m`` and the l.c.b.), and the sections of that continuous form are
     sampled at ``n_stations`` equally spaced stations (AP to FP) and ``n_waterlines``
     waterlines from the keel line to the deck (plus the end drafts).
+
+    Parameters
+    ----------
+    form : FormParameters
+        Particulars and form coefficients.
+    n_stations, n_waterlines : int
+        Stations and waterlines of the table.
+    beta_min, beta_max : float
+        Bounds on the section coefficient (as for ``parametric_hull``).
+
+    Returns
+    -------
+    OffsetsTable
     """
-    ref = parametric_hull(
-        L=L, B=B, D=D, d_f=d_f, d_a=d_a, C_b=C_b, lcb=lcb, C_M=C_M, C_wp=C_wp,
-        n_stations=80, beta_min=beta_min, beta_max=beta_max,
-    )  # fmt: skip
+    ref = parametric_hull(form, n_stations=80, beta_min=beta_min, beta_max=beta_max)
+    L, B, D, d_f, d_a, d_m = form.L, form.B, form.D, form.d_f, form.d_a, form.d_m
     xs = np.linspace(0.0, L, n_stations)
     t = 2.0 * xs / L - 1.0
-    d_m = 0.5 * (d_f + d_a)
     d = draft_at(xs, L, d_f, d_a)
     b_wl, beta = _sections(
-        t, d, B, d_m, C_M, ref.info["q_waterline"], ref.info["p_aft"], ref.info["p_fore"],
+        t, d, B, d_m, form.C_M, ref.info["q_waterline"], ref.info["p_aft"], ref.info["p_fore"],
         beta_min, beta_max,
     )  # fmt: skip
     n = beta / (1.0 - beta)

@@ -81,6 +81,7 @@ import numpy as np
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.typing import FloatArray
 
+from ..contracts import SeaState
 from .hull import HullForm
 from .mesh import check_wetted_mesh, mesh_volume, offsets_panels
 from .mesh_hull import MeshHull, wetted_panels
@@ -583,28 +584,35 @@ class PanelWaves:
         xi_over_lambda: Any,
         u: Any,
         chi: Any,
-        H_over_lambda: Any,
-        lambda_over_L: Any,
+        sea: SeaState,
         ops: Ops = NUMPY_OPS,
         *,
         lift: bool = True,
     ) -> tuple[Any, Any, Any, Any]:
-        """Wave forces ``(X_w, Y_w, N_w, K_w)`` (N, N, N m, N m).
+        r"""Wave forces ``(X_w, Y_w, N_w, K_w)`` (N, N, N m, N m) from the fitted table.
 
-        See :class:`~ship_models.contracts.WaveForceModel` for the arguments.
+        .. math::
+
+            (X, Y, N, K)_w = -a\,\mathrm{Re}\bigl[\hat F(\lambda/L, \chi)\,
+            e^{2\pi i\,\xi_G/\lambda}\bigr],
+            \qquad a = \tfrac12\,(H/\lambda)\,(\lambda/L)\,L,
+
+        :math:`\hat F` the fitted unit-amplitude amplitudes (:meth:`amplitudes`, phase at
+        G; module doc), ``X`` times the strips' ``surge_scale``, plus the strips'
+        slender-body lift (:meth:`WaveStrips.lift_forces`) when ``lift``. Arguments and
+        result as in :class:`~ship_models.contracts.WaveForceModel`.
         """
-        a = 0.5 * H_over_lambda * lambda_over_L * self.strips.L
+        Hl, lL = sea
+        a = 0.5 * Hl * lL * self.strips.L
         ph = 2.0 * ops.pi * xi_over_lambda
         cs, sn = ops.cos(ph), ops.sin(ph)
         out = []
-        for re, im in self.amplitudes(lambda_over_L, chi, ops):
+        for re, im in self.amplitudes(lL, chi, ops):
             out.append(-a * (re * cs - im * sn))  # -a Re[(re + i im) e^{i ph}]
         X, Y, N, K = out
         X = self.strips.surge_scale * X
         if lift:
-            YL, NL, KL = self.strips.lift_forces(
-                xi_over_lambda, u, chi, H_over_lambda, lambda_over_L, ops
-            )
+            YL, NL, KL = self.strips.lift_forces(xi_over_lambda, u, chi, sea, ops)
             Y, N, K = Y + YL, N + NL, K + KL
         return X, Y, N, K
 

@@ -75,6 +75,7 @@ import numpy as np
 from continuation.ops import NUMPY_OPS, Ops
 from continuation.typing import FloatArray
 
+from ..contracts import SeaState
 from .hull import HullForm
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -237,41 +238,64 @@ class WaveStrips:
         Sy = _rowsum(base * b * gg, ops)
         return C, Cz, Sy
 
+    def _phase(
+        self, xi_over_lambda: Any, chi: Any, sea: SeaState, ops: Ops
+    ) -> tuple[Any, Any, Any, Any, Any]:
+        r"""The wave at the stations: wavenumber, amplitude, heading and phase.
+
+        Returns
+        -------
+        k, a, s, c : scalar
+            :math:`k = 2\pi/\lambda` (1/m), the amplitude :math:`a = H/2` (m),
+            :math:`\sin\chi` and :math:`\cos\chi` (:meth:`SeaState.wave`).
+        kxi : array, shape (J,)
+            :math:`k\xi_x = 2\pi\,\xi_G/\lambda + k x\cos\chi` of each station
+            (module doc).
+        """
+        _, k, a = sea.wave(self.L, ops)
+        s = ops.sin(chi)
+        c = ops.cos(chi)
+        kxi = 2.0 * ops.pi * xi_over_lambda + k * _const(self.x, ops) * c
+        return k, a, s, c, kxi
+
     def forces(
         self,
         xi_over_lambda: Any,
         u: Any,
         chi: Any,
-        H_over_lambda: Any,
-        lambda_over_L: Any,
+        sea: SeaState,
         ops: Ops = NUMPY_OPS,
         *,
         lift: bool = True,
     ) -> tuple[Any, Any, Any, Any]:
-        """Wave forces ``(X_w, Y_w, N_w, K_w)`` (N, N, N m, N m).
+        r"""Froude-Krylov wave forces plus the wave lift, ``(X_w, Y_w, N_w, K_w)``.
+
+        The strip integrals :math:`X_{FK}, Y_{FK}, N_{FK}, K_{FK}` of the module doc,
+        :math:`X_{FK}` times :attr:`surge_scale`, plus :meth:`lift_forces` when
+        ``lift`` (the :class:`~ship_models.contracts.WaveForceModel` contract).
 
         Parameters
         ----------
         xi_over_lambda : scalar
-            ``xi_G / lambda`` (0 at a trough, 0.5 at a crest).
+            :math:`\xi_G/\lambda` (0 at a trough, 0.5 at a crest).
         u : scalar
             Surge velocity (m/s), used by the lift terms.
         chi : scalar
             Heading from the wave direction (rad).
-        H_over_lambda, lambda_over_L : scalar
-            Wave steepness and wavelength ratio.
+        sea : SeaState
+            Wave steepness :math:`H/\lambda` and wavelength ratio :math:`\lambda/L`.
         ops : Ops
             NumPy or CasADi namespace.
         lift : bool
             Include the hydrodynamic lift due to wave particle velocity.
+
+        Returns
+        -------
+        X_w, Y_w, N_w, K_w : scalar
+            Forces (N) and moments (N m) about G (CasADi expressions with CasADi
+            operands).
         """
-        lam = lambda_over_L * self.L
-        k = 2.0 * ops.pi / lam
-        a = 0.5 * H_over_lambda * lam
-        s = ops.sin(chi)
-        c = ops.cos(chi)
-        x = _const(self.x, ops)
-        kxi = 2.0 * ops.pi * xi_over_lambda + k * x * c
+        k, a, s, c, kxi = self._phase(xi_over_lambda, chi, sea, ops)
         sk = ops.sin(kxi)
         ck = ops.cos(kxi)
         C, Cz, Sy = self.section_integrals(k, s, ops)
@@ -312,22 +336,23 @@ class WaveStrips:
         return YL, NL, -self.z_H * YL
 
     def lift_forces(
-        self,
-        xi_over_lambda: Any,
-        u: Any,
-        chi: Any,
-        H_over_lambda: Any,
-        lambda_over_L: Any,
-        ops: Ops = NUMPY_OPS,
+        self, xi_over_lambda: Any, u: Any, chi: Any, sea: SeaState, ops: Ops = NUMPY_OPS
     ) -> tuple[Any, Any, Any]:
-        """The wave-lift part ``(Y_L, N_L, K_L)`` of :meth:`forces` alone (module doc)."""
-        lam = lambda_over_L * self.L
-        k = 2.0 * ops.pi / lam
-        a = 0.5 * H_over_lambda * lam
-        s = ops.sin(chi)
-        c = ops.cos(chi)
-        x = _const(self.x, ops)
-        ck = ops.cos(2.0 * ops.pi * xi_over_lambda + k * x * c)
+        """The wave-lift part ``(Y_L, N_L, K_L)`` of :meth:`forces` alone (module doc).
+
+        Parameters
+        ----------
+        xi_over_lambda, u, chi, sea, ops
+            As for :meth:`forces`.
+
+        Returns
+        -------
+        Y_L, N_L, K_L : scalar
+            Sway force (N), yaw and roll moments (N m) of the lift due to the wave
+            particle velocity.
+        """
+        k, a, s, c, kxi = self._phase(xi_over_lambda, chi, sea, ops)
+        ck = ops.cos(kxi)
         zeta = _const(self.zeta, ops)
         b = _const(self.b, ops)
         C = _rowsum(_const(self.wz, ops) * ops.exp(k * zeta) * 2.0 * b * sinc(k * s * b, ops), ops)

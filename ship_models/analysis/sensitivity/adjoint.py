@@ -21,7 +21,7 @@ from continuation.newton import newton
 from continuation.settings import NewtonSettings
 from continuation.typing import FloatArray
 
-from ...contracts import VesselModel
+from ...contracts import SeaState, VesselModel
 from ...estimation import build_vessel_model
 from ...registry import vessel_model
 from ...vessel import SCHEMA, VesselData, VesselFileError, load_vessel
@@ -140,7 +140,7 @@ def _factor_quantity(key: str, model: VesselModel, conn: CriticalFn) -> float:
         return float(F.resistance_force(F.nominal_speed(conn.Fn)))
     idx = {"factor.Y_w": 1, "factor.N_w": 2, "factor.K_w": 3}[key]
     xi = np.linspace(0.0, 1.0, 64, endpoint=False)
-    vals = [F.waves.forces(s, c, chi, Hl, lL)[idx] for s in xi]
+    vals = [F.waves.forces(s, c, chi, SeaState(Hl, lL))[idx] for s in xi]
     return float(np.max(np.abs(vals)))
 
 
@@ -153,7 +153,7 @@ def wave_surge_amplitude(model: VesselModel, chi_c: float, lambda_over_L: float 
     Hl = float(p["H_over_lambda"]) if H_over_lambda is None else float(H_over_lambda)
     c = float(F.celerity(lL))
     xi = np.linspace(0.0, 1.0, 256, endpoint=False)
-    X = [F.waves.forces(s, c, chi_c, Hl, lL, lift=False)[0] for s in xi]
+    X = [F.waves.forces(s, c, chi_c, SeaState(Hl, lL), lift=False)[0] for s in xi]
     return float(np.max(np.abs(X)))
 
 
