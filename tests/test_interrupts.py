@@ -24,7 +24,7 @@ from pathlib import Path
 
 import pytest
 
-from continuation.dynamics.integrators import _Sigints, sigint_recorded
+from continuation.sigint import _Sigints, sigint_recorded
 
 ROOT = Path(__file__).resolve().parents[1]
 

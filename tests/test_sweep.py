@@ -276,3 +276,27 @@ def test_a_cancelled_process_pool_leaves_no_thread_behind():
     left = [t.name for t in set(threading.enumerate()) - before]
     assert not left, left
     assert all(f.done() for f in futures)
+
+
+def test_a_sigint_whose_keyboard_interrupt_was_lost_still_stops_the_sweep(tmp_path):
+    """A SIGINT is counted (continuation.sigint) even when its ``KeyboardInterrupt`` is
+    lost (raised in a weakref callback, say: only printed): the sweep then stops with
+    INTERRUPTED at its next check (every 0.5 s at most) instead of running to the end.
+    The lost exception is imitated by counting a SIGINT without raising anything."""
+    import threading
+
+    from continuation.sigint import _Sigints
+
+    log = tmp_path / "log"
+    ks = [{"x": x, "log": str(log), "sleep": 0.3} for x in range(20)]
+    timer = threading.Timer(1.0, lambda: setattr(_Sigints, "count", _Sigints.count + 1))
+    timer.start()
+    try:
+        t0 = time.monotonic()
+        r = run_sweep(T.square, ks, store=tmp_path / "ck", backend="processes", workers=2)
+    finally:
+        timer.cancel()
+    # without the count the 20 tasks (3 s on two workers) would all run: SUCCESS
+    assert r.status.name == "INTERRUPTED", r.message
+    assert len(r.pending) > 0
+    assert time.monotonic() - t0 < 1.0 + 0.5 + 5.0  # the check interval and the pool's stop

@@ -13,13 +13,14 @@ from typing import Any
 import numpy as np
 
 from ..errors import ContinuationError
+from ..sigint import sigint_recorded, sigints_counted
 from ..status import Status
 from ..typing import FloatArray
 from ._common import check_scale, param_vector, periodic_difference, positive, state_period
 from .events import PoincareSection, SimEvent
 from .fate_scan import _ScanState
 from .fates import Fate, KnownEquilibrium
-from .integrators import DEFAULT_ATOL, DEFAULT_RTOL, sigint_recorded, sigints_counted
+from .integrators import DEFAULT_ATOL, DEFAULT_RTOL
 from .saddles import left_unstable_vector, refine_equilibrium
 from .simulate import Simulator
 from .trajectory import Trajectory

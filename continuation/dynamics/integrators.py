@@ -31,10 +31,11 @@ ship's sudden-change runs take about 2.7x less time.
 Interrupts. A CVODES call is native code, but CasADi polls Python's signal handlers
 between right-hand-side evaluations, so a Ctrl-C (SIGINT) stops it within one
 integrator step; the call then fails with a ``RuntimeError`` (``CV_RHSFUNC_FAIL``)
-whose message, with CasADi's warnings off, does not say why. :func:`sigint_recorded`
-counts the SIGINTs that arrive while a simulation runs, so that :class:`_CvodesBackend`
-raises ``KeyboardInterrupt`` for such a failure instead of reporting an integration
-failure (which would be misread as a blow-up, and retried).
+whose message, with CasADi's warnings off, does not say why.
+:func:`~continuation.sigint.sigint_recorded` counts the SIGINTs that arrive while a
+simulation runs, so that :class:`_CvodesBackend` raises ``KeyboardInterrupt`` for such
+a failure instead of reporting an integration failure (which would be misread as a
+blow-up, and retried).
 
 A SIGINT can also be *lost* in a CasADi call from Python: CasADi converts a NumPy
 argument with a Python helper (``DM_from_array``) called from its SWIG type check,
@@ -45,18 +46,14 @@ as a failed check; the call then runs to its end and nothing is raised (seen in
 So :class:`_CvodesBackend` converts the arguments to ``DM`` itself and checks the
 count before and after the native call, and
 :meth:`~continuation.dynamics.simulate.Simulator.run` and the fate classifier check
-:func:`sigints_counted` after every block: a counted SIGINT always stops the
-simulation, at worst one call late.
+:func:`~continuation.sigint.sigints_counted` after every block: a counted SIGINT always
+stops the simulation, at worst one call late.
 """
 
 from __future__ import annotations
 
 import math
-import signal
-import threading
 import weakref
-from collections.abc import Iterator
-from contextlib import contextmanager
 from typing import Any
 
 import casadi as ca
@@ -64,6 +61,7 @@ import numpy as np
 import scipy.integrate as si
 
 from ..casadi_compile import compiled_soon
+from ..sigint import _Sigints
 from ..typing import FloatArray
 
 SCIPY_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
@@ -75,64 +73,6 @@ DEFAULT_RTOL = 1e-10
 DEFAULT_ATOL = 1e-12
 #: CVODES internal steps allowed per output interval before it reports failure.
 _MAX_STEPS_PER_SAMPLE = 20000
-
-
-class _Sigints:
-    """SIGINTs seen while :func:`sigint_recorded` blocks run (``count``), and their depth."""
-
-    count = 0
-    depth = 0
-    previous: Any = None
-
-
-def _record_sigint(signum: int, frame: Any) -> Any:
-    """Count the signal, then hand it to the handler that was installed before."""
-    _Sigints.count += 1
-    return _Sigints.previous(signum, frame)
-
-
-@contextmanager
-def sigint_recorded() -> Iterator[None]:
-    """Count every SIGINT that arrives while the block runs, then handle it as before.
-
-    The previous handler still runs (Python's default raises ``KeyboardInterrupt``);
-    the count only lets a native call that failed tell that a SIGINT arrived while it
-    ran (module notes). Re-entrant; a no-op outside the main thread (where no signal
-    handler can be set) and when the current handler is not a Python callable
-    (``SIG_IGN``, ``SIG_DFL``).
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    if _Sigints.depth > 0:
-        _Sigints.depth += 1
-        try:
-            yield
-        finally:
-            _Sigints.depth -= 1
-        return
-    previous = signal.getsignal(signal.SIGINT)
-    if not callable(previous):
-        yield
-        return
-    _Sigints.previous = previous
-    _Sigints.depth = 1
-    signal.signal(signal.SIGINT, _record_sigint)
-    try:
-        yield
-    finally:
-        _Sigints.depth = 0
-        signal.signal(signal.SIGINT, previous)
-        _Sigints.previous = None
-
-
-def sigints_counted() -> int:
-    """SIGINTs counted by :func:`sigint_recorded` so far.
-
-    Compare two readings taken inside one block: a difference is an interrupt, even one a
-    CasADi call lost.
-    """
-    return _Sigints.count
 
 
 class _IntegrationFailure(Exception):

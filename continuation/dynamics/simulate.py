@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ContinuationError
+from ..sigint import sigint_recorded, sigints_counted
 from ..status import Status
 from ..typing import FloatArray
 from ._common import param_vector, positive, state_period
@@ -45,8 +46,6 @@ from .integrators import (
     _CvodesBackend,
     _IntegrationFailure,
     _ScipyBackend,
-    sigint_recorded,
-    sigints_counted,
 )
 from .trajectory import EventHits, Trajectory, hermite
 

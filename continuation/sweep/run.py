@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..sigint import sigint_recorded, sigints_counted
 from ..status import Status
 from .backends import Backend, configure_worker_logging, open_backend
 from .keys import check_key, function_name, source_version, table_order, task_id
@@ -339,9 +340,15 @@ def run_sweep(
     be: Backend | None = None
     clean = False
     try:
-        if todo:
-            be = open_backend(backend, workers=workers, scheduler=scheduler)
-            n_executed = _drive(be, fn, todo, retries, name, code, context, st, finished, bar)
+        # every SIGINT is counted: one whose KeyboardInterrupt is lost (raised in a
+        # weakref callback of the pool, say) still stops the sweep (continuation.sigint)
+        with sigint_recorded():
+            n_sigint = sigints_counted()
+            if todo:
+                be = open_backend(backend, workers=workers, scheduler=scheduler)
+                n_executed = _drive(
+                    be, fn, todo, retries, name, code, context, st, finished, bar, n_sigint
+                )
         clean = True
     except KeyboardInterrupt:
         status = Status.INTERRUPTED
@@ -374,8 +381,13 @@ def _drive(
     st: CheckpointStore | None,
     finished: dict[str, TaskRecord],
     bar: Any,
+    n_sigint: int | None = None,
 ) -> int:
-    """Keep ``be.slots`` tasks in flight until all finished; returns the attempts run."""
+    """Keep ``be.slots`` tasks in flight until all finished; returns the attempts run.
+
+    Raises ``KeyboardInterrupt`` when :func:`~continuation.sigint.sigints_counted` has
+    moved from ``n_sigint`` (a SIGINT whose own exception was lost).
+    """
     queue = [tid for tid, _ in reversed(todo)]  # pop() from the end: first key first
     errors: dict[str, list[str]] = {tid: [] for tid, _ in todo}
     keys = dict(todo)
@@ -392,6 +404,8 @@ def _drive(
                 flight[fut] = (tid, be.generation)
                 n_exec += 1
             done, _ = cf.wait(list(flight), timeout=0.5, return_when=cf.FIRST_COMPLETED)
+            if n_sigint is not None and sigints_counted() != n_sigint:
+                raise KeyboardInterrupt
             broken = False
             for fut in done:
                 tid, gen = flight.pop(fut)
