@@ -28,10 +28,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Find the fixed points and print them; returns 0 (1 when there are none)."""
+    from continuation._threads import blas_threads_for
     from ship_models.analysis import fixed_points
 
-    model, params = ship_from_args(args)
-    pts = fixed_points(model, params)
+    # every system solved here is small (the ship's states, a resistance fit of a few
+    # columns): one BLAS thread; a second one costs more than it gains (continuation._threads)
+    with blas_threads_for(0, sparse=False):
+        model, params = ship_from_args(args)
+        pts = fixed_points(model, params)
     result = {
         "vessel": model.vessel.name,
         "params": params.as_dict(),
