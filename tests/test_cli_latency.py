@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import os
 import pkgutil
 import subprocess
 import sys
@@ -17,6 +18,7 @@ import sys
 import pytest
 
 import broachkit_cli.commands
+from broachkit_cli.blas import THREAD_VARIABLES
 from broachkit_cli.main import COMMANDS, DEFAULT_COMMAND, requested_command
 
 
@@ -95,3 +97,35 @@ def test_a_fixed_points_query_imports_only_what_it_uses():
     res = json.loads(run.stdout.strip().splitlines()[-1])
     assert res["code"] == 0 and res["points"] >= 2  # the crest saddle and the trough
     assert res["loaded"] == []
+
+
+def _blas_probe(env_extra: dict[str, str]) -> dict[str, object]:
+    code = (
+        "import json, os\n"
+        "from broachkit_cli.blas import THREAD_VARIABLES, one_blas_thread\n"
+        "with one_blas_thread():\n"
+        "    import threadpoolctl\n"
+        "    inside = [i['num_threads'] for i in threadpoolctl.threadpool_info()\n"
+        "              if i['user_api'] == 'blas']\n"
+        "after = {v: os.environ.get(v) for v in THREAD_VARIABLES}\n"
+        "pools = [i['num_threads'] for i in threadpoolctl.threadpool_info()\n"
+        "         if i['user_api'] == 'blas']\n"
+        "print(json.dumps({'inside': inside, 'after': after, 'pools': pools}))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env={**env, **env_extra})  # fmt: skip
+    return json.loads(run.stdout.strip().splitlines()[-1])
+
+
+def test_one_blas_thread_starts_blas_with_one_thread_and_restores_the_environment():
+    res = _blas_probe({})
+    assert res["inside"] and set(res["inside"]) == {1}  # NumPy's and SciPy's BLAS
+    assert set(res["pools"]) == {1}  # started so: one thread after the context too
+    assert res["after"] == dict.fromkeys(THREAD_VARIABLES)  # children see the user's
+
+
+def test_one_blas_thread_keeps_a_count_the_user_set():
+    res = _blas_probe({"OPENBLAS_NUM_THREADS": "2"})
+    assert res["after"]["OPENBLAS_NUM_THREADS"] == "2"
+    assert set(res["inside"]) == {1}  # limited for the command's own calls all the same

@@ -15,6 +15,7 @@ import json
 import math
 import sys
 
+from ..blas import one_blas_thread
 from ..options import add_ship, json_safe, ship_from_args
 
 NAME = "fixed-points"
@@ -28,12 +29,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Find the fixed points and print them; returns 0 (1 when there are none)."""
-    from continuation._threads import blas_threads_for
-    from ship_models.analysis import fixed_points
+    with one_blas_thread():  # every system here is small: the ship's states
+        from ship_models.analysis import fixed_points
 
-    # every system solved here is small (the ship's states, a resistance fit of a few
-    # columns): one BLAS thread; a second one costs more than it gains (continuation._threads)
-    with blas_threads_for(0, sparse=False):
         model, params = ship_from_args(args)
         pts = fixed_points(model, params)
     result = {
