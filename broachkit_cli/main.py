@@ -1,7 +1,8 @@
 """Entry point of the ``broachkit`` command.
 
 Each sub-command lives in its own module under :mod:`broachkit_cli.commands` and
-provides ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``; the
+provides ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``, and is
+listed in :data:`COMMANDS` (a command line loads the module of its command only); the
 options they share are in :mod:`broachkit_cli.options`. ``broachkit`` with no
 sub-command runs :data:`DEFAULT_COMMAND` (so ``broachkit --out X`` is
 ``broachkit reproduce --out X``).
