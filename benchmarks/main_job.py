@@ -21,11 +21,12 @@ work took CPU from the measured command). One untimed warm-up run of each comman
 checkout comes first (``--warmup 0`` skips it).
 
 Python's bytecode cache: where the environment sets ``PYTHONDONTWRITEBYTECODE`` (some
-shells and agents do), every run compiles the checkout's sources again (about 0.1-0.3 s
-of a single query); an installed package, and any second run of a user's, reads its
-``__pycache__`` instead. ``--bytecode`` lets the measured processes use the cache
-whatever the environment says (the warm-up run writes it); the JSON and the first line
-printed say which (``bytecode_cache``).
+shells and agents do), no ``__pycache__`` is written, so a checkout that never had one
+compiles its sources again on every run (about 0.1-0.3 s of a single query; an existing
+cache is still read). An installed package, and any second run of a user's, reads its
+cache. ``--bytecode`` lets the measured processes write and use the cache whatever the
+environment says (the warm-up run writes it); the JSON and the first line printed say
+which (``bytecode_cache``).
 
 Run: ``python benchmarks/main_job.py [--commands main curve query] [--repeats 3]
 [--baseline DIR] [--bytecode] [--out benchmarks/results/main_job.json]``. Prints one
@@ -147,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
         "bytecode_cache": (
             "used"
             if args.bytecode or not os.environ.get("PYTHONDONTWRITEBYTECODE")
-            else "off: PYTHONDONTWRITEBYTECODE set, every run compiles the sources"
+            else "not written (PYTHONDONTWRITEBYTECODE): sources without one compiled every run"
         ),
         "runs": {k: {s: [] for s in sides} for k in args.commands},
     }
