@@ -20,9 +20,17 @@ average before and after each run (the machine is shared: a load above 2 means o
 work took CPU from the measured command). One untimed warm-up run of each command and
 checkout comes first (``--warmup 0`` skips it).
 
+Python's bytecode cache: where the environment sets ``PYTHONDONTWRITEBYTECODE`` (some
+shells and agents do), no ``__pycache__`` is written, so a checkout that never had one
+compiles its sources again on every run (about 0.1-0.3 s of a single query; an existing
+cache is still read). An installed package, and any second run of a user's, reads its
+cache. ``--bytecode`` lets the measured processes write and use the cache whatever the
+environment says (the warm-up run writes it); the JSON and the first line printed say
+which (``bytecode_cache``).
+
 Run: ``python benchmarks/main_job.py [--commands main curve query] [--repeats 3]
-[--baseline DIR] [--out benchmarks/results/main_job.json]``. Prints one line per run and
-a table of medians; writes every number to the JSON file.
+[--baseline DIR] [--bytecode] [--out benchmarks/results/main_job.json]``. Prints one
+line per run and a table of medians; writes every number to the JSON file.
 """
 
 from __future__ import annotations
@@ -78,9 +86,15 @@ def commit_of(checkout: Path) -> str:
         return "unknown (not a git checkout)"
 
 
-def run_once(command: str, checkout: Path) -> dict[str, Any]:
-    """One timed run of ``command`` with the packages of ``checkout``."""
+def run_once(command: str, checkout: Path, bytecode: bool = False) -> dict[str, Any]:
+    """One timed run of ``command`` with the packages of ``checkout``.
+
+    ``bytecode``: the process may read and write Python's bytecode cache even where
+    this environment sets ``PYTHONDONTWRITEBYTECODE`` (module docstring).
+    """
     env = dict(os.environ, PYTHONPATH=str(checkout))
+    if bytecode:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
     with tempfile.TemporaryDirectory(prefix="bk_bench_") as tmp:
         args = [a.replace("{out}", str(Path(tmp) / "out")) for a in COMMANDS[command]]
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -111,6 +125,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="another checkout, run alternately with this one (A/B)")  # fmt: skip
     ap.add_argument("--baseline-label", default=None,
                     help="the baseline's name (its commit) if not a git checkout")  # fmt: skip
+    ap.add_argument("--bytecode", action="store_true",
+                    help="use the bytecode cache even if PYTHONDONTWRITEBYTECODE")  # fmt: skip
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "main_job.json")
     args = ap.parse_args(argv)
     if args.repeats < 1 or args.warmup < 0:
@@ -129,21 +145,27 @@ def main(argv: list[str] | None = None) -> int:
         "started_utc": time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime()),
         "checkouts": {k: {"path": str(v), "commit": labels[k]} for k, v in sides.items()},
         "commands": {k: COMMANDS[k] for k in args.commands},
+        "bytecode_cache": (
+            "used"
+            if args.bytecode or not os.environ.get("PYTHONDONTWRITEBYTECODE")
+            else "not written (PYTHONDONTWRITEBYTECODE): sources without one compiled every run"
+        ),
         "runs": {k: {s: [] for s in sides} for k in args.commands},
     }
     print(f"# {doc['processor']}; " + "; ".join(f"{k} = {v['commit']} ({v['path']})"
-                                              for k, v in doc["checkouts"].items()))  # fmt: skip
+                                              for k, v in doc["checkouts"].items())
+          + f"; bytecode cache {doc['bytecode_cache']}")  # fmt: skip
     for command in args.commands:
         for _ in range(args.warmup):
             for side, checkout in sides.items():
-                r = run_once(command, checkout)
-                print(f"{command} {side} warm-up: {r['wall_s']:.1f} s", flush=True)
+                r = run_once(command, checkout, args.bytecode)
+                print(f"{command} {side} warm-up: {r['wall_s']:.2f} s", flush=True)
         for i in range(args.repeats):
             for side, checkout in sides.items():
-                r = run_once(command, checkout)
+                r = run_once(command, checkout, args.bytecode)
                 doc["runs"][command][side].append(r)
-                print(f"{command} {side} run {i + 1}: wall {r['wall_s']:.1f} s, CPU "
-                      f"{r['cpu_s']:.1f} s, load {r['load_before']:.1f} -> "
+                print(f"{command} {side} run {i + 1}: wall {r['wall_s']:.2f} s, CPU "
+                      f"{r['cpu_s']:.2f} s, load {r['load_before']:.1f} -> "
                       f"{r['load_after']:.1f}, exit {r['exit']}", flush=True)  # fmt: skip
     summary: dict[str, Any] = {}
     for command, by_side in doc["runs"].items():
@@ -170,8 +192,8 @@ def main(argv: list[str] | None = None) -> int:
     for command, by in summary.items():
         for side in sides:
             s = by[side]
-            print(f"| {command} | {side} | {s['median_wall_s']:.1f} s ({s['min_wall_s']:.1f}-"
-                  f"{s['max_wall_s']:.1f}) | {s['median_cpu_s']:.1f} s | "
+            print(f"| {command} | {side} | {s['median_wall_s']:.2f} s ({s['min_wall_s']:.2f}-"
+                  f"{s['max_wall_s']:.2f}) | {s['median_cpu_s']:.2f} s | "
                   f"{', '.join(f'{v:.1f}' for v in s['loads'])} |")  # fmt: skip
         if "A/B_wall_median" in by:
             print(f"| {command} | A/B | {by['A/B_wall_median']:.3f} | | |")

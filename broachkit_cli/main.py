@@ -1,7 +1,8 @@
 """Entry point of the ``broachkit`` command.
 
 Each sub-command lives in its own module under :mod:`broachkit_cli.commands` and
-provides ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``; the
+provides ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``, and is
+listed in :data:`COMMANDS` (a command line loads the module of its command only); the
 options they share are in :mod:`broachkit_cli.options`. ``broachkit`` with no
 sub-command runs :data:`DEFAULT_COMMAND` (so ``broachkit --out X`` is
 ``broachkit reproduce --out X``).
@@ -21,6 +22,7 @@ import os
 import sys
 import traceback
 import warnings
+from collections.abc import Iterable
 from types import ModuleType
 from typing import Any
 
@@ -34,23 +36,28 @@ from .interrupt import (
 )
 from .options import OneLineParser, add_verbose
 
+#: Sub-command name -> its module, in the order shown by ``broachkit --help``. A command
+#: line naming one loads that module alone (issue 27: a single query does not import
+#: the other commands); ``broachkit --help`` loads them all.
+COMMANDS: dict[str, str] = {
+    "reproduce": "broachkit_cli.commands.reproduce",
+    "vessels": "broachkit_cli.commands.vessels",
+    "fixed-points": "broachkit_cli.commands.fixed_points",
+    "manifold": "broachkit_cli.commands.manifold",
+    "critical": "broachkit_cli.commands.critical",
+    "critical-curve": "broachkit_cli.commands.critical_curve",
+    "sensitivity": "broachkit_cli.commands.sensitivity",
+    "calibrate": "broachkit_cli.commands.calibrate",
+    "demo": "broachkit_cli.commands.demo",
+    "sweep": "broachkit_cli.commands.sweep",
+    "cycles": "broachkit_cli.commands.cycles",
+    "periodic": "broachkit_cli.commands.periodic",
+    "periodic-branch": "broachkit_cli.commands.periodic_branch",
+    "assess": "broachkit_cli.commands.assess",
+}
+
 #: Sub-command modules, in the order shown by ``broachkit --help``.
-COMMAND_MODULES: tuple[str, ...] = (
-    "broachkit_cli.commands.reproduce",
-    "broachkit_cli.commands.vessels",
-    "broachkit_cli.commands.fixed_points",
-    "broachkit_cli.commands.manifold",
-    "broachkit_cli.commands.critical",
-    "broachkit_cli.commands.critical_curve",
-    "broachkit_cli.commands.sensitivity",
-    "broachkit_cli.commands.calibrate",
-    "broachkit_cli.commands.demo",
-    "broachkit_cli.commands.sweep",
-    "broachkit_cli.commands.cycles",
-    "broachkit_cli.commands.periodic",
-    "broachkit_cli.commands.periodic_branch",
-    "broachkit_cli.commands.assess",
-)
+COMMAND_MODULES: tuple[str, ...] = tuple(COMMANDS.values())
 
 #: What ``broachkit`` runs without a sub-command.
 DEFAULT_COMMAND = "reproduce"
@@ -60,9 +67,11 @@ _TOP_FLAGS = ("-v", "--verbose")
 _HELP_FLAGS = ("-h", "--help")
 
 
-def _load_commands() -> dict[str, ModuleType]:
+def _load_commands(names: Iterable[str] | None = None) -> dict[str, ModuleType]:
+    """The command modules keyed by their ``NAME``: all, or those of ``names``."""
+    modules = COMMAND_MODULES if names is None else tuple(COMMANDS[n] for n in names)
     cmds: dict[str, ModuleType] = {}
-    for modname in COMMAND_MODULES:
+    for modname in modules:
         try:
             mod = importlib.import_module(modname)
         except ModuleNotFoundError as exc:  # a command whose module is not there yet
@@ -91,6 +100,21 @@ def build_parser(cmds: dict[str, ModuleType]) -> argparse.ArgumentParser:
         mod.add_arguments(p)
         add_verbose(p)
     return parser
+
+
+def requested_command(argv: list[str]) -> str | None:
+    """The one command ``argv`` runs (:func:`with_default_command`), or None for help.
+
+    ``["fixed-points", ...]`` -> ``"fixed-points"``; ``["--out", "X"]`` and ``[]`` ->
+    :data:`DEFAULT_COMMAND`; ``["-h"]`` -> None (the top-level help lists every command).
+    """
+    i = 0
+    while i < len(argv) and argv[i] in _TOP_FLAGS:
+        i += 1
+    rest = argv[i:]
+    if rest and rest[0] in _HELP_FLAGS:
+        return None
+    return rest[0] if rest and rest[0] in COMMANDS else DEFAULT_COMMAND
 
 
 def with_default_command(argv: list[str], commands: dict[str, ModuleType]) -> list[str]:
@@ -212,9 +236,13 @@ def _main(argv: list[str] | None, terminal: bool = False) -> int:
     try:
         # from the start: a Ctrl-C while the modules load ends quietly too
         with sticky_interrupt(deadline=deadline, code=INTERRUPTED_EXIT):
-            cmds = _load_commands()
+            argv = list(sys.argv[1:] if argv is None else argv)
+            one = requested_command(argv)
+            cmds = _load_commands(None if one is None else (one,))
+            if not cmds:  # its module is not there: as before, with all the others
+                cmds = _load_commands()
             parser = build_parser(cmds)
-            argv = with_default_command(list(sys.argv[1:] if argv is None else argv), cmds)
+            argv = with_default_command(argv, cmds)
             args = parser.parse_args(argv)
             verbose = bool(getattr(args, "verbose", False))
             configure_logging(verbose)

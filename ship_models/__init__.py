@@ -31,31 +31,81 @@ PAPER_FN, PAPER_FN_BRACKET, PAPER_CHI_C
 
 from __future__ import annotations
 
-from typing import Any
+import importlib
+from typing import TYPE_CHECKING, Any
 
-from .estimation import VesselModelData, resolve_vessel
-from .paper import PAPER_CHI_C, PAPER_FN, PAPER_FN_BRACKET
-from .registry import (
-    PluginError,
-    get_model,
-    get_vessel_data,
-    list_models,
-    load_model_file,
-    model_info,
-    register_model,
-)
-from .surge import SurgeModel
-from .umeda_4dof import Umeda4DOF
-from .vessel import Coefficient, VesselData, VesselFileError, available_vessels, load_vessel
+if TYPE_CHECKING:  # for type checkers; _LAZY is what runs
+    from .estimation import VesselModelData, resolve_vessel
+    from .paper import PAPER_CHI_C, PAPER_FN, PAPER_FN_BRACKET
+    from .registry import (
+        PluginError,
+        get_model,
+        get_vessel_data,
+        list_models,
+        load_model_file,
+        model_info,
+        register_model,
+    )
+    from .surge import SurgeModel
+    from .umeda_4dof import Umeda4DOF
+    from .vessel import Coefficient, VesselData, VesselFileError, available_vessels, load_vessel
+
+#: Public name -> the sub-module defining it, imported on first use (issue 27: a single
+#: command-line query imports only what it needs; tests/test_import_light.py checks
+#: this table against ``__all__`` and the imports above).
+_LAZY: dict[str, str] = {
+    "VesselModelData": ".estimation",
+    "resolve_vessel": ".estimation",
+    "PAPER_CHI_C": ".paper",
+    "PAPER_FN": ".paper",
+    "PAPER_FN_BRACKET": ".paper",
+    "PluginError": ".registry",
+    "get_model": ".registry",
+    "get_vessel_data": ".registry",
+    "list_models": ".registry",
+    "load_model_file": ".registry",
+    "model_info": ".registry",
+    "register_model": ".registry",
+    "SurgeModel": ".surge",
+    "Umeda4DOF": ".umeda_4dof",
+    "Coefficient": ".vessel",
+    "VesselData": ".vessel",
+    "VesselFileError": ".vessel",
+    "available_vessels": ".vessel",
+    "load_vessel": ".vessel",
+}
+
+
+def __getattr__(name: str) -> Any:
+    mod = _LAZY.get(name)
+    if mod is not None:
+        value = getattr(importlib.import_module(mod, __name__), name)
+        globals()[name] = value
+        return value
+    if not name.startswith("__"):  # a sub-module not imported yet (``ship_models.vessel``)
+        try:
+            return importlib.import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 
 def purse_seiner(**options: Any) -> Umeda4DOF:
     """Umeda's (1999) purse seiner as a :class:`Umeda4DOF` (options go to the constructor)."""
+    from .umeda_4dof import Umeda4DOF
+
     return Umeda4DOF("purse_seiner", **options)
 
 
 def purse_seiner_surge() -> SurgeModel:
     """The purse seiner's uncoupled surge model."""
+    from .surge import SurgeModel
+
     return SurgeModel("purse_seiner")
 
 

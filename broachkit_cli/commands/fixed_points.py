@@ -15,6 +15,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from ..blas import one_blas_thread
 from ..options import add_ship, emit, ship_from_args
 
 NAME = "fixed-points"
@@ -28,10 +29,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Find the fixed points and print them; returns 0 (1 when there are none)."""
-    from ship_models.analysis import fixed_points
+    with one_blas_thread():  # every system here is small: the ship's states
+        from ship_models.analysis import fixed_points
 
-    model, params = ship_from_args(args)
-    pts = fixed_points(model, params)
+        model, params = ship_from_args(args)
+        pts = fixed_points(model, params)
     result = {
         "vessel": model.vessel.name,
         "params": params.as_dict(),

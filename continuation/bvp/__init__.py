@@ -60,22 +60,50 @@ instead of ``saddle_to``; the state must be declared periodic in the System.
 ``shift=0`` gives a homoclinic orbit (``x_+ = x_-``).
 """
 
-from .accuracy import ConnectionAccuracy
-from .collocation import CollocationMesh
-from .connection import HeteroclinicProblem, PinPhase
-from .find import find_connection
-from .landing import LandingProblem
-from .landing_solve import continue_landing, landing_at, solve_landing
-from .result import ConnectionResult, ErrorEstimates, LandingResult, OrbitResult
-from .simplified import JacobianCache, simplified_newton
-from .solve import (
-    ContinuedConnection,
-    ConvergenceCheck,
-    check_convergence,
-    connection_at,
-    continue_connection,
-    solve_connection,
-)
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_exports
+
+if TYPE_CHECKING:  # for type checkers; _EXPORTS is what runs (names imported on first use)
+    from .accuracy import ConnectionAccuracy
+    from .collocation import CollocationMesh
+    from .connection import HeteroclinicProblem, PinPhase
+    from .find import find_connection
+    from .landing import LandingProblem
+    from .landing_solve import continue_landing, landing_at, solve_landing
+    from .result import ConnectionResult, ErrorEstimates, LandingResult, OrbitResult
+    from .simplified import JacobianCache, simplified_newton
+    from .solve import (
+        ContinuedConnection,
+        ConvergenceCheck,
+        check_convergence,
+        connection_at,
+        continue_connection,
+        solve_connection,
+    )
+
+#: Sub-module -> the public names it defines (imported on first use: issue 27).
+_EXPORTS: dict[str, tuple[str, ...]] = {
+    "accuracy": ("ConnectionAccuracy",),
+    "collocation": ("CollocationMesh",),
+    "connection": ("HeteroclinicProblem", "PinPhase"),
+    "find": ("find_connection",),
+    "landing": ("LandingProblem",),
+    "landing_solve": ("continue_landing", "landing_at", "solve_landing"),
+    "result": ("ConnectionResult", "ErrorEstimates", "LandingResult", "OrbitResult"),
+    "simplified": ("JacobianCache", "simplified_newton"),
+    "solve": (
+        "ContinuedConnection",
+        "ConvergenceCheck",
+        "check_convergence",
+        "connection_at",
+        "continue_connection",
+        "solve_connection",
+    ),
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+del TYPE_CHECKING, lazy_exports
 
 __all__ = [
     "CollocationMesh",

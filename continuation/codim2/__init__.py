@@ -8,9 +8,24 @@ second parameter and detects cusp, Bogdanov-Takens, zero-Hopf, double-Hopf and
 generalised-Hopf points on the way.
 """
 
-from .curves import RENORMALISE_BELOW, codim2_events, continue_codim2, relabel_codim2
-from .fold import FoldProblem
-from .hopf import HopfProblem, normalisation
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_exports
+
+if TYPE_CHECKING:  # for type checkers; _EXPORTS is what runs (names imported on first use)
+    from .curves import RENORMALISE_BELOW, codim2_events, continue_codim2, relabel_codim2
+    from .fold import FoldProblem
+    from .hopf import HopfProblem, normalisation
+
+#: Sub-module -> the public names it defines (imported on first use: issue 27).
+_EXPORTS: dict[str, tuple[str, ...]] = {
+    "curves": ("RENORMALISE_BELOW", "codim2_events", "continue_codim2", "relabel_codim2"),
+    "fold": ("FoldProblem",),
+    "hopf": ("HopfProblem", "normalisation"),
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+del TYPE_CHECKING, lazy_exports
 
 __all__ = [
     "RENORMALISE_BELOW",

@@ -36,25 +36,56 @@ one wavelength per cycle) is declared by ``System(..., periodic={"xi_G": 1.0})``
 ``winding={"xi_G": 1}`` (or ``-1``) in the start.
 """
 
-from .collocation import CollocationLayout, monodromy_factors
-from .continuation import (
-    CycleSegments,
-    PeriodLimit,
-    adapt_mesh,
-    continue_periodic,
-    multipliers,
-    orbit_at,
-    period_limit,
-    problem_at,
-    solve_orbit,
-    special_problem,
-)
-from .doubling import continue_period_doubled, doubled_orbit, switch_period_doubling
-from .floquet import FloquetResult, floquet, ns_test, pd_test
-from .hopf import first_lyapunov_coefficient, periodic_orbit_from_hopf
-from .orbit import PeriodicOrbit, orbit_from_array
-from .problem import PeriodicOrbitProblem, error_estimate
-from .starts import continue_from_hopf, orbit_from_trajectory
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_exports
+
+if TYPE_CHECKING:  # for type checkers; _EXPORTS is what runs (names imported on first use)
+    from .collocation import CollocationLayout, monodromy_factors
+    from .continuation import (
+        CycleSegments,
+        PeriodLimit,
+        adapt_mesh,
+        continue_periodic,
+        multipliers,
+        orbit_at,
+        period_limit,
+        problem_at,
+        solve_orbit,
+        special_problem,
+    )
+    from .doubling import continue_period_doubled, doubled_orbit, switch_period_doubling
+    from .floquet import FloquetResult, floquet, ns_test, pd_test
+    from .hopf import first_lyapunov_coefficient, periodic_orbit_from_hopf
+    from .orbit import PeriodicOrbit, orbit_from_array
+    from .problem import PeriodicOrbitProblem, error_estimate
+    from .starts import continue_from_hopf, orbit_from_trajectory
+
+#: Sub-module -> the public names it defines (imported on first use: issue 27).
+_EXPORTS: dict[str, tuple[str, ...]] = {
+    "collocation": ("CollocationLayout", "monodromy_factors"),
+    "continuation": (
+        "CycleSegments",
+        "PeriodLimit",
+        "adapt_mesh",
+        "continue_periodic",
+        "multipliers",
+        "orbit_at",
+        "period_limit",
+        "problem_at",
+        "solve_orbit",
+        "special_problem",
+    ),
+    "doubling": ("continue_period_doubled", "doubled_orbit", "switch_period_doubling"),
+    "floquet": ("FloquetResult", "floquet", "ns_test", "pd_test"),
+    "hopf": ("first_lyapunov_coefficient", "periodic_orbit_from_hopf"),
+    "orbit": ("PeriodicOrbit", "orbit_from_array"),
+    "problem": ("PeriodicOrbitProblem", "error_estimate"),
+    "starts": ("continue_from_hopf", "orbit_from_trajectory"),
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+del TYPE_CHECKING, lazy_exports
 
 __all__ = [
     "CycleSegments",

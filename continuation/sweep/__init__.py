@@ -14,18 +14,42 @@ Public names: :func:`run_sweep`, :class:`SweepResult`, :class:`TaskRecord`,
 
 from __future__ import annotations
 
-from .backends import (
-    BACKENDS,
-    MAX_WORKERS,
-    Backend,
-    SerialExecutor,
-    check_workers,
-    default_workers,
-    open_backend,
-)
-from .keys import canonical_json, file_digest, source_version, table_order, task_id
-from .run import DONE, FAILED, SweepResult, TaskRecord, execute_task, run_sweep
-from .store import CheckpointStore
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_exports
+
+if TYPE_CHECKING:  # for type checkers; _EXPORTS is what runs (names imported on first use)
+    from .backends import (
+        BACKENDS,
+        MAX_WORKERS,
+        Backend,
+        SerialExecutor,
+        check_workers,
+        default_workers,
+        open_backend,
+    )
+    from .keys import canonical_json, file_digest, source_version, table_order, task_id
+    from .run import DONE, FAILED, SweepResult, TaskRecord, execute_task, run_sweep
+    from .store import CheckpointStore
+
+#: Sub-module -> the public names it defines (imported on first use: issue 27).
+_EXPORTS: dict[str, tuple[str, ...]] = {
+    "backends": (
+        "BACKENDS",
+        "MAX_WORKERS",
+        "Backend",
+        "SerialExecutor",
+        "check_workers",
+        "default_workers",
+        "open_backend",
+    ),
+    "keys": ("canonical_json", "file_digest", "source_version", "table_order", "task_id"),
+    "run": ("DONE", "FAILED", "SweepResult", "TaskRecord", "execute_task", "run_sweep"),
+    "store": ("CheckpointStore",),
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+del TYPE_CHECKING, lazy_exports
 
 __all__ = [
     "BACKENDS",

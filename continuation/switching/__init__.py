@@ -105,7 +105,21 @@ Its tolerances are module constants of the module that uses them (e.g.
 ``kernel`` by :func:`crossing_tangents` and from ``switch`` by :func:`switch_branch`.
 """
 
-from .bifurcation_equation import CrossingTangents, crossing_tangents
-from .switch import switch_branch
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_exports
+
+if TYPE_CHECKING:  # for type checkers; _EXPORTS is what runs (names imported on first use)
+    from .bifurcation_equation import CrossingTangents, crossing_tangents
+    from .switch import switch_branch
+
+#: Sub-module -> the public names it defines (imported on first use: issue 27).
+_EXPORTS: dict[str, tuple[str, ...]] = {
+    "bifurcation_equation": ("CrossingTangents", "crossing_tangents"),
+    "switch": ("switch_branch",),
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+del TYPE_CHECKING, lazy_exports
 
 __all__ = ["CrossingTangents", "crossing_tangents", "switch_branch"]
