@@ -176,9 +176,10 @@ def _variational_ode(system: Any, n: int, n_params: int) -> ca.Function:
         \frac{d\Phi}{ds} = T \, \frac{\partial f}{\partial x}(x, p) \, \Phi,
 
     so that :math:`\Phi(1) = \partial x(T) / \partial x(0)` with :math:`\Phi(0) = I`
-    (the state transition matrix; e.g. Parker & Chua 1989, *Practical Numerical
-    Algorithms for Chaotic Systems*, Sec. 2.2). ``df/dx`` is the exact Jacobian
-    of the system's CasADi trace. Signature as :func:`_scaled_ode`'s.
+    (the state transition matrix, the solution of the variational equation; e.g.
+    Parker & Chua 1989, *Practical Numerical Algorithms for Chaotic Systems*).
+    ``df/dx`` is the exact Jacobian of the system's CasADi trace. Signature as
+    :func:`_scaled_ode`'s.
     """
     funcs = system.casadi_functions()
     f, jac = funcs["f"], funcs["jac"]

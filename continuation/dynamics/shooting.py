@@ -28,8 +28,9 @@ The Jacobian of the return map (``ShootingSettings.jacobian``):
 
         DP_{\text{full}} = \Bigl(I - \frac{f(x_T)\, e_i^T}{f_i(x_T)}\Bigr)\,\Phi(T)
 
-    (Parker & Chua 1989, Sec. 6.2; row ``i`` vanishes: the return stays on the
-    section), of which :math:`DP` is the block of the ``n - 1`` section coordinates.
+    (differentiating the return condition, as in Parker & Chua 1989, Ch. 6; row ``i``
+    vanishes: the return stays on the section), of which :math:`DP` is the block of
+    the ``n - 1`` section coordinates.
     One run with the variational equations per Newton iteration (and one at the
     solution). Error: that of the integration of :math:`\Phi` (CVODES controls
     the local error of every component of :math:`\Phi` with ``map_rtol``,
@@ -38,7 +39,7 @@ The Jacobian of the return map (``ShootingSettings.jacobian``):
     of the section miss :math:`\delta x_i` of the located return, at the event
     location's accuracy. A simple multiplier :math:`\mu` then errs by about
     :math:`\kappa(\mu)\,\|\delta DP\|` (:math:`\kappa` its eigenvalue condition
-    number): for a well-conditioned orbit, to integration accuracy (about 1e-9
+    number): for a well-conditioned orbit, to integration accuracy (about 1e-8
     with the default tolerances; see ``tests/test_shooting_monodromy.py``).
 ``"fd"`` (the only one for a NumPy-only system)
     Forward differences of :math:`P` with steps ``fd_step`` times the scales
