@@ -10,10 +10,43 @@ Ch. 6, shooting on the Poincare map):
 1. Transient: simulate from a guess until two consecutive returns :math:`y_k, y_{k-1}`
    (the ``n - 1`` states other than ``x_i``, scaled max-norm) differ by less than
    ``return_tol``: the orbit attracts, or the run ends with a status.
-2. Newton on :math:`G(y) = P(y) - y = 0` with the Jacobian :math:`DP - I` by forward
-   differences (``n - 1`` one-period runs per iteration). The eigenvalues of
-   :math:`DP` are the nontrivial Floquet multipliers: all inside the unit circle means
-   the orbit attracts.
+2. Newton on :math:`G(y) = P(y) - y = 0` with the Jacobian :math:`DP - I`. The
+   eigenvalues of :math:`DP` at the solution are the nontrivial Floquet multipliers:
+   all inside the unit circle means the orbit attracts.
+
+The Jacobian of the return map (``ShootingSettings.jacobian``):
+
+``"variational"`` (default for a system with a CasADi trace)
+    From the state transition matrix :math:`\Phi(T) = \partial x(T)/\partial x_0`
+    over the return time :math:`T`, integrated by CVODES with the variational
+    equations :math:`\dot\Phi = (\partial f/\partial x)\,\Phi`, :math:`\Phi(0) = I`
+    (exact ``df/dx`` of the trace; :func:`~continuation.dynamics.integrators.state_transition`).
+    The return time depends on the start, :math:`g(x(T(x_0), x_0)) = 0` with
+    :math:`g = x_i - c`, so :math:`\partial T/\partial x_0 = -e_i^T\Phi / f_i(x_T)` and
+
+    .. math::
+
+        DP_{\text{full}} = \Bigl(I - \frac{f(x_T)\, e_i^T}{f_i(x_T)}\Bigr)\,\Phi(T)
+
+    (differentiating the return condition, as in Parker & Chua 1989, Ch. 6; row ``i``
+    vanishes: the return stays on the section), of which :math:`DP` is the block of
+    the ``n - 1`` section coordinates.
+    One run with the variational equations per Newton iteration (and one at the
+    solution). Error: that of the integration of :math:`\Phi` (CVODES controls
+    the local error of every component of :math:`\Phi` with ``map_rtol``,
+    ``map_atol``; the global error is a modest multiple, growing with the
+    orbit's expansion), plus :math:`|f(x_T)|\,|\Phi|\,\delta x_i / |f_i|^2`-terms
+    of the section miss :math:`\delta x_i` of the located return, at the event
+    location's accuracy. A simple multiplier :math:`\mu` then errs by about
+    :math:`\kappa(\mu)\,\|\delta DP\|` (:math:`\kappa` its eigenvalue condition
+    number): for a well-conditioned orbit, to integration accuracy (about 1e-8
+    with the default tolerances; see ``tests/test_shooting_monodromy.py``).
+``"fd"`` (the only one for a NumPy-only system)
+    Forward differences of :math:`P` with steps ``fd_step`` times the scales
+    (``n - 1`` extra one-period runs per iteration): error
+    :math:`O(\text{fd\_step}\,|D^2P|)` plus the noise of the runs over ``fd_step``
+    (about 1e-5 to 1e-3 in the multipliers of the ship's orbits with the
+    defaults).
 
 Rotation orbits: when state ``i`` is periodic (``period[i] > 0``) the orbit may
 advance by whole periods between returns (``shift = (x_i(T) - x_i(0)) / P_i``, an
@@ -41,11 +74,16 @@ from continuation.status import Status
 from continuation.typing import FloatArray
 
 from ..arguments import finite_number
+from ._common import param_vector
 from .events import PoincareSection
+from .integrators import _IntegrationFailure, state_transition
 from .simulate import simulate
 from .trajectory import Trajectory
 
 log = logging.getLogger(__name__)
+
+#: Choices of ``ShootingSettings.jacobian``.
+JACOBIANS = ("auto", "variational", "fd")
 
 
 @dataclass(frozen=True)
@@ -69,7 +107,13 @@ class ShootingSettings:
     map_dt, map_rtol, map_atol : float
         Sampling and integrator tolerances of one return-map evaluation.
     fd_step : float
-        Forward-difference step of ``DP``, relative to the state's scale.
+        Forward-difference step of ``DP``, relative to the state's scale (used by
+        ``jacobian="fd"``).
+    jacobian : {"auto", "variational", "fd"}
+        How ``DP`` is computed (module notes): ``"variational"`` from the state
+        transition matrix (needs a CasADi trace), ``"fd"`` by forward differences,
+        ``"auto"`` (default) the first when the system has a CasADi trace, else the
+        second.
 
     Raises
     ------
@@ -89,8 +133,11 @@ class ShootingSettings:
     map_rtol: float = 1e-11
     map_atol: float = 1e-13
     fd_step: float = 1e-6
+    jacobian: str = "auto"
 
     def __post_init__(self) -> None:
+        if self.jacobian not in JACOBIANS:
+            raise ValueError(f"`jacobian` must be one of {JACOBIANS}, got {self.jacobian!r}")
         for name in ("max_returns", "max_newton"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
@@ -128,7 +175,8 @@ class ShootingOrbit:
     direction : int
         Crossing direction of the return map (``+1``/``-1``).
     multipliers : ndarray, shape (n - 1,), complex
-        Eigenvalues of the return map's Jacobian (nontrivial Floquet multipliers).
+        Eigenvalues of the return map's Jacobian (nontrivial Floquet multipliers), by
+        the method ``jacobian`` (its accuracy: module notes).
     closure : float
         Scaled max-norm of ``P(y) - y`` at the solution.
     trajectory : Trajectory
@@ -139,6 +187,9 @@ class ShootingOrbit:
         Returns simulated before the Newton refinement.
     elapsed : float
         Wall time (s).
+    jacobian : str
+        How the return map's Jacobian was computed: ``"variational"`` or ``"fd"``
+        (``""`` when Newton was not reached).
     """
 
     system: Any
@@ -156,6 +207,7 @@ class ShootingOrbit:
     message: str = ""
     n_transient: int = 0
     elapsed: float = 0.0
+    jacobian: str = ""
     #: States found by :meth:`state_at`, by level (each found once per orbit).
     _levels: dict[float, FloatArray] = field(
         default_factory=dict, init=False, repr=False, compare=False
@@ -251,6 +303,7 @@ class ShootingOrbit:
             "message": self.message,
             "n_transient": self.n_transient,
             "elapsed_s": self.elapsed,
+            "jacobian": self.jacobian,
         }
 
 
@@ -309,6 +362,57 @@ class ReturnMap:
         if tr.terminal_event != "ret":
             raise ContinuationError(f"no return to the section within {self.t_max:g}")
         return np.asarray(tr.x[-1, self.others], dtype=float), float(tr.t[-1]), tr
+
+    def jacobian(self, y: FloatArray, T: float) -> FloatArray:
+        r"""``DP`` at ``y`` with return time ``T``, from the variational equations.
+
+        :math:`DP_{\text{full}} = (I - f(x_T) e_i^T / f_i(x_T))\,\Phi(T)` restricted
+        to the section coordinates (module notes).
+
+        Parameters
+        ----------
+        y : ndarray, shape (n - 1,)
+        T : float
+            The return time of ``y`` (from :meth:`__call__`).
+
+        Returns
+        -------
+        ndarray, shape (n - 1, n - 1)
+
+        Raises
+        ------
+        ContinuationError
+            If the integration fails or the orbit meets the section tangentially
+            (``f_i(x_T) = 0``).
+        """
+        s = self.settings
+        p = param_vector(self.system, self.params)
+        try:
+            xT, phi = state_transition(
+                self.system, p, self.full(y), T, rtol=s.map_rtol, atol=s.map_atol
+            )
+        except _IntegrationFailure as exc:
+            raise ContinuationError(f"the variational equations failed: {exc}") from None
+        fT = np.asarray(self.system.f(xT, p), dtype=float).reshape(-1)
+        fi = float(fT[self.state])
+        if not (math.isfinite(fi) and abs(fi) > 0.0):
+            raise ContinuationError("the orbit meets the section tangentially")
+        dp = phi - np.outer(fT / fi, phi[self.state])
+        return np.asarray(dp[np.ix_(self.others, self.others)], dtype=float)
+
+    def jacobian_fd(self, y: FloatArray, py: FloatArray, scale: FloatArray) -> FloatArray:
+        """``DP`` at ``y`` (``py = P(y)``) by forward differences, shape ``(n - 1, n - 1)``.
+
+        Steps ``fd_step * scale`` (one extra return per column).
+        """
+        m = len(self.others)
+        J = np.empty((m, m))
+        for k in range(m):
+            h = self.settings.fd_step * scale[k]
+            yk = y.copy()
+            yk[k] += h
+            J[:, k] = (self(yk)[0] - py) / h
+        return J
 
 
 def shoot_orbit(
@@ -380,6 +484,11 @@ def shoot_orbit(
     if direction not in (None, 1, -1):
         raise ValueError(f"`direction` must be None, 1 or -1, got {direction!r}")
     x0 = system.check_state(x_guess, "x_guess")
+    if cfg.jacobian == "variational" and not getattr(system, "has_casadi", False):
+        raise ValueError(
+            "`settings.jacobian` is 'variational' but the system has no CasADi trace "
+            "(use 'fd' or 'auto')"
+        )
     sc = np.ones(n) if scale is None else np.asarray(scale, dtype=float).reshape(-1)
     if sc.shape != (n,) or not np.all(np.isfinite(sc)) or np.any(sc <= 0):
         raise ValueError(f"`scale` must be {n} positive finite numbers")
@@ -461,21 +570,20 @@ def shoot_orbit(
     pmap = ReturnMap(system, params, i, section, d, 3.0 * period_est * max(abs(shift), 1), cfg)
 
     # ---- 2. Newton on P(y) - y
+    variational = cfg.jacobian == "variational" or (
+        cfg.jacobian == "auto" and bool(getattr(system, "has_casadi", False))
+    )
+    how = "variational" if variational else "fd"
     y = np.asarray(xb[others], dtype=float)
     status, msg = Status.NEWTON_FAILED, f"Newton did not converge in {cfg.max_newton} iterations"
     J = np.eye(len(others))
     res = math.inf
     try:
         for it in range(cfg.max_newton):
-            py, _, _ = pmap(y)
+            py, t_ret, _ = pmap(y)
             g = py - y
             res = float(np.max(np.abs(g) / s_o))
-            J = np.empty((len(others), len(others)))
-            for k in range(len(others)):
-                h = cfg.fd_step * s_o[k]
-                yk = y.copy()
-                yk[k] += h
-                J[:, k] = (pmap(yk)[0] - py) / h
+            J = pmap.jacobian(y, t_ret) if variational else pmap.jacobian_fd(y, py, s_o)
             step = np.linalg.solve(J - np.eye(len(others)), -g)
             y = y + step
             if np.max(np.abs(step) / s_o) < cfg.tol and res < 1e3 * cfg.tol:
@@ -497,10 +605,18 @@ def shoot_orbit(
     except KeyboardInterrupt:
         return fail(Status.INTERRUPTED, "interrupted during the Newton refinement", last)
     closure = float(np.max(np.abs(py - y) / s_o))
+    if variational and status is Status.SUCCESS:
+        # DP at the solution itself (the loop's last one is at the previous iterate)
+        try:
+            J = pmap.jacobian(y, period)
+        except ContinuationError as exc:
+            status, msg = Status.NEWTON_FAILED, f"at the solution: {exc}"
+        except KeyboardInterrupt:
+            return fail(Status.INTERRUPTED, "interrupted during the Newton refinement", last)
     mult = np.linalg.eigvals(J)
     orbit = ShootingOrbit(
         system, params, i, pmap.full(y), section, period, shift, d, mult, closure, tr, status,
-        msg, n_transient, time.perf_counter() - t_start,
+        msg, n_transient, time.perf_counter() - t_start, how,
     )  # fmt: skip
     if throw and status not in (Status.SUCCESS, Status.INTERRUPTED):
         raise ContinuationError(f"shoot_orbit: {msg}")
@@ -508,4 +624,4 @@ def shoot_orbit(
     return orbit
 
 
-__all__ = ["ShootingOrbit", "ReturnMap", "ShootingSettings", "shoot_orbit"]
+__all__ = ["JACOBIANS", "ShootingOrbit", "ReturnMap", "ShootingSettings", "shoot_orbit"]
