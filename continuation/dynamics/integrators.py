@@ -70,7 +70,7 @@ import numpy as np
 import scipy.integrate as si
 
 from ..casadi_compile import compiled_soon
-from ..sigint import _Sigints
+from ..sigint import _Sigints, sigint_recorded
 from ..typing import FloatArray
 
 SCIPY_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
