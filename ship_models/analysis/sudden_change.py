@@ -143,8 +143,10 @@ def periodic_orbit(
        and the section until two consecutive returns :math:`y_k, y_{k-1}` (the 7
        states other than ``xi_G``) differ by less than ``return_tol``.
     2. Newton's method on :math:`G(y) = P(y) - y = 0` with the Jacobian
-       :math:`DP - I` by forward differences (7 one-period runs), until the scaled
-       step and residual are below ``tol``.
+       :math:`DP - I` from the variational equations (one run of the 8 + 64 states per
+       iteration; :mod:`continuation.dynamics.shooting`), until the scaled step and
+       residual are below ``tol``. The Floquet multipliers are the eigenvalues of
+       :math:`DP` at the converged orbit.
 
     Parameters
     ----------
