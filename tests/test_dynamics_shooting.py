@@ -51,7 +51,8 @@ def test_hopf_limit_cycle_closed_form():
     assert o.period == pytest.approx(2 * math.pi / w, rel=1e-8)
     assert o.closure < 1e-9
     assert o.attracting
-    # forward-difference Jacobian of the return map: error O(fd_step)
+    # the return map's Jacobian (variational equations by default; forward differences
+    # for a NumPy-only system, error O(fd_step)): within the forward differences' bound
     assert abs(o.multipliers[0]) == pytest.approx(math.exp(-2 * mu * o.period), abs=1e-5)
     # state_at: the crossing of x = 0 (downwards in x: y > 0 there) is (0, sqrt(mu))
     # at a quarter period; here the section state is y, so ask for the level y = y0
