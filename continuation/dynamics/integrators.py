@@ -168,21 +168,25 @@ class _CvodesBackend:
             # the compiled right-hand side with its Jacobian when ready (the same
             # expressions, evaluated in machine code; module notes), else the VM
             dae = fast if fast is not None else ode
-            opts: dict[str, Any] = {
-                "reltol": self.rtol,
-                "abstol": self.atol,
-                "max_num_steps": _MAX_STEPS_PER_SAMPLE,
-                "linear_multistep_method": self.lmm,
-                "disable_internal_warnings": True,
-                "show_eval_warnings": False,
-                "error_on_fail": True,
-            }
+            opts = self._options(_MAX_STEPS_PER_SAMPLE)
             if ms > 0:
                 opts["max_step_size"] = ms
             grid = [k / n_out for k in range(1, n_out + 1)]
             integ = ca.integrator(f"sim_{n_out}", "cvodes", dae, 0.0, grid, opts)
             store[key] = integ
         return integ
+
+    def _options(self, max_steps: int) -> dict[str, Any]:
+        """CVODES options: this backend's tolerances and method, quiet, failing loudly."""
+        return {
+            "reltol": self.rtol,
+            "abstol": self.atol,
+            "max_num_steps": max_steps,
+            "linear_multistep_method": self.lmm,
+            "disable_internal_warnings": True,
+            "show_eval_warnings": False,
+            "error_on_fail": True,
+        }
 
     def _store(self) -> dict[Any, Any]:
         try:
@@ -264,15 +268,7 @@ class _CvodesBackend:
         integ = store.get(key)
         if integ is None:
             dae = fast if fast is not None else ode
-            opts: dict[str, Any] = {
-                "reltol": self.rtol,
-                "abstol": self.atol,
-                "max_num_steps": 10 * _MAX_STEPS_PER_SAMPLE,
-                "linear_multistep_method": self.lmm,
-                "disable_internal_warnings": True,
-                "show_eval_warnings": False,
-                "error_on_fail": True,
-            }
+            opts = self._options(10 * _MAX_STEPS_PER_SAMPLE)
             integ = store[key] = ca.integrator("transition", "cvodes", dae, 0.0, [1.0], opts)
         self.n_calls += 1
         n_sigint = _Sigints.count
