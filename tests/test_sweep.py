@@ -214,8 +214,12 @@ def test_dask_local_cluster_worker_killed_mid_sweep_then_resume(tmp_path):
     assert resumed.rows() == r.rows()
 
 
+# The child restores Python's SIGINT handler: a test run started in the background by a
+# non-interactive shell (`cmd &`) inherits SIGINT ignored, and Python then installs no
+# handler, so the Ctrl-C this test sends would never arrive (seen in a CI-like run).
 _CHILD = """
-import sys, json
+import signal, sys, json
+signal.signal(signal.SIGINT, signal.default_int_handler)
 sys.path[:0] = {paths!r}
 import sweep_tasks as T
 from continuation.sweep import run_sweep
