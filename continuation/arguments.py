@@ -10,7 +10,7 @@ import math
 from typing import Any
 
 
-def finite_number(name: str, value: Any) -> float:
+def finite_number(name: str, value: Any, *, meaning: str = "") -> float:
     """``float(value)``, checked to be a finite number.
 
     Parameters
@@ -19,6 +19,8 @@ def finite_number(name: str, value: Any) -> float:
         The argument's name, as the user wrote it (quoted in the message).
     value : object
         Anything ``float()`` accepts: a Python or NumPy scalar, a numeric string.
+    meaning : str, optional
+        What the number is, shown in brackets after "finite number" (e.g. a unit).
 
     Returns
     -------
@@ -30,12 +32,13 @@ def finite_number(name: str, value: Any) -> float:
         ``"`name` must be a finite number, got ..."`` when ``value`` is not a number
         or is NaN or infinite.
     """
+    what = f"a finite number ({meaning})" if meaning else "a finite number"
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"`{name}` must be a finite number, got {value!r}") from None
+        raise ValueError(f"`{name}` must be {what}, got {value!r}") from None
     if not math.isfinite(x):
-        raise ValueError(f"`{name}` must be a finite number, got {x}")
+        raise ValueError(f"`{name}` must be {what}, got {x}")
     return x
 
 

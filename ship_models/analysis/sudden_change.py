@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from continuation.arguments import finite_number
 from continuation.dynamics import Fate, FateKind, SimEvent, Trajectory, bisect_fate
 from continuation.dynamics.shooting import ShootingOrbit, ShootingSettings
 from continuation.dynamics.shooting import shoot_orbit as engine_periodic_orbit
@@ -82,13 +83,7 @@ def _positive(value: Any, name: str) -> float:
 
 
 def _position(value: Any, name: str = "xi_0") -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"`{name}` must be a finite number (xi_G/lambda), got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"`{name}` must be a finite number (xi_G/lambda), got {value!r}")
-    return v
+    return finite_number(name, value, meaning="xi_G/lambda")
 
 
 def _capsize_sim_event(model: VesselModel, angle: float | None) -> SimEvent:
