@@ -208,12 +208,24 @@ class _CvodesBackend:
 
     def run(self, x0: FloatArray, T: float, n_out: int, span_hint: float) -> FloatArray:
         """States at ``t0 + T k / n_out``, k = 1..n_out, shape ``(n_out, n)``."""
-        integ = self._integrator(n_out, span_hint)
+        out = self._call(self._integrator(n_out, span_hint), x0, T)
+        xs = out.reshape(self.n, n_out).T
+        if not np.all(np.isfinite(xs)):
+            raise _IntegrationFailure("non-finite state")
+        return xs
+
+    def _call(self, integ: Any, z0: FloatArray, T: float) -> FloatArray:
+        """``xf`` of one CVODES call from ``z0`` over time ``T`` (states x outputs).
+
+        Raises ``KeyboardInterrupt`` for a SIGINT counted before, during or after the
+        native call (also one whose exception CasADi discarded), and
+        ``_IntegrationFailure`` when CVODES fails otherwise.
+        """
         self.n_calls += 1
         n_sigint = _Sigints.count
         # DM arguments, converted first: a NumPy argument is converted inside the call by
         # Python code whose KeyboardInterrupt CasADi discards (module notes)
-        args = {"x0": ca.DM(np.asarray(x0, dtype=float)), "p": ca.DM(np.append(self.p, T))}
+        args = {"x0": ca.DM(np.asarray(z0, dtype=float)), "p": ca.DM(np.append(self.p, T))}
         if _Sigints.count != n_sigint:  # handled in the conversion, and discarded there
             raise KeyboardInterrupt
         try:
@@ -225,10 +237,7 @@ class _CvodesBackend:
             raise _IntegrationFailure(msg) from None
         if _Sigints.count != n_sigint:  # handled during the call, but lost (module notes)
             raise KeyboardInterrupt
-        xs = np.asarray(out["xf"], dtype=float).reshape(self.n, n_out).T
-        if not np.all(np.isfinite(xs)):
-            raise _IntegrationFailure("non-finite state")
-        return xs
+        return np.asarray(out["xf"], dtype=float)
 
     def transition(self, x0: FloatArray, T: float) -> tuple[FloatArray, FloatArray]:
         r"""The state and the state transition matrix after time ``T`` from ``x0``.
@@ -270,22 +279,8 @@ class _CvodesBackend:
             dae = fast if fast is not None else ode
             opts = self._options(10 * _MAX_STEPS_PER_SAMPLE)
             integ = store[key] = ca.integrator("transition", "cvodes", dae, 0.0, [1.0], opts)
-        self.n_calls += 1
-        n_sigint = _Sigints.count
         z0 = np.concatenate([np.asarray(x0, dtype=float), np.eye(n).reshape(-1)])
-        args = {"x0": ca.DM(z0), "p": ca.DM(np.append(self.p, T))}
-        if _Sigints.count != n_sigint:
-            raise KeyboardInterrupt
-        try:
-            out = integ.call(args)
-        except RuntimeError as exc:
-            if _Sigints.count != n_sigint or "KeyboardInterrupt" in str(exc):
-                raise KeyboardInterrupt from None
-            msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else "CVODES failed"
-            raise _IntegrationFailure(msg) from None
-        if _Sigints.count != n_sigint:
-            raise KeyboardInterrupt
-        z = np.asarray(out["xf"], dtype=float).reshape(-1)
+        z = self._call(integ, z0, T).reshape(-1)
         if not np.all(np.isfinite(z)):
             raise _IntegrationFailure("non-finite state or state transition matrix")
         return z[:n].copy(), z[n:].reshape(n, n, order="F")
