@@ -186,12 +186,13 @@ def test_cli_critical_bvp_no_traceback(capsys):
 
 @pytest.mark.slow
 def test_cli_critical_curve_end(capsys):
-    from broachkit_cli.main import main
-
     """The heteroclinic line's end is a fact, not a failure (exit 0 without thresholds);
     with the capsizing threshold (default every 5 deg), 45 deg has none inside the
     window (the upslope branch already capsizes where the crest saddle first exists),
-    which is a result not found: exit 1, said in the summary line."""
+    which is a result not found: exit 1, said in the summary line and, with its
+    reason, in the course's row."""
+    from broachkit_cli.main import main
+
     rc = main(["critical-curve", "--chi-c", "0,45", "--threshold-step", "0"])
     out = capsys.readouterr()
     assert rc == 0
@@ -202,3 +203,4 @@ def test_cli_critical_curve_end(capsys):
     assert rc == 1
     assert "the crest saddle does not exist beyond chi_c" in out.out
     assert "not SUCCESS at chi_c = 45 deg (NO_BRACKET)" in out.out
+    assert "NO_BRACKET: the upslope branch already capsizes at the lowest Fn" in out.out

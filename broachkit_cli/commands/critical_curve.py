@@ -227,8 +227,11 @@ def _run(args: argparse.Namespace) -> int:
                 "   chi_c (deg)   Fn_threshold         mechanism\n"
             )
             for c, t in zip(tc.chi_c_deg, tc.thresholds, strict=True):
-                val = f"{t.Fn:.5f} +- {t.error:.0e}" if math.isfinite(t.Fn) else "-"
-                sys.stdout.write(f"   {c:10.3f}   {val:18s}   {t.mechanism} ({t.status.name})\n")
+                if math.isfinite(t.Fn):
+                    val = f"{t.Fn:.5f} +- {t.error:.0e}"
+                    sys.stdout.write(f"   {c:10.3f}   {val:18s}   {t.mechanism} ({t.status.name})\n")
+                else:  # no threshold: say why, as the heteroclinic table does
+                    sys.stdout.write(f"   {c:10.3f}   {'-':18s}   {t.status.name}: {t.message}\n")
             sys.stdout.write(f"   {tc.message}\n")
         if args.out is not None:
             sys.stdout.write(f"wrote {args.out}/critical_curve.{{csv,json,png}}\n")
