@@ -229,9 +229,10 @@ def _run(args: argparse.Namespace) -> int:
             for c, t in zip(tc.chi_c_deg, tc.thresholds, strict=True):
                 if math.isfinite(t.Fn):
                     val = f"{t.Fn:.5f} +- {t.error:.0e}"
-                    sys.stdout.write(f"   {c:10.3f}   {val:18s}   {t.mechanism} ({t.status.name})\n")
+                    row = f"{val:18s}   {t.mechanism} ({t.status.name})"
                 else:  # no threshold: say why, as the heteroclinic table does
-                    sys.stdout.write(f"   {c:10.3f}   {'-':18s}   {t.status.name}: {t.message}\n")
+                    row = f"{'-':18s}   {t.status.name}: {t.message}"
+                sys.stdout.write(f"   {c:10.3f}   {row}\n")
             sys.stdout.write(f"   {tc.message}\n")
         if args.out is not None:
             sys.stdout.write(f"wrote {args.out}/critical_curve.{{csv,json,png}}\n")
