@@ -243,8 +243,9 @@ def compute(
             short = {"period-doubling cascade and crisis": "PD cascade + crisis",
                      "subcritical period doubling": "subcritical PD"}.get(t.mechanism,
                                                                           t.mechanism)  # fmt: skip
-            ax.annotate(short, (c, t.Fn), fontsize=7, rotation=90, xytext=(0, 9),
-                        textcoords="offset points", ha="center", va="bottom")  # fmt: skip
+            # below its marker: above it the heteroclinic line and its checks run
+            ax.annotate(short, (c, t.Fn), fontsize=7, xytext=(0, -7),
+                        textcoords="offset points", ha="center", va="top")  # fmt: skip
     if math.isfinite(curve.end_chi_c):
         ax.plot([math.degrees(curve.end_chi_c)], [curve.end_Fn], "k^", ms=5,
                 label="end of the heteroclinic line (fold)")  # fmt: skip
