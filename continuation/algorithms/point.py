@@ -17,6 +17,7 @@ Sec. 3.3). :class:`PointInfo` stores its sign and ``log|.|``.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -29,6 +30,7 @@ from ..problem import linearize
 from ..typing import FloatArray
 
 
+@dataclass(eq=False, repr=False, slots=True)
 class PointInfo:
     """A converged branch point with its linearisation and tangent.
 
@@ -59,60 +61,22 @@ class PointInfo:
         Per-point cache of derived quantities (eigenvalues, test functions).
     """
 
-    __slots__ = (
-        "z",
-        "p",
-        "tau",
-        "G",
-        "Gz",
-        "Gp",
-        "lu",
-        "border",
-        "t_raw",
-        "ctau",
-        "iters",
-        "residual_norm",
-        "cache",
-        "_u",
-        "_bp_sign",
-        "_bp_logdet",
-    )
-
-    def __init__(
-        self,
-        z: FloatArray,
-        p: float,
-        tau: FloatArray,
-        G: FloatArray,
-        Gz: Any,
-        Gp: FloatArray,
-        lu: BorderedLU | None,
-        border: FloatArray,
-        t_raw: FloatArray,
-        bp_sign: float | None = None,
-        ctau: float = 1.0,
-        iters: int = 0,
-        residual_norm: float = 0.0,
-        cache: dict[str, Any] | None = None,
-        _u: FloatArray | None = None,
-        _bp_logdet: float | None = None,
-    ) -> None:
-        self.z = z
-        self.p = p
-        self.tau = tau
-        self.G = G
-        self.Gz = Gz
-        self.Gp = Gp
-        self.lu = lu
-        self.border = border
-        self.t_raw = t_raw
-        self.ctau = ctau
-        self.iters = iters
-        self.residual_norm = residual_norm
-        self.cache = {} if cache is None else cache
-        self._u = _u
-        self._bp_sign = bp_sign
-        self._bp_logdet = _bp_logdet
+    z: FloatArray
+    p: float
+    tau: FloatArray
+    G: FloatArray
+    Gz: Any
+    Gp: FloatArray
+    lu: BorderedLU | None
+    border: FloatArray
+    t_raw: FloatArray
+    _bp_sign: float | None = None
+    ctau: float = 1.0
+    iters: int = 0
+    residual_norm: float = 0.0
+    cache: dict[str, Any] = field(default_factory=dict)
+    _u: FloatArray | None = None
+    _bp_logdet: float | None = None
 
     def __repr__(self) -> str:
         return f"PointInfo(p={self.p!r}, iters={self.iters}, |G|={self.residual_norm:.2e})"
@@ -230,7 +194,7 @@ def make_point(
         ctau,
         iters,
         _inf_norm(G) if residual_norm is None else residual_norm,
-        {"jac_finite": True} if jac_finite else None,
+        {"jac_finite": True} if jac_finite else {},
         u,
     )
 
