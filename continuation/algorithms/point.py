@@ -199,6 +199,38 @@ def make_point(
     )
 
 
+def oriented_point(pt: PointInfo, w: FloatArray, target: FloatArray) -> PointInfo:
+    r"""``pt`` with its tangent turned to point along ``target``.
+
+    Parameters
+    ----------
+    pt : PointInfo
+        A point whose tangent may point away from ``target``.
+    w : ndarray, shape (N + 1,)
+        ``theta`` weights.
+    target : ndarray, shape (N + 1,)
+        The direction: the returned tangent has :math:`\langle \tau, target\rangle_\theta
+        = (w \circ \tau) \cdot target \ge 0`.
+
+    Returns
+    -------
+    PointInfo
+        ``pt`` itself unless its tangent points against ``target``; else the point
+        made again (:func:`make_point`, reusing ``pt.lu``) with ``orient = w o target``,
+        so that the reversed tangent, ``border . tau``, the branch-point sign and the
+        iteration count go together.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the bordered matrix is singular.
+    """
+    if not float((w * pt.tau).dot(target)) < 0:
+        return pt
+    lin = (pt.G, pt.Gz, pt.Gp)
+    return make_point(pt.z, pt.p, lin, pt.border, w, orient=w * target, lu=pt.lu, iters=pt.iters)
+
+
 def initial_point(
     problem: Any,
     z: FloatArray,
@@ -228,4 +260,4 @@ def initial_point(
         return pt
 
 
-__all__ = ["PointInfo", "initial_point", "make_point"]
+__all__ = ["PointInfo", "initial_point", "make_point", "oriented_point"]
