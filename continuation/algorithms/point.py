@@ -30,8 +30,30 @@ from ..problem import linearize
 from ..typing import FloatArray
 
 
+class PointVector:
+    """Base of a point ``(z, p)`` whose vector ``u = (z, p)`` is joined on first use.
+
+    It owns the slot ``_u``: None until :attr:`u` is first read, or the vector itself
+    when the maker of the point already had it (a dataclass subclass declares ``_u``
+    as a field; the slot stays this class's).
+    """
+
+    __slots__ = ("_u",)
+
+    z: FloatArray
+    p: float
+    _u: FloatArray | None
+
+    @property
+    def u(self) -> FloatArray:
+        """``(z, p)``, shape ``(N + 1,)`` (computed once; do not modify)."""
+        if self._u is None:
+            self._u = np.concatenate((self.z, (self.p,)))
+        return self._u
+
+
 @dataclass(eq=False, repr=False, slots=True)
-class PointInfo:
+class PointInfo(PointVector):
     """A converged branch point with its linearisation and tangent.
 
     Attributes
@@ -95,13 +117,6 @@ class PointInfo:
         if self._bp_logdet is None:
             self._bp_logdet = self.lu.logabsdet - math.log(abs(self.ctau))  # type: ignore[union-attr]
         return self._bp_logdet
-
-    @property
-    def u(self) -> FloatArray:
-        """``(z, p)``, shape ``(N + 1,)`` (computed once; do not modify)."""
-        if self._u is None:
-            self._u = np.concatenate((self.z, (self.p,)))
-        return self._u
 
 
 def make_point(
