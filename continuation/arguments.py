@@ -42,4 +42,46 @@ def finite_number(name: str, value: Any, *, meaning: str = "") -> float:
     return x
 
 
-__all__ = ["finite_number"]
+def positive(name: str, value: Any) -> float:
+    """``float(value)``, checked to be a positive finite number.
+
+    Unlike :func:`finite_number`, only a Python ``int`` or ``float`` passes (a NumPy
+    floating scalar is a ``float``); a string or another type is refused, with the
+    message ``"`name` must be a positive finite number, got ..."`` (a ValueError), as
+    is a value that is not in ``(0, inf)``.
+
+    Parameters
+    ----------
+    name : str
+    value : int or float
+
+    Returns
+    -------
+    float
+    """
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+        raise ValueError(f"`{name}` must be a positive finite number, got {value!r}")
+    return float(value)
+
+
+def integer_at_least(name: str, value: Any, low: int) -> int:
+    """``value``, checked to be a Python ``int`` (``bool`` included) of at least ``low``.
+
+    Anything else raises ValueError ``"`name` must be an integer >= low, got ..."``.
+
+    Parameters
+    ----------
+    name : str
+    value : int
+    low : int
+
+    Returns
+    -------
+    int
+    """
+    if not (isinstance(value, int) and value >= low):
+        raise ValueError(f"`{name}` must be an integer >= {low}, got {value!r}")
+    return value
+
+
+__all__ = ["finite_number", "integer_at_least", "positive"]

@@ -30,7 +30,7 @@ from ._threads import blas_threads_for
 from .algorithms.base import RETRY, ContinuationAlgorithm, adapt_ds
 from .algorithms.corrector import CorrectorResult, correct
 from .algorithms.palc import PALC
-from .algorithms.point import make_point
+from .algorithms.point import oriented_point
 from .arguments import finite_number
 from .branch import Branch, BranchPoint, SpecialKind, SpecialPoint
 from .detection import ProgressFn, Row, RunContext
@@ -91,11 +91,8 @@ def _run(
     run = _Run()
     try:
         state = ctx.algorithm.init(ctx.problem, z0, p0, s)
-        pt = state.point
-        if orient is not None and float((state.w * pt.tau).dot(orient)) < 0:
-            state.point = make_point(
-                pt.z, pt.p, (pt.G, pt.Gz, pt.Gp), pt.border, state.w, orient=orient, lu=pt.lu
-            )
+        if orient is not None:
+            state.point = oriented_point(state.point, state.w, orient)
     except np.linalg.LinAlgError as exc:
         run.status, run.message = Status.SINGULAR, f"no tangent at the start point: {exc}"
         return run

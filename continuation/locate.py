@@ -100,7 +100,7 @@ def _chord_point(
         lu=None,
         border=c,
         t_raw=tau,
-        bp_sign=0.0,
+        _bp_sign=0.0,
         _bp_logdet=-math.inf,
         iters=iters,
         residual_norm=_inf_norm(G) if residual_norm is None else residual_norm,

@@ -5,10 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-
-def _positive(name: str, value: float) -> None:
-    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-        raise ValueError(f"`{name}` must be a positive finite number, got {value!r}")
+from .arguments import integer_at_least, positive
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -40,10 +37,9 @@ class NewtonSettings:
     damping: bool = False
 
     def __post_init__(self) -> None:
-        _positive("tol", self.tol)
-        _positive("step_tol", self.step_tol)
-        if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
-            raise ValueError(f"`max_iter` must be an integer >= 1, got {self.max_iter!r}")
+        positive("tol", self.tol)
+        positive("step_tol", self.step_tol)
+        integer_at_least("max_iter", self.max_iter, 1)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -91,17 +87,12 @@ class DetectionSettings:
     dense_eigs_max: int = 100
 
     def __post_init__(self) -> None:
-        _positive("tol", self.tol)
-        _positive("eig_tol", self.eig_tol)
-        _positive("imag_tol", self.imag_tol)
-        if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
-            raise ValueError(f"`max_iter` must be an integer >= 1, got {self.max_iter!r}")
-        if not (isinstance(self.n_eigs, int) and self.n_eigs >= 1):
-            raise ValueError(f"`n_eigs` must be an integer >= 1, got {self.n_eigs!r}")
-        if not (isinstance(self.dense_eigs_max, int) and self.dense_eigs_max >= 0):
-            raise ValueError(
-                f"`dense_eigs_max` must be an integer >= 0, got {self.dense_eigs_max!r}"
-            )
+        positive("tol", self.tol)
+        positive("eig_tol", self.eig_tol)
+        positive("imag_tol", self.imag_tol)
+        integer_at_least("max_iter", self.max_iter, 1)
+        integer_at_least("n_eigs", self.n_eigs, 1)
+        integer_at_least("dense_eigs_max", self.dense_eigs_max, 0)
         if not math.isfinite(self.eig_sigma):
             raise ValueError(f"`eig_sigma` must be finite, got {self.eig_sigma!r}")
 
@@ -158,8 +149,7 @@ class ContinuationSettings:
             )
         if not self.p_min < self.p_max:
             raise ValueError(f"need p_min < p_max, got p_min={self.p_min}, p_max={self.p_max}")
-        if not (isinstance(self.max_steps, int) and self.max_steps >= 1):
-            raise ValueError(f"`max_steps` must be an integer >= 1, got {self.max_steps!r}")
+        integer_at_least("max_steps", self.max_steps, 1)
         if not (0 < self.theta <= 1):
             raise ValueError(f"`theta` must be in (0, 1], got {self.theta}")
         if not self.grow >= 1:

@@ -52,6 +52,7 @@ from ..problem import bordered_evaluator as _bordered_evaluator
 from ..problem import linearizer as _linearizer
 from ..settings import NewtonSettings
 from ..typing import FloatArray
+from .point import PointVector
 
 _idamax = sla_blas.idamax
 
@@ -233,13 +234,14 @@ def _too_slow(
 
 
 @dataclass(eq=False, slots=True)
-class CorrectorResult:
+class CorrectorResult(PointVector):
     """Outcome of :func:`correct`.
 
     ``lu`` is the factorisation of the bordered matrix at the last Newton iterate (the
     returned point, or the iterate one step before it: within the step tolerance, or,
     with ``predict_final``, one quadratically converging step away), or None;
-    ``u_full`` is ``(z, p)`` when known; ``t_raw`` is the solution of
+    ``u`` is ``(z, p)`` (the corrector's vector when it has it, else joined on first
+    use: :class:`~continuation.algorithms.point.PointVector`); ``t_raw`` is the solution of
     ``M t = e_{N+1}`` with that factorisation when the corrector already has it (fused
     evaluator), else None; ``g_norm`` is ``max |G|`` of ``lin`` when known and
     ``jac_finite`` is True when ``lin``'s Jacobian is known to be finite.
@@ -253,17 +255,10 @@ class CorrectorResult:
     residual_norm: float
     message: str = ""
     lu: BorderedLU | None = None
-    u_full: FloatArray | None = None
+    _u: FloatArray | None = None
     t_raw: FloatArray | None = None
     g_norm: float | None = None
     jac_finite: bool = False
-
-    @property
-    def u(self) -> FloatArray:
-        """``(z, p)``, shape ``(N + 1,)``."""
-        if self.u_full is None:
-            self.u_full = np.concatenate((self.z, (self.p,)))
-        return self.u_full
 
 
 def _evaluate(

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..arguments import integer_at_least
 from ..settings import ContinuationSettings
 from .base import ContinuationAlgorithm, StepOutcome, StepState
 from .step import palc_point
@@ -33,9 +34,7 @@ class Natural(ContinuationAlgorithm):
     grow_iters: int = 3
 
     def __post_init__(self) -> None:
-        grow_iters = self.grow_iters
-        if not (isinstance(grow_iters, int) and grow_iters >= 0):
-            raise ValueError(f"`grow_iters` must be an integer >= 0, got {grow_iters!r}")
+        integer_at_least("grow_iters", self.grow_iters, 0)
 
     def step(
         self, problem: Any, state: StepState, settings: ContinuationSettings

@@ -70,6 +70,7 @@ from typing import Any
 
 import numpy as np
 
+from ..arguments import integer_at_least
 from ..problem import exact_jacobian, jacobian_is_stability, step_kernel
 from ..settings import ContinuationSettings
 from .base import ContinuationAlgorithm, StepOutcome, StepState
@@ -135,8 +136,7 @@ class PALC(ContinuationAlgorithm):
         predictor, kernel = self.predictor, self.kernel
         if not (0 < max_angle_deg <= 180):
             raise ValueError(f"`max_angle_deg` must be in (0, 180], got {max_angle_deg}")
-        if not (isinstance(grow_iters, int) and grow_iters >= 0):
-            raise ValueError(f"`grow_iters` must be an integer >= 0, got {grow_iters!r}")
+        integer_at_least("grow_iters", grow_iters, 0)
         if not (0 < max_contraction < 1):
             raise ValueError(f"`max_contraction` must be in (0, 1), got {max_contraction!r}")
         if not (max_distance > 0 and math.isfinite(max_distance)):

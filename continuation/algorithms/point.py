@@ -17,6 +17,7 @@ Sec. 3.3). :class:`PointInfo` stores its sign and ``log|.|``.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -29,7 +30,30 @@ from ..problem import linearize
 from ..typing import FloatArray
 
 
-class PointInfo:
+class PointVector:
+    """Base of a point ``(z, p)`` whose vector ``u = (z, p)`` is joined on first use.
+
+    It owns the slot ``_u``: None until :attr:`u` is first read, or the vector itself
+    when the maker of the point already had it (a dataclass subclass declares ``_u``
+    as a field; the slot stays this class's).
+    """
+
+    __slots__ = ("_u",)
+
+    z: FloatArray
+    p: float
+    _u: FloatArray | None
+
+    @property
+    def u(self) -> FloatArray:
+        """``(z, p)``, shape ``(N + 1,)`` (computed once; do not modify)."""
+        if self._u is None:
+            self._u = np.concatenate((self.z, (self.p,)))
+        return self._u
+
+
+@dataclass(eq=False, repr=False, slots=True)
+class PointInfo(PointVector):
     """A converged branch point with its linearisation and tangent.
 
     Attributes
@@ -59,60 +83,22 @@ class PointInfo:
         Per-point cache of derived quantities (eigenvalues, test functions).
     """
 
-    __slots__ = (
-        "z",
-        "p",
-        "tau",
-        "G",
-        "Gz",
-        "Gp",
-        "lu",
-        "border",
-        "t_raw",
-        "ctau",
-        "iters",
-        "residual_norm",
-        "cache",
-        "_u",
-        "_bp_sign",
-        "_bp_logdet",
-    )
-
-    def __init__(
-        self,
-        z: FloatArray,
-        p: float,
-        tau: FloatArray,
-        G: FloatArray,
-        Gz: Any,
-        Gp: FloatArray,
-        lu: BorderedLU | None,
-        border: FloatArray,
-        t_raw: FloatArray,
-        bp_sign: float | None = None,
-        ctau: float = 1.0,
-        iters: int = 0,
-        residual_norm: float = 0.0,
-        cache: dict[str, Any] | None = None,
-        _u: FloatArray | None = None,
-        _bp_logdet: float | None = None,
-    ) -> None:
-        self.z = z
-        self.p = p
-        self.tau = tau
-        self.G = G
-        self.Gz = Gz
-        self.Gp = Gp
-        self.lu = lu
-        self.border = border
-        self.t_raw = t_raw
-        self.ctau = ctau
-        self.iters = iters
-        self.residual_norm = residual_norm
-        self.cache = {} if cache is None else cache
-        self._u = _u
-        self._bp_sign = bp_sign
-        self._bp_logdet = _bp_logdet
+    z: FloatArray
+    p: float
+    tau: FloatArray
+    G: FloatArray
+    Gz: Any
+    Gp: FloatArray
+    lu: BorderedLU | None
+    border: FloatArray
+    t_raw: FloatArray
+    _bp_sign: float | None = None
+    ctau: float = 1.0
+    iters: int = 0
+    residual_norm: float = 0.0
+    cache: dict[str, Any] = field(default_factory=dict)
+    _u: FloatArray | None = None
+    _bp_logdet: float | None = None
 
     def __repr__(self) -> str:
         return f"PointInfo(p={self.p!r}, iters={self.iters}, |G|={self.residual_norm:.2e})"
@@ -131,13 +117,6 @@ class PointInfo:
         if self._bp_logdet is None:
             self._bp_logdet = self.lu.logabsdet - math.log(abs(self.ctau))  # type: ignore[union-attr]
         return self._bp_logdet
-
-    @property
-    def u(self) -> FloatArray:
-        """``(z, p)``, shape ``(N + 1,)`` (computed once; do not modify)."""
-        if self._u is None:
-            self._u = np.concatenate((self.z, (self.p,)))
-        return self._u
 
 
 def make_point(
@@ -230,9 +209,41 @@ def make_point(
         ctau,
         iters,
         _inf_norm(G) if residual_norm is None else residual_norm,
-        {"jac_finite": True} if jac_finite else None,
+        {"jac_finite": True} if jac_finite else {},
         u,
     )
+
+
+def oriented_point(pt: PointInfo, w: FloatArray, target: FloatArray) -> PointInfo:
+    r"""``pt`` with its tangent turned to point along ``target``.
+
+    Parameters
+    ----------
+    pt : PointInfo
+        A point whose tangent may point away from ``target``.
+    w : ndarray, shape (N + 1,)
+        ``theta`` weights.
+    target : ndarray, shape (N + 1,)
+        The direction: the returned tangent has :math:`\langle \tau, target\rangle_\theta
+        = (w \circ \tau) \cdot target \ge 0`.
+
+    Returns
+    -------
+    PointInfo
+        ``pt`` itself unless its tangent points against ``target``; else the point
+        made again (:func:`make_point`, reusing ``pt.lu``) with ``orient = w o target``,
+        so that the reversed tangent, ``border . tau``, the branch-point sign and the
+        iteration count go together.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the bordered matrix is singular.
+    """
+    if not float((w * pt.tau).dot(target)) < 0:
+        return pt
+    lin = (pt.G, pt.Gz, pt.Gp)
+    return make_point(pt.z, pt.p, lin, pt.border, w, orient=w * target, lu=pt.lu, iters=pt.iters)
 
 
 def initial_point(
@@ -264,4 +275,4 @@ def initial_point(
         return pt
 
 
-__all__ = ["PointInfo", "initial_point", "make_point"]
+__all__ = ["PointInfo", "initial_point", "make_point", "oriented_point"]

@@ -122,7 +122,7 @@ def palc_point(
                 w,
                 iters=res.iters,
                 lu=res.lu,
-                u=res.u_full,
+                u=res.u,
                 residual_norm=res.g_norm,
                 t_raw=res.t_raw,
                 jac_finite=res.jac_finite,

@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from ..arguments import integer_at_least
 from ..branch import SpecialKind
 from ..settings import ContinuationSettings, DetectionSettings, NewtonSettings
 from ._base import AugmentedProblem
@@ -376,8 +377,7 @@ def continue_codim2(
         raise ValueError(f"`sp` must be a fold or hopf point, got kind {kind!r}")
     if direction not in ("both", "forward", "backward"):
         raise ValueError(f"`direction` must be 'both', 'forward' or 'backward', got {direction!r}")
-    if not (isinstance(max_restarts, int) and max_restarts >= 0):
-        raise ValueError(f"`max_restarts` must be an integer >= 0, got {max_restarts!r}")
+    integer_at_least("max_restarts", max_restarts, 0)
     if isinstance(detect, str):
         raise ValueError("`detect` must be a bool or a sequence of names, got a string")
     problem = cls.from_point(branch, sp, free2, newton_settings=newton_settings)

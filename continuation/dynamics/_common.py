@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -53,10 +52,3 @@ def period_shift(period: FloatArray, x: FloatArray, x_ref: FloatArray) -> tuple[
         return ()
     k = np.rint((np.asarray(x)[mask] - np.asarray(x_ref)[mask]) / period[mask])
     return tuple(int(v) for v in k)
-
-
-def positive(name: str, v: Any) -> float:
-    """``float(v)``; ValueError naming ``name`` unless ``v`` is a positive finite number."""
-    if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-        raise ValueError(f"`{name}` must be a positive finite number, got {v!r}")
-    return float(v)

@@ -12,11 +12,12 @@ from typing import Any
 
 import numpy as np
 
+from ..arguments import integer_at_least, positive
 from ..errors import ContinuationError
 from ..sigint import sigint_recorded, sigints_counted
 from ..status import Status
 from ..typing import FloatArray
-from ._common import check_scale, param_vector, periodic_difference, positive, state_period
+from ._common import check_scale, param_vector, periodic_difference, state_period
 from .events import PoincareSection, SimEvent
 from .fate_scan import _ScanState
 from .fates import Fate, KnownEquilibrium
@@ -107,11 +108,7 @@ class FateClassifier:
         self.segment = positive("segment", segment) if segment is not None else t_max / 20
         self.segment = min(self.segment, self.t_max)
         self.dt = positive("dt", dt) if dt is not None else self.segment / 200
-        if not (isinstance(max_multiplicity, int) and max_multiplicity >= 1):
-            raise ValueError(
-                f"`max_multiplicity` must be an integer >= 1, got {max_multiplicity!r}"
-            )
-        self.max_multiplicity = max_multiplicity
+        self.max_multiplicity = integer_at_least("max_multiplicity", max_multiplicity, 1)
         self.min_amplitude = (
             positive("min_amplitude", min_amplitude) if min_amplitude is not None else 1e3 * tol
         )

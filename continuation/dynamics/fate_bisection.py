@@ -33,13 +33,13 @@ from typing import Any
 
 import numpy as np
 
+from ..arguments import integer_at_least, positive
 from ..errors import ContinuationError, ConvergenceError
 from ..newton import newton
 from ..settings import NewtonSettings
 from ..status import Status
 from ..system import as_params
 from ..typing import FloatArray
-from ._common import positive
 from .classifier import FateClassifier
 from .fates import Fate, FateKind, passage_side
 from .manifolds import unstable_manifold
@@ -156,8 +156,7 @@ def bisect_fate(
     if not (math.isfinite(a) and math.isfinite(b)) or a == b:
         raise ValueError(f"`a` and `b` must be distinct finite numbers, got {a}, {b}")
     positive("tol", tol)
-    if not (isinstance(max_evaluations, int) and max_evaluations >= 2):
-        raise ValueError(f"`max_evaluations` must be an integer >= 2, got {max_evaluations!r}")
+    integer_at_least("max_evaluations", max_evaluations, 2)
     if not callable(fate_at):
         raise ValueError("`fate_at` must be callable")
     lo, hi = min(a, b), max(a, b)

@@ -33,9 +33,10 @@ from typing import Any
 
 import numpy as np
 
+from ..arguments import positive
 from ..status import Status
 from ..typing import ComplexArray, FloatArray
-from ._common import check_scale, param_vector, positive, state_period
+from ._common import check_scale, param_vector, state_period
 from .classifier import FateClassifier
 from .fates import Fate
 from .integrators import DEFAULT_ATOL, DEFAULT_RTOL

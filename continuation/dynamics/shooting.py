@@ -74,7 +74,7 @@ from continuation.status import Status
 from continuation.typing import FloatArray
 
 from ..arguments import finite_number
-from ._common import param_vector
+from ._common import check_scale, param_vector
 from .events import PoincareSection
 from .integrators import _IntegrationFailure, state_transition
 from .simulate import simulate
@@ -489,9 +489,7 @@ def shoot_orbit(
             "`settings.jacobian` is 'variational' but the system has no CasADi trace "
             "(use 'fd' or 'auto')"
         )
-    sc = np.ones(n) if scale is None else np.asarray(scale, dtype=float).reshape(-1)
-    if sc.shape != (n,) or not np.all(np.isfinite(sc)) or np.any(sc <= 0):
-        raise ValueError(f"`scale` must be {n} positive finite numbers")
+    sc = check_scale(n, scale)
     others = [k for k in range(n) if k != i]
     s_o = sc[others]
     per_i = float(_periods(system)[i])

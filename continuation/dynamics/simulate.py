@@ -23,11 +23,12 @@ from typing import Any
 
 import numpy as np
 
+from ..arguments import positive
 from ..errors import ContinuationError
 from ..sigint import sigint_recorded, sigints_counted
 from ..status import Status
 from ..typing import FloatArray
-from ._common import param_vector, positive, state_period
+from ._common import param_vector, state_period
 from .events import (
     PoincareSection,
     SimEvent,

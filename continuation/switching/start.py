@@ -29,7 +29,7 @@ from ..algorithms.base import (
     theta_norm,
 )
 from ..algorithms.corrector import CorrectorResult
-from ..algorithms.point import make_point
+from ..algorithms.point import oriented_point
 from ..algorithms.step import palc_point
 from ..settings import ContinuationSettings, NewtonSettings
 from ..typing import FloatArray
@@ -83,19 +83,8 @@ class OrientedStart(ContinuationAlgorithm):
     ) -> StepState:
         """The inner algorithm's start state, its tangent turned along ``orient`` (``ds > 0``)."""
         state = self.inner.init(problem, z0, p0, settings)
-        pt = state.point
         target = self.orient if settings.ds > 0 else -self.orient
-        if float((state.w * pt.tau).dot(target)) < 0:
-            state.point = make_point(
-                pt.z,
-                pt.p,
-                (pt.G, pt.Gz, pt.Gp),
-                pt.border,
-                state.w,
-                orient=state.w * target,
-                lu=pt.lu,
-            )
-            state.point.iters = pt.iters
+        state.point = oriented_point(state.point, state.w, target)
         state.direction = 1.0 if state.point.tau[-1] >= 0 else -1.0
         return state
 
