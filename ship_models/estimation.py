@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 
 from .contracts import WaveForceBuilder
-from .estimates.common import Particulars
+from .estimates.common import Build
 from .estimates.hull import (
     estimate_hull,
     form_parameters,
@@ -77,8 +77,7 @@ from .hydro.hull import HullForm
 from .hydro.hydrostatics import GZCurve, is_code_margin
 from .hydro.resistance import HoltropHull
 from .hydro.waves import strip_waves
-from .validity import ValidityRange
-from .vessel import Coefficient, VesselData
+from .vessel import VesselData
 
 log = logging.getLogger(__name__)
 
@@ -173,22 +172,21 @@ def build_vessel_model(
             f"a {type(builder).__name__}"
         )
     v = vessel
-    est: dict[str, Coefficient] = {}
-    validity: list[ValidityRange] = []
-    p = Particulars.of(v)
+    b = Build.of(v)
+    p, est, validity = b.p, b.estimates, b.validity
     rho, g, L, B, d_a, d_m, GM = p.rho, p.g, p.L, p.B, p.d_a, p.d_m, p.GM
-    h = estimate_hull(v, p, est)
+    h = estimate_hull(b)
     volume, mass, x_G = h.volume, h.mass, h.x_G
-    topside, gz = estimate_stability(v, p, h.hull, est)
+    topside, gz = estimate_stability(b, h.hull)
     zeta_G = gz.zeta_G
-    hh, rfit = estimate_resistance(v, p, h.hull, h.C_wp, h.S_f, est, validity)
-    prop = estimate_propulsion(v, p, hh, rfit, est, validity)
+    hh, rfit = estimate_resistance(b, h.hull, h.C_wp, h.S_f)
+    prop = estimate_propulsion(b, hh, rfit)
     D_p, w_P, t_P, kt, kt_err = prop.D_p, prop.w_P, prop.t_P, prop.kt, prop.kt_err
-    inertia = estimate_inertia(v, p, h, est)
-    prime, inertia, f_alpha = estimate_derivatives(v, p, x_G, zeta_G, inertia, est)
+    inertia = estimate_inertia(b, h)
+    prime, inertia, f_alpha = estimate_derivatives(b, x_G, zeta_G, inertia)
     m_x, m_y, J_zz = inertia.m_x, inertia.m_y, inertia.J_zz
     I_zz, Ixx = inertia.I_zz, inertia.I_xx_J_xx
-    Kp0, Kp_lift = estimate_roll_damping(v, p, zeta_G, est)
+    Kp0, Kp_lift = estimate_roll_damping(b, zeta_G)
 
     # ---- geometry of forces -------------------------------------------------------------
     z_H = v.get("roll.z_H_over_d") * d_m + zeta_G  # body z (down) of the lateral force below G
@@ -199,7 +197,7 @@ def build_vessel_model(
         h_R = float(np.sqrt(v.get("rudder.aspect_ratio") * A_R))
     z_R = (d_a - 0.5 * h_R) + zeta_G  # rudder centre: lower edge at the keel line aft
     eta = min(1.0, D_p / h_R)
-    wave_model = wave_force_model(builder, v, p, h, zeta_G, z_H, inertia, est)
+    wave_model = wave_force_model(b, builder, h, zeta_G, z_H, inertia)
     q_speed = 0.5 * rho * L * d_m
     forces = ShipForces(
         rho=rho,

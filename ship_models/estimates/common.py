@@ -1,9 +1,12 @@
-"""What every estimation stage shares: the particulars read once and the estimate record."""
+"""What every estimation stage shares: the particulars read once and the record of the
+build (:class:`Build`: its estimates and validity ranges)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
+from ..validity import ValidityRange
 from ..vessel import Coefficient, VesselData
 
 
@@ -61,3 +64,30 @@ class Particulars(NamedTuple):
             GM=v.get("loading.GM"),
             T_phi=v.get("loading.T_phi"),
         )
+
+
+@dataclass
+class Build:
+    """One run of the estimation pipeline: what every stage reads and records.
+
+    Attributes
+    ----------
+    vessel : VesselData
+        The vessel file's data.
+    p : Particulars
+        Its particulars, read once.
+    estimates : dict of str to Coefficient
+        The coefficients the stages estimated, by dotted key, in the order estimated.
+    validity : list of ValidityRange
+        The validity ranges of the methods used.
+    """
+
+    vessel: VesselData
+    p: Particulars
+    estimates: dict[str, Coefficient] = field(default_factory=dict)
+    validity: list[ValidityRange] = field(default_factory=list)
+
+    @classmethod
+    def of(cls, vessel: VesselData) -> Build:
+        """A new build of ``vessel`` (nothing estimated yet)."""
+        return cls(vessel, Particulars.of(vessel))

@@ -23,8 +23,8 @@ from ..hydro.mesh_io import is_wetted_surface, read_mesh_file
 from ..hydro.offsets import OffsetsError, OffsetsHull, hull_from_offsets, read_offsets
 from ..hydro.upright import check_particulars
 from ..hydro.upright import hydrostatics as offsets_hydrostatics
-from ..vessel import Coefficient, VesselData, VesselFileError
-from .common import Particulars, estimated
+from ..vessel import VesselData, VesselFileError
+from .common import Build, estimated
 from .memo import memo_call
 
 
@@ -203,21 +203,19 @@ class HullEstimate(NamedTuple):
     x_G: float
 
 
-def estimate_hull(v: VesselData, p: Particulars, est: dict[str, Coefficient]) -> HullEstimate:
-    """The vessel's hull with C_wp, wetted surface and mass (estimates added to ``est``).
+def estimate_hull(b: Build) -> HullEstimate:
+    """The vessel's hull with C_wp, wetted surface and mass.
 
     Parameters
     ----------
-    v : VesselData
-    p : Particulars
-        ``Particulars.of(v)``.
-    est : dict
-        Estimates of the build, by dotted key; the stage adds its own.
+    b : Build
+        The build; the stage records the C_wp, S_f and mass it estimates.
 
     Returns
     -------
     HullEstimate
     """
+    v, p, est = b.vessel, b.p, b.estimates
     L, B, C_b, rho, lcb_aft = p.L, p.B, p.C_b, p.rho, p.lcb_aft
     if v.has("hull.C_wp"):
         C_wp = v.get("hull.C_wp")

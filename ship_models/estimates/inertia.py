@@ -8,8 +8,7 @@ from typing import Any, NamedTuple
 
 from ..hydro.added_mass import lewis_sway_added_mass, soding_surge_added_mass
 from ..hydro.roll import roll_inertia
-from ..vessel import Coefficient, VesselData
-from .common import Particulars, estimated
+from .common import Build, estimated
 from .hull import HullEstimate
 
 
@@ -42,24 +41,21 @@ class Inertia(NamedTuple):
     I_xx_J_xx: float
 
 
-def estimate_inertia(
-    v: VesselData, p: Particulars, h: HullEstimate, est: dict[str, Coefficient]
-) -> Inertia:
-    """The added masses and inertias the file does not give (estimates added to ``est``).
+def estimate_inertia(b: Build, h: HullEstimate) -> Inertia:
+    """The added masses and inertias the file does not give.
 
     Parameters
     ----------
-    v : VesselData
-    p : Particulars
+    b : Build
+        The build; the stage records m_x, m_y, J_zz and I_xx + J_xx where estimated.
     h : HullEstimate
         The hull, its volume, the mass and x_G.
-    est : dict
-        Estimates of the build; the stage adds its own.
 
     Returns
     -------
     Inertia
     """
+    v, p, est = b.vessel, b.p, b.estimates
     rho, g, L, d_m, GM, T_phi = p.rho, p.g, p.L, p.d_m, p.GM, p.T_phi
     hull, volume, mass, x_G = h.hull, h.volume, h.mass, h.x_G
     m22 = lewis_sway_added_mass(rho, hull.b_wl, hull.d, hull.beta)

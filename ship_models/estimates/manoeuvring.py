@@ -18,8 +18,7 @@ from ..hydro.manoeuvring import fujii_lift_slope, inoue_hull_derivatives
 from ..hydro.roll import ikeda_lift_damping_per_speed
 from ..validity import ValidityRange
 from ..validity import report as report_validity
-from ..vessel import Coefficient, VesselData
-from .common import Particulars, estimated
+from .common import Build, estimated
 from .inertia import Inertia
 
 
@@ -61,26 +60,20 @@ def derivatives_about_g(prime: dict[str, float], a_over_L: float) -> dict[str, f
 
 
 def estimate_derivatives(
-    v: VesselData,
-    p: Particulars,
-    x_G: float,
-    zeta_G: float,
-    inertia: Inertia,
-    est: dict[str, Coefficient],
+    b: Build, x_G: float, zeta_G: float, inertia: Inertia
 ) -> tuple[dict[str, float], Inertia, float]:
     """The non-dimensional hull and heel derivatives about G and the rudder lift slope.
 
     Parameters
     ----------
-    v : VesselData
-    p : Particulars
+    b : Build
+        The build; the stage records the hull and heel derivatives and f_alpha it
+        estimates (or assumes).
     x_G, zeta_G : float
         Position of G: from midship, forward +; height above the waterline (KG - d_m).
     inertia : Inertia
         A J_zz the file gives is moved to G with the derivatives
         (``hydrodynamics.x_ref``).
-    est : dict
-        Estimates of the build; the stage adds its own.
 
     Returns
     -------
@@ -92,6 +85,7 @@ def estimate_derivatives(
     f_alpha : float
         Rudder lift slope.
     """
+    v, p, est = b.vessel, b.p, b.estimates
     L, B, d_f, d_a, d_m, C_b = p.L, p.B, p.d_f, p.d_a, p.d_m, p.C_b
     m_y, J_zz, J_zz_given = inertia.m_y, inertia.J_zz, inertia.J_zz_given
     ino = inoue_hull_derivatives(L, B, d_m, d_a - d_f, C_b)
@@ -175,25 +169,22 @@ def estimate_derivatives(
     return prime, inertia._replace(J_zz=J_zz), f_alpha
 
 
-def estimate_roll_damping(
-    v: VesselData, p: Particulars, zeta_G: float, est: dict[str, Coefficient]
-) -> tuple[float, float]:
+def estimate_roll_damping(b: Build, zeta_G: float) -> tuple[float, float]:
     """The roll damping coefficients: zero-speed ``K_p0`` (from the assumed damping
     ratio ``roll.zeta_0``) and the hull-lift part ``K_p_lift_prime`` per speed.
 
     Parameters
     ----------
-    v : VesselData
-    p : Particulars
+    b : Build
+        The build; the stage records K_p0 and K_p_lift_prime where estimated.
     zeta_G : float
         Depth of G below the waterline is ``-zeta_G``.
-    est : dict
-        Estimates of the build; the stage adds its own.
 
     Returns
     -------
     Kp0, Kp_lift : float
     """
+    v, p, est = b.vessel, b.p, b.estimates
     rho, L, B, d_m, T_phi = p.rho, p.L, p.B, p.d_m, p.T_phi
     omega_phi = 2.0 * np.pi / T_phi
     if v.has("hydrodynamics.K_p0"):

@@ -19,8 +19,8 @@ from ..hydro.propeller import (
 )
 from ..hydro.resistance import HoltropHull
 from ..validity import ValidityRange
-from ..vessel import Coefficient, VesselData, VesselFileError
-from .common import Particulars, estimated
+from ..vessel import VesselFileError
+from .common import Build, estimated
 
 
 def quadratic_fit(J: Any, kt: Any) -> tuple[float, float, float]:
@@ -56,33 +56,24 @@ class Propulsion(NamedTuple):
     propeller: Propeller | None
 
 
-def estimate_propulsion(
-    v: VesselData,
-    p: Particulars,
-    hh: HoltropHull,
-    rfit: Any,
-    est: dict[str, Coefficient],
-    validity: list[ValidityRange],
-) -> Propulsion:
+def estimate_propulsion(b: Build, hh: HoltropHull, rfit: Any) -> Propulsion:
     """K_T, w_P, t_P and the propeller of ``[vessel] propeller_method``.
 
     Parameters
     ----------
-    v : VesselData
-    p : Particulars
+    b : Build
+        The build; the stage records the K_T quadratic, w_P and t_P it estimates, and
+        the validity ranges of K_T(J) and of the w_P, t_P curves.
     hh : HoltropHull
         Holtrop inputs (prismatic coefficient, l.c.b.) for the thrust deduction.
     rfit : ResistanceFit or table
         R(u): a propeller curve is checked to balance it at Fn 0.1 ... 0.5.
-    est : dict
-        Estimates of the build; the stage adds its own.
-    validity : list of ValidityRange
-        Validity ranges of the build; the stage adds the propeller's.
 
     Returns
     -------
     Propulsion
     """
+    v, p, est, validity = b.vessel, b.p, b.estimates, b.validity
     rho, g, L, B, d_m, C_b = p.rho, p.g, p.L, p.B, p.d_m, p.C_b
     D_p = v.get("propulsion.D_p")
     prop_method = v.propeller_method

@@ -16,8 +16,8 @@ from ..hydro.resistance import (
     resistance_table,
 )
 from ..validity import ValidityRange
-from ..vessel import Coefficient, VesselData
-from .common import Particulars, estimated
+from ..vessel import VesselData
+from .common import Build, estimated
 from .memo import memo_fit
 
 
@@ -40,28 +40,18 @@ def holtrop_hull(v: VesselData, hull: HullForm, C_wp: float, S: float) -> Holtro
 
 
 def estimate_resistance(
-    v: VesselData,
-    p: Particulars,
-    hull: HullForm,
-    C_wp: float,
-    S_f: float,
-    est: dict[str, Coefficient],
-    validity: list[ValidityRange],
+    b: Build, hull: HullForm, C_wp: float, S_f: float
 ) -> tuple[HoltropHull, Any]:
     """The resistance of ``[vessel] resistance_method`` and its validity ranges.
 
     Parameters
     ----------
-    v : VesselData
-    p : Particulars
+    b : Build
+        The build; the stage records the Holtrop form factor and correlation allowance
+        it estimates, and the validity ranges of the resistance.
     hull : HullForm
     C_wp, S_f : float
         Waterplane coefficient and wetted surface (m^2) used.
-    est : dict
-        Estimates of the build; the stage adds the Holtrop form factor and
-        correlation allowance when it uses them.
-    validity : list of ValidityRange
-        Validity ranges of the build; the stage adds the resistance's.
 
     Returns
     -------
@@ -70,6 +60,7 @@ def estimate_resistance(
     rfit : ResistanceFit or table
         R(u) with ``evaluate``, ``u_max`` and ``max_rel_error``.
     """
+    v, p, est, validity = b.vessel, b.p, b.estimates, b.validity
     rho, g, nu, L, d_m = p.rho, p.g, p.nu, p.L, p.d_m
     hh = holtrop_hull(v, hull, C_wp, S_f)
     hull_type = v.meta.get("hull_type", "")

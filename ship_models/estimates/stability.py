@@ -10,25 +10,21 @@ from __future__ import annotations
 from ..hydro.hull import HullForm
 from ..hydro.hydrostatics import GZCurve, gz_curve, marginal_topside_height
 from ..hydro.mesh_hull import MeshHull
-from ..vessel import Coefficient, VesselData, VesselFileError
-from .common import Particulars, estimated
+from ..vessel import VesselFileError
+from .common import Build, estimated
 from .hull import hull_mesh_path
 from .memo import memo_call
 
 
-def estimate_stability(
-    v: VesselData, p: Particulars, hull: HullForm, est: dict[str, Coefficient]
-) -> tuple[float, GZCurve]:
+def estimate_stability(b: Build, hull: HullForm) -> tuple[float, GZCurve]:
     """The topside height (given, assumed 0 for a mesh hull, or the IS-Code margin) and
     the GZ curve with it; VesselFileError when G would lie below the keel.
 
     Parameters
     ----------
-    v : VesselData
-    p : Particulars
+    b : Build
+        The build; the stage records the topside height it estimates or assumes.
     hull : HullForm
-    est : dict
-        Estimates of the build; the stage adds ``stability.topside_height``.
 
     Returns
     -------
@@ -36,7 +32,8 @@ def estimate_stability(
         Watertight extension of the sides above D, m.
     gz : GZCurve
     """
-    GM, d_m = p.GM, p.d_m
+    v, est = b.vessel, b.estimates
+    GM, d_m = b.p.GM, b.p.d_m
     if isinstance(hull, MeshHull):  # the mesh is the watertight envelope
         topside = v.get("stability.topside_height") if v.has("stability.topside_height") else 0.0
         if topside != 0.0:

@@ -9,8 +9,8 @@ from typing import Any
 from ..contracts import WaveForceBuilder, WaveInputs
 from ..hydro.diffraction import taylor_diffraction_ratio
 from ..hydro.waves import strip_waves
-from ..vessel import Coefficient, VesselData, VesselFileError
-from .common import Particulars, estimated
+from ..vessel import VesselData, VesselFileError
+from .common import Build, estimated
 from .hull import HullEstimate, mesh_is_hull
 from .inertia import Inertia
 
@@ -38,22 +38,21 @@ def file_wave_builder(vessel: VesselData) -> WaveForceBuilder:
 
 
 def wave_force_model(
+    b: Build,
     builder: WaveForceBuilder,
-    v: VesselData,
-    p: Particulars,
     h: HullEstimate,
     zeta_G: float,
     z_H: float,
     inertia: Inertia,
-    est: dict[str, Coefficient],
 ) -> Any:
     """The wave-force model ``builder`` makes for the vessel (checked to have ``forces``).
 
     Parameters
     ----------
+    b : Build
+        The build; the stage records the surge-force scale and diffraction ratio it
+        assumes or estimates.
     builder : WaveForceBuilder
-    v : VesselData
-    p : Particulars
     h : HullEstimate
         The hull, its volume and x_G.
     zeta_G, z_H : float
@@ -61,13 +60,12 @@ def wave_force_model(
         force.
     inertia : Inertia
         ``m22`` and ``m_x`` (the long-wave diffraction ratio).
-    est : dict
-        Estimates of the build; the stage adds the surge-force correction's.
 
     Returns
     -------
     WaveForceModel
     """
+    v, p, est = b.vessel, b.p, b.estimates
     vessel, hull, x_G, volume = v, h.hull, h.x_G, h.volume
     rho, g, m22, m_x = p.rho, p.g, inertia.m22, inertia.m_x
     if v.has("hydrodynamics.wave_surge_scale"):
