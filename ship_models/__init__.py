@@ -31,8 +31,9 @@ PAPER_FN, PAPER_FN_BRACKET, PAPER_CHI_C
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING, Any
+
+from continuation._lazy import lazy_exports
 
 if TYPE_CHECKING:  # for type checkers; _LAZY is what runs
     from .estimation import VesselModelData, resolve_vessel
@@ -75,24 +76,13 @@ _LAZY: dict[str, str] = {
     "load_vessel": ".vessel",
 }
 
-
-def __getattr__(name: str) -> Any:
-    mod = _LAZY.get(name)
-    if mod is not None:
-        value = getattr(importlib.import_module(mod, __name__), name)
-        globals()[name] = value
-        return value
-    if not name.startswith("__"):  # a sub-module not imported yet (``ship_models.vessel``)
-        try:
-            return importlib.import_module(f"{__name__}.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name != f"{__name__}.{name}":
-                raise
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+#: The same table by sub-module, as the engine's :func:`continuation._lazy.lazy_exports`
+#: (which makes ``__getattr__`` and ``__dir__``) takes it.
+_EXPORTS: dict[str, list[str]] = {}
+for _name, _sub in _LAZY.items():
+    _EXPORTS.setdefault(_sub.lstrip("."), []).append(_name)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+del _name, _sub
 
 
 def purse_seiner(**options: Any) -> Umeda4DOF:
