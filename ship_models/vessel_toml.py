@@ -61,7 +61,7 @@ def vessel_to_toml(vessel: VesselData, header: str = "") -> str:
 
 
 def dump_vessel(vessel: VesselData, path: str | Path, header: str = "") -> Path:
-    """Write :func:`vessel_to_toml` to ``path``; return the path."""
-    p = Path(path)
-    p.write_text(vessel_to_toml(vessel, header))
-    return p
+    """Write :func:`vessel_to_toml` to ``path`` atomically (UTF-8); return the path."""
+    from continuation.atomic import write_text
+
+    return write_text(path, vessel_to_toml(vessel, header))
