@@ -85,7 +85,12 @@ def write_text(path: str | os.PathLike[str], text: str, *, fsync: bool = False) 
 
 
 def json_safe(obj: Any) -> Any:
-    """``obj`` with every non-finite float replaced by ``None`` (strict JSON has no NaN)."""
+    """``obj`` with every non-finite float replaced by ``None`` (strict JSON has no NaN).
+
+    NumPy arrays and scalars (anything with ``tolist``) become lists and Python numbers.
+    """
+    if hasattr(obj, "tolist"):
+        obj = obj.tolist()
     if isinstance(obj, float):
         return obj if math.isfinite(obj) else None
     if isinstance(obj, dict):

@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from continuation.atomic import json_safe
+
 from ..files import write_json, write_text
 from ..options import MAX_LIST_VALUES, add_backend, backend_options, parse_list, prepare_out
 
@@ -159,24 +161,6 @@ def _write_json(path: Path, data: dict[str, Any]) -> None:
     write_json(path, data, default=str, indent=1)
 
 
-def _clean(v: Any) -> Any:
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    if isinstance(v, (list, tuple)):
-        return [_clean(x) for x in v]
-    if isinstance(v, np.ndarray):
-        return _clean(v.tolist())
-    return v
-
-
-def _clean_json(v: Any) -> Any:
-    if isinstance(v, dict):
-        return {k: _clean_json(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_clean_json(x) for x in v]
-    return _clean(v)
-
-
 def _boundary(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     from ship_models.analysis.sweeps import MAP_OFFSETS, boundary_sweep
 
@@ -212,12 +196,12 @@ def _boundary(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     data = {
         "chi_c_deg": r.chi_c_deg,
         "initial": args.initial,
-        "heteroclinic_Fn": _clean(r.heteroclinic_Fn),
-        "xi_0": _clean(r.xi_0),
-        "Fn": _clean(r.Fn),
+        "heteroclinic_Fn": json_safe(r.heteroclinic_Fn),
+        "xi_0": json_safe(r.xi_0),
+        "Fn": json_safe(r.Fn),
         "boundaries": r.boundaries.to_json(),
         "outcome_map": None if r.outcomes is None else r.outcomes.to_json(),
-        "bvp": None if r.bvp is None else _clean_json(r.bvp.to_json()),
+        "bvp": None if r.bvp is None else json_safe(r.bvp.to_json()),
     }
     plt = _plt()
     fig, ax = plt.subplots(figsize=(5.6, 3.9))
@@ -266,9 +250,9 @@ def _courses(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     out = args.out
     r.boundaries.write_csv(out / "courses.csv")
     data = {
-        "chi_c_deg": _clean(r.chi_c_deg),
-        "Fn": _clean(r.Fn),
-        "heteroclinic_Fn": _clean(r.heteroclinic_Fn),
+        "chi_c_deg": json_safe(r.chi_c_deg),
+        "Fn": json_safe(r.Fn),
+        "heteroclinic_Fn": json_safe(r.heteroclinic_Fn),
         "xi_0": r.xi_0,
         "boundaries": r.boundaries.to_json(),
     }
@@ -310,10 +294,10 @@ def _surface(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     write_text(out / "surface.csv", "\n".join(lines) + "\n")
     data = {
         "chi_c_deg": r.chi_c_deg,
-        "H_over_lambda": _clean(r.H_over_lambda),
-        "lambda_over_L": _clean(r.lambda_over_L),
-        "Fn": _clean(r.Fn),
-        "Fn_surge_chi_c_0": _clean(r.Fn_surge),
+        "H_over_lambda": json_safe(r.H_over_lambda),
+        "lambda_over_L": json_safe(r.lambda_over_L),
+        "Fn": json_safe(r.Fn),
+        "Fn_surge_chi_c_0": json_safe(r.Fn_surge),
         "reasons": list(r.reasons),
         "checks_by_bisection": list(r.checks),
         "quantity": "heteroclinic Fn (the connection); see capsizing_thresholds for where it "
