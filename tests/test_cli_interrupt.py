@@ -204,7 +204,10 @@ def test_ctrl_c_ends_a_sweep_and_its_workers_within_2_s(tmp_path, backend):
     if backend[0] == "--workers":
         pytest.importorskip("distributed")
     out = tmp_path / "b"
-    argv = [sys.executable, "-m", "broachkit_cli.main", "sweep", "boundary", "--positions", "12",
+    # 48 positions (about 75 s of work on 2 cores): the sweep must still be running when
+    # the signal comes after the workers settled (20 s for a LocalCluster); with 12 it
+    # could finish first once the fates got faster. The test ends at the interrupt.
+    argv = [sys.executable, "-m", "broachkit_cli.main", "sweep", "boundary", "--positions", "48",
             "--tol", "1e-6", "--no-map", "--no-progress", "--out", str(out), *backend]  # fmt: skip
     err_file = (tmp_path / "err.txt").open("w")
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=err_file,
