@@ -41,19 +41,27 @@ import numpy as np
 import scipy.optimize as so
 
 from .._threads import blas_threads_for
-from ..algorithms.corrector import correct
 from ..branch import Branch, SpecialKind, SpecialPoint
+from ..bvp.accuracy import discretisation_changes
 from ..bvp.collocation import CollocationMesh
 from ..driver import continue_branch
 from ..errors import ConvergenceError
 from ..events import Event
 from ..params import Params
-from ..settings import ContinuationSettings, NewtonSettings
+from ..settings import ContinuationSettings
 from ..status import Status
 from ..system import as_params
 from ..typing import FloatArray
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
-from .problem import PeriodicOrbitProblem, error_estimate
+from .problem import PeriodicOrbitProblem
+from .solve import (
+    CycleSolve,
+    adapt_mesh,
+    cycle_resolves,
+    refine_start,
+    refined_intervals,
+    solve_orbit,
+)
 
 log = logging.getLogger(__name__)
 
@@ -108,73 +116,6 @@ def _as_orbit(system: Any, start: Any, params: Any, mesh: CollocationMesh | None
         "`orbit_start` must be a PeriodicOrbit, a (t, x) pair of arrays or a Trajectory, "
         f"got {type(start).__name__}"
     )
-
-
-def solve_orbit(
-    orbit: PeriodicOrbit,
-    free: str | None = None,
-    newton: NewtonSettings | None = None,
-    *,
-    fix_period: bool = False,
-) -> PeriodicOrbit:
-    """Correct a cycle guess by Newton's method at fixed parameters (or fixed period).
-
-    Parameters
-    ----------
-    orbit : PeriodicOrbit
-        The guess (also the first phase reference).
-    free : str, optional
-        Any parameter name (default the first); with ``fix_period`` the parameter
-        that is solved for instead of the period.
-    newton : NewtonSettings, optional
-    fix_period : bool
-        Keep ``T`` at ``orbit.T`` and solve for the parameter ``free`` (well
-        conditioned where the period is very sensitive to the parameter, near a
-        homoclinic orbit).
-
-    Raises
-    ------
-    ConvergenceError
-        If Newton's method does not converge.
-    """
-    free = free if free is not None else orbit.system.param_names[0]
-    prob = PeriodicOrbitProblem.from_orbit(orbit, free)
-    newton = newton if newton is not None else NewtonSettings(max_iter=40)
-    p0 = orbit.param(free)
-    u0 = np.append(prob.reference, p0)
-    e_p = np.zeros(u0.size)
-    e_p[prob.layout.T_col if fix_period else -1] = 1.0
-    with blas_threads_for(u0.size, sparse=True):
-        # exact=False: the factorisation at the returned point is not needed here (the
-        # acceptance test of continuation steps; saves one linearisation and one
-        # factorisation per solve, i.e. per mesh adaptation of a branch)
-        res = correct(prob, u0, u0, e_p, 0.0, newton, exact=False)
-    if not res.converged:
-        raise ConvergenceError(f"the cycle did not converge at {free}={p0:.10g}: {res.message}")
-    return prob.orbit(res.z, res.p)
-
-
-def adapt_mesh(
-    orbit: PeriodicOrbit,
-    n_intervals: int | None = None,
-    *,
-    rounds: int = 2,
-    free: str | None = None,
-    newton: NewtonSettings | None = None,
-    fix_period: bool = False,
-) -> PeriodicOrbit:
-    """Equidistribute the mesh on ``orbit`` and re-solve, ``rounds`` times.
-
-    The new nodes equidistribute the local error monitor
-    (:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`);
-    ``n_intervals`` changes the number of intervals (default: the same);
-    ``fix_period`` as in :func:`solve_orbit`.
-    """
-    for _ in range(max(1, int(rounds))):
-        X = orbit.X
-        new = orbit.mesh.equidistributed(X, n_intervals)
-        orbit = solve_orbit(orbit.on_mesh(new), free, newton, fix_period=fix_period)
-    return orbit
 
 
 def continue_periodic(
@@ -301,7 +242,7 @@ def continue_periodic(
         raise ValueError(f"`max_intervals` must be an integer >= 2, got {max_intervals!r}")
     orb = _as_orbit(system, orbit_start, params, mesh, winding)
     if error_tol is not None:
-        orb = _refine_start(orb, free, error_tol, max_intervals)
+        orb = refine_start(orb, free, error_tol, max_intervals)
     settings = settings if settings is not None else ContinuationSettings()
     settings = dataclasses.replace(
         settings, detect=dataclasses.replace(settings.detect, hopf=False)
@@ -507,7 +448,7 @@ def _continue_segments(
         err = float(br.records["error"][-1])
         if at_tol:  # (the row where the estimate reached the tolerance: grow the mesh)
             err = max(err, (1.0 + 1e-3) * error_tol)  # type: ignore[operator]
-        n_new = _refined_intervals(last, err, error_tol, max_intervals)
+        n_new = refined_intervals(last, err, error_tol, max_intervals)
         if at_tol and n_new is None:
             msg = (
                 f"{Status.DISCRETISATION_ERROR.value} The collocation error estimate reaches "
@@ -525,7 +466,7 @@ def _continue_segments(
         if error_tol is not None:
             # the restart cycle itself within the tolerance (else the next segment's
             # rows start above it, and no crossing of it stops them)
-            moved = _refine_start(moved, free, error_tol, max_intervals, fix_period=True)
+            moved = refine_start(moved, free, error_tol, max_intervals, fix_period=True)
         # the restart leaves along the secant of the last step (at a fold, or near a
         # homoclinic orbit where the parameter hardly moves, its sign in p is noise)
         prev = orbit_at(br, len(br) - 2)
@@ -618,12 +559,14 @@ def _limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
     if abs(float(p_tail[-1]) - lim.p_star) > max(0.1 * span, 1e-8 * (1.0 + abs(lim.p_star))):
         return None
     last = orbit_at(br, n - 1)
-    try:
-        fine = solve_orbit(last.on_mesh(last.mesh.refined()), free, fix_period=True)
-    except ConvergenceError as exc:
-        log.debug("no discretisation estimate of %s at T=%.6g: %s", free, last.T, exc)
+    # the connections' discretisation estimate (safety 1: LIMIT_MARGIN is the margin)
+    fine, change = discretisation_changes(
+        CycleSolve(last, (free,)), cycle_resolves(free, fix_period=True), 1.0
+    )
+    if change is None:
+        log.debug("no discretisation estimate of %s at T=%.6g: %s", free, last.T, fine.message)
         return None
-    delta = abs(fine.param(free) - float(br.p[-1]))
+    delta = change[free]
     thr = LIMIT_MARGIN * delta + 1e-12 * (1.0 + abs(lim.p_star))
     if not lim.fit_residual <= thr:
         # the rows do not follow the monotone law to their accuracy (e.g. the snaking
@@ -652,50 +595,6 @@ def _limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
     )
     log.info(msg)
     return _truncated(br, k, Status.PERIOD_UNBOUNDED, msg)
-
-
-def _refined_intervals(
-    orb: PeriodicOrbit, error: float, error_tol: float | None, max_intervals: int
-) -> int | None:
-    """Number of intervals for the next segment (None: keep).
-
-    From the error estimate ``error`` of ``orb`` (order ``m + 1`` in the interval length).
-    """
-    N = orb.mesh.n_intervals
-    if error_tol is None or not math.isfinite(error) or error <= error_tol or N >= max_intervals:
-        return None
-    # aim at half the tolerance (the estimate scales as h^(m+1)), with 20 % to spare
-    factor = 1.2 * (2.0 * error / error_tol) ** (1.0 / (orb.mesh.degree + 1))
-    n_new = min(max_intervals, max(N + 1, math.ceil(N * factor)))
-    log.info("error estimate %.3g > error_tol %.3g: %d -> %d intervals", error, error_tol, N, n_new)
-    return n_new
-
-
-def _refine_start(
-    orb: PeriodicOrbit,
-    free: str,
-    error_tol: float,
-    max_intervals: int,
-    rounds: int = 4,
-    fix_period: bool = False,
-) -> PeriodicOrbit:
-    """The start cycle on a mesh whose error estimate is within ``error_tol``.
-
-    At most ``max_intervals`` intervals, ``rounds`` refinements by
-    :func:`_refined_intervals`, so that the first segment's rows are not left above the
-    tolerance; a refinement that does not converge keeps the cycle as it was (the driver's
-    start correction and the message report what follows).
-    """
-    for _ in range(rounds):
-        n_new = _refined_intervals(orb, error_estimate(orb.mesh, orb.X), error_tol, max_intervals)
-        if n_new is None:
-            break
-        try:
-            orb = adapt_mesh(orb, n_new, rounds=1, free=free, fix_period=fix_period)
-        except ConvergenceError as exc:
-            log.info("start cycle kept on %d intervals: %s", orb.mesh.n_intervals, exc)
-            break
-    return orb
 
 
 def _merge_segments(segs: list[Branch]) -> Branch:

@@ -18,9 +18,10 @@ from ..branch import Branch, SpecialPoint
 from ..bvp.collocation import CollocationMesh
 from ..settings import ContinuationSettings
 from ..system import as_params
-from .continuation import adapt_mesh, continue_periodic, solve_orbit
+from .continuation import continue_periodic
 from .hopf import _hopf_point, periodic_orbit_from_hopf
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
+from .solve import adapt_mesh, solve_orbit
 
 
 def orbit_from_trajectory(
