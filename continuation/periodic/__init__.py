@@ -42,40 +42,24 @@ from .._lazy import lazy_exports
 
 if TYPE_CHECKING:  # for type checkers; _EXPORTS is what runs (names imported on first use)
     from .collocation import CollocationLayout, monodromy_factors
-    from .continuation import (
-        CycleSegments,
-        PeriodLimit,
-        adapt_mesh,
-        continue_periodic,
-        multipliers,
-        orbit_at,
-        period_limit,
-        problem_at,
-        solve_orbit,
-        special_problem,
-    )
+    from .continuation import continue_periodic
     from .doubling import continue_period_doubled, doubled_orbit, switch_period_doubling
     from .floquet import FloquetResult, floquet, ns_test, pd_test
     from .hopf import first_lyapunov_coefficient, periodic_orbit_from_hopf
+    from .limit import PeriodLimit, period_limit
     from .orbit import PeriodicOrbit, orbit_from_array
     from .problem import PeriodicOrbitProblem, error_estimate
+    from .rows import CycleSegments, multipliers, orbit_at, problem_at, special_problem
+    from .solve import adapt_mesh, solve_orbit
     from .starts import continue_from_hopf, orbit_from_trajectory
 
 #: Sub-module -> the public names it defines (imported on first use: issue 27).
 _EXPORTS: dict[str, tuple[str, ...]] = {
     "collocation": ("CollocationLayout", "monodromy_factors"),
-    "continuation": (
-        "CycleSegments",
-        "PeriodLimit",
-        "adapt_mesh",
-        "continue_periodic",
-        "multipliers",
-        "orbit_at",
-        "period_limit",
-        "problem_at",
-        "solve_orbit",
-        "special_problem",
-    ),
+    "continuation": ("continue_periodic",),
+    "limit": ("PeriodLimit", "period_limit"),
+    "rows": ("CycleSegments", "multipliers", "orbit_at", "problem_at", "special_problem"),
+    "solve": ("adapt_mesh", "solve_orbit"),
     "doubling": ("continue_period_doubled", "doubled_orbit", "switch_period_doubling"),
     "floquet": ("FloquetResult", "floquet", "ns_test", "pd_test"),
     "hopf": ("first_lyapunov_coefficient", "periodic_orbit_from_hopf"),

@@ -56,7 +56,7 @@ def orbit_from_trajectory(
         Place the nodes by equidistribution
         (:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`) of the
         samples on a mesh four times finer before solving, then once more on the
-        solution (:func:`~continuation.periodic.continuation.adapt_mesh`); for cycles
+        solution (:func:`~continuation.periodic.solve.adapt_mesh`); for cycles
         with fast and slow phases (relaxation oscillations).
 
     Raises
