@@ -60,7 +60,7 @@ import dataclasses
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import scipy.linalg as la
@@ -69,15 +69,12 @@ import scipy.sparse as sp
 from ..newton import newton as _newton
 from ..params import Params
 from ..settings import NewtonSettings
-from ..status import Status
 from ..system import as_params
 from ..typing import FloatArray
 from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
 from .layout import phase_reference
-
-if TYPE_CHECKING:
-    from .result import ConnectionResult
+from .result import ConnectionResult, ToResult
 
 log = logging.getLogger(__name__)
 
@@ -142,7 +139,7 @@ def _refine_equilibrium(system: Any, x0: FloatArray, pvec: FloatArray, name: str
 
 
 @dataclass(frozen=True, eq=False)
-class HeteroclinicProblem:
+class HeteroclinicProblem(ToResult[ConnectionResult]):
     r"""A connecting orbit from saddle ``x_-`` to saddle ``x_+`` (equations: module docstring).
 
     Implements the :class:`~continuation.problem.ContinuationProblem` protocol with
@@ -587,25 +584,14 @@ class HeteroclinicProblem:
         z_new = new.pack(parts["X"], parts["x_from"], parts["x_to"], list(parts["params"].values()))
         return new, z_new
 
-    def to_result(
-        self,
-        z: FloatArray,
-        p: float | None = None,
-        *,
-        status: Status = Status.SUCCESS,
-        message: str = "",
-        newton_iters: int = 0,
-        residual_norm: float | None = None,
-    ) -> ConnectionResult:
-        """Wrap ``z`` (at ``vary = p``) as a :class:`ConnectionResult` (:func:`.orbit_result`)."""
-        from .result import ConnectionResult, orbit_result
-
+    def _result_parts(
+        self, z: FloatArray, p: float | None
+    ) -> tuple[type[ConnectionResult], float | None, dict[str, Any]]:
+        """A :class:`ConnectionResult` at ``vary = p`` (:meth:`ToResult.to_result`)."""
         parts = self.unpack(z)
-        return orbit_result(ConnectionResult, self, z, p,
-                            params=self.params.with_vector(self.param_vector(z, p)),
-                            x_from=parts["x_from"], x_to=parts["x_to"], status=status,
-                            message=message, newton_iters=newton_iters,
-                            residual_norm=residual_norm)  # fmt: skip
+        params = self.params.with_vector(self.param_vector(z, p))
+        return ConnectionResult, p, {"params": params, "x_from": parts["x_from"],
+                                     "x_to": parts["x_to"]}  # fmt: skip
 
 
 def _as_params(system: Any, params: Any) -> Params:

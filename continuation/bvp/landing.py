@@ -47,14 +47,13 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..arguments import finite_number
 from ..params import Params
-from ..status import Status
 from ..typing import FloatArray
 from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
@@ -69,9 +68,7 @@ from .connection import (
     _shift_vector,
     _solved_names,
 )
-
-if TYPE_CHECKING:
-    from .result import LandingResult
+from .result import LandingResult, ToResult
 
 #: Relative step of the central difference of ``x_0(s)`` when no derivative is given.
 FD_STEP = 1e-5
@@ -81,7 +78,7 @@ StartFn = Callable[[float], Any]
 
 
 @dataclass(frozen=True, eq=False)
-class LandingProblem:
+class LandingProblem(ToResult[LandingResult]):
     r"""An orbit from ``x_0(s)`` onto the stable manifold of ``x_e + shift`` (module doc).
 
     Parameters
@@ -321,31 +318,20 @@ class LandingProblem:
         out["riccati_norm"] = float(np.max(np.abs(parts["R"]))) if parts["R"].size else 0.0
         return out
 
-    def to_result(
-        self,
-        z: FloatArray,
-        s: float | None = None,
-        *,
-        status: Status = Status.SUCCESS,
-        message: str = "",
-        newton_iters: int = 0,
-        residual_norm: float | None = None,
-    ) -> LandingResult:
-        """Wrap ``z`` (at start parameter ``s``) as a :class:`LandingResult`.
+    def _result_parts(
+        self, z: FloatArray, s: float | None
+    ) -> tuple[type[LandingResult], float | None, dict[str, Any]]:
+        """A :class:`LandingResult` at start parameter ``s`` (:meth:`ToResult.to_result`).
 
         The connection's result (:class:`~continuation.bvp.result.OrbitResult`) with its
         start condition recorded: ``x_from`` the start point ``x_0(s)``, ``s`` and
         ``start_name``.
         """
-        from .result import LandingResult, orbit_result
-
         s = self.s if s is None else float(s)
-        return orbit_result(LandingResult, self, z, s,
-                            params=self.params.with_vector(self.param_vector(z)),
-                            x_from=self.x0(s), x_to=self.unpack(z)["x_end"], status=status,
-                            message=message, newton_iters=newton_iters,
-                            residual_norm=residual_norm, s=s,
-                            start_name=self.start_name)  # fmt: skip
+        params = self.params.with_vector(self.param_vector(z))
+        return LandingResult, s, {"params": params, "x_from": self.x0(s),
+                                  "x_to": self.unpack(z)["x_end"], "s": s,
+                                  "start_name": self.start_name}  # fmt: skip
 
     # ------------------------------------------------------------------ starting data
     def initial_vector(self, guess: Any) -> FloatArray:
