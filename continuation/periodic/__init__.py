@@ -2,9 +2,18 @@ r"""Periodic orbits: collocation, Floquet multipliers, continuation, bifurcation
 
 A cycle is collocated on the core it shares with connections and landings
 (:mod:`continuation.bvp.layout`): the same mesh, layout of unknowns and rows, integral
-phase condition, condensation and local error estimate; periodicity and the phase
-condition are its boundary conditions. Its residual and Jacobian values are filled by
-the compiled kernel :mod:`continuation.periodic._collocation_jit`.
+phase condition, condensation and local error estimate, and the steps of the accuracy
+loop of connections (mesh adaptation, the re-solve on the halved mesh:
+:mod:`continuation.periodic.solve`); periodicity and the phase condition are its
+boundary conditions. Its residual and Jacobian values are filled by the compiled kernel
+:mod:`continuation.periodic._collocation_jit`.
+
+Modules: :mod:`~continuation.periodic.problem` (the collocation system),
+:mod:`~continuation.periodic.solve` (one cycle: Newton, mesh adaptation, refinement),
+:mod:`~continuation.periodic.continuation` (:func:`continue_periodic`),
+:mod:`~continuation.periodic.segments` (one driver run per mesh and the segments of an
+adapted branch), :mod:`~continuation.periodic.rows` (the rows of a branch and their
+meshes), :mod:`~continuation.periodic.limit` (the period's blow-up end).
 
 * :class:`PeriodicOrbitProblem` -- the collocation system (Gauss-Legendre, degree
   ``m``, ``N`` intervals on ``[0, 1]``, period unknown, integral phase condition,
