@@ -58,15 +58,14 @@ from ..typing import FloatArray
 from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
 from .connection import (
-    _as_params,
     _as_trajectory,
-    _count,
+    _checked_orbit_fields,
+    _hyperbolic_dims,
     _mesh_changes,
     _refine_equilibrium,
-    _resolve_mesh,
     _schur_basis,
+    _set_mesh,
     _shift_vector,
-    _solved_names,
 )
 from .result import LandingResult, ToResult
 
@@ -134,19 +133,10 @@ class LandingProblem(ToResult[LandingResult]):
     _cache: dict[float, FloatArray] = field(init=False, repr=False, default_factory=dict)
 
     def __post_init__(self) -> None:
-        system = self.system
-        if not getattr(system, "has_casadi", False):
-            raise ValueError(
-                "`system` must be a continuation.System with a CasADi trace "
-                "(write rhs(x, p, ops) with ops functions)"
-            )
+        system, params, unk = _checked_orbit_fields(self)
         n = system.n_states
-        params = _as_params(system, self.params)
-        object.__setattr__(self, "params", params)
-        unk = _solved_names(system, self.free)
         if not unk:
             raise ValueError(f"`free` must be one or more distinct parameters, got {unk}")
-        object.__setattr__(self, "free", unk)
         s = finite_number("s", self.s)
         object.__setattr__(self, "s", s)
         if not isinstance(self.start_name, str) or not self.start_name:
@@ -163,13 +153,7 @@ class LandingProblem(ToResult[LandingResult]):
         shift.setflags(write=False)
         object.__setattr__(self, "shift", shift)
         A = system.jacobian(x_eq + shift, pvec)
-        ev = np.linalg.eigvals(A)
-        nu, ns, gap = _count(ev, float(np.max(np.abs(ev))))
-        if nu + ns != n:
-            raise ValueError(
-                f"`saddle` equilibrium is not hyperbolic (min |Re lambda| = {gap:.3g}); "
-                f"eigenvalues {ev}"
-            )
+        nu, ns = _hyperbolic_dims(A, "`saddle`")
         if nu != len(unk):
             raise ValueError(
                 f"landing count does not close: the equilibrium has dim W^u = {nu} unstable "
@@ -177,9 +161,7 @@ class LandingProblem(ToResult[LandingResult]):
             )
         if ns == 0:
             raise ValueError("the equilibrium has no stable direction: no orbit can land on it")
-        mesh = _resolve_mesh(self.mesh, self.T, "give `T=` (the length of the orbit) or `mesh=`")
-        object.__setattr__(self, "mesh", mesh)
-        object.__setattr__(self, "T", mesh.T)
+        mesh = _set_mesh(self, "give `T=` (the length of the orbit) or `mesh=`")
         if self.bases is None:
             Q, k = _schur_basis(A, "unstable")
         else:
