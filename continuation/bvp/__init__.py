@@ -8,7 +8,8 @@ unknowns and rows with the integral phase condition (:mod:`~continuation.bvp.lay
 one condensation of the stage unknowns (:mod:`~continuation.bvp.condense`). A landing
 is a connection whose start condition is a point: the same CasADi functions, the same
 accuracy loop (:mod:`~continuation.bvp.accuracy`), the same result
-(:class:`OrbitResult`) and driver adapter.
+(:class:`OrbitResult`, one ``to_result``) and driver adapter. A cycle's mesh adaptation
+and halved-mesh estimate are steps of that accuracy loop too.
 
 Names follow :func:`~continuation.equilibria.continue_equilibria`: ``free`` are the
 *solved* parameters, ``vary`` is the continuation parameter.

@@ -28,7 +28,11 @@ The mesh itself is adapted as in AUTO-07p (Doedel et al.): the nodes equidistrib
 :func:`~continuation.bvp.solve.solve_connection` and
 :func:`~continuation.bvp.landing_solve.solve_landing`: a landing differs only in how its
 problem is re-solved (:class:`Resolves`) and in being lengthened at its end only (its
-start is a point, not a saddle).
+start is a point, not a saddle). A periodic orbit has no truncation: its mesh
+adaptation (:func:`~continuation.periodic.adapt_mesh`) and the discretisation estimate
+of its parameter at a period limit are the loop's two steps :func:`adapted` and
+:func:`discretisation_changes`, with the cycle's re-solves
+(:func:`continuation.periodic.accuracy.cycle_resolves`).
 """
 
 from __future__ import annotations
@@ -224,23 +228,30 @@ def refined_problem(result: Any) -> Any:
 class Resolves:
     """How :func:`controlled` re-solves a result (each returns a new result).
 
+    The results need ``success``, ``message``, ``mesh``, ``params`` (by name) and
+    ``free`` (the names of the solved parameters): a
+    :class:`~continuation.bvp.result.ConnectionResult`, a
+    :class:`~continuation.bvp.result.LandingResult`, or a cycle's
+    :class:`~continuation.periodic.accuracy.CycleSolve`.
+
     Attributes
     ----------
     adapt : callable
         ``adapt(result)``: one equidistribution of the mesh and a solve on it.
     refine : callable
         ``refine(result)``: the solve on the mesh with every interval halved.
-    extend : callable
+    extend : callable or None
         ``extend(result, T_factor)``: the solve on ``[0, T_factor T]`` at the same
-        resolution.
+        resolution; None for an orbit without truncation (a cycle), which uses
+        :func:`adapted` and :func:`discretisation_changes` but not :func:`controlled`.
     keep_on_adapt_failure : bool
         When an adaptation solve fails: True keeps the last result and goes on to the
-        estimates (a landing), False returns the failure (a connection).
+        estimates (a landing), False returns the failure (a connection, a cycle).
     """
 
     adapt: Callable[[Any], Any]
     refine: Callable[[Any], Any]
-    extend: Callable[[Any, float], Any]
+    extend: Callable[[Any, float], Any] | None = None
     keep_on_adapt_failure: bool = False
 
 
@@ -253,14 +264,41 @@ def _worst(est: dict[str, float], tol: dict[str, float]) -> str | None:
     return max(bad, key=lambda u: est[u] / max(tol[u], 1e-300)) if bad else None
 
 
-def _adapted(
+def _keep_nothing(result: Any) -> None:
+    """The default ``keep`` of :func:`adapted` and :func:`controlled`."""
+
+
+def adapted(
     result: Any,
     rounds: int,
     how: Resolves,
-    progress: Callable[[Any], None] | None,
-    keep: Callable[[Any], None],
+    progress: Callable[[Any], None] | None = None,
+    keep: Callable[[Any], None] = _keep_nothing,
 ) -> Any:
-    """``rounds`` equidistribution solves; stop when the nodes no longer move."""
+    """At most ``rounds`` equidistribution solves ``how.adapt``; stop once the nodes settle.
+
+    The nodes have settled when no interior node moved by more than a tenth of the
+    shorter of its two neighbouring intervals (old or new); a round that changed the
+    number of intervals (a cycle's :func:`~continuation.periodic.adapt_mesh` with
+    ``n_intervals``) is never the last for that reason.
+
+    Parameters
+    ----------
+    result
+        A converged solve (see :class:`Resolves`).
+    rounds : int
+    how : Resolves
+    progress : callable, optional
+        Called with every adaptation solve.
+    keep : callable
+        Called with every converged adaptation solve.
+
+    Returns
+    -------
+    result
+        The last converged solve, or the failed one (``how.keep_on_adapt_failure``
+        False).
+    """
     for _ in range(rounds):
         old = result.mesh.nodes
         new = how.adapt(result)
@@ -271,11 +309,48 @@ def _adapted(
         if not new.success:
             return result if how.keep_on_adapt_failure else new
         result = new
+        if result.mesh.nodes.size != old.size:
+            continue
         h = np.minimum(np.diff(old), np.diff(result.mesh.nodes))
         move = np.abs(result.mesh.nodes - old)
         if np.all(move[1:-1] <= 0.1 * np.minimum(h[:-1], h[1:])):
             break
     return result
+
+
+def discretisation_changes(
+    result: Any,
+    how: Resolves,
+    safety: float,
+    progress: Callable[[Any], None] | None = None,
+) -> tuple[Any, dict[str, float] | None]:
+    r"""The re-solve on the halved mesh and the discretisation estimates of ``result``.
+
+    ``safety * |p(2N) - p(N)|`` for every solved parameter ``p`` (``result.free``), the
+    solve ``p(2N)`` by ``how.refine`` (see the module docstring for the order
+    :math:`O(h^{2m})` behind it).
+
+    Returns
+    -------
+    fine
+        The re-solve on the halved mesh.
+    changes : dict of str to float or None
+        The estimates; None where the re-solve failed.
+    """
+    fine = how.refine(result)
+    if progress is not None:
+        progress(fine)
+    return fine, (_changes(result, fine, safety) if fine.success else None)
+
+
+def _flagged(
+    result: Any, status: Status, message: str, errors: ErrorEstimates | None = None
+) -> Any:
+    """``result`` with an accuracy status, its message and (if any) its estimates."""
+    changes: dict[str, Any] = {"status": status, "message": message}
+    if errors is not None:
+        changes["errors"] = errors
+    return dataclasses.replace(result, **changes)
 
 
 def controlled(
@@ -284,7 +359,7 @@ def controlled(
     how: Resolves,
     rounds: int | None = None,
     progress: Callable[[Any], None] | None = None,
-    keep: Callable[[Any], None] = lambda r: None,
+    keep: Callable[[Any], None] = _keep_nothing,
     first_rounds: int | None = None,
 ) -> Any:
     r"""Adapt, refine and lengthen until both estimates meet ``acc``.
@@ -318,45 +393,39 @@ def controlled(
         parameter, the estimate, the tolerance and what to change), or the failed
         adaptation solve.
     """
+    if how.extend is None:
+        raise ValueError("`how.extend` is needed: controlled() estimates the truncation error")
     rounds = acc.adapt_rounds if rounds is None else rounds
     for n_ext in range(acc.max_extensions + 1):
         # ---- discretisation: adapt, halve, compare; double the intervals if needed
         for n_ref in range(acc.max_refinements + 1):
             k = rounds if (n_ext or n_ref or first_rounds is None) else first_rounds
-            result = _adapted(result, k, how, progress, keep)
+            result = adapted(result, k, how, progress, keep)
             if not result.success:
                 return result
             tol = {u: acc.tolerance(result.params[u]) for u in result.free}
-            fine = how.refine(result)
-            if progress is not None:
-                progress(fine)
-            if not fine.success:
-                return dataclasses.replace(
+            fine, changes = discretisation_changes(result, how, acc.safety, progress)
+            if changes is None:
+                return _flagged(
                     result,
-                    status=Status.DISCRETISATION_ERROR,
-                    message=(
-                        f"{Status.DISCRETISATION_ERROR.value} The re-solve on the halved mesh "
-                        f"({fine.mesh.n_intervals} intervals) failed: {fine.message}"
-                    ),
+                    Status.DISCRETISATION_ERROR,
+                    f"{Status.DISCRETISATION_ERROR.value} The re-solve on the halved mesh "
+                    f"({fine.mesh.n_intervals} intervals) failed: {fine.message}",
                 )
-            e_d = _changes(result, fine, acc.safety)
+            e_d = changes
             bad = _worst(e_d, tol)
             if bad is None:
                 break
             if n_ref == acc.max_refinements:
-                return dataclasses.replace(
+                return _flagged(
                     result,
-                    status=Status.DISCRETISATION_ERROR,
-                    message=(
-                        f"discretisation error of {bad} estimated {e_d[bad]:.2e} > tolerance "
-                        f"{tol[bad]:.2e} after {acc.max_refinements} doublings of the mesh "
-                        f"({result.mesh.n_intervals} intervals, degree {result.mesh.degree}):"
-                        " raise `max_refinements`, the degree or the starting intervals, or "
-                        "loosen rtol/atol"
-                    ),
-                    errors=ErrorEstimates(
-                        e_d, {u: math.nan for u in e_d}, tol, fine.mesh.n_intervals
-                    ),
+                    Status.DISCRETISATION_ERROR,
+                    f"discretisation error of {bad} estimated {e_d[bad]:.2e} > tolerance "
+                    f"{tol[bad]:.2e} after {acc.max_refinements} doublings of the mesh "
+                    f"({result.mesh.n_intervals} intervals, degree {result.mesh.degree}):"
+                    " raise `max_refinements`, the degree or the starting intervals, or "
+                    "loosen rtol/atol",
+                    ErrorEstimates(e_d, {u: math.nan for u in e_d}, tol, fine.mesh.n_intervals),
                 )
             log.info(
                 "discretisation estimate %.2e > %.2e: %d intervals",
@@ -371,15 +440,13 @@ def controlled(
         if progress is not None:
             progress(long)
         if not long.success:
-            return dataclasses.replace(
+            return _flagged(
                 result,
-                status=Status.TRUNCATION_ERROR,
-                message=(
-                    f"{Status.TRUNCATION_ERROR.value} The re-solve on T = {long.mesh.T:.6g}"
-                    f" failed ({long.message}): the truncation error cannot be estimated; "
-                    "check the saddles and the guess, or try a different T"
-                ),
-                errors=ErrorEstimates(
+                Status.TRUNCATION_ERROR,
+                f"{Status.TRUNCATION_ERROR.value} The re-solve on T = {long.mesh.T:.6g}"
+                f" failed ({long.message}): the truncation error cannot be estimated; "
+                "check the saddles and the guess, or try a different T",
+                ErrorEstimates(
                     e_d, {u: math.nan for u in e_d}, tol, fine.mesh.n_intervals, long.mesh.T
                 ),
             )
@@ -387,26 +454,22 @@ def controlled(
         errors = ErrorEstimates(e_d, e_T, tol, fine.mesh.n_intervals, long.mesh.T)
         bad = _worst(e_T, tol)
         if bad is None:
-            return dataclasses.replace(
+            return _flagged(
                 result,
-                status=Status.SUCCESS,
-                message=(
-                    f"{result.message}; error estimates within tolerance "
-                    + ", ".join(f"{u}: {e_d[u]:.1e} (mesh) + {e_T[u]:.1e} (T)" for u in e_d)
-                ),
-                errors=errors,
+                Status.SUCCESS,
+                f"{result.message}; error estimates within tolerance "
+                + ", ".join(f"{u}: {e_d[u]:.1e} (mesh) + {e_T[u]:.1e} (T)" for u in e_d),
+                errors,
             )
         if n_ext == acc.max_extensions:
-            return dataclasses.replace(
+            return _flagged(
                 result,
-                status=Status.TRUNCATION_ERROR,
-                message=(
-                    f"truncation error of {bad} estimated {e_T[bad]:.2e} > tolerance "
-                    f"{tol[bad]:.2e} at T = {result.mesh.T:.6g} (after {acc.max_extensions} "
-                    f"extensions): give a longer T (about {long.mesh.T * acc.T_factor:.4g}) "
-                    "or raise `max_extensions`, or loosen rtol/atol"
-                ),
-                errors=errors,
+                Status.TRUNCATION_ERROR,
+                f"truncation error of {bad} estimated {e_T[bad]:.2e} > tolerance "
+                f"{tol[bad]:.2e} at T = {result.mesh.T:.6g} (after {acc.max_extensions} "
+                f"extensions): give a longer T (about {long.mesh.T * acc.T_factor:.4g}) "
+                "or raise `max_extensions`, or loosen rtol/atol",
+                errors,
             )
         log.info("truncation estimate %.2e > %.2e: T = %.6g", e_T[bad], tol[bad], long.mesh.T)
         result = long
@@ -417,7 +480,9 @@ def controlled(
 __all__ = [
     "ConnectionAccuracy",
     "Resolves",
+    "adapted",
     "controlled",
+    "discretisation_changes",
     "extended_mesh",
     "extended_orbit",
     "extended_problem",

@@ -60,7 +60,7 @@ import dataclasses
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import scipy.linalg as la
@@ -69,15 +69,12 @@ import scipy.sparse as sp
 from ..newton import newton as _newton
 from ..params import Params
 from ..settings import NewtonSettings
-from ..status import Status
 from ..system import as_params
 from ..typing import FloatArray
 from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
 from .layout import phase_reference
-
-if TYPE_CHECKING:
-    from .result import ConnectionResult
+from .result import ConnectionResult, ToResult
 
 log = logging.getLogger(__name__)
 
@@ -118,6 +115,20 @@ def _count(eigs: np.ndarray, scale: float) -> tuple[int, int, float]:
     return int(np.sum(re > tol)), int(np.sum(re < -tol)), float(np.min(np.abs(re)))
 
 
+def _hyperbolic_dims(A: FloatArray, name: str) -> tuple[int, int]:
+    """``(dim W^u, dim W^s)`` of the equilibrium with Jacobian ``A``; ValueError if not hyperbolic.
+
+    ``name`` names the equilibrium in the message (``"`saddle`"``, ``"end"``).
+    """
+    ev = np.linalg.eigvals(A)
+    nu, ns, gap = _count(ev, float(np.max(np.abs(ev))))
+    if nu + ns != ev.size:
+        raise ValueError(
+            f"{name} equilibrium is not hyperbolic (min |Re lambda| = {gap:.3g}); eigenvalues {ev}"
+        )
+    return nu, ns
+
+
 def _schur_basis(A: FloatArray, which: str) -> tuple[FloatArray, int]:
     """Orthogonal ``Q`` whose first ``k`` columns span the ``which`` subspace of ``A^T``."""
     sort = "lhp" if which == "stable" else "rhp"
@@ -142,7 +153,7 @@ def _refine_equilibrium(system: Any, x0: FloatArray, pvec: FloatArray, name: str
 
 
 @dataclass(frozen=True, eq=False)
-class HeteroclinicProblem:
+class HeteroclinicProblem(ToResult[ConnectionResult]):
     r"""A connecting orbit from saddle ``x_-`` to saddle ``x_+`` (equations: module docstring).
 
     Implements the :class:`~continuation.problem.ContinuationProblem` protocol with
@@ -218,17 +229,8 @@ class HeteroclinicProblem:
 
     # ------------------------------------------------------------------ validation
     def __post_init__(self) -> None:
-        system = self.system
-        if not hasattr(system, "casadi_functions") or not getattr(system, "has_casadi", False):
-            raise ValueError(
-                "`system` must be a continuation.System with a CasADi trace "
-                "(write rhs(x, p, ops) with ops functions)"
-            )
+        system, params, unk = _checked_orbit_fields(self)
         n = system.n_states
-        params = _as_params(system, self.params)
-        object.__setattr__(self, "params", params)
-        unk = _solved_names(system, self.free)
-        object.__setattr__(self, "free", unk)
         if self.vary is not None:
             if self.vary not in system.param_names:
                 raise ValueError(f"`vary` must be one of {system.param_names}, got {self.vary!r}")
@@ -262,19 +264,8 @@ class HeteroclinicProblem:
         # hyperbolicity and counting
         A_m = system.jacobian(x_from, pvec)
         A_p = system.jacobian(x_to, pvec)
-        ev_m, ev_p = np.linalg.eigvals(A_m), np.linalg.eigvals(A_p)
-        nu_m, ns_m, gap_m = _count(ev_m, float(np.max(np.abs(ev_m))))
-        nu_p, ns_p, gap_p = _count(ev_p, float(np.max(np.abs(ev_p))))
-        if nu_m + ns_m != n:
-            raise ValueError(
-                f"`saddle_from` equilibrium is not hyperbolic (min |Re lambda| = {gap_m:.3g}); "
-                f"eigenvalues {ev_m}"
-            )
-        if nu_p + ns_p != n:
-            raise ValueError(
-                f"end equilibrium is not hyperbolic (min |Re lambda| = {gap_p:.3g}); "
-                f"eigenvalues {ev_p}"
-            )
+        nu_m, _ = _hyperbolic_dims(A_m, "`saddle_from`")
+        _, ns_p = _hyperbolic_dims(A_p, "end")
         q = len(unk)
         if nu_m + ns_p != n + 1 - q:
             raise ValueError(
@@ -286,12 +277,10 @@ class HeteroclinicProblem:
             raise ValueError("`saddle_from` has no unstable direction: no orbit can leave it")
         if ns_p == 0:
             raise ValueError("the end equilibrium has no stable direction: no orbit can reach it")
-        mesh = _resolve_mesh(
-            self.mesh, self.T, "give `T=` (the truncation interval) or `mesh=`; there is no "
+        _set_mesh(
+            self, "give `T=` (the truncation interval) or `mesh=`; there is no "
             "default T (find_connection picks T from the saddles' eigenvalues)"
         )  # fmt: skip
-        object.__setattr__(self, "mesh", mesh)
-        object.__setattr__(self, "T", mesh.T)
         # phase
         pin = None
         if isinstance(self.phase, PinPhase):
@@ -587,25 +576,14 @@ class HeteroclinicProblem:
         z_new = new.pack(parts["X"], parts["x_from"], parts["x_to"], list(parts["params"].values()))
         return new, z_new
 
-    def to_result(
-        self,
-        z: FloatArray,
-        p: float | None = None,
-        *,
-        status: Status = Status.SUCCESS,
-        message: str = "",
-        newton_iters: int = 0,
-        residual_norm: float | None = None,
-    ) -> ConnectionResult:
-        """Wrap ``z`` (at ``vary = p``) as a :class:`ConnectionResult` (:func:`.orbit_result`)."""
-        from .result import ConnectionResult, orbit_result
-
+    def _result_parts(
+        self, z: FloatArray, p: float | None
+    ) -> tuple[type[ConnectionResult], float | None, dict[str, Any]]:
+        """A :class:`ConnectionResult` at ``vary = p`` (:meth:`ToResult.to_result`)."""
         parts = self.unpack(z)
-        return orbit_result(ConnectionResult, self, z, p,
-                            params=self.params.with_vector(self.param_vector(z, p)),
-                            x_from=parts["x_from"], x_to=parts["x_to"], status=status,
-                            message=message, newton_iters=newton_iters,
-                            residual_norm=residual_norm)  # fmt: skip
+        params = self.params.with_vector(self.param_vector(z, p))
+        return ConnectionResult, p, {"params": params, "x_from": parts["x_from"],
+                                     "x_to": parts["x_to"]}  # fmt: skip
 
 
 def _as_params(system: Any, params: Any) -> Params:
@@ -629,6 +607,33 @@ def _solved_names(system: Any, free: Any) -> tuple[str, ...]:
     if len(set(unk)) != len(unk):
         raise ValueError(f"`free` must be unique, got {unk}")
     return unk
+
+
+def _checked_orbit_fields(problem: Any) -> tuple[Any, Params, tuple[str, ...]]:
+    """The checks a connection and a landing share: ``(system, params, free)``.
+
+    ``system`` must have a CasADi trace; ``params`` (as :class:`Params`) and ``free`` (as
+    a tuple of names) are set on the (frozen) ``problem``.
+    """
+    system = problem.system
+    if not hasattr(system, "casadi_functions") or not getattr(system, "has_casadi", False):
+        raise ValueError(
+            "`system` must be a continuation.System with a CasADi trace "
+            "(write rhs(x, p, ops) with ops functions)"
+        )
+    params = _as_params(system, problem.params)
+    object.__setattr__(problem, "params", params)
+    unk = _solved_names(system, problem.free)
+    object.__setattr__(problem, "free", unk)
+    return system, params, unk
+
+
+def _set_mesh(problem: Any, missing: str) -> CollocationMesh:
+    """:func:`_resolve_mesh` of ``problem.mesh``/``problem.T``, set on ``problem`` (both)."""
+    mesh = _resolve_mesh(problem.mesh, problem.T, missing)
+    object.__setattr__(problem, "mesh", mesh)
+    object.__setattr__(problem, "T", mesh.T)
+    return mesh
 
 
 def _resolve_mesh(mesh: Any, T: float | None, missing: str) -> CollocationMesh:

@@ -47,31 +47,27 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..arguments import finite_number
 from ..params import Params
-from ..status import Status
 from ..typing import FloatArray
 from .casadi_backend import ConnectionFunctions, ConnectionLayout, build_connection_functions
 from .collocation import CollocationMesh
 from .connection import (
-    _as_params,
     _as_trajectory,
-    _count,
+    _checked_orbit_fields,
+    _hyperbolic_dims,
     _mesh_changes,
     _refine_equilibrium,
-    _resolve_mesh,
     _schur_basis,
+    _set_mesh,
     _shift_vector,
-    _solved_names,
 )
-
-if TYPE_CHECKING:
-    from .result import LandingResult
+from .result import LandingResult, ToResult
 
 #: Relative step of the central difference of ``x_0(s)`` when no derivative is given.
 FD_STEP = 1e-5
@@ -81,7 +77,7 @@ StartFn = Callable[[float], Any]
 
 
 @dataclass(frozen=True, eq=False)
-class LandingProblem:
+class LandingProblem(ToResult[LandingResult]):
     r"""An orbit from ``x_0(s)`` onto the stable manifold of ``x_e + shift`` (module doc).
 
     Parameters
@@ -137,19 +133,10 @@ class LandingProblem:
     _cache: dict[float, FloatArray] = field(init=False, repr=False, default_factory=dict)
 
     def __post_init__(self) -> None:
-        system = self.system
-        if not getattr(system, "has_casadi", False):
-            raise ValueError(
-                "`system` must be a continuation.System with a CasADi trace "
-                "(write rhs(x, p, ops) with ops functions)"
-            )
+        system, params, unk = _checked_orbit_fields(self)
         n = system.n_states
-        params = _as_params(system, self.params)
-        object.__setattr__(self, "params", params)
-        unk = _solved_names(system, self.free)
         if not unk:
             raise ValueError(f"`free` must be one or more distinct parameters, got {unk}")
-        object.__setattr__(self, "free", unk)
         s = finite_number("s", self.s)
         object.__setattr__(self, "s", s)
         if not isinstance(self.start_name, str) or not self.start_name:
@@ -166,13 +153,7 @@ class LandingProblem:
         shift.setflags(write=False)
         object.__setattr__(self, "shift", shift)
         A = system.jacobian(x_eq + shift, pvec)
-        ev = np.linalg.eigvals(A)
-        nu, ns, gap = _count(ev, float(np.max(np.abs(ev))))
-        if nu + ns != n:
-            raise ValueError(
-                f"`saddle` equilibrium is not hyperbolic (min |Re lambda| = {gap:.3g}); "
-                f"eigenvalues {ev}"
-            )
+        nu, ns = _hyperbolic_dims(A, "`saddle`")
         if nu != len(unk):
             raise ValueError(
                 f"landing count does not close: the equilibrium has dim W^u = {nu} unstable "
@@ -180,9 +161,7 @@ class LandingProblem:
             )
         if ns == 0:
             raise ValueError("the equilibrium has no stable direction: no orbit can land on it")
-        mesh = _resolve_mesh(self.mesh, self.T, "give `T=` (the length of the orbit) or `mesh=`")
-        object.__setattr__(self, "mesh", mesh)
-        object.__setattr__(self, "T", mesh.T)
+        mesh = _set_mesh(self, "give `T=` (the length of the orbit) or `mesh=`")
         if self.bases is None:
             Q, k = _schur_basis(A, "unstable")
         else:
@@ -321,31 +300,20 @@ class LandingProblem:
         out["riccati_norm"] = float(np.max(np.abs(parts["R"]))) if parts["R"].size else 0.0
         return out
 
-    def to_result(
-        self,
-        z: FloatArray,
-        s: float | None = None,
-        *,
-        status: Status = Status.SUCCESS,
-        message: str = "",
-        newton_iters: int = 0,
-        residual_norm: float | None = None,
-    ) -> LandingResult:
-        """Wrap ``z`` (at start parameter ``s``) as a :class:`LandingResult`.
+    def _result_parts(
+        self, z: FloatArray, s: float | None
+    ) -> tuple[type[LandingResult], float | None, dict[str, Any]]:
+        """A :class:`LandingResult` at start parameter ``s`` (:meth:`ToResult.to_result`).
 
         The connection's result (:class:`~continuation.bvp.result.OrbitResult`) with its
         start condition recorded: ``x_from`` the start point ``x_0(s)``, ``s`` and
         ``start_name``.
         """
-        from .result import LandingResult, orbit_result
-
         s = self.s if s is None else float(s)
-        return orbit_result(LandingResult, self, z, s,
-                            params=self.params.with_vector(self.param_vector(z)),
-                            x_from=self.x0(s), x_to=self.unpack(z)["x_end"], status=status,
-                            message=message, newton_iters=newton_iters,
-                            residual_norm=residual_norm, s=s,
-                            start_name=self.start_name)  # fmt: skip
+        params = self.params.with_vector(self.param_vector(z))
+        return LandingResult, s, {"params": params, "x_from": self.x0(s),
+                                  "x_to": self.unpack(z)["x_end"], "s": s,
+                                  "start_name": self.start_name}  # fmt: skip
 
     # ------------------------------------------------------------------ starting data
     def initial_vector(self, guess: Any) -> FloatArray:

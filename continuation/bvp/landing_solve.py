@@ -39,7 +39,7 @@ from ..typing import FloatArray
 from .accuracy import ConnectionAccuracy, Resolves, controlled, extended_mesh, extended_orbit
 from .landing import LandingProblem
 from .result import LandingResult
-from .solve import ContinuedOrbit, _finish, _newton_solve, branch_row
+from .solve import ContinuedOrbit, _solved, _Solver, branch_row
 
 DEFAULT_NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=True)
 
@@ -47,10 +47,9 @@ DEFAULT_NEWTON = NewtonSettings(tol=1e-10, step_tol=1e-8, max_iter=40, damping=T
 def _plain(prob: LandingProblem, z0: FloatArray, settings: NewtonSettings) -> LandingResult:
     """One Newton solve, then a rebase (Schur basis at the solution) and a polish.
 
-    The connections' own steps (:func:`continuation.bvp.solve._finish`).
+    The connections' own steps (:func:`continuation.bvp.solve._solved`).
     """
-    res = _newton_solve(prob, z0, settings)
-    return _finish(prob, res, settings, what="landing")  # type: ignore[no-any-return]
+    return _solved(prob, z0, _Solver(settings, what="landing"))  # type: ignore[no-any-return]
 
 
 def _adapt(result: LandingResult, settings: NewtonSettings) -> LandingResult:

@@ -52,7 +52,13 @@ Accuracy: every adaptive mesh equidistributes the monitor of
 error estimate (its records, its mesh refinement and its ``error_tol``) is that same
 estimate. Connections and landings then bound their *solved parameters* by re-solves
 on the halved mesh and on a longer interval (:func:`~continuation.bvp.accuracy.controlled`,
-one loop for both); a cycle has no truncation and reports the estimate of its orbit.
+one loop for both). A cycle's mesh adaptation and the discretisation estimate of its
+parameter at a period limit are two steps of that loop
+(:func:`~continuation.bvp.accuracy.adapted`,
+:func:`~continuation.bvp.accuracy.discretisation_changes`) with the cycle's re-solves
+(:func:`~continuation.periodic.solve.cycle_resolves`); a cycle has no truncation, and the
+size of its mesh follows its orbit's error estimate against ``error_tol`` (along a branch
+its parameter is the continuation parameter, not a solved one).
 Their results are one class body (:class:`~continuation.bvp.result.OrbitResult`; a
 landing's result records its start condition) and one driver adapter
 (:class:`~continuation.bvp.solve.ContinuedOrbit`).

@@ -17,7 +17,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 
@@ -364,6 +364,48 @@ def orbit_result(
     )
 
 
+#: The result class of a problem (:class:`ToResult`).
+R = TypeVar("R", bound=OrbitResult)
+
+
+class ToResult(Generic[R]):
+    """The one ``to_result`` of collocated orbit problems (connections and landings).
+
+    A problem gives :meth:`_result_parts`, what its results differ in; the rest is
+    :func:`orbit_result`.
+    """
+
+    def _result_parts(
+        self, z: FloatArray, p: float | None
+    ) -> tuple[type[R], float | None, dict[str, Any]]:
+        """``(result class, value of the continuation parameter, fields)`` of ``z``.
+
+        The fields are ``params``, ``x_from``, ``x_to`` and a landing's ``s`` and
+        ``start_name``.
+        """
+        raise NotImplementedError
+
+    def to_result(
+        self,
+        z: FloatArray,
+        p: float | None = None,
+        *,
+        status: Status = Status.SUCCESS,
+        message: str = "",
+        newton_iters: int = 0,
+        residual_norm: float | None = None,
+    ) -> R:
+        """Wrap ``z`` as the problem's result (:func:`orbit_result`).
+
+        ``p`` is the value of the continuation parameter: a connection's ``vary``, a
+        landing's start parameter ``s`` (default the problem's).
+        """
+        kind, p, fields = self._result_parts(z, p)
+        return orbit_result(kind, self, z, p, status=status, message=message,  # type: ignore[no-any-return]
+                            newton_iters=newton_iters, residual_norm=residual_norm,
+                            **fields)  # fmt: skip
+
+
 @dataclass(frozen=True, eq=False, repr=False)  # (the repr of OrbitResult)
 class ConnectionResult(OrbitResult):
     """A (possibly failed) connecting orbit from the saddle ``x_from`` to ``x_to``.
@@ -407,4 +449,11 @@ class LandingResult(OrbitResult):
         return {"s": self.s, "start_name": self.start_name}
 
 
-__all__ = ["ConnectionResult", "ErrorEstimates", "LandingResult", "OrbitResult", "orbit_result"]
+__all__ = [
+    "ConnectionResult",
+    "ErrorEstimates",
+    "LandingResult",
+    "OrbitResult",
+    "ToResult",
+    "orbit_result",
+]

@@ -57,18 +57,35 @@ def _value(prob: Any) -> float | None:
     return None if vary is None else float(prob.params[vary])
 
 
-def _newton_solve(
-    prob: Any,
-    z0: FloatArray,
-    settings: NewtonSettings,
-    method: str = "newton",
-    store: dict[Any, JacobianCache] | None = None,
-) -> NewtonResult:
-    """Newton (or its simplified forms, ``method``) on ``prob.residual(z, p) = 0``.
+@dataclass(frozen=True, eq=False)
+class _Solver:
+    """How a collocated orbit is solved (one value for every solve of one call).
+
+    Attributes
+    ----------
+    settings : NewtonSettings
+    method : str
+        One of :data:`METHODS`.
+    store : dict or None
+        Factorised Jacobians shared between nearby solves (``jacobians`` of
+        :func:`solve_connection`).
+    what : str
+        The kind of orbit, named in the messages ("connection", "landing").
+    """
+
+    settings: NewtonSettings = DEFAULT_NEWTON
+    method: str = "newton"
+    store: dict[Any, JacobianCache] | None = None
+    what: str = "connection"
+
+
+def _newton_solve(prob: Any, z0: FloatArray, solver: _Solver) -> NewtonResult:
+    """Newton (or its simplified forms, ``solver.method``) on ``prob.residual(z, p) = 0``.
 
     ``prob`` is a :class:`HeteroclinicProblem` or a
     :class:`~continuation.bvp.landing.LandingProblem` (the same collocation core).
     """
+    settings, method, store = solver.settings, solver.method, solver.store
     p = _value(prob)
 
     def res(z: FloatArray) -> FloatArray:
@@ -90,19 +107,14 @@ def _newton_solve(
     return out
 
 
-def _finish(
-    prob: Any,
-    res: NewtonResult,
-    settings: NewtonSettings,
-    method: str = "newton",
-    store: dict[Any, JacobianCache] | None = None,
-    what: str = "connection",
-) -> Any:
-    """Rebase at a converged solution (one more Newton if needed) and wrap as a result.
+def _solved(prob: Any, z0: FloatArray, solver: _Solver) -> Any:
+    """Newton from ``z0``, then a rebase at a converged solution, as a result.
 
-    ``prob``: a connection or a landing (``what`` names it in the messages); the result
-    is its ``to_result``.
+    One more Newton solve follows the rebase if its residual exceeds the tolerance.
+    ``prob``: a connection or a landing (``solver.what`` names it in the messages); the
+    result is its ``to_result``.
     """
+    res = _newton_solve(prob, z0, solver)
     p = _value(prob)
     if not res.converged:
         return prob.to_result(
@@ -121,12 +133,12 @@ def _finish(
             p,
             status=Status.NEWTON_FAILED,
             newton_iters=res.iterations,
-            message=f"converged, but the solution is not a valid {what}: {exc}",
+            message=f"converged, but the solution is not a valid {solver.what}: {exc}",
         )
     rn = float(np.max(np.abs(new.residual(z, p))))
     iters = res.iterations
-    if rn > settings.tol:
-        res2 = _newton_solve(new, z, settings, method, store)
+    if rn > solver.settings.tol:
+        res2 = _newton_solve(new, z, solver)
         iters += res2.iterations
         if not res2.converged:
             return new.to_result(
@@ -142,7 +154,7 @@ def _finish(
         z,
         p,
         status=Status.SUCCESS,
-        message=f"converged in {iters} {_KIND[method]} iterations (|G|={rn:.2e})",
+        message=f"converged in {iters} {_KIND[solver.method]} iterations (|G|={rn:.2e})",
         newton_iters=iters,
         residual_norm=rn,
     )
@@ -244,13 +256,10 @@ def solve_connection(
         raise ValueError(f"`method` must be one of {METHODS}, got {method!r}")
     if jacobians is not None and not isinstance(jacobians, dict):
         raise ValueError(f"`jacobians` must be a dict, got {type(jacobians).__name__}")
-    store = jacobians
-    settings = DEFAULT_NEWTON if newton is None else newton
+    solver = _Solver(DEFAULT_NEWTON if newton is None else newton, method, jacobians)
     prob, z0 = problem.initial_vector(guess)
     try:
-        result = _finish(
-            prob, _newton_solve(prob, z0, settings, method, store), settings, method, store
-        )
+        result = _solved(prob, z0, solver)
     except KeyboardInterrupt:
         p = _value(prob)
         result = prob.to_result(
@@ -269,7 +278,7 @@ def solve_connection(
             for _ in range(adapt or 0):
                 if not result.success:
                     break
-                result = _adapt_once(result, settings, method, store)
+                result = _adapt_once(result, solver)
                 if progress is not None:
                     progress(result)
         elif result.success:
@@ -280,7 +289,7 @@ def solve_connection(
                 result = controlled(
                     result,
                     accuracy,
-                    _resolves(settings, method, store),
+                    _resolves(solver),
                     rounds,
                     progress,
                     last.append,
@@ -308,29 +317,19 @@ def _already_adapted(guess: Any, prob: HeteroclinicProblem) -> bool:
     )
 
 
-def _plain(
-    problem: HeteroclinicProblem,
-    guess: Any,
-    settings: NewtonSettings,
-    method: str,
-    store: dict[Any, JacobianCache] | None = None,
-) -> ConnectionResult:
-    prob, z0 = problem.initial_vector(guess)
-    return _finish(prob, _newton_solve(prob, z0, settings, method, store), settings, method, store)
+def _plain(problem: HeteroclinicProblem, guess: Any, solver: _Solver) -> ConnectionResult:
+    return _solved(*problem.initial_vector(guess), solver)  # type: ignore[no-any-return]
 
 
-def _resolves(
-    settings: NewtonSettings, method: str, store: dict[Any, JacobianCache] | None
-) -> Resolves:
+def _resolves(solver: _Solver) -> Resolves:
     """The re-solves of a connection for :func:`~continuation.bvp.accuracy.controlled`."""
 
     def extend(result: ConnectionResult, T_factor: float) -> ConnectionResult:
-        prob_long, guess_long = extended_problem(result, T_factor)
-        return _plain(prob_long, guess_long, settings, method, store)
+        return _plain(*extended_problem(result, T_factor), solver)
 
     return Resolves(
-        adapt=lambda r: _adapt_once(r, settings, method, store),
-        refine=lambda r: _plain(refined_problem(r), r, settings, method, store),
+        adapt=lambda r: _adapt_once(r, solver),
+        refine=lambda r: _plain(refined_problem(r), r, solver),
         extend=extend,
     )
 
@@ -339,12 +338,7 @@ def _with_status(result: ConnectionResult, status: Status, message: str) -> Conn
     return dataclasses.replace(result, status=status, message=message)
 
 
-def _adapt_once(
-    result: ConnectionResult,
-    settings: NewtonSettings,
-    method: str = "newton",
-    store: dict[Any, JacobianCache] | None = None,
-) -> ConnectionResult:
+def _adapt_once(result: ConnectionResult, solver: _Solver) -> ConnectionResult:
     prob: HeteroclinicProblem = result.problem
     pin = prob.layout.pin
     fixed = None
@@ -363,7 +357,7 @@ def _adapt_once(
     new = _replace_fast(prob, **changes)
     parts = prob.unpack(result.z)
     z0 = new.pack(X, parts["x_from"], parts["x_to"], list(parts["params"].values()))
-    return _finish(new, _newton_solve(new, z0, settings, method, store), settings, method, store)
+    return _solved(new, z0, solver)  # type: ignore[no-any-return]
 
 
 @dataclass(frozen=True)
@@ -426,10 +420,9 @@ def check_convergence(
         raise ValueError(f"`result` did not converge ({result.status.name})")
     if not (math.isfinite(T_factor) and T_factor > 1):
         raise ValueError(f"`T_factor` must be > 1, got {T_factor!r}")
-    settings = DEFAULT_NEWTON if newton is None else newton
-    refined = _plain(refined_problem(result), result, settings, "newton")
-    prob_long, guess_long = extended_problem(result, T_factor)
-    extended = _plain(prob_long, guess_long, settings, "newton")
+    solver = _Solver(DEFAULT_NEWTON if newton is None else newton)
+    refined = _plain(refined_problem(result), result, solver)
+    extended = _plain(*extended_problem(result, T_factor), solver)
     d_mesh = {u: abs(refined.params[u] - result.params[u]) for u in result.free}
     d_T = {u: abs(extended.params[u] - result.params[u]) for u in result.free}
     return ConvergenceCheck(result, refined, extended, d_mesh, d_T)

@@ -2,9 +2,18 @@ r"""Periodic orbits: collocation, Floquet multipliers, continuation, bifurcation
 
 A cycle is collocated on the core it shares with connections and landings
 (:mod:`continuation.bvp.layout`): the same mesh, layout of unknowns and rows, integral
-phase condition, condensation and local error estimate; periodicity and the phase
-condition are its boundary conditions. Its residual and Jacobian values are filled by
-the compiled kernel :mod:`continuation.periodic._collocation_jit`.
+phase condition, condensation and local error estimate, and the steps of the accuracy
+loop of connections (mesh adaptation, the re-solve on the halved mesh:
+:mod:`continuation.periodic.solve`); periodicity and the phase condition are its
+boundary conditions. Its residual and Jacobian values are filled by the compiled kernel
+:mod:`continuation.periodic._collocation_jit`.
+
+Modules: :mod:`~continuation.periodic.problem` (the collocation system),
+:mod:`~continuation.periodic.solve` (one cycle: Newton, mesh adaptation, refinement),
+:mod:`~continuation.periodic.continuation` (:func:`continue_periodic`),
+:mod:`~continuation.periodic.segments` (one driver run per mesh and the segments of an
+adapted branch), :mod:`~continuation.periodic.rows` (the rows of a branch and their
+meshes), :mod:`~continuation.periodic.limit` (the period's blow-up end).
 
 * :class:`PeriodicOrbitProblem` -- the collocation system (Gauss-Legendre, degree
   ``m``, ``N`` intervals on ``[0, 1]``, period unknown, integral phase condition,
@@ -42,40 +51,24 @@ from .._lazy import lazy_exports
 
 if TYPE_CHECKING:  # for type checkers; _EXPORTS is what runs (names imported on first use)
     from .collocation import CollocationLayout, monodromy_factors
-    from .continuation import (
-        CycleSegments,
-        PeriodLimit,
-        adapt_mesh,
-        continue_periodic,
-        multipliers,
-        orbit_at,
-        period_limit,
-        problem_at,
-        solve_orbit,
-        special_problem,
-    )
+    from .continuation import continue_periodic
     from .doubling import continue_period_doubled, doubled_orbit, switch_period_doubling
     from .floquet import FloquetResult, floquet, ns_test, pd_test
     from .hopf import first_lyapunov_coefficient, periodic_orbit_from_hopf
+    from .limit import PeriodLimit, period_limit
     from .orbit import PeriodicOrbit, orbit_from_array
     from .problem import PeriodicOrbitProblem, error_estimate
+    from .rows import CycleSegments, multipliers, orbit_at, problem_at, special_problem
+    from .solve import adapt_mesh, solve_orbit
     from .starts import continue_from_hopf, orbit_from_trajectory
 
 #: Sub-module -> the public names it defines (imported on first use: issue 27).
 _EXPORTS: dict[str, tuple[str, ...]] = {
     "collocation": ("CollocationLayout", "monodromy_factors"),
-    "continuation": (
-        "CycleSegments",
-        "PeriodLimit",
-        "adapt_mesh",
-        "continue_periodic",
-        "multipliers",
-        "orbit_at",
-        "period_limit",
-        "problem_at",
-        "solve_orbit",
-        "special_problem",
-    ),
+    "continuation": ("continue_periodic",),
+    "limit": ("PeriodLimit", "period_limit"),
+    "rows": ("CycleSegments", "multipliers", "orbit_at", "problem_at", "special_problem"),
+    "solve": ("adapt_mesh", "solve_orbit"),
     "doubling": ("continue_period_doubled", "doubled_orbit", "switch_period_doubling"),
     "floquet": ("FloquetResult", "floquet", "ns_test", "pd_test"),
     "hopf": ("first_lyapunov_coefficient", "periodic_orbit_from_hopf"),

@@ -34,26 +34,31 @@ import dataclasses
 import logging
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-import scipy.optimize as so
 
 from .._threads import blas_threads_for
-from ..algorithms.corrector import correct
-from ..branch import Branch, SpecialKind, SpecialPoint
+from ..branch import Branch, SpecialKind
 from ..bvp.collocation import CollocationMesh
-from ..driver import continue_branch
-from ..errors import ConvergenceError
 from ..events import Event
-from ..params import Params
-from ..settings import ContinuationSettings, NewtonSettings
+from ..settings import ContinuationSettings
 from ..status import Status
 from ..system import as_params
 from ..typing import FloatArray
+from .limit import LIMIT_MARGIN, PeriodLimit, period_limit
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
-from .problem import PeriodicOrbitProblem, error_estimate
+from .rows import (
+    CycleSegments,
+    merge_segments,
+    multipliers,
+    orbit_at,
+    problem_at,
+    reversed_segments,
+    special_problem,
+)
+from .segments import ERR_EVENT, continue_once, continue_segments
+from .solve import adapt_mesh, refine_start, solve_orbit
 
 log = logging.getLogger(__name__)
 
@@ -68,19 +73,9 @@ TRIVIAL_TOL = 1e-3
 #: adapts its mesh by default).
 ERROR_TOL = 1e-6
 
-#: A branch ends with ``Status.PERIOD_UNBOUNDED`` where the period grows without bound and
-#: the parameter is within this many times its discretisation error (``|p_{2N} - p_N|``
-#: at fixed period) of the limit ``p*`` fitted to ``T = a - b ln|p* - p|`` (beyond that
-#: the rows cannot tell on which side of ``p*`` they are).
-LIMIT_MARGIN = 10.0
-
 #: Rows count as within ``error_tol`` up to this factor (the row where a segment stopped
 #: has the estimate at the tolerance to the locator's accuracy).
 ERROR_SLACK = 1.01
-
-#: Label of the terminal event that stops a segment where the error estimate reaches
-#: ``error_tol`` (the next segment has more intervals).
-_ERR_EVENT = "error_tol"
 
 #: Without ``error_tol``, rows whose collocation error estimate exceeds this fraction of
 #: the cycle's range (largest ``max - min`` of a state) are named in the branch's
@@ -108,73 +103,6 @@ def _as_orbit(system: Any, start: Any, params: Any, mesh: CollocationMesh | None
         "`orbit_start` must be a PeriodicOrbit, a (t, x) pair of arrays or a Trajectory, "
         f"got {type(start).__name__}"
     )
-
-
-def solve_orbit(
-    orbit: PeriodicOrbit,
-    free: str | None = None,
-    newton: NewtonSettings | None = None,
-    *,
-    fix_period: bool = False,
-) -> PeriodicOrbit:
-    """Correct a cycle guess by Newton's method at fixed parameters (or fixed period).
-
-    Parameters
-    ----------
-    orbit : PeriodicOrbit
-        The guess (also the first phase reference).
-    free : str, optional
-        Any parameter name (default the first); with ``fix_period`` the parameter
-        that is solved for instead of the period.
-    newton : NewtonSettings, optional
-    fix_period : bool
-        Keep ``T`` at ``orbit.T`` and solve for the parameter ``free`` (well
-        conditioned where the period is very sensitive to the parameter, near a
-        homoclinic orbit).
-
-    Raises
-    ------
-    ConvergenceError
-        If Newton's method does not converge.
-    """
-    free = free if free is not None else orbit.system.param_names[0]
-    prob = PeriodicOrbitProblem.from_orbit(orbit, free)
-    newton = newton if newton is not None else NewtonSettings(max_iter=40)
-    p0 = orbit.param(free)
-    u0 = np.append(prob.reference, p0)
-    e_p = np.zeros(u0.size)
-    e_p[prob.layout.T_col if fix_period else -1] = 1.0
-    with blas_threads_for(u0.size, sparse=True):
-        # exact=False: the factorisation at the returned point is not needed here (the
-        # acceptance test of continuation steps; saves one linearisation and one
-        # factorisation per solve, i.e. per mesh adaptation of a branch)
-        res = correct(prob, u0, u0, e_p, 0.0, newton, exact=False)
-    if not res.converged:
-        raise ConvergenceError(f"the cycle did not converge at {free}={p0:.10g}: {res.message}")
-    return prob.orbit(res.z, res.p)
-
-
-def adapt_mesh(
-    orbit: PeriodicOrbit,
-    n_intervals: int | None = None,
-    *,
-    rounds: int = 2,
-    free: str | None = None,
-    newton: NewtonSettings | None = None,
-    fix_period: bool = False,
-) -> PeriodicOrbit:
-    """Equidistribute the mesh on ``orbit`` and re-solve, ``rounds`` times.
-
-    The new nodes equidistribute the local error monitor
-    (:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`);
-    ``n_intervals`` changes the number of intervals (default: the same);
-    ``fix_period`` as in :func:`solve_orbit`.
-    """
-    for _ in range(max(1, int(rounds))):
-        X = orbit.X
-        new = orbit.mesh.equidistributed(X, n_intervals)
-        orbit = solve_orbit(orbit.on_mesh(new), free, newton, fix_period=fix_period)
-    return orbit
 
 
 def continue_periodic(
@@ -301,7 +229,7 @@ def continue_periodic(
         raise ValueError(f"`max_intervals` must be an integer >= 2, got {max_intervals!r}")
     orb = _as_orbit(system, orbit_start, params, mesh, winding)
     if error_tol is not None:
-        orb = _refine_start(orb, free, error_tol, max_intervals)
+        orb = refine_start(orb, free, error_tol, max_intervals)
     settings = settings if settings is not None else ContinuationSettings()
     settings = dataclasses.replace(
         settings, detect=dataclasses.replace(settings.detect, hopf=False)
@@ -312,8 +240,8 @@ def continue_periodic(
 
     def one(st: ContinuationSettings) -> Branch:
         if adapt_every == 0 and error_tol is None:
-            return _continue_once(orb, free, st, **run)  # type: ignore[arg-type]
-        return _continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals)
+            return continue_once(orb, free, st, **run)  # type: ignore[arg-type]
+        return continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals)
 
     back = dataclasses.replace(settings, ds=-settings.ds)
     # one BLAS thread for the whole run, the start corrections and mesh adaptations
@@ -330,439 +258,11 @@ def continue_periodic(
             if len(b) == 0 or len(f) == 0:
                 br = f if len(f) else b
             else:
-                br = _merge_segments([_reverse(b), f])
+                br = merge_segments([reversed_segments(b), f])
                 br = dataclasses.replace(
                     br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
                 )
         return _finish(br, free, period_max, error_tol)
-
-
-def _segments_of(br: Branch) -> tuple[list[PeriodicOrbitProblem], list[int]]:
-    prob = br.problem
-    if isinstance(prob, CycleSegments):
-        return list(prob.problems), list(prob.first_row)
-    return [prob], [0]
-
-
-def _reverse(br: Branch) -> Branch:
-    """The branch in the opposite order (rows, steps, special points, segments)."""
-    N = len(br)
-    probs, first = _segments_of(br)
-    ends = [f - 1 for f in first[1:]] + [N - 1]  # last row of each segment
-    problem: Any = br.problem
-    if len(probs) > 1:
-        problem = CycleSegments(tuple(probs[::-1]), tuple(N - 1 - e for e in ends[::-1]))
-    return br.reversed(problem=problem)
-
-
-def _continue_once(
-    orb: PeriodicOrbit,
-    free: str,
-    settings: ContinuationSettings,
-    *,
-    period_max: float | None,
-    detect_pd: bool,
-    detect_ns: bool,
-    events: Sequence[Event],
-    progress: Callable[[Any], None] | None,
-    throw: bool,
-    fix_period: bool = False,
-    period_sign: float = 0.0,
-    error_tol: float | None = None,
-    previous: PeriodicOrbit | None = None,
-) -> Branch:
-    """One driver run on one mesh (PD/NS/T_max events, phase reference per step).
-
-    ``fix_period``: the start is corrected at its period rather than its parameter;
-    ``period_sign`` (+1/-1): the branch leaves the start with the period growing /
-    shrinking (0: by the sign of ``settings.ds`` in the parameter); ``previous``: the
-    cycle of the row before ``orb`` on the branch being continued, whose secant
-    ``orb - previous`` (on ``orb``'s mesh) the first tangent follows instead (the
-    direction of a restart is then right at folds and where the parameter hardly
-    moves); ``error_tol``: a terminal event where the error estimate rises through it.
-    """
-    prob = PeriodicOrbitProblem.from_orbit(orb, free)
-    T_col = prob.layout.T_col
-    evs: list[Event] = []
-    # the Floquet tests cost a condensation each: the sign test at the rows only
-    # (no slopes off the branch), as the driver's built-in tests
-    if detect_pd:
-        evs.append(Event("PD", prob.pd_test, slope=False))
-    if detect_ns:
-        evs.append(Event("NS", prob.ns_test, slope=False))
-    if period_max is not None:
-        evs.append(Event("T_max", lambda z, p: period_max - z[T_col], terminal=True))
-    if error_tol is not None:
-        lay, errw = prob.layout, prob._errw  # type: ignore[attr-defined]
-
-        def margin(z: FloatArray, p: float) -> float:
-            return float(error_tol - errw(lay.split(np.asarray(z, dtype=float))[0]))
-
-        evs.append(Event(_ERR_EVENT, margin, direction="down", terminal=True, slope=False))
-    evs.extend(events)
-
-    # the driver runs prob.accept after every accepted row and prob.relabel on the
-    # special points (the hooks of continuation.problem.ProblemHooks)
-    return continue_branch(
-        prob, prob.reference, orb.param(free), settings=settings, events=evs,
-        throw=throw, progress=progress, start_fixed=T_col if fix_period else None,
-        start_orient=(_period_orient(prob, period_sign) if previous is None
-                      else _secant_orient(prob, orb, previous, free)),
-    )  # fmt: skip
-
-
-@dataclass(frozen=True, eq=False)
-class CycleSegments:
-    """The problems of a cycle branch computed on several meshes (``adapt_every``).
-
-    Attributes
-    ----------
-    problems : tuple of PeriodicOrbitProblem
-        One per segment (each with its own mesh).
-    first_row : tuple of int
-        Branch row where each segment starts.
-    """
-
-    problems: tuple[PeriodicOrbitProblem, ...]
-    first_row: tuple[int, ...]
-
-    @property
-    def free(self) -> str:
-        """The continuation parameter."""
-        return self.problems[0].free
-
-    @property
-    def system(self) -> Any:
-        """The dynamical system."""
-        return self.problems[0].system
-
-    @property
-    def params(self) -> Params:
-        """The parameters of the first segment."""
-        return self.problems[0].params
-
-    def at_row(self, k: int) -> PeriodicOrbitProblem:
-        """The problem (mesh) of branch row ``k``."""
-        i = int(np.searchsorted(np.asarray(self.first_row), k, side="right")) - 1
-        return self.problems[max(i, 0)]
-
-
-def _period_orient(prob: PeriodicOrbitProblem, sign: float) -> FloatArray | None:
-    """The unit vector of the period in ``(z, p)`` times ``sign`` (None for 0)."""
-    if sign == 0.0:
-        return None
-    e = np.zeros(prob.n_unknowns + 1)
-    e[prob.layout.T_col] = math.copysign(1.0, sign)
-    return e
-
-
-def _secant_orient(
-    prob: PeriodicOrbitProblem, orb: PeriodicOrbit, previous: PeriodicOrbit, free: str
-) -> FloatArray:
-    """The secant ``(z, p)`` from ``previous`` to ``orb``, both on ``orb``'s mesh."""
-    prev = previous.on_mesh(orb.mesh)
-    dz = prob.layout.join(orb.X - prev.X, orb.T - prev.T)
-    return np.append(dz, orb.param(free) - previous.param(free))
-
-
-def _continue_segments(
-    orb: PeriodicOrbit,
-    free: str,
-    settings: ContinuationSettings,
-    every: int,
-    run: dict[str, Any],
-    error_tol: float | None = None,
-    max_intervals: int = 400,
-) -> Branch:
-    """Segments of ``every`` steps, each on an equidistributed mesh, merged into one branch.
-
-    See :func:`continue_periodic`; with ``error_tol`` the number of intervals grows where
-    the error estimate of a segment's last cycle exceeds it.
-
-    Each segment after the first starts from the last cycle interpolated onto the
-    equidistributed mesh; the driver's start correction (at fixed parameter) solves it
-    there. Where that fails (near a homoclinic orbit the period is far more sensitive
-    than the parameter) the start is corrected at fixed period instead, and where
-    that fails too the old mesh is kept. Where the parameter hardly moves, the next
-    segment leaves in the direction of growing (shrinking) period as the last did.
-    """
-    segs: list[Branch] = []
-    left = settings.max_steps
-    st = settings
-    br = _continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)), **run)
-    while True:
-        segs.append(br)
-        left -= max(len(br) - 1, 0)
-        if error_tol is not None:
-            end = _limit_end(_merge_segments(segs), free)
-            if end is not None:
-                return end
-        at_tol = br.status == Status.EVENT and repr(_ERR_EVENT) in br.message
-        if at_tol and (left <= 0 or len(br) < 2):
-            segs[-1] = dataclasses.replace(br, status=Status.MAX_STEPS,
-                                           message=Status.MAX_STEPS.value)  # fmt: skip
-        if not (br.status == Status.MAX_STEPS or at_tol) or left <= 0 or len(br) < 2:
-            break
-        last = orbit_at(br, len(br) - 1)
-        err = float(br.records["error"][-1])
-        if at_tol:  # (the row where the estimate reached the tolerance: grow the mesh)
-            err = max(err, (1.0 + 1e-3) * error_tol)  # type: ignore[operator]
-        n_new = _refined_intervals(last, err, error_tol, max_intervals)
-        if at_tol and n_new is None:
-            msg = (
-                f"{Status.DISCRETISATION_ERROR.value} The collocation error estimate reaches "
-                f"error_tol={error_tol:g} at {free}={br.p[-1]:.10g} on "
-                f"{last.mesh.n_intervals} intervals (max_intervals={max_intervals}); the "
-                "branch up to there is kept."
-            )
-            log.warning(msg)
-            segs[-1] = dataclasses.replace(br, status=Status.DISCRETISATION_ERROR, message=msg)
-            break
-        sgn = 1.0 if br.p[-1] >= br.p[-2] else -1.0
-        ds = min(max(abs(float(br.ds[-1])), abs(st.ds)), st.ds_max)
-        st = dataclasses.replace(st, ds=sgn * ds, max_steps=min(every, left))
-        moved = last.on_mesh(last.mesh.equidistributed(last.X, n_new))
-        if error_tol is not None:
-            # the restart cycle itself within the tolerance (else the next segment's
-            # rows start above it, and no crossing of it stops them)
-            moved = _refine_start(moved, free, error_tol, max_intervals, fix_period=True)
-        # the restart leaves along the secant of the last step (at a fold, or near a
-        # homoclinic orbit where the parameter hardly moves, its sign in p is noise)
-        prev = orbit_at(br, len(br) - 2)
-        nxt = _continue_once(moved, free, st, previous=prev, **run)
-        if len(nxt) == 0:
-            log.info("restart on the adapted mesh failed at %s=%.8g: %s", free, br.p[-1],
-                     nxt.message)  # fmt: skip
-            nxt = _continue_once(moved, free, st, fix_period=True, previous=prev, **run)
-        if len(nxt) == 0 and not at_tol:
-            log.warning("restart at fixed period failed at %s=%.8g (%s); mesh kept", free,
-                        br.p[-1], nxt.message)  # fmt: skip
-            nxt = _continue_once(last, free, st, fix_period=True, previous=prev, **run)
-        if len(nxt) == 0:
-            # the restart on the new mesh failed (e.g. near a homoclinic orbit, where the
-            # start correction at fixed parameter is ill-conditioned): keep the branch
-            msg = (
-                f"the restart after mesh adaptation failed at {free}={last.param(free):.10g} "
-                f"({nxt.message}); the branch up to there is kept."
-            )
-            log.warning(msg)
-            segs[-1] = dataclasses.replace(segs[-1], status=nxt.status, message=msg)
-            break
-        br = nxt
-    return _merge_segments(segs)
-
-
-def _truncated(br: Branch, k: int, status: Status, message: str) -> Branch:
-    """Rows ``0 .. k`` of a cycle branch (with the special points between them)."""
-    probs, first = _segments_of(br)
-    keep = [i for i, f in enumerate(first) if f <= k] or [0]
-    problem: Any = br.problem
-    if isinstance(problem, CycleSegments):
-        problem = CycleSegments(tuple(probs[i] for i in keep), tuple(first[i] for i in keep))
-    return dataclasses.replace(
-        br,
-        problem=problem,
-        p=br.p[: k + 1],
-        x=br.x[: k + 1],
-        eigenvalues=br.eigenvalues[: k + 1],
-        n_unstable=br.n_unstable[: k + 1],
-        ds=br.ds[: k + 1],
-        newton_iters=br.newton_iters[: k + 1],
-        records={name: v[: k + 1] for name, v in br.records.items()},
-        special_points=tuple(sp for sp in br.special_points if sp.index < k),
-        status=status,
-        message=message,
-    )
-
-
-def _limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
-    r"""The end of a branch whose period grows without bound, or None.
-
-    The branch ended where its period grows without bound and its parameter has come within
-    its own error of the limit; None while it has not.
-
-    Near a homoclinic or heteroclinic orbit of saddles ``p = p^* + c e^{-T/b}``. Where
-    the period grew over the last ``n_tail`` rows and the parameter moved one way (or
-    has stalled at round-off), ``p*`` is fitted
-    (:func:`period_limit`), and where the parameter has nearly converged to it the
-    parameter's discretisation error is estimated by re-solving the last cycle at its
-    period on the mesh with every interval halved, ``delta = |p_{2N} - p_N|``. Rows
-    within ``LIMIT_MARGIN delta + 1e-12 (1 + |p*|)`` of ``p*`` (the last term the
-    round-off of ``p``) cannot tell on which side of the limit they are: the branch is
-    cut before the first of them, with ``Status.PERIOD_UNBOUNDED``. A discretised
-    cycle does not see the end (on a finite mesh the period stays finite and the rows
-    may pass ``p*``, where no cycle exists), so this is where the branch must stop.
-    Only where the fit is as good as that bound: a cycle snaking towards a
-    saddle-focus loop (Shilnikov; cycles on both sides of ``p*``) is not ended here.
-    """
-    n = len(br)
-    if n < n_tail + 2:
-        return None
-    T = np.asarray(br.records["T"][-n_tail:], dtype=float)
-    p_tail = np.asarray(br.p[-n_tail:], dtype=float)
-    if not np.all(np.diff(T) > 0):
-        return None
-    dp = np.diff(p_tail)
-    stalled = float(np.ptp(p_tail)) <= 1e-8 * (1.0 + float(np.max(np.abs(p_tail))))
-    if not (np.all(dp > 0) or np.all(dp < 0) or stalled):
-        return None  # (the parameter turns: not the monotone approach, e.g. snaking)
-    try:
-        lim = period_limit(br, n_fit=n_tail)
-    except (ValueError, np.linalg.LinAlgError):
-        return None
-    if not math.isfinite(lim.p_star):
-        return None
-    # (cheap pre-check before the discretisation estimate: the parameter has nearly
-    # converged, its remaining distance small against its last moves or tiny)
-    span = float(np.ptp(p_tail))
-    if abs(float(p_tail[-1]) - lim.p_star) > max(0.1 * span, 1e-8 * (1.0 + abs(lim.p_star))):
-        return None
-    last = orbit_at(br, n - 1)
-    try:
-        fine = solve_orbit(last.on_mesh(last.mesh.refined()), free, fix_period=True)
-    except ConvergenceError as exc:
-        log.debug("no discretisation estimate of %s at T=%.6g: %s", free, last.T, exc)
-        return None
-    delta = abs(fine.param(free) - float(br.p[-1]))
-    thr = LIMIT_MARGIN * delta + 1e-12 * (1.0 + abs(lim.p_star))
-    if not lim.fit_residual <= thr:
-        # the rows do not follow the monotone law to their accuracy (e.g. the snaking
-        # of a cycle near a saddle-focus loop, with cycles on both sides of p*): no end
-        return None
-    log.debug("period limit %s*=%.15g: delta %.2g, fit rms %.2g, last row %.3g from it",
-              free, lim.p_star, delta, lim.fit_residual, float(br.p[-1]) - lim.p_star)  # fmt: skip
-    # the side of the rows: that of the rows before the period took off
-    T_all = np.asarray(br.records["T"], dtype=float)
-    rising = n - 1
-    while rising > 0 and T_all[rising - 1] < T_all[rising]:
-        rising -= 1
-    dist = np.asarray(br.p, dtype=float) - lim.p_star
-    side = math.copysign(1.0, float(dist[rising]) if dist[rising] != 0.0 else 1.0)
-    dist = side * dist
-    close = np.flatnonzero(dist[rising:] <= thr)
-    if close.size == 0:
-        return None
-    k = max(rising + int(close[0]) - 1, 1)
-    msg = (
-        f"{Status.PERIOD_UNBOUNDED.value} The period grows without bound towards "
-        f"{free}*={lim.p_star:.12g} (fit of T = a - b ln|{free}* - {free}|); the rows "
-        f"stop {dist[k]:.2g} before it, where the parameter's discretisation error "
-        f"({delta:.1g}) no longer tells the side. Last period T={br.records['T'][k]:.10g} "
-        f"at {free}={br.p[k]:.12g}."
-    )
-    log.info(msg)
-    return _truncated(br, k, Status.PERIOD_UNBOUNDED, msg)
-
-
-def _refined_intervals(
-    orb: PeriodicOrbit, error: float, error_tol: float | None, max_intervals: int
-) -> int | None:
-    """Number of intervals for the next segment (None: keep).
-
-    From the error estimate ``error`` of ``orb`` (order ``m + 1`` in the interval length).
-    """
-    N = orb.mesh.n_intervals
-    if error_tol is None or not math.isfinite(error) or error <= error_tol or N >= max_intervals:
-        return None
-    # aim at half the tolerance (the estimate scales as h^(m+1)), with 20 % to spare
-    factor = 1.2 * (2.0 * error / error_tol) ** (1.0 / (orb.mesh.degree + 1))
-    n_new = min(max_intervals, max(N + 1, math.ceil(N * factor)))
-    log.info("error estimate %.3g > error_tol %.3g: %d -> %d intervals", error, error_tol, N, n_new)
-    return n_new
-
-
-def _refine_start(
-    orb: PeriodicOrbit,
-    free: str,
-    error_tol: float,
-    max_intervals: int,
-    rounds: int = 4,
-    fix_period: bool = False,
-) -> PeriodicOrbit:
-    """The start cycle on a mesh whose error estimate is within ``error_tol``.
-
-    At most ``max_intervals`` intervals, ``rounds`` refinements by
-    :func:`_refined_intervals`, so that the first segment's rows are not left above the
-    tolerance; a refinement that does not converge keeps the cycle as it was (the driver's
-    start correction and the message report what follows).
-    """
-    for _ in range(rounds):
-        n_new = _refined_intervals(orb, error_estimate(orb.mesh, orb.X), error_tol, max_intervals)
-        if n_new is None:
-            break
-        try:
-            orb = adapt_mesh(orb, n_new, rounds=1, free=free, fix_period=fix_period)
-        except ConvergenceError as exc:
-            log.info("start cycle kept on %d intervals: %s", orb.mesh.n_intervals, exc)
-            break
-    return orb
-
-
-def _merge_segments(segs: list[Branch]) -> Branch:
-    """One branch from consecutive segments.
-
-    The first row of each later segment, the previous segment's last cycle on the new mesh,
-    is dropped.
-    """
-    rows: dict[str, list[Any]] = {k: [] for k in ("p", "x", "eig", "nun", "ds", "it")}
-    recs: dict[str, list[float]] = {}
-    specials: list[SpecialPoint] = []
-    first_row, probs = [], []
-    base, s_base = 0, 0.0
-    for k, b in enumerate(segs):
-        lo = 0 if k == 0 else 1
-        sub_p, sub_f = _segments_of(b)
-        for q, fr in zip(sub_p, sub_f, strict=True):
-            probs.append(q)
-            first_row.append(base + max(fr, lo) if k else fr)
-        rows["p"].append(b.p[lo:])
-        rows["x"].append(b.x[lo:])
-        rows["eig"].append(b.eigenvalues[lo:])
-        rows["nun"].append(b.n_unstable[lo:])
-        rows["ds"].append(b.ds[lo:])
-        rows["it"].append(b.newton_iters[lo:])
-        for name, col in b.records.items():
-            recs.setdefault(name, []).extend(col[lo:].tolist())
-        for sp in b.special_points:
-            specials.append(dataclasses.replace(sp, index=base + sp.index, s=s_base + sp.s))
-        base += len(b) - 1
-        s_base += float(b.arclength[-1]) if len(b) else 0.0
-    last = segs[-1]
-    wide = max(x.shape[1] for x in rows["x"])  # meshes of more intervals: NaN-pad the rest
-    rows["x"] = [np.pad(x, ((0, 0), (0, wide - x.shape[1])), constant_values=np.nan)
-                 for x in rows["x"]]  # fmt: skip
-    ev = [e for e in rows["eig"] if e.size]
-    width = max((e.shape[1] for e in ev), default=0)
-    eig: np.ndarray = (
-        np.vstack([np.pad(e, ((0, 0), (0, width - e.shape[1])), constant_values=np.nan)
-                   for e in rows["eig"]]) if width else np.zeros((base + 1, 0))
-    )  # fmt: skip
-    count = {"LPC": 0, "BPC": 0}
-    relabelled = []
-    for sp in specials:
-        for key in count:
-            if sp.label.startswith(key):
-                count[key] += 1
-                sp = dataclasses.replace(sp, label=f"{key}{count[key]}")
-        relabelled.append(sp)
-    return Branch(
-        problem=CycleSegments(tuple(probs), tuple(first_row)) if len(probs) > 1 else probs[0],
-        free=last.free,
-        p=np.concatenate(rows["p"]),
-        x=np.vstack(rows["x"]),
-        eigenvalues=eig,
-        n_unstable=np.concatenate(rows["nun"]),
-        ds=np.concatenate(rows["ds"]),
-        newton_iters=np.concatenate(rows["it"]),
-        records={k: np.array(v) for k, v in recs.items()},
-        special_points=tuple(relabelled),
-        status=last.status,
-        message=last.message,
-        settings=segs[0].settings,
-        state_names=last.state_names,
-        param_values=segs[0].param_values,
-        event_names=last.event_names,
-    )
 
 
 def _finish(
@@ -784,7 +284,7 @@ def _finish(
         )
         specials = tuple(s for s in specials if s.label != "T_max")
         log.info(message)
-    specials = tuple(s for s in specials if s.label != _ERR_EVENT)
+    specials = tuple(s for s in specials if s.label != ERR_EVENT)
     out = []
     for sp in specials:
         floquet = (SpecialKind.PERIOD_DOUBLING, SpecialKind.NEIMARK_SACKER)
@@ -849,221 +349,17 @@ def _state_ranges(br: Branch) -> FloatArray:
     return np.where(r > 0.0, r, 1.0)
 
 
-def _row(branch: Branch, k: int) -> FloatArray:
-    """The unknowns of row ``k`` (rows of meshes with fewer intervals are NaN-padded)."""
-    return np.asarray(branch.x[k][: problem_at(branch, k).n_unknowns], dtype=float)
-
-
-def problem_at(branch: Branch, k: int) -> PeriodicOrbitProblem:
-    """The :class:`PeriodicOrbitProblem` (mesh) of row ``k`` of a cycle branch."""
-    prob = branch.problem
-    if isinstance(prob, CycleSegments):
-        return prob.at_row(k)
-    if not isinstance(prob, PeriodicOrbitProblem):
-        raise ValueError("`branch` must be a branch of periodic orbits (continue_periodic)")
-    return prob
-
-
-def special_problem(branch: Branch, sp: SpecialPoint) -> PeriodicOrbitProblem:
-    """The :class:`PeriodicOrbitProblem` (mesh) on which special point ``sp`` was found.
-
-    A point in the first step of a later segment of an adapted branch lies on that
-    segment's mesh although its step starts at the previous segment's last row: of the
-    meshes of rows ``sp.index`` and ``sp.index + 1`` the one with the right number of
-    unknowns and the smaller collocation residual at ``sp``.
-    """
-    x = np.asarray(sp.x, dtype=float)
-    cands: list[PeriodicOrbitProblem] = []
-    for k in (sp.index, min(sp.index + 1, len(branch) - 1)):
-        prob = problem_at(branch, max(k, 0))
-        if prob.n_unknowns == x.size and all(prob is not q for q in cands):
-            cands.append(prob)
-    if len(cands) == 1:
-        return cands[0]
-    if not cands:
-        raise ValueError("`sp` is not a point of this cycle branch (no mesh of its size)")
-    res = [float(np.max(np.abs(q.residual(x, sp.p)[:-1]))) for q in cands]
-    return cands[int(np.argmin(res))]
-
-
-def multipliers(branch: Branch) -> np.ndarray:
-    """Nontrivial Floquet multipliers at every row of a cycle branch, ``(N, n - 1)``."""
-    with blas_threads_for(branch.x.shape[1] if branch.x.ndim == 2 else 0, sparse=True):
-        return np.array([problem_at(branch, k).floquet(_row(branch, k), branch.p[k]).multipliers
-                         for k in range(len(branch))])  # fmt: skip
-
-
-def orbit_at(branch: Branch, k: int | SpecialPoint) -> PeriodicOrbit:
-    """The cycle at row ``k`` (or at a special point) of a cycle branch."""
-    if isinstance(k, SpecialPoint):
-        return special_problem(branch, k).orbit(k.x, k.p)
-    k = int(k) + len(branch) if k < 0 else int(k)
-    return problem_at(branch, k).orbit(_row(branch, k), branch.p[k])
-
-
-@dataclass(frozen=True)
-class PeriodLimit:
-    r"""The end of a cycle branch whose period grows without bound.
-
-    Attributes
-    ----------
-    p_star : float
-        Fitted limit of the parameter, from :math:`T = a - b \ln|p^* - p|` over the
-        last rows (NaN if the fit failed).
-    rate : float
-        ``b``; ``1/b`` estimates the unstable eigenvalue of the saddle that the cycle
-        approaches (for a homoclinic orbit of a saddle with ``lambda_u < |lambda_s|``).
-        NaN where the last rows do not determine it (the parameter has converged to
-        round-off): the fit then uses ``b = 1 / lambda_u``.
-    p_last, T_last : float
-        Parameter and period of the last row.
-    saddle : ndarray, shape (n,)
-        The point of the last cycle where ``|f|`` is smallest: a guess of the saddle.
-    t, x : ndarray
-        The last cycle as one period starting and ending at that point, ``(K,)`` and
-        ``(K, n)``: a guess of the connecting orbit for a connection solver.
-    fit_residual : float
-        RMS residual of the fit in ``p``.
-    orbit : PeriodicOrbit
-        The last cycle.
-    free : str
-        The continuation parameter.
-    lambda_u : float
-        Largest real part of the eigenvalues at :attr:`saddle` (its unstable rate).
-    """
-
-    p_star: float
-    rate: float
-    p_last: float
-    T_last: float
-    saddle: FloatArray
-    t: FloatArray
-    x: FloatArray
-    fit_residual: float
-    orbit: PeriodicOrbit
-    free: str
-    lambda_u: float = math.nan
-
-    def connection_problem(self, mesh: CollocationMesh | None = None) -> Any:
-        """A :class:`~continuation.bvp.HeteroclinicProblem` for the limiting connection.
-
-        The saddle is :attr:`saddle` corrected by Newton's method on ``f = 0``; the
-        connection returns to it shifted by the cycle's winding (``x_+ = x_- + k o
-        period``, a homoclinic orbit when ``k = 0``); the free parameter is solved for,
-        at :attr:`p_last` to start. Solve it with
-        ``solve_connection(problem, (limit.t, limit.x))``. ``mesh``: default 80
-        intervals of degree 4 over ``T_last``. Only a connection of *one* saddle to
-        itself is set up (a cycle approaching a heteroclinic cycle of several saddles
-        needs its own problem).
-
-        Raises
-        ------
-        ConvergenceError
-            If Newton's method on the saddle fails.
-        """
-        from ..bvp import HeteroclinicProblem
-
-        orb = self.orbit
-        P = np.array(orb.params.values, dtype=float)
-        x = np.array(self.saddle, dtype=float)
-        for _ in range(30):
-            dx = np.linalg.solve(orb.system.jacobian(x, P), orb.system.f(x, P))
-            x = x - dx
-            if np.max(np.abs(dx)) <= 1e-13 * (1.0 + np.max(np.abs(x))):
-                break
-        else:
-            raise ConvergenceError("the saddle of the period limit did not converge")
-        mesh = mesh if mesh is not None else CollocationMesh(80, 4, self.T_last)
-        return HeteroclinicProblem(orb.system, orb.params, free=(self.free,),
-                                   saddle_from=x, shift=orb.shift, mesh=mesh)  # fmt: skip
-
-
-def _log_fit(
-    p: FloatArray, T: FloatArray, b_fixed: float | None = None
-) -> tuple[float, float, float]:
-    """Fit ``p = p* + c exp(-T / b)`` (i.e. ``T = a - b ln|p - p*|``).
-
-    Returns ``(p*, b, rms of the fit in p)``. For fixed ``b`` the fit is linear in ``(p*,
-    c)``; ``b`` is found by a bounded scalar search on ``ln b``. Where that search ends on a
-    bound or the rows agree to ``1e-10`` relative (``b`` is not determined by the rows), the
-    fit with ``b = b_fixed`` is returned, with ``b`` as NaN.
-    """
-    Tn = T - float(np.min(T))  # exponentials in (0, 1]: no overflow
-
-    def lsq(lb: float) -> tuple[float, float, float]:
-        A = np.column_stack([np.ones_like(Tn), np.exp(-Tn / math.exp(lb))])
-        coef, *_ = np.linalg.lstsq(A, p, rcond=None)
-        r = A @ coef - p
-        return float(coef[0]), float(coef[1]), float(np.sqrt(np.mean(r**2)))
-
-    span = float(np.ptp(T)) + 1e-300
-    lo, hi = math.log(span) - 8, math.log(span) + 4
-    res = so.minimize_scalar(lambda q: lsq(q)[2], bounds=(lo, hi), method="bounded",
-                             options={"xatol": 1e-10})  # fmt: skip
-    q = float(res.x)
-    p_star, _, rms = lsq(q)
-    if b_fixed is not None and math.isfinite(b_fixed) and b_fixed > 0:
-        # the rate is not determined by these rows where the search ends on a bound or
-        # the parameter has converged to round-off: then the fit with the saddle's own
-        # rate, and no rate
-        p_fix, _, rms_fix = lsq(math.log(b_fixed))
-        at_bound = q - lo < 0.05 or hi - q < 0.05
-        flat = float(np.ptp(p)) <= 1e-10 * max(1.0, float(np.max(np.abs(p))))
-        if at_bound or flat:
-            return p_fix, math.nan, rms_fix
-    return p_star, math.exp(q), rms
-
-
-def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
-    """The limit of a cycle branch whose period grows (see :class:`PeriodLimit`).
-
-    Parameters
-    ----------
-    branch : Branch
-        A branch of :func:`continue_periodic` (typically ended with
-        ``Status.PERIOD_UNBOUNDED``).
-    n_fit : int
-        Number of last rows in the fit (at least 4).
-    """
-    problem_at(branch, 0)  # (checks the branch)
-    if not (isinstance(n_fit, int) and n_fit >= 4):
-        raise ValueError(f"`n_fit` must be an integer >= 4, got {n_fit!r}")
-    if len(branch) < 4:
-        raise ValueError("`branch` needs at least 4 rows for the period fit")
-    k = min(n_fit, len(branch))
-    p = np.asarray(branch.p[-k:], dtype=float)
-    T = np.asarray(branch.records["T"][-k:], dtype=float)
-    orb = orbit_at(branch, len(branch) - 1)
-    F = np.array([orb.system.f(x, orb.params.values) for x in orb.X])
-    q = int(np.argmin(np.linalg.norm(F, axis=1)))
-    lam_u = _unstable_rate(orb, orb.X[q])
-    try:
-        p_star, b, rms = _log_fit(p, T, 1.0 / lam_u if lam_u > 0 else None)
-    except (ValueError, np.linalg.LinAlgError, FloatingPointError):
-        p_star, b, rms = math.nan, math.nan, math.nan
-    t0 = float(orb.t[q])
-    t = np.linspace(t0, t0 + orb.T, 4 * orb.mesh.n_points)
-    x = orb(t)
-    return PeriodLimit(p_star, b, float(branch.p[-1]), float(T[-1]), orb.X[q].copy(),
-                       t - t0, x, rms, orb, branch.free, lam_u)  # fmt: skip
-
-
-def _unstable_rate(orb: PeriodicOrbit, x: FloatArray) -> float:
-    """Largest real part of the eigenvalues of ``f_x`` at ``x`` (the saddle guess)."""
-    try:
-        ev = np.linalg.eigvals(orb.system.jacobian(x, np.asarray(orb.params.values, float)))
-    except (np.linalg.LinAlgError, ValueError):
-        return math.nan
-    return float(np.max(ev.real))
-
-
+#: The public names of the cycle continuation (those defined in the modules split off
+#: from this one stay importable from here: :mod:`~continuation.periodic.solve`,
+#: :mod:`~continuation.periodic.rows`, :mod:`~continuation.periodic.limit`).
 __all__ = [
+    "LIMIT_MARGIN",
+    "CycleSegments",
     "PeriodLimit",
     "adapt_mesh",
     "continue_periodic",
     "multipliers",
     "orbit_at",
-    "CycleSegments",
     "period_limit",
     "problem_at",
     "solve_orbit",

@@ -25,10 +25,11 @@ from ..bvp.collocation import CollocationMesh
 from ..errors import ConvergenceError
 from ..settings import ContinuationSettings, NewtonSettings
 from .collocation import monodromy_factors
-from .continuation import continue_periodic, special_problem
+from .continuation import continue_periodic
 from .floquet import monodromy
 from .orbit import PeriodicOrbit
 from .problem import PeriodicOrbitProblem
+from .rows import special_problem
 
 
 def _pd_point(branch: Branch, which: Any) -> SpecialPoint:

@@ -28,8 +28,8 @@ from ..bvp.collocation import CollocationMesh
 from ..params import Params
 from ..settings import NewtonSettings
 from ..typing import FloatArray
-from .continuation import solve_orbit
 from .orbit import PeriodicOrbit
+from .solve import solve_orbit
 
 
 def _multilinear(system: Any) -> tuple[Any, Any]:

@@ -173,7 +173,7 @@ class PeriodicOrbitProblem:
 
         With ``p`` (an accepted row of the branch): its Floquet multipliers, if already
         computed, are kept for the life of the problem, so that
-        :func:`~continuation.periodic.continuation.multipliers` of the branch does not
+        :func:`~continuation.periodic.rows.multipliers` of the branch does not
         compute them again.
         """
         lay = self.layout

@@ -18,9 +18,10 @@ from ..branch import Branch, SpecialPoint
 from ..bvp.collocation import CollocationMesh
 from ..settings import ContinuationSettings
 from ..system import as_params
-from .continuation import adapt_mesh, continue_periodic, solve_orbit
+from .continuation import continue_periodic
 from .hopf import _hopf_point, periodic_orbit_from_hopf
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
+from .solve import adapt_mesh, solve_orbit
 
 
 def orbit_from_trajectory(
@@ -55,7 +56,7 @@ def orbit_from_trajectory(
         Place the nodes by equidistribution
         (:meth:`~continuation.bvp.collocation.CollocationMesh.equidistributed`) of the
         samples on a mesh four times finer before solving, then once more on the
-        solution (:func:`~continuation.periodic.continuation.adapt_mesh`); for cycles
+        solution (:func:`~continuation.periodic.solve.adapt_mesh`); for cycles
         with fast and slow phases (relaxation oscillations).
 
     Raises
