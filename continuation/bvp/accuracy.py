@@ -32,7 +32,7 @@ start is a point, not a saddle). A periodic orbit has no truncation: its mesh
 adaptation (:func:`~continuation.periodic.adapt_mesh`) and the discretisation estimate
 of its parameter at a period limit are the loop's two steps :func:`adapted` and
 :func:`discretisation_changes`, with the cycle's re-solves
-(:func:`continuation.periodic.accuracy.cycle_resolves`).
+(:func:`continuation.periodic.solve.cycle_resolves`).
 """
 
 from __future__ import annotations
@@ -232,7 +232,7 @@ class Resolves:
     ``free`` (the names of the solved parameters): a
     :class:`~continuation.bvp.result.ConnectionResult`, a
     :class:`~continuation.bvp.result.LandingResult`, or a cycle's
-    :class:`~continuation.periodic.accuracy.CycleSolve`.
+    :class:`~continuation.periodic.solve.CycleSolve`.
 
     Attributes
     ----------
