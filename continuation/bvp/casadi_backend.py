@@ -68,6 +68,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from .. import _jit
 from ..casadi_compile import compilation_allowed, compiled
 from ..linalg import csc_with_data
 from ..typing import FloatArray
@@ -237,78 +238,46 @@ def _riccati(A: Any, Q: Any, k: int, R: Any) -> tuple[Any, Any]:
     return res, Y
 
 
-def _collocation_jacobian(
-    fns: dict[str, ca.Function],
-    layout: ConnectionLayout,
-    Xs: Any,
-    P_eff: Any,
-    h_rep: Any,
-    T: Any,
-    D: FloatArray,
-    n_par: int,
-) -> tuple[Any, Any]:
-    r"""Exact Jacobians of the collocation rows in ``w`` and in ``P``.
-
-    Row ``s n + i`` is component ``i`` of
-    :math:`(1/(h_j T)) \sum_l D[k,l] X_{j,l} - f(X_{j,k}, P)` at stage ``s = j m + k``::
-
-        d/dvec(X) = diag(1/(h T)) (Dbig^T kron I_n) - blockdiag(f_x(X_s)) Sel
-        d/dp      = -f_p(X_s)   (unknown-parameter columns into w, the rest into P)
-
-    ``Sel`` picks the stage values out of ``vec(X)``. Assembling this from the mapped
-    ``f_x``/``f_p`` avoids forward-mode AD through the map with one sweep per colour.
-    """
-    n = layout.n
-    M, Nm = layout.n_points, layout.n_stages
-    # constant (D kron I) and selection matrices, (n Nm, n M): the one orbit layout
-    orbit = layout.orbit
-    Kd = _to_dm(orbit.derivative_matrix(D))
-    Sel = _to_dm(orbit.stage_selection())
-    scale = ca.vec(ca.repmat(1.0 / (h_rep * T), n, 1))  # (n Nm,)
-    JF = compiled(fns["jac"]).map("jac_map", "serial", Nm, [1], [])(Xs, P_eff)  # (n, n Nm)
-    bd_sparsity = ca.kron(ca.DM(ca.Sparsity.diag(Nm), 1.0), ca.DM.ones(n, n)).sparsity()
-    BD = ca.MX(bd_sparsity, ca.vec(JF))
-    J_orbit = ca.mtimes(ca.diag(scale), Kd) - ca.mtimes(BD, Sel)
-    q = len(layout.unknown_param_index)
-    n_mid = layout.n_unknowns - n * M - q
-    if n_par:
-        dfdp_map = compiled(fns["dfdp"]).map("dfdp_map", "serial", Nm, [1], [])
-        DP = dfdp_map(Xs, P_eff)  # (n, n_par Nm)
-        # stack the stage blocks vertically: row s n + i, column c = f_p(X_s)[i, c]
-        R = ca.reshape(DP, n * n_par, Nm).T  # (Nm, n n_par), row s = vec(block s)
-        V_perm = ca.reshape(R, Nm * n, n_par)  # row i Nm + s
-        perm = [i * Nm + s for s in range(Nm) for i in range(n)]
-        V = V_perm[perm, :]
-        J_par = -V[:, list(layout.unknown_param_index)] if q else ca.MX(n * Nm, 0)
-        mask = np.ones(n_par)
-        mask[list(layout.unknown_param_index)] = 0.0
-        J_P = -ca.mtimes(V, ca.DM(np.diag(mask)))
-    else:
-        J_par = ca.MX(n * Nm, 0)
-        J_P = ca.MX(n * Nm, 0)
-    J_w = ca.horzcat(J_orbit, ca.MX(n * Nm, n_mid), J_par)
-    return J_w, J_P
-
-
 #: The functions are expanded from MX to SX when the system's right-hand side has at
 #: most this many instructions times the number of collocation points (the small
 #: demos: 10^3-10^4; the ship's 12 000-instruction model on 360 points stays MX, whose
 #: expansion would take minutes and much memory).
 MAX_EXPANDED_POINT_INSTRUCTIONS = 100_000
 
+#: The compiled collocation and continuity rows of every collocated orbit
+#: (:func:`continuation._jit.compiled`), shared with periodic orbits.
+KERNELS = "continuation.bvp._collocation_jit"
+
+
+def _block_permutation(n_rows: int, n_cols: int, K: int, cols: Any = None) -> list[int]:
+    """Non-zeros of ``K`` column-major ``(n_rows, n_cols)`` blocks side by side, permuted.
+
+    Taken in the order ``[s, a, b]`` (block ``s``, row ``a``, column ``cols[b]``:
+    row-major blocks of the columns ``cols``, default all).
+    """
+    c = np.arange(n_cols) if cols is None else np.asarray(cols, dtype=int)
+    s, a, b = np.meshgrid(np.arange(K), np.arange(n_rows), c, indexing="ij")
+    return ((s * n_cols + b) * n_rows + a).ravel().tolist()  # type: ignore[no-any-return]
+
 
 class ConnectionFunctions:
-    """Compiled residual and Jacobians of one :class:`ConnectionLayout` (see module doc).
+    """Residual and Jacobians of one :class:`ConnectionLayout` (see module doc).
 
     Build with :func:`build_connection_functions`, which caches per system and layout.
-    Every function is built on first use from one expression graph.
+    The collocation and continuity rows and their derivatives are filled by the compiled
+    kernel of every collocated orbit (:mod:`continuation.bvp._collocation_jit`, with the
+    row scale ``h_j T`` and the factor ``1`` on ``f``) from ``f``, ``f_x`` and ``f_p`` at
+    the stages; the boundary rows (equilibria, Riccati, projections, start point, phase)
+    and their exact Jacobians come from one CasADi expression graph, which evaluates the
+    stage values too. Each CasADi function is built on first use.
 
     Attributes
     ----------
     layout : ConnectionLayout
-    G, G_w, G_P, G_all : casadi.Function
-        Residual, Jacobian in ``w`` (sparse), Jacobian in ``P`` (sparse), and all three
-        in one function; their inputs are ``w, P`` and :meth:`ConnectionLayout.data_names`.
+    B : casadi.Function
+        ``(w, P, *data) -> (F, g_b)``: ``f`` at the stages, ``(n, N m)``, and the boundary
+        rows ``G[n N (m + 1):]``; its inputs are ``w, P`` and
+        :meth:`ConnectionLayout.data_names`.
     n_equations : int
     """
 
@@ -335,7 +304,7 @@ class ConnectionFunctions:
             "pin": ca.MX.sym("pin"),
             "x0": ca.MX.sym("x0", n),
         }
-        h, T, shift = data["h"], data["T"], data["shift"]
+        h, shift = data["h"], data["shift"]
 
         # effective parameter vector: unknown parameters come from w
         upar = w[sl["params"]]
@@ -354,20 +323,11 @@ class ConnectionFunctions:
             x_to = w[sl["x_to"]] if layout.separate_to else x_from + shift
 
         Xs = X[:, stage_points(N, m).tolist()]
-        # h repeated for each stage: (1, N m)
-        E = sp.kron(sp.eye(N), np.ones((1, m)), format="csc")
-        h_rep = ca.mtimes(h.T, _to_dm(E))
-        # the orbit layout of one state: X (n, M) times these gives the rows of all states
-        point = OrbitLayout(1, N, m)
-        Dbig = _to_dm(point.derivative_matrix(mesh.D).T)  # (M, N m)
-        Cbig = _to_dm(point.continuity_matrix(mesh.e).T)  # (M, N)
         # the stage evaluations (most of the cost) by compiled copies when possible
         fmap = compiled(f_fun).map("fmap", "serial", N * m, [1], [])
-        F = fmap(Xs, P_eff)
-        colloc = ca.mtimes(X, Dbig) / ca.repmat(h_rep * T, n, 1) - F
-        cont = ca.mtimes(X, Cbig)
+        F = fmap(Xs, P_eff)  # (n, N m)
 
-        eqs = [ca.vec(cont)]
+        eqs = []
         if x_from is None:  # a landing: the start point, then its end equilibrium
             eqs += [X[:, 0] - data["x0"], f_fun(w[sl["x_to"]], P_eff)]
         else:
@@ -393,6 +353,9 @@ class ConnectionFunctions:
         if layout.start_point:
             phase = None
         elif layout.pin is None:
+            # (1, N m): h_j b_k of each stage
+            E = sp.kron(sp.eye(N), np.ones((1, m)), format="csc")
+            h_rep = ca.mtimes(h.T, _to_dm(E))
             b_rep = ca.DM(np.tile(mesh.b, N)).T  # (1, N m)
             wq = h_rep * b_rep
             phase = ca.sum2(ca.sum1((Xs - data["ref"]) * data["dref"]) * wq)
@@ -400,109 +363,160 @@ class ConnectionFunctions:
             i_state, i_node = layout.pin
             phase = X[i_state, i_node * (m + 1)] - data["pin"]
         g_rest = ca.vertcat(*eqs)
-        g = ca.vertcat(ca.vec(colloc), g_rest, *([] if phase is None else [phase]))
-        if g.shape[0] != layout.n_unknowns:
+        g_b = ca.vertcat(g_rest, *([] if phase is None else [phase]))
+        if layout.boundary_row + g_b.shape[0] != layout.n_unknowns:
             raise ValueError(
-                f"internal count mismatch: {g.shape[0]} equations for {layout.n_unknowns} unknowns"
+                f"internal count mismatch: {layout.boundary_row + g_b.shape[0]} equations "
+                f"for {layout.n_unknowns} unknowns"
             )
         names = ["w", "P", *layout.data_names()]
         inputs = [w, P, *(data[k] for k in names[2:])]
-        self.G = ca.Function("G", inputs, [g], names, ["G"])
+        self.B = ca.Function("B", inputs, [F, g_b], names, ["F", "g_b"])
         # small systems: the functions are expanded to SX (one flat instruction list,
         # about half the evaluation time of the MX graph with its mapped calls)
         self._expand = f_fun.n_instructions() * N * m <= MAX_EXPANDED_POINT_INSTRUCTIONS
         if self._expand:
-            self.G = self.G.expand()
-        self.n_equations = int(g.shape[0])
-        self.arg_sizes = tuple(int(self.G.nnz_in(i)) for i in range(self.G.n_in()))
-        self._bG = _Buffered(self.G)
+            self.B = self.B.expand()
+        self.n_equations = int(layout.n_unknowns)
+        self.n_params = int(n_par)
+        self.arg_sizes = tuple(int(self.B.nnz_in(i)) for i in range(self.B.n_in()))
+        self._bB = _Buffered(self.B)
         # collocation rows and stage unknowns of each interval: the linear solves of
         # Newton and of the driver condense the stages (continuation.bvp.condense)
         self.condenser = StageCondenser(*layout.stage_blocks())
+        self._D = np.ascontiguousarray(mesh.D, dtype=float)
+        self._e = np.ascontiguousarray(mesh.e, dtype=float)
         # The Jacobians cost most of the construction (about 0.8 s of 1 s for the ship);
         # a residual-only user (finite differences of G in a model coefficient) never
         # needs them, so each is built on first use.
-        self._graph = (fns, inputs, names, g, g_rest, phase, Xs, P_eff, h_rep, T, mesh.D,
-                       n_par, w, P)  # fmt: skip
-        self._jac: dict[str, Any] = {}
+        self._graph = (fns, inputs, names, F, g_rest, phase, Xs, P_eff, n_par, w, P)
+        self._jac: dict[Any, Any] = {}
+        self._Bc: tuple[FloatArray, FloatArray] | None = None
 
-    def _expressions(self) -> tuple[Any, Any]:
-        """The Jacobian expressions ``(dG/dw, dG/dP)`` (built once)."""
-        if "expr" not in self._jac:
-            (fns, _, _, _, g_rest, phase, Xs, P_eff, h_rep, T, D, n_par, w, P) = self._graph
-            # Collocation rows: Jacobian assembled from the mapped df/dx and df/dp of
-            # the system (exact, one evaluation of each per collocation point). Other
-            # rows: AD. The integral phase row is dense in the orbit unknowns; a dense
-            # row defeats the column colouring of a forward-mode Jacobian, so it is
-            # differentiated on its own (one reverse sweep).
-            Jc_w, Jc_P = _collocation_jacobian(fns, self.layout, Xs, P_eff, h_rep, T, D, n_par)
-            last = [] if phase is None else [phase]
-            Jw = ca.vertcat(Jc_w, ca.jacobian(g_rest, w), *(ca.jacobian(r, w) for r in last))
-            Jp = ca.vertcat(Jc_P, ca.jacobian(g_rest, P), *(ca.jacobian(r, P) for r in last))
-            self._jac["expr"] = (Jw, Jp)
-        return self._jac["expr"]  # type: ignore[no-any-return]
+    def _function(self, with_p: bool) -> tuple[ca.Function, _Buffered]:
+        """``(w, P, *data) -> (F, f_x, f_p, g_b, dg_b/dw[, dg_b/dP])``, built once.
 
-    def _function(self, name: str) -> tuple[ca.Function, _Buffered]:
-        """``G_w``, ``G_P``, ``G_all`` (G, G_w, G_P) or ``G_gw`` (G, G_w), built once."""
+        ``f_x`` and ``f_p`` at the stages leave as row-major blocks (``(N m, n, n)`` and
+        ``(N m, n, n_p)``, the columns :meth:`_fp_columns`); the Jacobians of the boundary
+        rows as their non-zeros.
+        """
+        name = "L_all" if with_p else "L_w"
         hit = self._jac.get(name)
         if hit is None:
-            _, inputs, names, g, *_ = self._graph
-            Jw, Jp = self._expressions()
-            outs = {"G_w": ([Jw], ["G_w"]), "G_P": ([Jp], ["G_P"]),
-                    "G_all": ([g, Jw, Jp], ["G", "G_w", "G_P"]),
-                    "G_gw": ([g, Jw], ["G", "G_w"])}[name]  # fmt: skip
-            fn = ca.Function(name, inputs, outs[0], names, outs[1])
+            fns, inputs, names, F, g_rest, phase, Xs, P_eff, n_par, w, P = self._graph
+            n, K = self.layout.n, self.layout.n_stages
+            jmap = compiled(fns["jac"]).map("jac_map", "serial", K, [1], [])
+            JF = ca.vec(ca.densify(jmap(Xs, P_eff)))[_block_permutation(n, n, K)]
+            cols = self._fp_columns(with_p)
+            if cols:
+                pmap = compiled(fns["dfdp"]).map("dfdp_map", "serial", K, [1], [])
+                JP = ca.vec(ca.densify(pmap(Xs, P_eff)))[_block_permutation(n, n_par, K, cols)]
+            else:
+                JP = ca.MX(0, 1)
+            # The integral phase row is dense in the orbit unknowns; a dense row defeats
+            # the column colouring of a forward-mode Jacobian, so it is differentiated on
+            # its own (one reverse sweep).
+            last = [] if phase is None else [phase]
+            g_b = ca.vertcat(g_rest, *last)
+            Jw = ca.vertcat(ca.jacobian(g_rest, w), *(ca.jacobian(r, w) for r in last))
+            outs, onames = [F, JF, JP, g_b, Jw], ["F", "f_x", "f_p", "g_b", "dg_b_dw"]
+            if with_p:
+                Jp = ca.vertcat(ca.jacobian(g_rest, P), *(ca.jacobian(r, P) for r in last))
+                outs.append(Jp)
+                onames.append("dg_b_dP")
+            fn = ca.Function(name, inputs, outs, names, onames)
             if self._expand:
                 fn = fn.expand()
             hit = (fn, _Buffered(fn))
             self._jac[name] = hit
         return hit
 
-    def _template_of(self, which: str, name: str | None = None, out: int = 0) -> sp.csc_matrix:
-        """CSC template of ``dG/dw`` (``"w"``) or ``dG/dP`` (``"p"``), one per layout.
+    def _fp_columns(self, with_p: bool) -> list[int]:
+        """The columns of ``f_p`` evaluated: all with ``dG/dP``, else the solved ones."""
+        return list(range(self.n_params)) if with_p else list(self.layout.unknown_param_index)
 
-        Read from output ``out`` of function ``name`` (default ``G_w`` / ``G_P``), the one
-        about to be evaluated (all of them share the pattern). Every Jacobian shares the
-        template's (canonical) index arrays, so the driver recognises the pattern and
-        SciPy's format checks run once.
+    def _patterns(self, with_p: bool) -> dict[str, Any]:
+        """CSC templates of ``dG/dw`` and ``dG/dP`` and where their values come from.
+
+        The kernel's values (:mod:`continuation.bvp._collocation_jit`: the blocks, the
+        ``f_p`` columns, the continuity entries) are followed by the non-zeros of the
+        boundary rows' Jacobians in ``w`` and in ``P``; ``order_w[q]`` is the value of CSC
+        slot ``q`` of ``dG/dw``, ``order_p`` that of ``dG/dP``. The pattern of the
+        collocation rows is that of ``D[k, l] / (h_j T) I - [l = k + 1] f_x``: the
+        diagonal of the blocks ``l != k + 1``, the whole block ``l = k + 1``.
         """
-        key = which + "_template"
-        if key not in self._jac:
-            fn = self._function(name or ("G_w" if which == "w" else "G_P"))[0]
-            spw = fn.sparsity_out(out)
-            pattern = (np.array(spw.row(), dtype=np.int32),
-                       np.array(spw.colind(), dtype=np.int32), spw.shape)  # fmt: skip
-            template = _template(pattern)
-            if which == "w":
-                template.condensed_lu = self.condenser.factor
-            self._jac[which + "_pattern"] = pattern
-            self._jac[key] = template
-        return self._jac[key]  # type: ignore[no-any-return]
-
-    @property
-    def G_w(self) -> ca.Function:  # noqa: N802 (the paper's symbol)
-        """Jacobian in ``w`` (built on first use)."""
-        return self._function("G_w")[0]
-
-    @property
-    def G_P(self) -> ca.Function:  # noqa: N802
-        """Jacobian in ``P`` (built on first use)."""
-        return self._function("G_P")[0]
-
-    @property
-    def G_all(self) -> ca.Function:  # noqa: N802
-        """Residual and both Jacobians in one function (built on first use)."""
-        return self._function("G_all")[0]
-
-    @property
-    def _w_pattern(self) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
-        self._template_of("w")
-        return self._jac["w_pattern"]  # type: ignore[no-any-return]
-
-    @property
-    def _p_pattern(self) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
-        self._template_of("p")
-        return self._jac["p_pattern"]  # type: ignore[no-any-return]
+        pat = self._jac.get(("patterns", with_p))
+        if pat is not None:
+            return pat  # type: ignore[no-any-return]
+        lay = self.layout
+        n, m, K = lay.n, lay.degree, lay.n_stages
+        m1, n_par, br = m + 1, self.n_params, lay.boundary_row
+        fn = self._function(with_p)[0]
+        sw = fn.sparsity_out(4)
+        sP = fn.sparsity_out(5) if with_p else ca.Sparsity(0, n_par)
+        # the blocks: (N, m, m+1, n, n)
+        rows_b, cols_b = lay.orbit.collocation_blocks()
+        k = np.arange(m)[None, :, None, None, None]
+        l_ = np.arange(m1)[None, None, :, None, None]
+        i = np.arange(n)[None, None, None, :, None]
+        ii = np.arange(n)[None, None, None, None, :]
+        keep = np.broadcast_to((l_ == k + 1) | (i == ii), rows_b.shape)
+        fns = self._graph[0]
+        n_b = rows_b.size
+        pos_b = np.arange(n_b).reshape(rows_b.shape)
+        # the f_p values [s, i, c] of the columns q = cols[c]: the solved parameters into
+        # w, the others into P
+        cols = np.asarray(self._fp_columns(with_p), dtype=int)
+        n_p = cols.size
+        n_fp = K * n * n_p
+        unk = list(lay.unknown_param_index)
+        col_of = np.full(n_par, -1)  # column in w of each solved parameter
+        col_of[unk] = lay.slices()["params"].start + np.arange(len(unk))
+        # the structural non-zeros of f_p (i, q) at every stage s: row s n + i
+        jp = np.asarray(ca.DM(fns["dfdp"].sparsity_out(0), 1.0).full()).reshape(n, n_par) != 0
+        s_, i_, c_ = np.nonzero(np.broadcast_to(jp[None][:, :, cols], (K, n, n_p)))
+        q_ = cols[c_]
+        rows_fp, pos_fp = s_ * n + i_, n_b + (s_ * n + i_) * n_p + c_
+        u = col_of[q_] >= 0
+        rows_u, cols_u, pos_u = rows_fp[u], col_of[q_[u]], pos_fp[u]
+        rows_k, cols_k, pos_k = rows_fp[~u], q_[~u], pos_fp[~u]
+        # the continuity entries, in the order of OrbitLayout.continuity_entries
+        rows_c, cols_c, _ = lay.orbit.continuity_entries(self._e)
+        n_c = rows_c.size
+        off = n_b + n_fp + n_c
+        # the boundary rows (CasADi's column-major non-zeros)
+        rows_w = br + np.asarray(sw.row(), dtype=np.int64)
+        cols_w = np.repeat(np.arange(sw.size2()), np.diff(sw.colind()))
+        pos_w = off + np.arange(rows_w.size)
+        rows_P = br + np.asarray(sP.row(), dtype=np.int64)
+        cols_P = np.repeat(np.arange(sP.size2()), np.diff(sP.colind()))
+        pos_P = off + rows_w.size + np.arange(rows_P.size)
+        nw = lay.n_unknowns
+        tw, order_w = _csc(
+            np.concatenate([rows_b[keep], rows_u, rows_c, rows_w]),
+            np.concatenate([cols_b[keep], cols_u, cols_c, cols_w]),
+            np.concatenate([pos_b[keep], pos_u, off - n_c + np.arange(n_c), pos_w]),
+            (nw, nw),
+        )
+        first = self._jac.setdefault("w_template", tw)  # one template for both variants
+        if first is not tw:
+            if not (np.array_equal(first.indices, tw.indices)
+                    and np.array_equal(first.indptr, tw.indptr)):  # fmt: skip
+                raise ValueError("internal error: two patterns of the connection's Jacobian")
+            tw = first
+        tw.condensed_lu = self.condenser.factor
+        tp, order_p = _csc(
+            np.concatenate([rows_k, rows_P]), np.concatenate([cols_k, cols_P]),
+            np.concatenate([pos_k, pos_P]), (nw, n_par),
+        )  # fmt: skip
+        pat = {
+            "w": tw, "p": tp, "order_w": order_w, "order_p": order_p,
+            "order_none": np.zeros(0, dtype=np.int64),
+            "bounds": (off, off + rows_w.size, off + rows_w.size + rows_P.size),
+            "shapes": ((K, n), (K, n, n), (K, n, n_p)),
+        }  # fmt: skip
+        self._jac[("patterns", with_p)] = pat
+        return pat
 
     def flat_args(self, args: list[Any]) -> list[FloatArray]:
         """The inputs as contiguous float vectors (matrices column-major), sizes checked.
@@ -516,14 +530,14 @@ class ConnectionFunctions:
         Returns
         -------
         list of ndarray
-            One 1-D float64 array per input, of length ``G.nnz_in(i)``.
+            One 1-D float64 array per input, of length ``B.nnz_in(i)``.
         """
         out = []
         for i, a in enumerate(args):
             v = np.ascontiguousarray(np.asarray(a, dtype=float).ravel(order="F"))
             if v.size != self.arg_sizes[i]:
                 raise ValueError(
-                    f"input {self.G.name_in(i)!r} of G has {v.size} entries, expected "
+                    f"input {self.B.name_in(i)!r} of G has {v.size} entries, expected "
                     f"{self.arg_sizes[i]}"
                 )
             out.append(v)
@@ -538,60 +552,116 @@ class ConnectionFunctions:
             return args
         return self.flat_args(args)
 
+    def _orbit(self, flat: list[FloatArray]) -> tuple[FloatArray, FloatArray]:
+        """``X`` (``(M, n)``, a view of ``w``) and the row scales ``d_j = h_j T``."""
+        lay = self.layout
+        X = flat[0][: lay.n_orbit_unknowns].reshape(lay.n_points, lay.n)
+        return X, flat[2] * flat[3][0]
+
+    def _constant_blocks(self, d: FloatArray) -> FloatArray:
+        """``D[k,l] / d_j I`` of the row scales ``d``, flat (the kernel's ``Bc``).
+
+        The last ones are kept (one mesh and ``T`` per problem, many evaluations).
+        """
+        last = self._Bc
+        if last is None or not np.array_equal(last[0], d):
+            last = (d, _jit.compiled(KERNELS).constant_blocks(self._D, d, self.layout.n))
+            self._Bc = last
+        return last[1]
+
     def residual(self, args: list[Any]) -> FloatArray:
         """``G(*args)`` as a flat array, shape ``(n_eq,)``."""
-        return self._bG(self._flat(args))[0]
+        flat = self._flat(args)
+        lay = self.layout
+        G = np.empty(self.n_equations)
+        F = np.empty((lay.n_stages, lay.n))
+        self._bB(flat, [F, G[lay.boundary_row :]])
+        X, d = self._orbit(flat)
+        _jit.compiled(KERNELS).collocation_residual(X, F, 1.0, self._D, self._e, d, G)
+        return G
+
+    def _linearize(
+        self, args: list[Any], with_p: bool
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        flat = self._flat(args)
+        pat = self._patterns(with_p)
+        br = self.layout.boundary_row
+        G = np.empty(self.n_equations)
+        F, J, Jp = (np.empty(s) for s in pat["shapes"])
+        a, b, c = pat["bounds"]
+        vals = np.empty(c)
+        outs = [F, J, Jp, G[br:], vals[a:b]] + ([vals[b:c]] if with_p else [])
+        self._function(with_p)[1](flat, outs)
+        X, d = self._orbit(flat)
+        data_w = np.empty(pat["order_w"].size)
+        order_p = pat["order_p"] if with_p else pat["order_none"]
+        data_p = np.empty(order_p.size)
+        _jit.compiled(KERNELS).linearize(
+            X, F, J, Jp, 1.0, self._D, self._e, d, self._constant_blocks(d), G, vals,
+            pat["order_w"], data_w, order_p, data_p,
+        )  # fmt: skip
+        return G, data_w, data_p
 
     def jacobian(self, args: list[Any]) -> sp.csc_matrix:
         """``dG/dw`` as SciPy CSC, shape ``(n_eq, n_eq)``."""
-        template = self._template_of("w")
-        return csc_with_data(template, self._function("G_w")[1](self._flat(args))[0])
+        return self.residual_jacobian(args)[1]
 
     def residual_jacobian(self, args: list[Any]) -> tuple[FloatArray, sp.csc_matrix]:
         """``(G, dG/dw)`` in one evaluation."""
-        template = self._template_of("w", "G_gw", 1)
-        g, jw = self._function("G_gw")[1](self._flat(args))
-        return g, csc_with_data(template, jw)
+        g, jw, _ = self._linearize(args, False)
+        return g, csc_with_data(self._patterns(False)["w"], jw)
 
     def linearize(self, args: list[Any]) -> tuple[FloatArray, sp.csc_matrix, sp.csc_matrix]:
         """``(G, dG/dw, dG/dP)`` in one evaluation."""
-        tw, tp = self._template_of("w", "G_all", 1), self._template_of("p", "G_all", 2)
-        g, jw, jp = self._function("G_all")[1](self._flat(args))
-        return g, csc_with_data(tw, jw), csc_with_data(tp, jp)
+        g, jw, jp = self._linearize(args, True)
+        pat = self._patterns(True)
+        return g, csc_with_data(pat["w"], jw), csc_with_data(pat["p"], jp)
 
     def param_jacobian(self, args: list[Any]) -> sp.csc_matrix:
         """``dG/dP`` as SciPy CSC, shape ``(n_eq, n_params)``."""
-        template = self._template_of("p")
-        return csc_with_data(template, self._function("G_P")[1](self._flat(args))[0])
+        return self.linearize(args)[2]
 
 
-def _template(pattern: tuple[np.ndarray, np.ndarray, tuple[int, int]]) -> sp.csc_matrix:
-    row, colind, shape = pattern
-    A = sp.csc_matrix((np.ones(row.size), row, colind), shape=shape)
-    A.has_canonical_format  # noqa: B018  (CasADi sparsities are sorted, no duplicates)
-    return A
+def _csc(
+    rows: np.ndarray, cols: np.ndarray, pos: np.ndarray, shape: tuple[int, int]
+) -> tuple[sp.csc_matrix, np.ndarray]:
+    """The CSC template of the entries ``(rows, cols)`` and the value index of each slot.
+
+    Raises
+    ------
+    ValueError
+        If an entry repeats (the orbit rows and the boundary rows are disjoint).
+    """
+    srt = np.lexsort((rows, cols))  # column-major, rows sorted within a column
+    key = cols[srt].astype(np.int64) * shape[0] + rows[srt]
+    if key.size and np.any(key[1:] == key[:-1]):
+        raise ValueError("internal error: a repeated entry in the connection's pattern")
+    indices = (key % shape[0]).astype(np.int32)
+    indptr = np.searchsorted(key // shape[0], np.arange(shape[1] + 1)).astype(np.int32)
+    A = sp.csc_matrix((np.ones(key.size), indices, indptr), shape=shape)
+    A.has_canonical_format  # noqa: B018  (sorted, no duplicates: flag checked once)
+    return A, np.ascontiguousarray(pos[srt], dtype=np.int64)
 
 
 class _Buffered:
     """Evaluate a ``ca.Function`` on NumPy buffers (``Function.buffer``): no conversions.
 
     The inputs are 1-D float64 arrays of the functions' input sizes (checked by the
-    caller); each call returns fresh output arrays of the outputs' nonzeros.
+    caller); the outputs are written into the given contiguous float64 arrays (views
+    allowed), one per output with its number of non-zeros.
     """
 
     def __init__(self, fn: ca.Function) -> None:
+        self._fn = fn  # (kept alive with its buffer)
         self._buf, self._trigger = fn.buffer()
-        self._sizes = tuple(int(fn.nnz_out(i)) for i in range(fn.n_out()))
 
-    def __call__(self, args: list[FloatArray]) -> list[FloatArray]:
+    def __call__(self, args: list[FloatArray], outs: list[FloatArray]) -> None:
         buf = self._buf
         for i, a in enumerate(args):
             buf.set_arg(i, memoryview(a))
-        outs = [np.empty(k) for k in self._sizes]
         for i, o in enumerate(outs):
             buf.set_res(i, memoryview(o))
         self._trigger()
-        return outs
 
 
 _CACHE: weakref.WeakKeyDictionary[Any, dict[tuple[ConnectionLayout, bool], ConnectionFunctions]] = (

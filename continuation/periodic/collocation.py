@@ -272,15 +272,15 @@ class CollocationLayout:
         rows_b, cols_b = self.orbit.collocation_blocks()
         self._col_rows = rows_b.ravel()
         self._col_cols = cols_b.ravel()
-        # continuity rows: d/dX_{j,l} = e[l] I, d/dx_{j+1} = -I
-        rows_c, cols_c, vals_c = self.orbit.continuity_entries(mesh.e)
+        # continuity rows: d/dX_{j,l} = e[l] I, d/dx_{j+1} = -I (values by the kernel)
+        rows_c, cols_c, _ = self.orbit.continuity_entries(mesh.e)
         # the boundary conditions: periodicity rows, then the phase row
         rp = self.orbit.boundary_row + np.arange(n)
         self.row_period = int(rp[0])
         self.row_phase = int(rp[-1]) + 1
         self._const_rows = np.concatenate([rows_c, rp, rp])
         self._const_cols = np.concatenate([cols_c, (self.M - 1) * n + np.arange(n), np.arange(n)])
-        self._const_vals = np.concatenate([vals_c, np.ones(n), -np.ones(n)])
+        self._const_vals = np.concatenate([np.ones(n), -np.ones(n)])  # periodicity
         # T column of the collocation rows (row s n + i of stage s)
         self._T_rows = np.arange(self.orbit.continuity_row)
         self.T_col = n * self.M
@@ -300,8 +300,14 @@ class CollocationLayout:
              self._ph_cols]
         )  # fmt: skip
         size = n * M + 1
-        order = np.lexsort((rows, cols))  # column-major, rows sorted within a column
-        key = cols[order].astype(np.int64) * size + rows[order]
+        # positions in the kernel's values (continuation.bvp._collocation_jit): the
+        # blocks, the (unused) f_p values, the continuity entries, then the cycle's own
+        nB, nS = self._col_rows.size, self._T_rows.size
+        pos = np.concatenate([np.arange(nB), nB + nS + np.arange(rows.size - nB)])
+        srt = np.lexsort((rows, cols))  # column-major, rows sorted within a column
+        order = pos[srt]
+        self._n_vals = int(nS + rows.size)  # the kernel's values, f_p ones included
+        key = cols[srt].astype(np.int64) * size + rows[srt]
         first = np.concatenate(([True], key[1:] != key[:-1]))
         slot = np.cumsum(first) - 1  # CSC slot of each sorted value
         self._order = order
@@ -343,7 +349,8 @@ class CollocationLayout:
         """The layout's constant arrays in the order of the compiled kernel.
 
         See :mod:`continuation.periodic._collocation_jit`: ``D, e, h, weights, stage_points,
-        B_const (flat), const_vals, order, slot_of (empty: none)``.
+        B_const (flat), const_vals (the periodicity entries), order, slot_of (empty:
+        none)``.
         """
         args = self.__dict__.get("_kernel_args")
         if args is None:

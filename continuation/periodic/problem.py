@@ -251,15 +251,14 @@ class PeriodicOrbitProblem:
         args = lay.kernel_args()
         G = np.empty(lay.n_unknowns)
         Gp = np.empty(lay.n_unknowns)
-        vals = np.empty(lay._order.size)
+        vals = np.empty(lay._n_vals)
         data = np.empty(lay._template.nnz)
-        Jp0 = np.ascontiguousarray(Jp[:, :, 0])
         compiled(KERNELS).linearize(
             X,
             T,
             F,
             J,
-            Jp0,
+            Jp,
             *args[:3],
             self._shift,
             s["ref"],
@@ -270,7 +269,7 @@ class PeriodicOrbitProblem:
             data,
             Gp,
         )
-        B = vals[: args[5].size].reshape(lay.N, lay.m, lay.m + 1, lay.n, lay.n)
+        B = vals[: lay._col_rows.size].reshape(lay.N, lay.m, lay.m + 1, lay.n, lay.n)
         self._slot["cache"] = (z.copy(), float(p), B, F)
         return G, csc_with_data(lay._template, data), Gp
 
