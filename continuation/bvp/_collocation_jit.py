@@ -139,12 +139,30 @@ def linearize(
         data_p[q] = vals[order_p[q]]
 
 
+@_jit
+def _constant_blocks(D: Any, d: Any, n: int, B: Any) -> None:  # pragma: no cover - compiled
+    m, m1 = D.shape
+    for j in range(d.shape[0]):
+        for k in range(m):
+            for l in range(m1):
+                base = (((j * m + k) * m1 + l) * n) * n
+                v = D[k, l] / d[j]
+                for a in range(n):
+                    for b in range(n):
+                        B[base + a * n + b] = v if a == b else 0.0
+
+
 def constant_blocks(D: Any, d: Any, n: int) -> Any:
-    """The constant part ``D[k,l] / d_j I`` of the blocks, flat ``(N m (m + 1) n n,)``."""
+    """The constant part ``D[k,l] / d_j I`` of the blocks, flat ``(N m (m + 1) n n,)``.
+
+    ``D`` (``(m, m + 1)``) and ``d`` (``(N,)``) float arrays, ``n`` the state dimension.
+    """
     import numpy as np
 
-    B = (np.asarray(D)[None, :, :] / np.asarray(d)[:, None, None])[..., None, None] * np.eye(n)
-    return np.ascontiguousarray(B, dtype=float).ravel()
+    m, m1 = D.shape
+    B = np.empty(d.shape[0] * m * m1 * n * n)
+    _constant_blocks(D, d, n, B)
+    return B
 
 
 __all__ = [

@@ -391,7 +391,7 @@ class ConnectionFunctions:
         # needs them, so each is built on first use.
         self._graph = (fns, inputs, names, F, g_rest, phase, Xs, P_eff, n_par, w, P)
         self._jac: dict[Any, Any] = {}
-        self._Bc: tuple[FloatArray, FloatArray] | None = None
+        self._Bc: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
 
     def _function(self, with_p: bool) -> tuple[ca.Function, _Buffered]:
         """``(w, P, *data) -> (F, f_x, f_p, g_b, dg_b/dw[, dg_b/dP])``, built once.
@@ -552,22 +552,25 @@ class ConnectionFunctions:
             return args
         return self.flat_args(args)
 
-    def _orbit(self, flat: list[FloatArray]) -> tuple[FloatArray, FloatArray]:
-        """``X`` (``(M, n)``, a view of ``w``) and the row scales ``d_j = h_j T``."""
+    def _orbit(self, flat: list[FloatArray]) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``X`` (``(M, n)``, a view of ``w``), the row scales ``d_j = h_j T`` and ``Bc``.
+
+        ``Bc`` is the constant part ``D[k,l] / d_j I`` of the blocks, flat (the kernel's
+        ``Bc``). The last ones are kept: one mesh and ``T`` per problem, many
+        evaluations, recognised by the problem's own (cached) input arrays, else by value.
+        """
         lay = self.layout
         X = flat[0][: lay.n_orbit_unknowns].reshape(lay.n_points, lay.n)
-        return X, flat[2] * flat[3][0]
-
-    def _constant_blocks(self, d: FloatArray) -> FloatArray:
-        """``D[k,l] / d_j I`` of the row scales ``d``, flat (the kernel's ``Bc``).
-
-        The last ones are kept (one mesh and ``T`` per problem, many evaluations).
-        """
+        h, T = flat[2], flat[3]
         last = self._Bc
-        if last is None or not np.array_equal(last[0], d):
-            last = (d, _jit.compiled(KERNELS).constant_blocks(self._D, d, self.layout.n))
-            self._Bc = last
-        return last[1]
+        if last is None or last[0] is not h or last[1] is not T:
+            d = h * T[0]
+            if last is None or not np.array_equal(last[2], d):
+                Bc = _jit.compiled(KERNELS).constant_blocks(self._D, d, lay.n)
+            else:
+                Bc = last[3]
+            last = self._Bc = (h, T, d, Bc)
+        return X, last[2], last[3]
 
     def residual(self, args: list[Any]) -> FloatArray:
         """``G(*args)`` as a flat array, shape ``(n_eq,)``."""
@@ -576,7 +579,7 @@ class ConnectionFunctions:
         G = np.empty(self.n_equations)
         F = np.empty((lay.n_stages, lay.n))
         self._bB(flat, [F, G[lay.boundary_row :]])
-        X, d = self._orbit(flat)
+        X, d, _ = self._orbit(flat)
         _jit.compiled(KERNELS).collocation_residual(X, F, 1.0, self._D, self._e, d, G)
         return G
 
@@ -592,12 +595,12 @@ class ConnectionFunctions:
         vals = np.empty(c)
         outs = [F, J, Jp, G[br:], vals[a:b]] + ([vals[b:c]] if with_p else [])
         self._function(with_p)[1](flat, outs)
-        X, d = self._orbit(flat)
+        X, d, Bc = self._orbit(flat)
         data_w = np.empty(pat["order_w"].size)
         order_p = pat["order_p"] if with_p else pat["order_none"]
         data_p = np.empty(order_p.size)
         _jit.compiled(KERNELS).linearize(
-            X, F, J, Jp, 1.0, self._D, self._e, d, self._constant_blocks(d), G, vals,
+            X, F, J, Jp, 1.0, self._D, self._e, d, Bc, G, vals,
             pat["order_w"], data_w, order_p, data_p,
         )  # fmt: skip
         return G, data_w, data_p
