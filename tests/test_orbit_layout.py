@@ -3,11 +3,13 @@
 The three problems place the orbit's unknowns and its collocation and continuity rows
 by one layout (``continuation.bvp.layout.OrbitLayout``), condense the same stage blocks
 and estimate the local error with one monitor (``continuation.bvp.collocation.LocalError``).
-The values are filled by two independent engines (CasADi for connections and landings,
-the compiled kernel for cycles): on the same orbit values they must give the same rows.
-References: the equations themselves (the collocation row of a cycle is ``T`` times a
-connection's, module doc of ``layout``), and for the local error the closed-form
-derivatives of ``sin(2 pi tau)``.
+The collocation and continuity rows of all three are filled by one compiled kernel
+(``continuation.bvp._collocation_jit``, checked against finite differences in
+``test_collocation_kernel``) with each problem's scaling; the stage values come from the
+landing's CasADi graph and from the cycle's mapped point function: on the same orbit
+values they must give the same rows. References: the equations themselves (the
+collocation row of a cycle is ``T`` times a connection's, module doc of ``layout``), and
+for the local error the closed-form derivatives of ``sin(2 pi tau)``.
 """
 
 from __future__ import annotations
@@ -50,7 +52,8 @@ def _problems(system, N=7, m=3, T=2.5):
 
 
 def test_landing_and_cycle_share_rows_and_unknowns(system):
-    # the same X through the CasADi landing and the compiled cycle kernel: the
+    # the same X through the landing and the cycle (their stage values from two CasADi
+    # functions, their rows by the one kernel with their two scalings): the
     # collocation rows differ by the factor T only (1/(h T) D X - f against
     # 1/h D X - T f), the continuity rows are the same, in the same places, and so are
     # the Jacobian's entries in the orbit's unknowns
