@@ -1,4 +1,4 @@
-r"""CasADi construction of the collocation residual of a connecting orbit, built once.
+r"""Residual and Jacobians of a connecting orbit: CasADi boundary rows, compiled orbit rows.
 
 One core for every orbit that ends at a saddle: a *connection* (it starts at a saddle
 too, with a phase condition) and a *landing* (:mod:`continuation.bvp.landing`: it starts
@@ -6,21 +6,27 @@ at a given point ``x_0``, which fixes the time shift, so there is no phase condi
 The two differ only in their start condition (:attr:`ConnectionLayout.start_point`).
 
 :func:`build_connection_functions` turns a :class:`~continuation.system.System`
-and an unknown-vector :class:`ConnectionLayout` into compiled ``ca.Function`` s
+and an unknown-vector :class:`ConnectionLayout` into :class:`ConnectionFunctions`, which
+evaluates, for the inputs ``(w, P, h, T, Qm, Qp, shift, ref, dref, pin)``,
 
-* ``G(w, P, h, T, Qm, Qp, shift, ref, dref, pin) -> (n_eq,)``, the residual,
-* ``G_w`` (sparse ``(n_eq, n_eq)``), its exact Jacobian in the unknowns ``w``,
-* ``G_P`` (sparse ``(n_eq, n_params)``), its exact Jacobian in the full parameter
+* the residual ``G`` (``(n_eq,)``),
+* ``dG/dw`` (sparse ``(n_eq, n_eq)``), its exact Jacobian in the unknowns ``w``,
+* ``dG/dP`` (sparse ``(n_eq, n_params)``), its exact Jacobian in the full parameter
   vector ``P``,
 
-where every quantity that may change without changing the *structure* of the
-problem (mesh spacing ``h``, truncation time ``T``, reference Schur bases
-``Qm``/``Qp``, the periodic ``shift``, the phase-condition reference orbit and the
-pinned value) is a numeric input. Adapting the mesh with a fixed number of
-intervals, changing ``T`` or updating a reference therefore never rebuilds the
-functions. The right-hand side is the system's own CasADi trace, evaluated on all
-``N m`` collocation points at once through ``Function.map``, so the Jacobian
-re-uses the mapped derivative of ``f`` instead of growing an expression per point.
+in two parts. The collocation and continuity rows and their derivatives are filled by
+the compiled kernel every collocated orbit shares (:mod:`continuation.bvp._collocation_jit`,
+the one of periodic orbits too) from ``f``, ``f_x`` and ``f_p`` at the ``N m`` stages.
+The stage values and the boundary rows (equilibria, Riccati, projections, start point,
+phase) with their exact Jacobians by automatic differentiation come from one CasADi
+expression graph (``ca.Function`` s built once, expanded to SX for small systems). Every
+quantity that may change without changing the *structure* of the problem (mesh spacing
+``h``, truncation time ``T``, reference Schur bases ``Qm``/``Qp``, the periodic
+``shift``, the phase-condition reference orbit and the pinned value) is a numeric
+input. Adapting the mesh with a fixed number of intervals, changing ``T`` or updating a
+reference therefore never rebuilds the functions. The right-hand side is the system's
+own CasADi trace, evaluated on all ``N m`` collocation points at once through
+``Function.map``.
 
 Unknowns, in this order (see :class:`ConnectionLayout`)::
 
@@ -30,9 +36,8 @@ Unknowns, in this order (see :class:`ConnectionLayout`)::
 with ``X`` the ``(n, M)`` matrix of values at the ``M = N (m + 1) + 1`` mesh and
 collocation points (interval by interval, so the Jacobian is almost block
 banded). The orbit block and the collocation and continuity rows are placed by
-:class:`~continuation.bvp.layout.OrbitLayout`, the layout periodic orbits use too (its
-matrices ``D kron I``, the stage selection and the continuity rows are built here
-from its index arrays). Equations, in this order::
+:class:`~continuation.bvp.layout.OrbitLayout`, the layout periodic orbits use too (the
+CSC patterns are built here from its index arrays). Equations, in this order::
 
     collocation   (1/(h_j T)) sum_l D[k,l] X_{j,l} - f(X_{j,k}, P)         (n N m)
     continuity    sum_l e[l] X_{j,l} - x_{j+1}                              (n N)

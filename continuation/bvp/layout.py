@@ -63,18 +63,29 @@ Their results are one class body (:class:`~continuation.bvp.result.OrbitResult`;
 landing's result records its start condition) and one driver adapter
 (:class:`~continuation.bvp.solve.ContinuedOrbit`).
 
-What is *not* shared, and why: the values of the residual and Jacobian are filled by
-two engines. Connections and landings build theirs in CasADi
-(:mod:`continuation.bvp.casadi_backend`): their boundary rows (Riccati equations of the
-projection bases, equilibria) need exact derivatives by automatic differentiation and
-the whole system is one expression graph. Periodic orbits fill theirs in a compiled
-Numba kernel (:mod:`continuation.periodic._collocation_jit`) from the system's ``f``,
-``f_x``, ``f_p`` at the stages: their boundary rows are linear, and at the sizes of a
-cycle branch the call overhead of a CasADi function is the larger cost. The two
-scalings of the collocation row also differ by the factor ``T`` (connections divide by
-``T``: :math:`(1/(h_j T)) \sum_l D_{kl} X_{j,l} - f`, cycles multiply ``f`` by their
-unknown period ``T``), kept so that the Newton iterates and tolerances are those of
-before; both place their entries by the index arrays of this module.
+What is shared in the values too: one compiled kernel
+(:mod:`continuation.bvp._collocation_jit`) fills the collocation and continuity rows,
+the values of their Jacobian in the orbit's unknowns (the blocks
+``D[k, l] / d_j I - [l = k + 1] c f_x``) and their derivatives in the parameters
+(``-c f_p``) for all three problems, from ``f``, ``f_x``, ``f_p`` at the stages; the
+cycle's kernel (:mod:`continuation.periodic._collocation_jit`) calls its functions, and a
+connection's or landing's :class:`~continuation.bvp.casadi_backend.ConnectionFunctions`
+calls it. The two scalings of the collocation row are its arguments ``d_j`` (the row
+scale) and ``c`` (the factor on ``f``): connections and landings divide by ``T``
+(:math:`(1/(h_j T)) \sum_l D_{kl} X_{j,l} - f`: ``d_j = h_j T``, ``c = 1``), cycles
+multiply ``f`` by their unknown period (``d_j = h_j``, ``c = T``), kept so that the Newton
+iterates and tolerances are those of before.
+
+What is *not* shared, and why: where the stage values and the boundary rows come from.
+Connections and landings evaluate ``f``, ``f_x``, ``f_p`` at the stages in the same CasADi
+graph (:mod:`continuation.bvp.casadi_backend`) as their boundary rows (Riccati
+equations of the projection bases, equilibria, projections, start point, phase), which
+need exact derivatives by automatic differentiation. Periodic orbits have linear
+boundary rows (periodicity, phase), filled in their compiled kernel, and take ``f``,
+``f_x``, ``f_p`` from a mapped point function
+(:class:`~continuation.periodic.collocation.StageEvaluator`), compiled to C in the
+background for a large model. Both place their entries by the index arrays of this
+module.
 """
 
 from __future__ import annotations
