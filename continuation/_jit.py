@@ -3,8 +3,7 @@
 Numba is a hard dependency (``pyproject.toml``): every kernel module is compiled code and
 there is no NumPy twin of it. The kernel modules (``continuation._kernel``, the
 compiled PALC step; ``continuation.bvp._condense_jit``;
-``continuation.bvp._collocation_jit``; ``continuation.periodic._collocation_jit``;
-``continuation.periodic._floquet_jit``)
+``continuation.bvp._collocation_jit``; ``continuation.periodic._floquet_jit``)
 import Numba, which takes about half a second, so each is imported only when first
 needed, by :func:`compiled`.
 """

@@ -84,12 +84,11 @@ def test_connection_collocation_jacobian_against_finite_differences(connection):
 
 def test_connection_and_cycle_use_the_same_kernel(connection, monkeypatch):
     shared = importlib.import_module(SHARED)
-    cycle = importlib.import_module("continuation.periodic._collocation_jit")
     backend = importlib.import_module("continuation.bvp.casadi_backend")
-    # the cycle's compiled kernel calls the shared functions themselves
-    for name in ("collocation_residual", "collocation_values", "scatter"):
-        assert getattr(cycle, name) is getattr(shared, name)
-    assert backend.KERNELS == SHARED
+    cycle = importlib.import_module("continuation.periodic.problem")
+    # both load the one kernel module; the cycle's compiled residual and Jacobian call
+    # its collocation_residual and collocation_values inside it
+    assert backend.KERNELS == cycle.KERNELS == SHARED
     # the connection's residual and Jacobian go through them (spied)
     calls = []
     for name in ("collocation_residual", "linearize"):

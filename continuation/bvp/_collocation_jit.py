@@ -1,4 +1,4 @@
-r"""Compiled collocation and continuity rows of every collocated orbit.
+r"""Compiled collocation and continuity rows of every collocated orbit, and a cycle's rows.
 
 One kernel fills the rows that connections, landings and cycles share
 (:class:`~continuation.bvp.layout.OrbitLayout`: the collocation rows of all stages,
@@ -10,26 +10,36 @@ then the continuity rows) from the orbit's values ``X`` (``(M, n)``, ``M = N (m 
     continuity    sum_l e[l] X_{j,l,i} - X_{j+1,0,i}
 
 with the row scale ``d_j`` and the factor ``c`` of the problem: a connection or landing
-(:mod:`continuation.bvp.casadi_backend`) has ``d_j = h_j T``, ``c = 1`` (its truncation
-time ``T`` is data), a cycle (:mod:`continuation.periodic._collocation_jit`) ``d_j =
-h_j``, ``c = T`` (its period is an unknown); each keeps the scaling, and so the Newton
-iterates and tolerances, it had before the rows were shared. The values of the
-Jacobian are written into one array ``vals`` in the order::
+(:mod:`continuation.bvp.casadi_backend`, through :func:`collocation_residual` and
+:func:`linearize`) has ``d_j = h_j T``, ``c = 1`` (its truncation time ``T`` is data), a
+cycle (:mod:`continuation.periodic.problem`, through :func:`cycle_residual` and
+:func:`cycle_linearize`, which call the same functions) ``d_j = h_j``, ``c = T`` (its
+period is an unknown); each keeps the scaling, and so the Newton iterates and
+tolerances, it had before the rows were shared. The values of the Jacobian are written
+into one array ``vals`` in the order::
 
     blocks      B[j,k,l] = D[k,l] / d_j I - [l = k+1] c f_x(X_{j,k})    (N, m, m+1, n, n)
     parameters  -c f_p(X_s)[i, q]                                       (N m, n, n_p)
     continuity  e[l] at (j, l, i), then -1 at (j, i)                    (N (m+1) n + N n)
 
-after which the problem writes the values of its own rows; :func:`scatter` then places
-them into the CSC data of the problem's pattern (``order``: the ``vals`` index of each
-CSC slot; ``slot_of``, if not empty, sums duplicates). A pattern needs not take every
-value: a connection's pattern takes only the diagonal of the blocks ``l != k + 1``, as
-its CasADi graph had, a cycle's the whole blocks.
+(the constant part ``D[k,l] / d_j I`` of the blocks given, :func:`constant_blocks`),
+after which come the values of the problem's own rows; the CSC data of the problem's
+pattern are then taken from ``vals`` (``order``: the ``vals`` index of each CSC slot;
+``slot_of``, if not empty, sums duplicates, :func:`scatter`). A pattern needs not take
+every value: a connection's takes only the diagonal of the blocks ``l != k + 1``, as its
+CasADi graph had, a cycle's the whole blocks.
+
+A cycle's own rows (:class:`~continuation.periodic.collocation.CollocationLayout`):
+periodicity ``x_N - x_0 - shift`` (``n``) and the integral phase condition
+``sum_s w_s <X_s - ref_s, dref_s>`` (1); its Jacobian values after the shared ones are
+the periodicity entries ``+-1``, the ``T`` column ``-f`` of the collocation rows and
+the phase row ``w_s dref_s``, and its ``dG/dp`` is ``-T f_p`` on the collocation rows.
+All of it is one call, in place of a dozen NumPy calls whose overhead dominates at the
+sizes of continuation.
 
 ``f_x`` arrives as ``J[s, a, b] = df_a/dx_b`` and ``f_p`` as ``Jp[s, i, q]`` (row-major
-blocks). Compiled on first use and cached on disk. (Numba's cache does not track calls
-across modules: after changing this file, delete the cycle kernel's cache too,
-``continuation/periodic/__pycache__/_collocation_jit*``.)
+blocks). Compiled on first use and cached on disk (one module: Numba's cache does not
+track calls across modules, so the cycle's functions live beside the shared ones).
 """
 
 from __future__ import annotations
@@ -140,6 +150,65 @@ def linearize(
 
 
 @_jit
+def cycle_residual(
+    X: Any, T: float, F: Any, D: Any, e: Any, h: Any, shift: Any, ref: Any, dref: Any,
+    w: Any, stage_points: Any, G: Any,
+) -> None:  # pragma: no cover - compiled  # fmt: skip
+    """``G`` (``(n M + 1,)``) of the cycle ``X``, ``T`` with ``f`` at the stages ``F``."""
+    M, n = X.shape
+    N = h.shape[0]
+    m, m1 = D.shape
+    collocation_residual(X, F, T, D, e, h, G)
+    rp = N * m1 * n
+    for i in range(n):
+        G[rp + i] = X[M - 1, i] - X[0, i] - shift[i]
+    acc = 0.0
+    for s in range(N * m):
+        q = stage_points[s]
+        for i in range(n):
+            acc += w[s] * (X[q, i] - ref[s, i]) * dref[s, i]
+    G[rp + n] = acc
+
+
+@_jit
+def cycle_linearize(
+    X: Any, T: float, F: Any, J: Any, Jp: Any, D: Any, e: Any, h: Any, shift: Any,
+    ref: Any, dref: Any, w: Any, stage_points: Any, Bc: Any, const_vals: Any,
+    order: Any, slot_of: Any, G: Any, vals: Any, data: Any, Gp: Any,
+) -> None:  # pragma: no cover - compiled  # fmt: skip
+    """A cycle's ``G``, the CSC values ``data`` of ``dG/dz`` and ``Gp`` (module doc).
+
+    ``Bc`` is the constant part ``D[k,l] / h_j I`` of the blocks (flat). ``vals``
+    receives the unordered values: first those of :func:`collocation_values` (the
+    blocks ``B``,
+    ``(N, m, m + 1, n, n)`` flattened, then ``-T f_p`` of ``Jp`` (``(N m, n, 1)``) and the
+    continuity entries), then the periodicity entries ``const_vals``, the ``T`` column
+    and the phase row. ``slot_of`` (empty: none) sums duplicates.
+    """
+    cycle_residual(X, T, F, D, e, h, shift, ref, dref, w, stage_points, G)
+    n = X.shape[1]
+    N = h.shape[0]
+    m = D.shape[0]
+    off = collocation_values(J, Jp, T, Bc, e, vals)
+    for q in range(const_vals.size):
+        vals[off + q] = const_vals[q]
+    off += const_vals.size
+    for s in range(N * m):
+        for i in range(n):
+            vals[off + s * n + i] = -F[s, i]
+    off += N * m * n
+    for s in range(N * m):
+        for i in range(n):
+            vals[off + s * n + i] = w[s] * dref[s, i]
+    scatter(vals, order, slot_of, data)
+    for q in range(Gp.size):
+        Gp[q] = 0.0
+    nB = N * m * (m + 1) * n * n
+    for q in range(N * m * n):
+        Gp[q] = vals[nB + q]
+
+
+@_jit
 def _constant_blocks(D: Any, d: Any, n: int, B: Any) -> None:  # pragma: no cover - compiled
     m, m1 = D.shape
     for j in range(d.shape[0]):
@@ -166,5 +235,6 @@ def constant_blocks(D: Any, d: Any, n: int) -> Any:
 
 
 __all__ = [
-    "collocation_residual", "collocation_values", "constant_blocks", "linearize", "scatter"
+    "collocation_residual", "collocation_values", "constant_blocks", "cycle_linearize",
+    "cycle_residual", "linearize", "scatter",
 ]  # fmt: skip

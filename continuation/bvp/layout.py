@@ -67,11 +67,12 @@ What is shared in the values too: one compiled kernel
 (:mod:`continuation.bvp._collocation_jit`) fills the collocation and continuity rows,
 the values of their Jacobian in the orbit's unknowns (the blocks
 ``D[k, l] / d_j I - [l = k + 1] c f_x``) and their derivatives in the parameters
-(``-c f_p``) for all three problems, from ``f``, ``f_x``, ``f_p`` at the stages; the
-cycle's kernel (:mod:`continuation.periodic._collocation_jit`) calls its functions, and a
-connection's or landing's :class:`~continuation.bvp.casadi_backend.ConnectionFunctions`
-calls it. The two scalings of the collocation row are its arguments ``d_j`` (the row
-scale) and ``c`` (the factor on ``f``): connections and landings divide by ``T``
+(``-c f_p``) for all three problems, from ``f``, ``f_x``, ``f_p`` at the stages; a
+cycle's compiled residual and Jacobian (in the same module) call its functions, and so
+does a connection's or landing's
+:class:`~continuation.bvp.casadi_backend.ConnectionFunctions`. The two scalings of the
+collocation row are its arguments ``d_j`` (the row scale) and ``c`` (the factor on
+``f``): connections and landings divide by ``T``
 (:math:`(1/(h_j T)) \sum_l D_{kl} X_{j,l} - f`: ``d_j = h_j T``, ``c = 1``), cycles
 multiply ``f`` by their unknown period (``d_j = h_j``, ``c = T``), kept so that the Newton
 iterates and tolerances are those of before.

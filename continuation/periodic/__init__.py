@@ -6,8 +6,8 @@ phase condition, condensation and local error estimate, and the steps of the acc
 loop of connections (mesh adaptation, the re-solve on the halved mesh:
 :mod:`continuation.periodic.solve`); periodicity and the phase condition are its
 boundary conditions. Its residual and Jacobian values are filled by the compiled kernel
-:mod:`continuation.periodic._collocation_jit`, whose collocation and continuity rows are
-those of the kernel connections and landings use (:mod:`continuation.bvp._collocation_jit`).
+connections and landings use for their collocation and continuity rows
+(:mod:`continuation.bvp._collocation_jit`), with the cycle's own rows beside them.
 
 Modules: :mod:`~continuation.periodic.problem` (the collocation system),
 :mod:`~continuation.periodic.solve` (one cycle: Newton, mesh adaptation, refinement),

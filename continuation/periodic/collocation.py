@@ -348,7 +348,8 @@ class CollocationLayout:
     def kernel_args(self) -> tuple[Any, ...]:
         """The layout's constant arrays in the order of the compiled kernel.
 
-        See :mod:`continuation.periodic._collocation_jit`: ``D, e, h, weights, stage_points,
+        See :func:`continuation.bvp._collocation_jit.cycle_linearize`: ``D, e, h, weights,
+        stage_points,
         B_const (flat), const_vals (the periodicity entries), order, slot_of (empty:
         none)``.
         """

@@ -58,8 +58,9 @@ def error_estimate(mesh: CollocationMesh, X: FloatArray) -> float:
     return LocalError(mesh, periodic=True)(X)
 
 
-#: The compiled collocation system (:func:`continuation._jit.compiled`).
-KERNELS = "continuation.periodic._collocation_jit"
+#: The compiled collocation system (:func:`continuation._jit.compiled`): the rows of every
+#: collocated orbit and the cycle's own (``cycle_residual``, ``cycle_linearize``).
+KERNELS = "continuation.bvp._collocation_jit"
 
 
 @dataclass(frozen=True, eq=False)
@@ -238,7 +239,8 @@ class PeriodicOrbitProblem:
         s = self._slot
         D, e, h, w, sp_ = self.layout.kernel_args()[:5]
         G = np.empty(self.layout.n_unknowns)
-        compiled(KERNELS).residual(X, T, F, D, e, h, self._shift, s["ref"], s["dref"], w, sp_, G)
+        kern = compiled(KERNELS)
+        kern.cycle_residual(X, T, F, D, e, h, self._shift, s["ref"], s["dref"], w, sp_, G)
         return G
 
     def linearize(self, z: FloatArray, p: float) -> tuple[FloatArray, Any, FloatArray]:
@@ -253,7 +255,7 @@ class PeriodicOrbitProblem:
         Gp = np.empty(lay.n_unknowns)
         vals = np.empty(lay._n_vals)
         data = np.empty(lay._template.nnz)
-        compiled(KERNELS).linearize(
+        compiled(KERNELS).cycle_linearize(
             X,
             T,
             F,
