@@ -40,6 +40,7 @@ published values). Sources:
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -47,6 +48,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from continuation.bvp import ConnectionResult, find_connection
 from continuation.system import System
 
 SQ2 = np.sqrt(2.0)
@@ -168,6 +170,24 @@ def cir() -> System:
         )
 
     return System(rhs, ("x", "y", "z"), ("nu", "beta", "gamma", "r", "a3", "b3"))
+
+
+#: The starting parameters of AUTO-07p's demo ``cir`` (cir.f90), ``nu`` solved for.
+CIR_START = {"nu": -0.72, "beta": 0.6, "gamma": 0.0, "r": 0.6, "a3": 0.328578, "b3": 0.933578}
+
+
+@functools.lru_cache(maxsize=1)
+def cir_connection() -> ConnectionResult:
+    """The homoclinic orbit of ``cir`` found from :data:`CIR_START` (``nu`` free), cached.
+
+    Shared by the tests that need a converged connection to linearise; callers must not
+    modify it.
+    """
+    s = cir()
+    res = find_connection(s, s.params(**CIR_START), "nu", source=[0.0, 0.0, 0.0], shift=0)
+    if not res.success:
+        raise AssertionError(f"the cir connection did not converge: {res.status}")
+    return res
 
 
 def kpr() -> System:
@@ -315,10 +335,7 @@ def cases() -> list[ConnectionCase]:
             [0.0, 0.0, 0.0], 13.9265574, 5e-8, shift=0,
         ),
         ConnectionCase(
-            "cir", cir(),
-            {"nu": -0.72, "beta": 0.6, "gamma": 0.0, "r": 0.6, "a3": 0.328578,
-             "b3": 0.933578},
-            "nu", [0.0, 0.0, 0.0], -0.7213093, 5e-8, shift=0,
+            "cir", cir(), dict(CIR_START), "nu", [0.0, 0.0, 0.0], -0.7213093, 5e-8, shift=0,
         ),
         ConnectionCase(
             "kpr", kpr(), {"lam": -1.8512, "k": -0.15, "ie1": 10.0}, "lam",

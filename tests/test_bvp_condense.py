@@ -12,19 +12,14 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from continuation.bvp import find_connection
 from continuation.bvp.condense import CondensedLU, StageCondenser
 from continuation.linalg import BorderedLU, _perm_parity, assemble_bordered_csc
-from tests.connection_problems import cir
-
-CIR = {"nu": -0.72, "beta": 0.6, "gamma": 0.0, "r": 0.6, "a3": 0.328578, "b3": 0.933578}
+from tests.connection_problems import cir_connection
 
 
 @pytest.fixture(scope="module")
 def linearised():
-    s = cir()
-    res = find_connection(s, s.params(**CIR), "nu", source=[0, 0, 0], shift=0)
-    assert res.success
+    res = cir_connection()
     prob = res.problem.with_vary("beta")
     g, J, gp = prob.linearize(res.z, 0.6)
     return J, gp

@@ -15,20 +15,16 @@ import importlib
 import numpy as np
 import pytest
 
-from continuation.bvp import find_connection
 from continuation.bvp.collocation import CollocationMesh
 from continuation.periodic.problem import PeriodicOrbitProblem
-from tests.connection_problems import cir
+from tests.connection_problems import CIR_START, cir, cir_connection
 
-CIR = {"nu": -0.72, "beta": 0.6, "gamma": 0.0, "r": 0.6, "a3": 0.328578, "b3": 0.933578}
 SHARED = "continuation.bvp._collocation_jit"
 
 
 @pytest.fixture(scope="module")
 def connection():
-    s = cir()
-    res = find_connection(s, s.params(**CIR), "nu", source=[0, 0, 0], shift=0)
-    assert res.success
+    res = cir_connection()
     prob = res.problem.with_vary("beta")
     # off the solution (an arbitrary point: the Jacobian is checked, not the orbit)
     rng = np.random.default_rng(11)
@@ -107,7 +103,7 @@ def test_connection_and_cycle_use_the_same_kernel(connection, monkeypatch):
     rng = np.random.default_rng(2)
     X = rng.standard_normal((mesh.n_points, 3))
     T = 2.5
-    cyc = PeriodicOrbitProblem(s, s.params(**CIR), "beta", mesh, (0, 0, 0),
+    cyc = PeriodicOrbitProblem(s, s.params(**CIR_START), "beta", mesh, (0, 0, 0),
                                np.concatenate([X.ravel(), [T]]))  # fmt: skip
     z_c = np.concatenate([X.ravel(), [T]])
     G_c = cyc.residual(z_c, 0.6)
