@@ -113,3 +113,18 @@ def test_connection_and_cycle_use_the_same_kernel(connection, monkeypatch):
     shared.collocation_residual(X, F, T, mesh.D, mesh.e, mesh.h, G)
     b = cyc.layout.orbit.boundary_row
     np.testing.assert_array_equal(G[:b], G_c[:b])
+
+
+def test_jacobian_alone_equals_the_one_with_the_residual(connection):
+    """``dG/dz`` without the residual (Newton's Jacobian call) is the linearisation's, bit
+    for bit, on the same pattern, at a point off the solution."""
+    prob, z = connection
+    F = prob.functions
+    args = prob._args(z, 0.6)
+    J_alone = F.jacobian(args)
+    g, J_with = F.residual_jacobian(args)
+    assert J_alone.shape == J_with.shape
+    np.testing.assert_array_equal(J_alone.indptr, J_with.indptr)
+    np.testing.assert_array_equal(J_alone.indices, J_with.indices)
+    np.testing.assert_array_equal(J_alone.data, J_with.data)
+    np.testing.assert_array_equal(g, F.residual(args))

@@ -398,14 +398,15 @@ class ConnectionFunctions:
         self._jac: dict[Any, Any] = {}
         self._Bc: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
 
-    def _function(self, with_p: bool) -> tuple[ca.Function, _Buffered]:
+    def _function(self, with_p: bool, values: bool = True) -> tuple[ca.Function, _Buffered]:
         """``(w, P, *data) -> (F, f_x, f_p, g_b, dg_b/dw[, dg_b/dP])``, built once.
 
         ``f_x`` and ``f_p`` at the stages leave as row-major blocks (``(N m, n, n)`` and
         ``(N m, n, n_p)``, the columns :meth:`_fp_columns`); the Jacobians of the boundary
-        rows as their non-zeros.
+        rows as their non-zeros. ``values=False`` (``dG/dw`` alone, ``with_p`` False):
+        ``(f_x, f_p, dg_b/dw)`` only, without the residual's ``F`` and ``g_b``.
         """
-        name = "L_all" if with_p else "L_w"
+        name = "L_all" if with_p else ("L_w" if values else "J_w")
         hit = self._jac.get(name)
         if hit is None:
             fns, inputs, names, F, g_rest, phase, Xs, P_eff, n_par, w, P = self._graph
@@ -425,6 +426,8 @@ class ConnectionFunctions:
             g_b = ca.vertcat(g_rest, *last)
             Jw = ca.vertcat(ca.jacobian(g_rest, w), *(ca.jacobian(r, w) for r in last))
             outs, onames = [F, JF, JP, g_b, Jw], ["F", "f_x", "f_p", "g_b", "dg_b_dw"]
+            if not values:
+                outs, onames = [JF, JP, Jw], ["f_x", "f_p", "dg_b_dw"]
             if with_p:
                 Jp = ca.vertcat(ca.jacobian(g_rest, P), *(ca.jacobian(r, P) for r in last))
                 outs.append(Jp)
@@ -611,8 +614,19 @@ class ConnectionFunctions:
         return G, data_w, data_p
 
     def jacobian(self, args: list[Any]) -> sp.csc_matrix:
-        """``dG/dw`` as SciPy CSC, shape ``(n_eq, n_eq)``."""
-        return self.residual_jacobian(args)[1]
+        """``dG/dw`` as SciPy CSC, shape ``(n_eq, n_eq)`` (the residual is not evaluated)."""
+        flat = self._flat(args)
+        pat = self._patterns(False)
+        _, J, Jp = (np.empty(s) for s in pat["shapes"])
+        a, b, c = pat["bounds"]
+        vals = np.empty(c)
+        self._function(False, values=False)[1](flat, [J, Jp, vals[a:b]])
+        _, _, Bc = self._orbit(flat)
+        data_w = np.empty(pat["order_w"].size)
+        kernels = _jit.compiled(KERNELS)
+        kernels.collocation_values(J, Jp, 1.0, Bc, self._e, vals)
+        kernels.scatter(vals, pat["order_w"], pat["order_none"], data_w)
+        return csc_with_data(pat["w"], data_w)
 
     def residual_jacobian(self, args: list[Any]) -> tuple[FloatArray, sp.csc_matrix]:
         """``(G, dG/dw)`` in one evaluation."""

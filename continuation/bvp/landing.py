@@ -279,7 +279,7 @@ class LandingProblem(ToResult[LandingResult]):
 
     def jacobian(self, z: FloatArray, s: float | None = None) -> sp.csc_matrix:
         """Exact ``dG/dz`` (CSC), shape ``(N_z, N_z)``."""
-        return self.functions.residual_jacobian(self._args(z, s))[1]
+        return self.functions.jacobian(self._args(z, s))
 
     def dp(self, z: FloatArray, s: float | None = None) -> FloatArray:
         """``dG/ds = -dx_0/ds`` on the start rows, shape ``(N_z,)``."""
