@@ -128,3 +128,17 @@ def test_jacobian_alone_equals_the_one_with_the_residual(connection):
     np.testing.assert_array_equal(J_alone.indices, J_with.indices)
     np.testing.assert_array_equal(J_alone.data, J_with.data)
     np.testing.assert_array_equal(g, F.residual(args))
+
+
+def test_parameter_jacobian_alone_equals_the_linearisation(connection):
+    """``dG/dP`` alone (the sensitivity's exact columns) is the linearisation's, bit for
+    bit, on the same pattern, at a point off the solution."""
+    prob, z = connection
+    F = prob.functions
+    args = prob._args(z, 0.6)
+    P_alone = F.param_jacobian(args)
+    P_with = F.linearize(args)[2]
+    assert P_alone.shape == P_with.shape
+    np.testing.assert_array_equal(P_alone.indptr, P_with.indptr)
+    np.testing.assert_array_equal(P_alone.indices, P_with.indices)
+    np.testing.assert_array_equal(P_alone.data, P_with.data)

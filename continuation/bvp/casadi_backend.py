@@ -403,10 +403,12 @@ class ConnectionFunctions:
 
         ``f_x`` and ``f_p`` at the stages leave as row-major blocks (``(N m, n, n)`` and
         ``(N m, n, n_p)``, the columns :meth:`_fp_columns`); the Jacobians of the boundary
-        rows as their non-zeros. ``values=False`` (``dG/dw`` alone, ``with_p`` False):
-        ``(f_x, f_p, dg_b/dw)`` only, without the residual's ``F`` and ``g_b``.
+        rows as their non-zeros. ``values=False``: ``dG/dw`` alone (``with_p`` False,
+        ``(f_x, f_p, dg_b/dw)``) or ``dG/dP`` alone (``with_p`` True, ``(f_p, dg_b/dP)``),
+        without the residual's ``F`` and ``g_b``.
         """
-        name = "L_all" if with_p else ("L_w" if values else "J_w")
+        name = {(True, True): "L_all", (False, True): "L_w", (False, False): "J_w",
+                (True, False): "J_P"}[(with_p, values)]  # fmt: skip
         hit = self._jac.get(name)
         if hit is None:
             fns, inputs, names, F, g_rest, phase, Xs, P_eff, n_par, w, P = self._graph
@@ -423,15 +425,19 @@ class ConnectionFunctions:
             # the column colouring of a forward-mode Jacobian, so it is differentiated on
             # its own (one reverse sweep).
             last = [] if phase is None else [phase]
-            g_b = ca.vertcat(g_rest, *last)
-            Jw = ca.vertcat(ca.jacobian(g_rest, w), *(ca.jacobian(r, w) for r in last))
-            outs, onames = [F, JF, JP, g_b, Jw], ["F", "f_x", "f_p", "g_b", "dg_b_dw"]
-            if not values:
-                outs, onames = [JF, JP, Jw], ["f_x", "f_p", "dg_b_dw"]
             if with_p:
                 Jp = ca.vertcat(ca.jacobian(g_rest, P), *(ca.jacobian(r, P) for r in last))
-                outs.append(Jp)
-                onames.append("dg_b_dP")
+            if with_p and not values:
+                outs, onames = [JP, Jp], ["f_p", "dg_b_dP"]
+            else:
+                g_b = ca.vertcat(g_rest, *last)
+                Jw = ca.vertcat(ca.jacobian(g_rest, w), *(ca.jacobian(r, w) for r in last))
+                outs, onames = [F, JF, JP, g_b, Jw], ["F", "f_x", "f_p", "g_b", "dg_b_dw"]
+                if not values:
+                    outs, onames = [JF, JP, Jw], ["f_x", "f_p", "dg_b_dw"]
+                if with_p:
+                    outs.append(Jp)
+                    onames.append("dg_b_dP")
             fn = ca.Function(name, inputs, outs, names, onames)
             if self._expand:
                 fn = fn.expand()
@@ -521,6 +527,7 @@ class ConnectionFunctions:
             "w": tw, "p": tp, "order_w": order_w, "order_p": order_p,
             "order_none": np.zeros(0, dtype=np.int64),
             "bounds": (off, off + rows_w.size, off + rows_w.size + rows_P.size),
+            "fp_start": n_b,
             "shapes": ((K, n), (K, n, n), (K, n, n_p)),
         }  # fmt: skip
         self._jac[("patterns", with_p)] = pat
@@ -640,8 +647,20 @@ class ConnectionFunctions:
         return g, csc_with_data(pat["w"], jw), csc_with_data(pat["p"], jp)
 
     def param_jacobian(self, args: list[Any]) -> sp.csc_matrix:
-        """``dG/dP`` as SciPy CSC, shape ``(n_eq, n_params)``."""
-        return self.linearize(args)[2]
+        """``dG/dP`` as SciPy CSC, shape ``(n_eq, n_params)`` (nothing else is evaluated).
+
+        Its values are those :meth:`linearize` places: ``-f_p`` on the collocation rows
+        (the kernel's ``-c f_p`` with ``c = 1``) and the boundary rows' ``dg_b/dP``.
+        """
+        flat = self._flat(args)
+        pat = self._patterns(True)
+        Jp = np.empty(pat["shapes"][2])
+        _, b, c = pat["bounds"]
+        vals = np.empty(c)
+        self._function(True, values=False)[1](flat, [Jp, vals[b:c]])
+        s0 = pat["fp_start"]
+        vals[s0 : s0 + Jp.size] = -Jp.ravel()
+        return csc_with_data(pat["p"], vals[pat["order_p"]])
 
 
 def _csc(
