@@ -629,11 +629,8 @@ class ConnectionFunctions:
         vals = np.empty(c)
         self._function(False, values=False)[1](flat, [J, Jp, vals[a:b]])
         _, _, Bc = self._orbit(flat)
-        data_w = np.empty(pat["order_w"].size)
-        kernels = _jit.compiled(KERNELS)
-        kernels.collocation_values(J, Jp, 1.0, Bc, self._e, vals)
-        kernels.scatter(vals, pat["order_w"], pat["order_none"], data_w)
-        return csc_with_data(pat["w"], data_w)
+        _jit.compiled(KERNELS).collocation_values(J, Jp, 1.0, Bc, self._e, vals)
+        return csc_with_data(pat["w"], vals[pat["order_w"]])
 
     def residual_jacobian(self, args: list[Any]) -> tuple[FloatArray, sp.csc_matrix]:
         """``(G, dG/dw)`` in one evaluation."""
