@@ -61,7 +61,7 @@ import numpy as np
 
 from continuation.typing import FloatArray, IntArray
 
-from .hydrostatics import GZCurve, HeeledState, fit_sine_series, heeled_gz
+from .gz import GZCurve, HeeledState, fit_sine_series, heeled_gz
 from .upright import Hydrostatics
 
 
@@ -225,7 +225,7 @@ def mesh_heeled_equilibrium(
 ) -> HeeledState:
     """Level ``h0`` and trim ``theta`` at heel ``phi`` for the given volume and LCB (Newton).
 
-    Returns a :class:`~ship_models.hydro.hydrostatics.HeeledState` with ``y_B`` to
+    Returns a :class:`~ship_models.hydro.gz.HeeledState` with ``y_B`` to
     **starboard** and ``zeta_B`` up (body axes of the strip GZ).
     """
     h0, th = guess
@@ -280,7 +280,7 @@ def mesh_gz_curve(
     heel_step : float
         Heel increment (rad).
     n_terms : int
-        Sine terms of the fit (:func:`~ship_models.hydro.hydrostatics.fit_sine_series`).
+        Sine terms of the fit (:func:`~ship_models.hydro.gz.fit_sine_series`).
     phi_max : float
         Largest heel (rad); the fit needs ``pi``.
     free_trim : bool
