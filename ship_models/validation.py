@@ -35,6 +35,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from .vessel_schema import VesselFileError, _si_factor
+
 #: Largest vessel file read (bytes); real files are a few kB.
 MAX_VESSEL_FILE_BYTES = 1_000_000
 #: The natural roll period must be within this factor of the IMO estimate.
@@ -62,7 +64,6 @@ def check_file_size(path: str | os.PathLike[str]) -> None:
 
 
 def _si(coeffs: Mapping[str, Any], key: str) -> float | None:
-    from .vessel import _si_factor
 
     c = coeffs.get(key)
     if c is None:
@@ -134,8 +135,6 @@ def check_plausible(coeffs: Mapping[str, Any]) -> None:
     VesselFileError
         A ``ValueError`` naming the field.
     """
-    from .vessel import VesselFileError
-
     problems = plausibility_problems(coeffs)
     if problems:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""

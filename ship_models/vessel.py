@@ -51,6 +51,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .validation import check_file_size, check_plausible
 from .vessel_checks import check_table, check_uncertainty, validate
 from .vessel_curves import CurveData, CurveError, parse_curves
 from .vessel_schema import (
@@ -126,9 +127,7 @@ class VesselData(Mapping[str, Coefficient]):
     def __post_init__(self) -> None:
         coeffs = dict(self.coefficients)
         validate(coeffs)
-        from .validation import check_plausible  # relations between fields (plausibility)
-
-        check_plausible(coeffs)
+        check_plausible(coeffs)  # relations between fields (plausibility)
         meta = dict(self.meta)
         for key, allowed in (*METHOD_CHOICES.items(), ("hull_type", HULL_TYPES)):
             if key in meta and meta[key] not in allowed:
@@ -348,8 +347,6 @@ def load_vessel(path_or_name: str | Path) -> VesselData:
         raise ValueError(
             f"no vessel file {str(path_or_name)!r}; packaged vessels are {available_vessels()}"
         )
-    from .validation import check_file_size
-
     check_file_size(p)
     try:
         with p.open("rb") as fh:
