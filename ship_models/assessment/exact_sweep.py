@@ -2,8 +2,8 @@ r"""The exact surf-riding threshold over the Level 2 wave cases on the sweep eng
 
 :func:`exact_threshold_sweep` computes what
 :func:`~ship_models.assessment.exact.exact_threshold_grid` computes in one process, as
-tasks of the ship sweep layer (:func:`ship_models.analysis.sweeps.run_task`, task
-``"surf-riding-block"``) run by :func:`continuation.sweep.run_sweep`: on local
+tasks (:func:`run_block`, named ``"surf-riding-block"`` in the sweep's records) run
+by :func:`continuation.sweep.run_sweep`: on local
 processes, a Dask ``LocalCluster`` or a running Dask scheduler, checkpointed and
 resumable, without a change.
 
@@ -36,7 +36,7 @@ from continuation.typing import FloatArray
 
 from .exact import ExactGrid
 
-#: Name of the task in :func:`ship_models.analysis.sweeps.run_task`.
+#: Name of the task in the sweep's keys and records.
 TASK = "surf-riding-block"
 #: Default wavelengths per task: 8 tasks on the standard's 80 wavelengths, so that two
 #: workers share them evenly and one cold start serves 10 columns.
@@ -176,7 +176,7 @@ def exact_threshold_sweep(
         raise ValueError(f"`columns_per_task` must be at least 1, got {columns_per_task}")
     ref = _vessel_ref(str(vessel) if isinstance(vessel, Path) else vessel)
     keys = block_keys(ref, lam, s, columns_per_task=columns_per_task, ds_max=ds_max)
-    res = _run(keys, ref, "exact surf-riding threshold", run)
+    res = _run(run_block, keys, ref, "exact surf-riding threshold", run)
     Fn = np.full((lam.size, s.size), math.nan)
     err = np.full_like(Fn, math.nan)
     status = ["interrupted"] * lam.size

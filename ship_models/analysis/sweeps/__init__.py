@@ -20,13 +20,10 @@ Tasks (``key["task"]``):
   one row of the critical surface :math:`Fn^*(H/\lambda, \lambda/L)`.
 - ``"surge-line"`` -- the same for the uncoupled surge model (``chi_c = 0``,
   :func:`surge_threshold`): the surge-only threshold beside the surface.
-- ``"surf-riding-block"`` -- the exact surf-riding threshold of the surge model on a
-  block of the IMO Level 2 wave cases, continued across them
-  (:func:`ship_models.assessment.exact_sweep.run_block`; the sweep:
-  :func:`~ship_models.assessment.exact_sweep.exact_threshold_sweep`).
 
 Sweeps (the calling side): :func:`boundary_sweep`, :func:`courses_sweep`,
-:func:`surface_sweep`.
+:func:`surface_sweep`. The IMO Level 2 exact surf-riding grid runs on the same engine
+with its own task (:func:`ship_models.assessment.exact_sweep.exact_threshold_sweep`).
 
 Notes
 -----

@@ -15,6 +15,7 @@ from continuation.sweep import SweepResult
 from continuation.typing import FloatArray
 
 from .context import BRACKET_OFFSETS, MAP_OFFSETS, _model, _orbit, _run, _vessel_ref, _wave
+from .tasks import run_task
 
 log = logging.getLogger(__name__)
 
@@ -140,7 +141,7 @@ def boundary_sweep(
          "Fn_brackets": brackets, "tol": float(tol), "t_max": float(t_max), **common}
         for x in xs
     ]  # fmt: skip
-    b = _run(keys, vessel, "boundary", run)
+    b = _run(run_task, keys, vessel, "boundary", run)
     outcomes = None
     if (
         map_offsets is not None
@@ -153,7 +154,7 @@ def boundary_sweep(
              "chi_c_deg": float(chi_c_deg), "t_max": float(t_max), **common}
             for d in map_offsets for x in xs
         ]  # fmt: skip
-        outcomes = _run(mk, vessel, "outcome map", run)
+        outcomes = _run(run_task, mk, vessel, "outcome map", run)
     by_xi = {r.key["xi_0"]: r for r in b.records}
     Fn = np.array(
         [

@@ -6,6 +6,7 @@ from __future__ import annotations
 import hashlib
 import logging
 import math
+from collections.abc import Callable
 from typing import Any
 
 from continuation.errors import ContinuationError
@@ -109,13 +110,20 @@ def _vessel_ref(vessel: Any) -> str:
     return str(p.resolve()) if p.suffix == ".toml" or p.is_file() else vessel
 
 
-def _run(keys: list[dict[str, Any]], vessel: str, desc: str, run: dict[str, Any]) -> SweepResult:
+def _run(
+    task: Callable[[dict[str, Any]], dict[str, Any]],
+    keys: list[dict[str, Any]],
+    vessel: str,
+    desc: str,
+    run: dict[str, Any],
+) -> SweepResult:
+    """``task(key)`` for every key on :func:`continuation.sweep.run_sweep`, the vessel's
+    content as the checkpoints' context; ``run`` the caller's run options (named when
+    unknown)."""
     bad = set(run) - set(_RUN_OPTIONS)
     if bad:
         raise ValueError(f"unknown sweep option(s): {', '.join(sorted(bad))}")
-    from .tasks import run_task  # (the tasks use this module's caches)
-
-    return run_sweep(run_task, keys, context=vessel_context(vessel), desc=desc, **run)
+    return run_sweep(task, keys, context=vessel_context(vessel), desc=desc, **run)
 
 
 def _wave(m: Any, H_over_lambda: float | None, lambda_over_L: float | None) -> dict[str, float]:

@@ -15,6 +15,7 @@ from continuation.typing import FloatArray
 
 from .boundary import _sudden_keys
 from .context import BRACKET_OFFSETS, _model, _run, _vessel_ref, _wave
+from .tasks import run_task
 
 log = logging.getLogger(__name__)
 
@@ -82,7 +83,7 @@ def courses_sweep(
              "Fn_brackets": [[fh + a, fh + b] for a, b in BRACKET_OFFSETS], "tol": float(tol),
              "t_max": float(t_max), **common}
         )  # fmt: skip
-    b = _run(keys, vessel, "courses", run)
+    b = _run(run_task, keys, vessel, "courses", run)
     by = {r.key["chi_c_deg"]: r for r in b.records if r.done}
     Fn = np.array(
         [by[float(d)].value["Fn"] if float(d) in by and by[float(d)].value["Fn"] else np.nan

@@ -15,6 +15,7 @@ from continuation.sweep import SweepResult
 from continuation.typing import FloatArray
 
 from .context import _finite, _run, _vessel_ref
+from .tasks import run_task
 
 log = logging.getLogger(__name__)
 
@@ -106,7 +107,7 @@ def surface_sweep(
                      "H_over_lambda": hl, "tol": float(tol), "vessel": vessel})  # fmt: skip
         keys.append({"task": "surge-line", "lambda_over_L": float(lL), "H_over_lambda": hl,
                      "tol": float(surge_tol), "vessel": vessel})  # fmt: skip
-    res = _run(keys, vessel, "surface", run)
+    res = _run(run_task, keys, vessel, "surface", run)
     Fn = np.full((ls.size, hs.size), np.nan)
     Fs = np.full((ls.size, hs.size), np.nan)
     reasons = [""] * ls.size
@@ -136,7 +137,7 @@ def surface_sweep(
              "tol": float(check_tol), "t_max": float(check_t_max), "vessel": vessel}
             for i, j in pick
         ]  # fmt: skip
-        check_res = _run(ck, vessel, "surface checks", run)
+        check_res = _run(run_task, ck, vessel, "surface checks", run)
         for r in check_res.records:
             i, j = (
                 index[r.key["lambda_over_L"]],
@@ -162,7 +163,7 @@ def surface_sweep(
              "chi_c_deg": float(chi_c_deg), "Fn_heteroclinic": float(Fn[i, j]), "vessel": vessel}
             for i, j in pick
         ]  # fmt: skip
-        th_res = _run(tk, vessel, "surface thresholds", run)
+        th_res = _run(run_task, tk, vessel, "surface thresholds", run)
         for r in th_res.records:
             v = r.value if r.done else {}
             ths.append({"lambda_over_L": r.key["lambda_over_L"],

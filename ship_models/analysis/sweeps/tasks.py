@@ -133,13 +133,6 @@ def _threshold(key: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def _surf_riding_block(key: dict[str, Any]) -> dict[str, Any]:
-    """The exact surf-riding threshold on a block of IMO Level 2 wave cases."""
-    from ship_models.assessment.exact_sweep import run_block
-
-    return run_block(key)
-
-
 _TASKS = {
     "threshold": _threshold,
     "boundary": _boundary,
@@ -147,13 +140,12 @@ _TASKS = {
     "line": _line,
     "surge-line": _surge_line,
     "bisect": _bisect,
-    "surf-riding-block": _surf_riding_block,
 }
 
 
 def run_task(key: dict[str, Any]) -> dict[str, Any]:
     """Run one ship task (``key["task"]``: one of ``_TASKS``: threshold, boundary, outcome,
-    line, surge-line, bisect, surf-riding-block).
+    line, surge-line, bisect).
 
     The function handed to :func:`continuation.sweep.run_sweep`: module level, JSON in,
     JSON out (``None`` for values that do not exist), no timings (so the table does
