@@ -1,0 +1,271 @@
+"""Two-parameter continuation (continuation.codim2) on published problems at defaults.
+
+A robustness probe of fold and Hopf curves, their codimension-two points and the first
+Lyapunov coefficient, run the way a researcher would: ``continue_equilibria`` with
+default settings (a parameter window only), then ``continue_codim2`` from the located
+fold/Hopf points with default ``ContinuationSettings`` (a window in the second
+parameter only). None of these problems is used elsewhere in the tests.
+
+References are closed forms derived in the docstrings, published values (cited with
+the file they come from), or independent computations written here: SciPy root
+finders on hand-written defining equations (Routh-Hurwitz conditions of the
+characteristic polynomial) and an independent implementation of the first Lyapunov
+coefficient (Kuznetsov 2004, "Elements of Applied Bifurcation Theory", 3rd ed.,
+eq. (3.20)) with hand-written second and third derivatives (:func:`_l1`).
+
+Tolerances: curve rows and located codim-2 points are Newton solutions of the
+augmented systems (residual tolerance 1e-10, location tolerance 1e-10 in
+pseudo-arclength), so closed forms are met to 1e-8 absolute on O(1) quantities;
+published values are compared to the digits they are printed with.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from continuation import ContinuationSettings, System, continue_codim2, continue_equilibria
+from continuation.branch import SpecialKind
+from continuation.status import Status
+
+
+def _one(branch, kind):
+    """The single located special point of ``kind`` on ``branch``."""
+    found = branch.find(kind)
+    assert len(found) == 1, [(s.label, s.p) for s in branch.special_points]
+    assert found[0].located
+    return found[0]
+
+
+def _l1(J, B, C):
+    """First Lyapunov coefficient, Kuznetsov (2004) eq. (3.20), written independently.
+
+    ``J`` (n, n) has the pair ``±i omega``; ``B(u, v)``, ``C(u, v, w)`` are the
+    hand-written multilinear forms of the model (complex arguments allowed).
+    ``q``: ``J q = i omega q``, ``<q, q> = 1``; ``p``: ``J^T p = -i omega p``,
+    ``<p, q> = 1`` with ``<a, b> = conj(a) . b``.
+    """
+    lam, vec = np.linalg.eig(J)
+    k = int(np.argmin(np.abs(lam.real) + 1e3 * (lam.imag <= 0)))
+    om = lam[k].imag
+    q = vec[:, k] / np.linalg.norm(vec[:, k])
+    lt, vt = np.linalg.eig(J.T)
+    p = vt[:, int(np.argmin(np.abs(lt + 1j * om)))]
+    p = p / np.conj(np.vdot(p, q))
+    n = J.shape[0]
+    h11 = np.linalg.solve(J, B(q, q.conj()))
+    h20 = np.linalg.solve(2j * om * np.eye(n) - J, B(q, q))
+    val = np.vdot(p, C(q, q, q.conj())) - 2 * np.vdot(p, B(q, h11)) + np.vdot(p, B(q.conj(), h20))
+    return float(val.real / (2 * om)), om
+
+
+def _l1_along(curve):
+    """The engine's l1 at every row of a Hopf curve (NaN on neutral saddles)."""
+    P = curve.problem
+    return np.array([P.lyapunov_coefficient(z, p) for z, p in zip(curve.x, curve.p, strict=True)])
+
+
+# ============================================================================ Gray-Scott
+def gray_scott() -> System:
+    def rhs(x, p, ops):
+        F, k = p[0], p[1]
+        u, v = x[0], x[1]
+        return ops.stack([-u * v**2 + F * (1 - u), u * v**2 - (F + k) * v])
+
+    return System(rhs, ("u", "v"), ("F", "k"))
+
+
+def _gs_jac(u, v, F, k):
+    return np.array([[-(v**2) - F, -2 * u * v], [v**2, 2 * u * v - (F + k)]])
+
+
+def _gs_B(u, v):
+    def Bn(a, b):  # second derivative of u v^2
+        return 2 * v * (a[0] * b[1] + a[1] * b[0]) + 2 * u * a[1] * b[1]
+
+    return lambda a, b: np.array([-Bn(a, b), Bn(a, b)])
+
+
+def _gs_C(a, b, c):
+    cn = 2 * (a[0] * b[1] * c[1] + a[1] * b[0] * c[1] + a[1] * b[1] * c[0])
+    return np.array([-cn, cn])
+
+
+def _gs_hopf_point(v, sign=-1.0):
+    """Point of the Hopf curve parametrised by ``v`` (closed form, see the class)."""
+    c = (v + sign * np.sqrt(v * v - 4 * v**3)) / 2
+    F = c * c / v
+    return c / v, v, F, c - F  # u, v, F, k
+
+
+class TestGrayScott:
+    """Gray-Scott autocatalator in a CSTR (Gray & Scott 1983, Chem. Eng. Sci. 38, 29-43;
+    1984, Chem. Eng. Sci. 39, 1087-1097): ``u' = -u v^2 + F (1 - u)``,
+    ``v' = u v^2 - (F + k) v``.
+
+    With ``c = F + k``, a nontrivial equilibrium has ``u v = c`` and
+    ``c v^2 - F v + F c = 0``; ``J = [[-v^2 - F, -2c], [v^2, c]]``, so
+    ``tr J = c - v^2 - F`` and ``det J = c (v^2 - F)``.
+
+    * Fold curve (``det J = 0``, ``v^2 = F``, double root ``v = F/(2c)``):
+      ``F = 4 c^2``, i.e. ``F = s^2``, ``k = s/2 - s^2``, ``v = s``, ``u = 1/2``.
+    * Hopf curve (``tr J = 0``, ``det J > 0``): ``v = c^2/F``, ``v^2 = c - F``, i.e.
+      ``c^2 - v c + v^3 = 0``, ``F = c^2/v``, ``omega^2 = c (c - 2F)``.
+    * Bogdanov-Takens point (both): ``s = 1/4``: ``F = k = 1/16``, ``u = 1/2``,
+      ``v = 1/4`` (the double root ``v = 1/4`` of the Hopf parametrisation).
+    * At ``s = 0`` (``F = k = 0``) ``J = 0``: both eigenvalues vanish with a
+      two-dimensional kernel, a point of higher codimension that is neither a
+      Bogdanov-Takens point (which needs ``J != 0``, Kuznetsov 2004, Sec. 8.4) nor a
+      cusp (the fold curve is smooth there and its quadratic coefficient
+      ``a = -2 s^2 / (1 - 4 s)`` does not change sign). Regression: the engine
+      reported BT1 and CP1 there.
+    * Generalised Hopf point: the zero of ``l1`` on the Hopf curve, found
+      independently by ``brentq`` on :func:`_l1` with the hand-written derivatives;
+      it is the rational point ``(F, k) = (3/256, 9/256)``, ``v = 3/16``,
+      ``c = 3/64`` (to the 1e-12 of that root finder).
+    """
+
+    @pytest.fixture(scope="class")
+    @classmethod
+    def branch(cls):
+        F, k = 0.04, 0.055
+        c = F + k
+        v = (F + np.sqrt(F * F - 4 * F * c * c)) / (2 * c)
+        return continue_equilibria(gray_scott(), [c / v, v], {"F": F, "k": k}, "k",
+                                   p_min=0.0, p_max=0.1)  # fmt: skip
+
+    def test_one_parameter_points(self, branch):
+        # at F = 0.04: the fold where F = 4 c^2 (k = 0.06), the Hopf point from the
+        # Hopf parametrisation solved for F = 0.04
+        fold = _one(branch, "fold")
+        assert fold.p == pytest.approx(np.sqrt(0.04) / 2 - 0.04, abs=1e-10)
+        hopf = _one(branch, "hopf")
+        v = brentq(lambda v: _gs_hopf_point(v)[2] - 0.04, 0.2, 0.2499999)
+        u, v, F, k = _gs_hopf_point(v)
+        assert hopf.p == pytest.approx(k, abs=1e-10)
+        np.testing.assert_allclose(hopf.x, [u, v], atol=1e-9)
+        c = F + k
+        assert hopf.data["omega"] == pytest.approx(np.sqrt(c * (c - 2 * F)), abs=1e-9)
+
+    def test_fold_curve_bt_and_no_false_points_at_the_degenerate_corner(self, branch, caplog):
+        st = ContinuationSettings(p_min=0.0, p_max=0.3)
+        with caplog.at_level(logging.WARNING, logger="continuation.codim2"):
+            curve = continue_codim2(branch, _one(branch, "fold"), "F", st)
+        assert curve.status is Status.PARAM_BOUND
+        u, v, k, F = curve.x[:, 0], curve.x[:, 1], curve.records["k"], curve.p
+        np.testing.assert_allclose(F, v**2, atol=1e-9)
+        np.testing.assert_allclose(k, v / 2 - v**2, atol=1e-9)
+        np.testing.assert_allclose(u, 0.5, atol=1e-8)
+        # both sheets v > 0 and v < 0 are traced, through the corner F = k = 0
+        assert v.min() < -0.4 and v.max() > 0.4
+        bt = _one(curve, "bt")
+        assert bt.p == pytest.approx(1 / 16, abs=1e-9)
+        assert bt.data["k"] == pytest.approx(1 / 16, abs=1e-9)
+        np.testing.assert_allclose(bt.x[:2], [0.5, 0.25], atol=1e-8)
+        # the corner s = 0 (J = 0) is no BT point and no cusp
+        assert not curve.find("cusp") and not curve.find("zh")
+        assert "kernel has dimension two or more" in caplog.text
+
+    def test_hopf_curve_bt_and_bautin_point(self, branch):
+        curve = continue_codim2(
+            branch, _one(branch, "hopf"), "F", ContinuationSettings(p_min=0.005, p_max=0.3)
+        )
+        assert curve.status is Status.PARAM_BOUND
+        u, v, F, k = curve.x[:, 0], curve.x[:, 1], curve.p, curve.records["k"]
+        c = F + k
+        kappa = curve.records["kappa"]
+        np.testing.assert_allclose(u * v, c, atol=1e-9)
+        np.testing.assert_allclose(v**2, c - F, atol=1e-9)  # tr J = 0
+        np.testing.assert_allclose(kappa, c * (c - 2 * F), atol=1e-9)  # det J (< 0: saddle)
+        bt = _one(curve, "bt")
+        assert bt.p == pytest.approx(1 / 16, abs=1e-9)
+        assert bt.data["k"] == pytest.approx(1 / 16, abs=1e-9)
+
+        # the independent l1 of eq. (3.20) with hand-written derivatives, on the closed-form
+        # Hopf curve, and its zero by brentq
+        def l1_ref(v):
+            u, v, F, k = _gs_hopf_point(v)
+            return _l1(_gs_jac(u, v, F, k), _gs_B(u, v), _gs_C)[0]
+
+        v_gh = brentq(l1_ref, 0.1, 0.24, xtol=1e-14)
+        _, _, F_gh, k_gh = _gs_hopf_point(v_gh)
+        assert (F_gh, k_gh) == pytest.approx((3 / 256, 9 / 256), abs=1e-12)
+        gh = _one(curve, "gh")
+        assert gh.p == pytest.approx(F_gh, abs=1e-9)
+        assert gh.data["k"] == pytest.approx(k_gh, abs=1e-9)
+        assert gh.kind is SpecialKind.GENERALIZED_HOPF
+        # the engine's l1 against the independent one along the curve
+        l1 = _l1_along(curve)
+        for j in range(0, len(curve), 7):
+            if kappa[j] > 1e-4:
+                ref = _l1(_gs_jac(u[j], v[j], F[j], k[j]), _gs_B(u[j], v[j]), _gs_C)[0]
+                assert l1[j] == pytest.approx(ref, rel=1e-7, abs=1e-9 * abs(ref) + 1e-12)
+        assert not curve.find("zh") and not curve.find("hh") and not curve.find("cusp")
+
+
+# ===================================================================== FitzHugh-Nagumo
+def fitzhugh_nagumo() -> System:
+    def rhs(x, p, ops):
+        a, b, c = p[0], p[1], p[2]
+        return ops.stack([c * (x[0] - x[0] ** 3 / 3 + x[1]), -(x[0] - a + b * x[1]) / c])
+
+    return System(rhs, ("x", "y"), ("a", "b", "c"))
+
+
+def test_fitzhugh_nagumo_hopf_curve_and_bautin_points():
+    """AUTO-07p demo ``fhn`` (auto-07p/auto-07p, demos/fhn/fhn.f90 and c.fhn.1/3/4):
+    ``x' = c (x - x^3/3 + y)``, ``y' = -(x - a + b y)/c``, ``b = 0.8``, ``c = 3``,
+    equilibria continued in ``a`` from 0, the Hopf point continued in ``(a, c)``
+    up to ``c = 10``.
+
+    Equilibria: ``y = x^3/3 - x``, ``a = x + b (x^3/3 - x)``;
+    ``J = [[c k, c], [-1/c, -b/c]]``, ``k = 1 - x^2``. Hopf curve (``tr J = 0``):
+    ``x^2 = 1 - b/c^2``, ``omega^2 = det J = 1 - b^2/c^2``; no fold (``det J > 0`` for
+    ``b < 1``).
+
+    First Lyapunov coefficient in closed form, derived here from Kuznetsov (2004),
+    eq. (3.20): for a planar ``J = [[al, be], [ga, -al]]`` with the nonlinearity
+    ``(A xi^2 + C xi^3, 0)`` in the first equation only, ``q = (be, i omega - al)``,
+    ``p_1 = -ga / (2 omega (omega - i al))`` (conjugated), ``N = be^2 + al^2 + omega^2``
+    (for ``<q, q> = 1``), ``l1 = K (6 C + 4 A^2 al / omega^2)`` with
+    ``K = -be^3 ga / (4 omega (omega^2 + al^2) N)``. For FHN ``al = b/c``, ``be = c``,
+    ``ga = -1/c``, ``A = -c x``, ``C = -c/3``, so ``K > 0`` and
+    ``l1 = 2 c K (2 b x^2 / omega^2 - 1)``: the Bautin points are
+    ``c^2 = b^2/(2b - 1)``, ``x = ±sqrt((1 - b)/b)``; for ``b = 0.8``
+    ``c = sqrt(16/15)``, ``x = ±1/2``, ``a = ±2/15``, ``omega^2 = 2/5``.
+    """
+    b = 0.8
+    br = continue_equilibria(fitzhugh_nagumo(), [0, 0], {"a": 0, "b": b, "c": 3.0}, "a",
+                             p_min=-0.1, p_max=1.0, direction="forward")  # fmt: skip
+    hopf = _one(br, "hopf")
+    x_h = np.sqrt(1 - b / 9)  # the equilibrium at the Hopf point (x > 0 for a > 0)
+    assert hopf.p == pytest.approx(x_h + b * (x_h**3 / 3 - x_h), abs=1e-10)
+    assert hopf.data["omega"] == pytest.approx(np.sqrt(1 - b * b / 9), abs=1e-10)
+    curve = continue_codim2(br, hopf, "c", ContinuationSettings(p_min=0.0, p_max=10.0))
+    assert curve.status is Status.PARAM_BOUND and curve.p.max() == pytest.approx(10.0)
+    x, c, a = curve.x[:, 0], curve.p, curve.records["a"]
+    np.testing.assert_allclose(x**2, 1 - b / c**2, atol=1e-9)
+    np.testing.assert_allclose(a, x + b * (x**3 / 3 - x), atol=1e-9)
+    np.testing.assert_allclose(curve.records["omega"] ** 2, 1 - b * b / c**2, atol=1e-9)
+    # both arms x < 0 and x > 0 of the U-shaped curve, through its turn at c = sqrt(b)
+    assert x.min() < -0.9 and x.max() > 0.9
+    assert np.sqrt(b) - 1e-12 <= c.min() < np.sqrt(b) + 0.01
+    # l1 against the closed form along the curve
+    l1 = _l1_along(curve)
+    om2 = 1 - b * b / c**2
+    al, be, ga = b / c, c, -1 / c
+    N = be**2 + al**2 + om2
+    K = -(be**3) * ga / (4 * np.sqrt(om2) * (om2 + al**2) * N)
+    ref = K * (6 * (-c / 3) + 4 * (c * x) ** 2 * al / om2)
+    np.testing.assert_allclose(l1, ref, rtol=1e-8, atol=1e-10)
+    ghs = sorted(curve.find("gh"), key=lambda s: s.data["a"])
+    assert len(ghs) == 2 and all(g.located for g in ghs)
+    for g, sgn in zip(ghs, (-1, 1), strict=True):
+        assert g.p == pytest.approx(np.sqrt(b * b / (2 * b - 1)), abs=1e-9)
+        assert g.x[0] == pytest.approx(sgn * np.sqrt((1 - b) / b), abs=1e-8)
+        assert g.data["a"] == pytest.approx(sgn * 2 / 15, abs=1e-9)
+        assert g.data["omega"] ** 2 == pytest.approx(0.4, abs=1e-9)
+    assert not curve.find("bt") and not curve.find("zh") and not curve.find("hh")
