@@ -25,7 +25,7 @@ import logging
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
+from scipy.optimize import brentq, fsolve
 
 from continuation import ContinuationSettings, System, continue_codim2, continue_equilibria
 from continuation.branch import SpecialKind
@@ -190,7 +190,7 @@ class TestGrayScott:
             u, v, F, k = _gs_hopf_point(v)
             return _l1(_gs_jac(u, v, F, k), _gs_B(u, v), _gs_C)[0]
 
-        v_gh = brentq(l1_ref, 0.1, 0.24, xtol=1e-14)
+        v_gh = brentq(l1_ref, 0.1, 0.24, xtol=1e-12)
         _, _, F_gh, k_gh = _gs_hopf_point(v_gh)
         assert (F_gh, k_gh) == pytest.approx((3 / 256, 9 / 256), abs=1e-12)
         gh = _one(curve, "gh")
@@ -269,3 +269,157 @@ def test_fitzhugh_nagumo_hopf_curve_and_bautin_points():
         assert g.data["a"] == pytest.approx(sgn * 2 / 15, abs=1e-9)
         assert g.data["omega"] ** 2 == pytest.approx(0.4, abs=1e-9)
     assert not curve.find("bt") and not curve.find("zh") and not curve.find("hh")
+
+
+# ================================================================ A -> B -> C reaction
+ABC = {"alpha": 1.0, "B": 8.0, "s": 0.04}  # AUTO-07p demo abc, PAR(2), PAR(4), PAR(5)
+
+
+def abc_reaction() -> System:
+    def rhs(x, p, ops):
+        D, al, be, B, s = p[0], p[1], p[2], p[3], p[4]
+        e = ops.exp(x[2])
+        x1c = 1 - x[0]
+        return ops.stack(
+            [
+                -x[0] + D * x1c * e,
+                -x[1] + D * e * (x1c - s * x[1]),
+                -x[2] - be * x[2] + D * B * e * (x1c + al * s * x[1]),
+            ]
+        )
+
+    return System(rhs, ("x1", "x2", "x3"), ("D", "alpha", "beta", "B", "s"))
+
+
+def _abc_f(x, D, be, al=ABC["alpha"], B=ABC["B"], s=ABC["s"]):
+    e = np.exp(x[2])
+    return np.array(
+        [
+            -x[0] + D * (1 - x[0]) * e,
+            -x[1] + D * e * (1 - x[0] - s * x[1]),
+            -(1 + be) * x[2] + D * B * e * (1 - x[0] + al * s * x[1]),
+        ]
+    )
+
+
+def _abc_forms(x, D, be, al=ABC["alpha"], B=ABC["B"], s=ABC["s"]):
+    """Jacobian (3, 3) and the multilinear forms B, C, written out.
+
+    ``f = -diag(1, 1, 1 + beta) x + D e^{x3} (L1, L2, B L3)`` with the affine
+    ``L1 = 1 - x1``, ``L2 = 1 - x1 - s x2``, ``L3 = 1 - x1 + alpha s x2``; for
+    ``g = e^{x3} L``: ``d2g(p, q) = e^{x3} (L p3 q3 + (L'p) q3 + (L'q) p3)`` and
+    ``d3g(p, q, r) = e^{x3} (L p3 q3 r3 + (L'p) q3 r3 + (L'q) p3 r3 + (L'r) p3 q3)``.
+    """
+    e = np.exp(x[2])
+    L = np.array([1 - x[0], 1 - x[0] - s * x[1], 1 - x[0] + al * s * x[1]])
+    dL = np.array([[-1.0, 0, 0], [-1.0, -s, 0], [-1.0, al * s, 0]])
+    w = D * e * np.array([1.0, 1.0, B])
+    J = -np.diag([1.0, 1.0, 1 + be]) + w[:, None] * (dL + np.outer(L, [0, 0, 1.0]))
+
+    def Bf(p, q):
+        return w * (L * p[2] * q[2] + (dL @ p) * q[2] + (dL @ q) * p[2])
+
+    def Cf(p, q, r):
+        return w * (
+            L * p[2] * q[2] * r[2]
+            + (dL @ p) * q[2] * r[2]
+            + (dL @ q) * p[2] * r[2]
+            + (dL @ r) * p[2] * q[2]
+        )
+
+    return J, Bf, Cf
+
+
+def _charpoly(J):
+    """``[1, c1, ..., cn]`` of ``det(lambda I - J)``."""
+    return np.poly(J)
+
+
+@pytest.fixture(scope="module")
+def abc_branch():
+    return continue_equilibria(
+        abc_reaction(),
+        [0.0, 0.0, 0.0],
+        {"D": 0.0, "beta": 1.55, **ABC},
+        "D",
+        p_min=0.0,
+        p_max=0.4,
+        direction="forward",
+    )
+
+
+def test_abc_reaction_hopf_curve_bt_and_bautin_points(abc_branch):
+    """AUTO-07p demo ``abc`` (auto-07p/auto-07p, demos/abc/abc.f90, c.abc.1; Doedel &
+    Heinemann 1983, Chem. Eng. Sci. 38, 1493-1499): the A -> B -> C reaction in a CSTR,
+    ``x1' = -x1 + D (1 - x1) e^{x3}``, ``x2' = -x2 + D e^{x3} (1 - x1 - s x2)``,
+    ``x3' = -x3 - beta x3 + D B e^{x3} (1 - x1 + alpha s x2)``, ``alpha = 1``,
+    ``beta = 1.55``, ``B = 8``, ``s = 0.04``, continued in ``D`` from 0 to 0.4 as in the
+    demo; the Hopf points then continued in ``(D, beta)``, ``0 <= beta <= 5``.
+
+    References, all independent of the engine: the Hopf curve rows satisfy the
+    Routh-Hurwitz condition ``c1 c2 = c3`` of ``lambda^3 + c1 lambda^2 + c2 lambda + c3``
+    with ``kappa = c2`` (also on the neutral-saddle part, where ``c2 < 0``); the
+    Bogdanov-Takens points solve ``f = 0, c2 = c3 = 0`` (``fsolve``, hand-written ``f``);
+    the Bautin points are zeros of :func:`_l1` (eq. (3.20) with the derivatives of
+    :func:`_abc_forms`) along the Hopf curve solved by ``fsolve`` at fixed ``beta``,
+    found by ``brentq``. Every one of the demo's four Hopf points lies on the same
+    closed Hopf curve: each continuation finds the same two BT and four GH points.
+    """
+    hopfs = abc_branch.find("hopf")
+    assert len(hopfs) == 4 and all(h.located for h in hopfs)
+    assert not abc_branch.find("fold")
+    st = ContinuationSettings(p_min=0.0, p_max=5.0)
+    curves = [continue_codim2(abc_branch, h, "beta", st) for h in hopfs]
+    for curve in curves:
+        assert curve.status is Status.PARAM_BOUND
+        for z, be, D, kappa in zip(
+            curve.x, curve.p, curve.records["D"], curve.records["kappa"], strict=True
+        ):
+            assert np.abs(_abc_f(z[:3], D, be)).max() < 1e-9
+            c = _charpoly(_abc_forms(z[:3], D, be)[0])
+            assert c[1] * c[2] - c[3] == pytest.approx(0.0, abs=1e-8 * max(1.0, abs(c[3])))
+            assert kappa == pytest.approx(c[2], abs=1e-8)
+
+    def bt_eqs(v):
+        c = _charpoly(_abc_forms(v[:3], v[3], v[4])[0])
+        return [*_abc_f(v[:3], v[3], v[4]), c[2], c[3]]
+
+    def hopf_at(beta, guess):
+        def eqs(v):
+            c = _charpoly(_abc_forms(v[:3], v[3], beta)[0])
+            return [*_abc_f(v[:3], v[3], beta), c[1] * c[2] - c[3]]
+
+        v = fsolve(eqs, guess, xtol=1e-12)
+        assert np.abs(eqs(v)).max() < 1e-9  # (terms of c1 c2 - c3 reach 1e3)
+        return v
+
+    def l1_ref(beta, guess):
+        v = hopf_at(beta, guess)
+        return _l1(*_abc_forms(v[:3], v[3], beta))[0]
+
+    for curve in curves:
+        bts = sorted(curve.find("bt"), key=lambda q: q.p)
+        assert len(bts) == 2 and all(q.located for q in bts)
+        for q in bts:
+            ref = fsolve(bt_eqs, np.array([*q.x[:3], q.data["D"], q.p]) + 1e-4, xtol=1e-12)
+            assert np.abs(bt_eqs(ref)).max() < 1e-9  # c3 has terms of order 1e3 at x3 = 12
+            assert q.p == pytest.approx(ref[4], abs=1e-8)
+            assert q.data["D"] == pytest.approx(ref[3], abs=1e-8)
+        ghs = sorted(curve.find("gh"), key=lambda q: q.p)
+        assert len(ghs) == 4 and all(q.located for q in ghs)
+        for q in ghs:
+            guess = [*q.x[:3], q.data["D"]]
+            lo, hi = q.p - 1e-3, q.p + 1e-3
+            assert l1_ref(lo, guess) * l1_ref(hi, guess) < 0
+            beta_gh = brentq(l1_ref, lo, hi, args=(guess,), xtol=1e-13)
+            assert q.p == pytest.approx(beta_gh, abs=1e-8)
+            assert q.data["D"] == pytest.approx(hopf_at(beta_gh, guess)[3], abs=1e-8)
+        assert not curve.find("zh") and not curve.find("hh")
+    # one closed curve: the same points from each of the four starts
+    for curve in curves[1:]:
+        for kind in ("bt", "gh"):
+            np.testing.assert_allclose(
+                sorted(q.p for q in curve.find(kind)),
+                sorted(q.p for q in curves[0].find(kind)),
+                atol=1e-8,
+            )
