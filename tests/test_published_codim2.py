@@ -423,3 +423,204 @@ def test_abc_reaction_hopf_curve_bt_and_bautin_points(abc_branch):
                 sorted(q.p for q in curves[0].find(kind)),
                 atol=1e-8,
             )
+
+
+# ====================================================================== extended Lorenz-84
+L84 = {"alpha": 0.25, "beta": 1.0, "gamma": 0.987, "delta": 1.04, "G": 0.25}
+
+
+def lorenz84_extended() -> System:
+    def rhs(x, p, ops):
+        al, be, ga, de, G, F, T = p[0], p[1], p[2], p[3], p[4], p[5], p[6]
+        X, Y, Z, U = x[0], x[1], x[2], x[3]
+        return ops.stack(
+            [
+                -(Y**2) - Z**2 - al * X + al * F - ga * U**2,
+                X * Y - be * X * Z - Y + G,
+                be * X * Y + X * Z - Z,
+                -de * U + ga * U * X + T,
+            ]
+        )
+
+    return System(rhs, ("X", "Y", "Z", "U"), ("alpha", "beta", "gamma", "delta", "G", "F", "T"))
+
+
+def _l84_f(x, F, T, al=L84["alpha"], be=L84["beta"], ga=L84["gamma"], de=L84["delta"]):
+    X, Y, Z, U = x
+    G = L84["G"]
+    return np.array(
+        [
+            -(Y**2) - Z**2 - al * X + al * F - ga * U**2,
+            X * Y - be * X * Z - Y + G,
+            be * X * Y + X * Z - Z,
+            -de * U + ga * U * X + T,
+        ]
+    )
+
+
+def _l84_jac(x, al=L84["alpha"], be=L84["beta"], ga=L84["gamma"], de=L84["delta"]):
+    X, Y, Z, U = x
+    return np.array(
+        [
+            [-al, -2 * Y, -2 * Z, -2 * ga * U],
+            [Y - be * Z, X - 1, -be * X, 0.0],
+            [be * Y + Z, be * X, X - 1, 0.0],
+            [ga * U, 0.0, 0.0, -de + ga * X],
+        ]
+    )
+
+
+def _l84_B(p, q, be=L84["beta"], ga=L84["gamma"]):
+    """Second derivative of the (quadratic) vector field; the third vanishes."""
+    return np.array(
+        [
+            -2 * (p[1] * q[1] + p[2] * q[2] + ga * p[3] * q[3]),
+            p[0] * q[1] + p[1] * q[0] - be * (p[0] * q[2] + p[2] * q[0]),
+            be * (p[0] * q[1] + p[1] * q[0]) + p[0] * q[2] + p[2] * q[0],
+            ga * (p[3] * q[0] + p[0] * q[3]),
+        ]
+    )
+
+
+def _l84_C(p, q, r):
+    return np.zeros(4, dtype=complex)
+
+
+class TestExtendedLorenz84:
+    """Extended Lorenz-84 model of the MatCont tutorials (Kuznetsov), as in the
+    BifurcationKit.jl test suite (bifurcationkit/BifurcationKit.jl,
+    test/hopf_codim_2/lorenz84.jl): ``X' = -Y^2 - Z^2 - alpha X + alpha F - gamma U^2``,
+    ``Y' = X Y - beta X Z - Y + G``, ``Z' = beta X Y + X Z - Z``,
+    ``U' = -delta U + gamma U X + T``, ``alpha = 1/4``, ``beta = 1``, ``G = 1/4``,
+    ``delta = 1.04``, ``gamma = 0.987``; equilibria from the published start
+    ``z0`` at ``F = 3``, ``T = 0.04``, continued in ``F`` over ``[-1.5, 3]``; the fold
+    and Hopf points then in ``(F, T)``, ``|T| <= 0.1``.
+
+    Published values (that file): the one-parameter points lie in the bisection
+    brackets (2.859863413561998, 2.859897757930758), (2.467211879219629,
+    2.467246154619121), (1.619657484413436, 1.6196654620692468) (Hopf) and
+    (1.546648372620807, 1.5466483727182652) (fold); a double-Hopf point at
+    ``T = ±0.02627393`` (rtol 1e-5 there) and the Bautin point's frequency
+    ``omega = 0.6903636672622595`` (atol 1e-5 there). Its fold-curve values
+    ``T = 0.02058724, -0.02135893`` (BT) and ``4.983e-5, -4.5281e-4`` (ZH) are not used:
+    the model is invariant under ``(U, T) -> (-U, -T)``, so the fold curve and its
+    points are symmetric in ``T``, which those bisection values are not.
+
+    Independent references: BT ``f = 0, c3 = c4 = 0``; zero-Hopf
+    ``f = 0, c4 = 0, c1 c2 = c3`` (the cubic factor has ``±i omega``, ``c2 > 0``);
+    double Hopf ``f = 0, c1 = c3 = 0`` (two imaginary pairs, ``c2^2 > 4 c4 > 0``);
+    Hopf ``f = 0, c3 (c1 c2 - c3) = c1^2 c4`` (``omega^2 = c3 / c1``), all for
+    ``lambda^4 + c1 lambda^3 + ... + c4``, solved by ``fsolve``; the Bautin point by
+    ``brentq`` on :func:`_l1` along that Hopf curve. The cusp is the symmetric
+    pitchfork at ``T = 0``: ``U = 0``, ``X = delta/gamma`` (the ``U`` equation
+    decouples), ``(Y, Z)`` from the linear ``Y, Z`` equations at that ``X`` and
+    ``F = X + (Y^2 + Z^2)/alpha``.
+    """
+
+    @pytest.fixture(scope="class")
+    @classmethod
+    def branch(cls):
+        z0 = [2.9787004394953343, -0.03868302503393752, 0.058232737694740085, -0.02105288273117459]
+        return continue_equilibria(lorenz84_extended(), z0, {**L84, "F": 3.0, "T": 0.04}, "F",
+                                   p_min=-1.5, p_max=3.0)  # fmt: skip
+
+    def test_one_parameter_points_in_the_published_brackets(self, branch):
+        brackets = {
+            "hopf": [
+                (1.619657484413436, 1.6196654620692468),
+                (2.467211879219629, 2.467246154619121),
+                (2.859863413561998, 2.859897757930758),
+            ],
+            "fold": [(1.546648372620807, 1.5466483727182652)],
+        }
+        for kind, refs in brackets.items():
+            pts = sorted(branch.find(kind), key=lambda s: s.p)
+            assert len(pts) == len(refs) and all(s.located for s in pts)
+            for s, (lo, hi) in zip(pts, refs, strict=True):
+                # the published brackets come from bisection to ~1e-10: 1e-9 of slack
+                assert lo - 1e-9 <= s.p <= hi + 1e-9
+
+    def test_fold_curve_bt_zero_hopf_and_symmetric_cusp(self, branch):
+        curve = continue_codim2(
+            branch, _one(branch, "fold"), "T", ContinuationSettings(p_min=-0.1, p_max=0.1)
+        )
+        assert curve.status is Status.PARAM_BOUND
+
+        def bt_eqs(v):
+            c = _charpoly(_l84_jac(v[:4]))
+            return [*_l84_f(v[:4], v[4], v[5]), c[3], c[4]]
+
+        def zh_eqs(v):
+            c = _charpoly(_l84_jac(v[:4]))
+            return [*_l84_f(v[:4], v[4], v[5]), c[4], c[1] * c[2] - c[3]]
+
+        for kind, eqs in (("bt", bt_eqs), ("zh", zh_eqs)):
+            pts = sorted(curve.find(kind), key=lambda s: s.p)
+            assert len(pts) == 2 and all(s.located for s in pts)
+            assert pts[0].p == pytest.approx(-pts[1].p, abs=1e-9)  # the symmetry
+            for s in pts:
+                ref = fsolve(eqs, np.array([*s.x[:4], s.data["F"], s.p]) + 1e-5, xtol=1e-12)
+                assert np.abs(eqs(ref)).max() < 1e-11
+                assert s.p == pytest.approx(ref[5], abs=1e-9)
+                assert s.data["F"] == pytest.approx(ref[4], abs=1e-9)
+                if kind == "zh":
+                    assert _charpoly(_l84_jac(ref[:4]))[2] > 0  # imaginary pair, no saddle
+        cp = _one(curve, "cusp")
+        X = L84["delta"] / L84["gamma"]
+        Y, Z = np.linalg.solve([[X - 1, -X], [X, X - 1]], [-L84["G"], 0.0])  # beta = 1
+        assert abs(cp.p) < 1e-9 and abs(cp.x[3]) < 1e-9
+        np.testing.assert_allclose(cp.x[:3], [X, Y, Z], atol=1e-9)
+        assert cp.data["F"] == pytest.approx(X + (Y * Y + Z * Z) / L84["alpha"], abs=1e-9)
+        assert not curve.find("gh") and not curve.find("hh")
+
+    def test_hopf_curve_bt_bautin_and_double_hopf(self, branch):
+        h2 = sorted(branch.find("hopf"), key=lambda s: s.p)[1]  # F = 2.4672
+        curve = continue_codim2(branch, h2, "T", ContinuationSettings(p_min=-0.1, p_max=0.1))
+        assert curve.status is Status.PARAM_BOUND
+
+        def hopf_eqs(v, T):
+            c = _charpoly(_l84_jac(v[:4]))
+            return [*_l84_f(v[:4], v[4], T), c[3] * (c[1] * c[2] - c[3]) - c[1] ** 2 * c[4]]
+
+        def hh_eqs(v):
+            c = _charpoly(_l84_jac(v[:4]))
+            return [*_l84_f(v[:4], v[4], v[5]), c[1], c[3]]
+
+        for z, T, F, kappa in zip(
+            curve.x, curve.p, curve.records["F"], curve.records["kappa"], strict=True
+        ):
+            assert np.abs(hopf_eqs([*z[:4], F], T)).max() < 1e-9
+            c = _charpoly(_l84_jac(z[:4]))
+            assert kappa == pytest.approx(c[3] / c[1], rel=1e-8)
+        for kind, n_pts in (("bt", 2), ("gh", 2), ("hh", 2)):
+            pts = sorted(curve.find(kind), key=lambda s: s.p)
+            assert len(pts) == n_pts and all(s.located for s in pts), kind
+            assert pts[0].p == pytest.approx(-pts[1].p, abs=1e-9)  # the symmetry
+        for s in curve.find("hh"):
+            ref = fsolve(hh_eqs, np.array([*s.x[:4], s.data["F"], s.p]) + 1e-5, xtol=1e-12)
+            assert np.abs(hh_eqs(ref)).max() < 1e-11
+            c = _charpoly(_l84_jac(ref[:4]))
+            assert c[2] ** 2 > 4 * c[4] > 0  # two imaginary pairs
+            assert s.p == pytest.approx(ref[5], abs=1e-9)
+            assert abs(s.p) == pytest.approx(0.02627393, rel=1e-5)  # published
+        for s in curve.find("bt"):
+            bt = fsolve(
+                lambda v: [*_l84_f(v[:4], v[4], v[5]), *_charpoly(_l84_jac(v[:4]))[3:]],
+                np.array([*s.x[:4], s.data["F"], s.p]) + 1e-5,
+                xtol=1e-12,
+            )
+            assert s.p == pytest.approx(bt[5], abs=1e-9)
+            assert s.data["F"] == pytest.approx(bt[4], abs=1e-9)
+
+        def l1_ref(T, guess):
+            v = fsolve(hopf_eqs, guess, args=(T,), xtol=1e-12)
+            assert np.abs(hopf_eqs(v, T)).max() < 1e-11
+            return _l1(_l84_jac(v[:4]), _l84_B, _l84_C)[0]
+
+        for s in curve.find("gh"):
+            guess = [*s.x[:4], s.data["F"]]
+            T_gh = brentq(l1_ref, s.p - 1e-3, s.p + 1e-3, args=(guess,), xtol=1e-13)
+            assert s.p == pytest.approx(T_gh, abs=1e-9)
+            # published frequency at the Bautin point (to the 1e-5 printed there)
+            assert s.data["omega"] == pytest.approx(0.6903636672622595, abs=1e-5)
+        assert not curve.find("zh") and not curve.find("cusp")
