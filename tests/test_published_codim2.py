@@ -624,3 +624,126 @@ class TestExtendedLorenz84:
             # published frequency at the Bautin point (to the 1e-5 printed there)
             assert s.data["omega"] == pytest.approx(0.6903636672622595, abs=1e-5)
         assert not curve.find("zh") and not curve.find("cusp")
+
+
+# ============================================================ predator-prey with harvesting
+PP3 = {"p2": 0.25, "p3": 0.5, "p5": 3.0, "p6": 5.0}  # AUTO-07p demo pp3, STPNT
+
+
+def pp3() -> System:
+    def rhs(u, p, ops):
+        p1, p2, p3, p4, p5, p6 = (p[i] for i in range(6))
+        return ops.stack(
+            [
+                u[0] * (1 - u[0]) - p4 * u[0] * u[1],
+                -p2 * u[1] + p4 * u[0] * u[1] - p5 * u[1] * u[2] - p1 * (1 - ops.exp(-p6 * u[1])),
+                -p3 * u[2] + p5 * u[1] * u[2],
+            ]
+        )
+
+    return System(rhs, ("u1", "u2", "u3"), ("p1", "p2", "p3", "p4", "p5", "p6"))
+
+
+def _pp3_plane(p4):
+    """The equilibrium in the plane ``u3 = 0`` with ``u2 = p3/p5`` at ``p4``, and there
+    ``(p1, u1, J22)`` (see the test's docstring)."""
+    p2, p3, p5, p6 = PP3["p2"], PP3["p3"], PP3["p5"], PP3["p6"]
+    u2 = p3 / p5
+    u1 = 1 - p4 * u2
+    p1 = u2 * (p4 * u1 - p2) / (1 - np.exp(-p6 * u2))
+    J22 = -p2 + p4 * u1 - p1 * p6 * np.exp(-p6 * u2)
+    return p1, u1, u2, J22
+
+
+@pytest.fixture(scope="module")
+def pp3_branch():
+    from continuation import switch_branch
+
+    trivial = continue_equilibria(pp3(), [1.0, 0.0, 0.0], {"p1": 0.0, "p4": 4.0, **PP3}, "p1",
+                                  p_min=0.0, p_max=1.0)  # fmt: skip
+    st = ContinuationSettings(p_min=0.0, p_max=1.0, max_steps=200)
+    return switch_branch(trivial, _one(trivial, "bp").label, settings=st)
+
+
+def test_pp3_fold_curve_bt_points_without_false_cusps(pp3_branch):
+    """AUTO-07p demo ``pp3`` (auto-07p/auto-07p, demos/pp3/pp3.f90, pp3.auto): a
+    predator-prey-superpredator chain with exponential harvesting,
+    ``u1' = u1 (1 - u1) - p4 u1 u2``,
+    ``u2' = -p2 u2 + p4 u1 u2 - p5 u2 u3 - p1 (1 - e^{-p6 u2})``,
+    ``u3' = -p3 u3 + p5 u2 u3``, ``(p2, p3, p4, p5, p6) = (0.25, 0.5, 4, 3, 5)``:
+    from ``u = (1, 0, 0)`` in ``p1``, onto the branch through the transcritical point
+    ``p1 = (p4 - p2)/p6 = 0.75`` (as the demo), its fold continued in ``(p1, p4)``.
+
+    Closed forms. The planes ``u2 = 0`` and ``u3 = 0`` are invariant.
+    (i) In ``u3 = 0`` the ``u3`` eigenvalue ``-p3 + p5 u2`` vanishes at ``u2 = p3/p5 = 1/6``;
+    with ``u1 = 1 - p4 u2`` and ``p1`` from ``u2' = 0`` (:func:`_pp3_plane`) the planar
+    block has ``det = u1 (p4^2 u2 - J22)``, so the fold curve meets that eigenvalue at
+    ``J22 = p4^2 u2``: two Bogdanov-Takens points (``J`` has rank 2: the third column is
+    nonzero). There the left null vector is ``e3`` and ``B(v, v)_3 = 2 p5 v2 v3 = 0``,
+    so the cusp test vanishes at the BT points too, while the quadratic coefficient
+    ``a`` keeps its sign. Regression: they were also reported as cusps (CP2, CP3).
+    (ii) The fold curve meets the transcritical line ``u = (1, 0, 0)``,
+    ``p1 = (p4 - p2)/p6`` where the transcritical point's quadratic coefficient
+    (``u1 = 1 - p4 u2`` on the centre manifold) ``-p4^2 + p1 p6^2/2`` vanishes:
+    ``p4^2 - (p6/2) p4 + p2 p6/2 = 0``, ``p4 = (2.5 -+ sqrt(3.75))/2 = 0.28175, 2.21825``;
+    the Moore-Spence cusp test detects both (the fold's ``a`` changes sign there).
+    """
+    fold = _one(pp3_branch, "fold")
+    curve = continue_codim2(pp3_branch, fold, "p4", ContinuationSettings(p_min=0.25, p_max=4.0))
+    assert curve.status is Status.PARAM_BOUND
+    refs = []
+    for lo, hi in ((0.2, 0.6), (1.0, 1.6)):
+        p4 = brentq(lambda q: _pp3_plane(q)[3] - q * q * PP3["p3"] / PP3["p5"], lo, hi, xtol=1e-14)
+        refs.append((p4, *_pp3_plane(p4)[:3]))
+    bts = sorted(curve.find("bt"), key=lambda s: s.p)
+    assert len(bts) == 2 and all(s.located for s in bts)
+    for s, (p4, p1, u1, u2) in zip(bts, refs, strict=True):
+        assert s.p == pytest.approx(p4, abs=1e-9)
+        assert s.data["p1"] == pytest.approx(p1, abs=1e-9)
+        np.testing.assert_allclose(s.x[:3], [u1, u2, 0.0], atol=1e-8)
+    # both roots of the transcritical condition lie in the window; the second sits
+    # where the fold curve crosses the transcritical line next to a branch point of the
+    # Moore-Spence curve, where the corrector may fail: then it must be reported as
+    # bracketed (not located) with the root inside its bracket
+    half, disc = PP3["p6"] / 4, np.sqrt(PP3["p6"] ** 2 / 16 - PP3["p2"] * PP3["p6"] / 2)
+    roots = (half - disc, half + disc)
+    cps = sorted(curve.find("cusp"), key=lambda s: s.p)
+    assert len(cps) == 2 and cps[0].located
+    # the crossing makes the bordered Jacobian nearly singular there (its smallest
+    # singular value is ~2e-3 at the rows around it), so Newton fixes the trial points
+    # only to about tol / sigma_min: 1e-8 instead of 1e-9
+    for cp, p4 in zip(cps, roots, strict=True):
+        if cp.located:
+            assert cp.p == pytest.approx(p4, abs=1e-8)
+            assert cp.data["p1"] == pytest.approx((p4 - PP3["p2"]) / PP3["p6"], abs=1e-8)
+            np.testing.assert_allclose(cp.x[:3], [1.0, 0.0, 0.0], atol=1e-7)
+        else:
+            assert min(cp.bracket) <= p4 <= max(cp.bracket)
+
+
+def test_pp3_hopf_curve_zero_hopf_points(pp3_branch):
+    """The Hopf points of the same branch continued in ``(p1, p4)`` (the demo's Hopf
+    locus, ``ICP = [1, 4]``) up to ``p4 = 6``. In the plane ``u3 = 0`` the Hopf curve
+    (planar trace ``-u1 + J22 = 0``) meets the zero ``u3`` eigenvalue at ``u2 = 1/6``:
+    zero-Hopf points with ``J22 = u1`` and ``omega^2 = u1 (p4^2 u2 - u1)``, where the
+    Hopf curve of the branch with ``u3 != 0`` crosses it (a branch point of the curve,
+    also reported). Both Hopf points of the branch lie on one curve through both.
+    """
+    hopfs = pp3_branch.find("hopf")
+    assert len(hopfs) == 2
+    refs = []
+    for lo, hi in ((3.0, 4.0), (5.0, 5.9)):
+        p4 = brentq(lambda q: _pp3_plane(q)[3] - _pp3_plane(q)[1], lo, hi, xtol=1e-14)
+        refs.append((p4, *_pp3_plane(p4)[:3]))
+    for h in hopfs:
+        curve = continue_codim2(pp3_branch, h, "p4", ContinuationSettings(p_min=0.0, p_max=6.0))
+        assert curve.status is Status.PARAM_BOUND
+        zhs = sorted(curve.find("zh"), key=lambda s: s.p)
+        assert len(zhs) == 2 and all(s.located for s in zhs)
+        for s, (p4, p1, u1, u2) in zip(zhs, refs, strict=True):
+            assert s.p == pytest.approx(p4, abs=1e-9)
+            assert s.data["p1"] == pytest.approx(p1, abs=1e-9)
+            np.testing.assert_allclose(s.x[:3], [u1, u2, 0.0], atol=1e-8)
+            assert s.data["omega"] ** 2 == pytest.approx(u1 * (p4 * p4 * u2 - u1), abs=1e-9)
+        assert len(curve.find("bp")) == 2
+        assert not curve.find("bt") and not curve.find("gh") and not curve.find("hh")
