@@ -22,7 +22,7 @@ Each located zero is confirmed by the problem's ``classify`` (a ``zh``/``hh`` ze
 without an imaginary pair is a neutral saddle and is dropped; ``bt``/``cusp`` zeros
 where ``J`` has a kernel of dimension two or more are dropped; a sign change
 through a pole, as of ``l1`` where ``J`` becomes singular, is dropped; a cusp zero
-across which the quadratic coefficient keeps its sign is dropped) and stored as a
+at a located BT point is that BT point) and stored as a
 :class:`~continuation.branch.SpecialPoint` of kind ``bt``, ``cusp``, ``zh``, ``gh``
 (``hh`` has no dedicated kind yet and is stored as ``user`` with label ``HH<k>``).
 
@@ -156,25 +156,29 @@ def _kernel_grows(branch: Any, problem: AugmentedProblem, sp: Any) -> bool:
     return bool(s_pt < KERNEL_GROWTH * s_rows)
 
 
-def _cusp_without_sign_change(branch: Any, problem: AugmentedProblem, sp: Any) -> bool:
-    """True when the quadratic coefficient ``a`` keeps its sign across the cusp zero.
+#: a cusp-test zero within this relative distance of a located BT point is that point
+COINCIDE = 1e-7
 
-    The cusp test ``v^T adj(J) B(v, v) = 2 a (v^T adj(J) v)`` also changes sign where
-    the factor ``v^T adj(J) v`` does without a Bogdanov-Takens point, e.g. where
-    ``adj(J)`` passes through zero (the Jacobian's kernel grows); at a cusp ``a``
-    itself changes sign (Kuznetsov 2004, Sec. 8.2). ``a`` is evaluated at the two
-    rows around the zero, where ``v`` is continuous along the curve, so its sign
-    (which flips with ``v``) is comparable.
+
+def _cusp_at_bt(problem: AugmentedProblem, sp: Any, bts: Sequence[Any]) -> bool:
+    """True when the cusp-test zero ``sp`` is a located Bogdanov-Takens point of ``bts``.
+
+    The cusp test ``v^T adj(J) B(v, v)`` is ``w^T B(v, v)`` with the left null vector
+    ``w = adj(J)^T v``; at a BT point ``w`` is orthogonal to ``v`` and the test is the
+    BT point's own quadratic coefficient, which vanishes identically in models with an
+    invariant subspace (a zero row of ``J``: ``w`` a unit vector off the subspace, and
+    ``B(v, v)`` inside it). Such a zero at the BT point (the same point to ``COINCIDE``,
+    relative, in the state, ``free1`` and ``free2``) is that BT point (degenerate), not
+    a cusp; a cusp near but apart from a BT point (e.g. close to the codim-3 point
+    where they meet) is kept.
     """
-    i = sp.index
-    coef = getattr(problem, "quadratic_coefficient", None)
-    if coef is None or not 0 <= i < len(branch) - 1:
-        return False
-    a0 = coef(branch.x[i], branch.p[i])
-    a1 = coef(branch.x[i + 1], branch.p[i + 1])
-    if not (np.isfinite(a0) and np.isfinite(a1)):
-        return False
-    return bool(a0 * a1 > 0)
+    m = problem.n + 1
+    u = np.append(np.asarray(sp.x, dtype=float)[:m], sp.p)
+    for bt in bts:
+        ub = np.append(np.asarray(bt.x, dtype=float)[:m], bt.p)
+        if np.max(np.abs(u - ub)) <= COINCIDE * (1.0 + np.max(np.abs(ub))):
+            return True
+    return False
 
 
 def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
@@ -187,6 +191,11 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
     """
     counters: dict[str, int] = {}
     out = []
+    bts = [
+        sp
+        for sp in branch.special_points
+        if sp.label == _PREFIX + "bt" and sp.located and not _kernel_grows(branch, problem, sp)
+    ]
     for sp in branch.special_points:
         if not sp.label.startswith(_PREFIX):
             out.append(sp)
@@ -206,11 +215,10 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
                 "Bogdanov-Takens point" if kind == "bt" else "cusp",
             )
             kind = None
-        if kind == "cusp" and _cusp_without_sign_change(branch, problem, sp):
-            log.warning(
-                "fold curve: cusp test zero at %s=%.10g dropped: the quadratic coefficient "
-                "keeps its sign across it (the adjugate factor changed sign, not the "
-                "coefficient)",
+        if kind == "cusp" and _cusp_at_bt(problem, sp, bts):
+            log.info(
+                "fold curve: cusp test zero at %s=%.10g is the BT point there (its quadratic "
+                "coefficient vanishes), not a cusp",
                 branch.free,
                 sp.p,
             )
