@@ -486,6 +486,13 @@ def _l84_C(p, q, r):
     return np.zeros(4, dtype=complex)
 
 
+def _l84_branch():
+    """Equilibria from the published start ``z0`` (``F = 3``, ``T = 0.04``) in ``F``."""
+    z0 = [2.9787004394953343, -0.03868302503393752, 0.058232737694740085, -0.02105288273117459]
+    return continue_equilibria(lorenz84_extended(), z0, {**L84, "F": 3.0, "T": 0.04}, "F",
+                               p_min=-1.5, p_max=3.0)  # fmt: skip
+
+
 class TestExtendedLorenz84:
     """Extended Lorenz-84 model of the MatCont tutorials (Kuznetsov), as in the
     BifurcationKit.jl test suite (bifurcationkit/BifurcationKit.jl,
@@ -520,9 +527,7 @@ class TestExtendedLorenz84:
     @pytest.fixture(scope="class")
     @classmethod
     def branch(cls):
-        z0 = [2.9787004394953343, -0.03868302503393752, 0.058232737694740085, -0.02105288273117459]
-        return continue_equilibria(lorenz84_extended(), z0, {**L84, "F": 3.0, "T": 0.04}, "F",
-                                   p_min=-1.5, p_max=3.0)  # fmt: skip
+        return _l84_branch()
 
     def test_one_parameter_points_in_the_published_brackets(self, branch):
         brackets = {
@@ -747,3 +752,34 @@ def test_pp3_hopf_curve_zero_hopf_points(pp3_branch):
             assert s.data["omega"] ** 2 == pytest.approx(u1 * (p4 * p4 * u2 - u1), abs=1e-9)
         assert len(curve.find("bp")) == 2
         assert not curve.find("bt") and not curve.find("gh") and not curve.find("hh")
+
+
+def test_extended_lorenz84_points_shared_by_two_curves():
+    """Each codim-2 point lies on two codim-1 curves, computed from different augmented
+    systems: the zero-Hopf points of the fold curve are on the Hopf curve of the
+    first Hopf point (``F = 2.8599``), and the double-Hopf points of that curve are
+    those of the second Hopf point's curve, with the two frequencies swapped (setting
+    of :class:`TestExtendedLorenz84`)."""
+    br = _l84_branch()
+    st = ContinuationSettings(p_min=-0.1, p_max=0.1)
+    h1, h2 = sorted(br.find("hopf"), key=lambda s: s.p)[::-1][:2]  # F = 2.8599, 2.4672
+    fold = continue_codim2(br, _one(br, "fold"), "T", st)
+    c1 = continue_codim2(br, h1, "T", st)
+    c2 = continue_codim2(br, h2, "T", st)
+    for a, b in ((c1.find("zh"), fold.find("zh")), (c1.find("hh"), c2.find("hh"))):
+        a, b = sorted(a, key=lambda s: s.p), sorted(b, key=lambda s: s.p)
+        assert len(a) == len(b) == 2 and all(s.located for s in a + b)
+        for s, t in zip(a, b, strict=True):
+            assert s.p == pytest.approx(t.p, abs=1e-9)
+            assert s.data["F"] == pytest.approx(t.data["F"], abs=1e-9)
+            np.testing.assert_allclose(s.x[:4], t.x[:4], atol=1e-8)
+    for s, t in zip(
+        sorted(c1.find("hh"), key=lambda s: s.p),
+        sorted(c2.find("hh"), key=lambda s: s.p),
+        strict=True,
+    ):
+        lam = np.linalg.eigvals(_l84_jac(s.x[:4]))
+        np.testing.assert_allclose(
+            sorted(abs(lam.imag))[::2], sorted([s.data["omega"], t.data["omega"]]), atol=1e-8
+        )
+        assert abs(s.data["omega"] - t.data["omega"]) > 0.1
