@@ -835,3 +835,27 @@ class TestEmbeddedCSTR:
             assert abs(a_gh) < 1e-7 * abs(a_ref)
         assert not curve.find("zh") and not curve.find("user")
         assert curve.newton_iters.mean() < 4
+
+
+@pytest.mark.parametrize("ds_max", [0.1, 1.0])
+def test_cusp_next_to_a_bogdanov_takens_point_in_one_step(ds_max):
+    """CSTR of Uppal, Ray & Poore (1974) with B = 8.05, just above B = 8 where the cusp
+    (x1 = 1/2: beta = B/4 - 1, Da = e^{-2}) meets a Bogdanov-Takens point
+    (B x1^2 (1 - x1) = 1, beta = B x1 (1 - x1) - 1; see TestCSTR): both lie inside
+    one step of the fold curve. The cusp must be kept (a screen that compared the
+    quadratic coefficient's sign at the two rows dropped it: the coefficient has a pole
+    at the BT point and a zero at the cusp), and the BT point's own zero of the cusp
+    test is no cusp."""
+    B = 8.05
+    br = _branch(CSTR, [0.0, 0.0], {"Da": 0.0, "B": B, "beta": 0.5}, "Da", p_min=0.0,
+                 p_max=0.3, ds=0.01, direction="forward")  # fmt: skip
+    st = ContinuationSettings(ds=0.05, ds_max=ds_max, p_min=0.05, p_max=3.0)
+    curve = continue_codim2(br, br.find("fold")[0], "beta", st)
+    cp = _only(curve, "cusp")
+    assert cp.p == pytest.approx(B / 4 - 1, abs=1e-8)
+    assert cp.data["Da"] == pytest.approx(np.exp(-2.0), abs=1e-8)
+    x1 = np.roots([-B, B, 0.0, -1.0])  # B x1^2 (1 - x1) = 1
+    x1 = np.sort(x1[(abs(x1.imag) < 1e-12) & (x1.real > 0) & (x1.real < 1)].real)
+    bts = sorted(b.p for b in curve.find("bt"))
+    np.testing.assert_allclose(bts, np.sort(B * x1 * (1 - x1) - 1), atol=1e-8)
+    assert min(abs(b - cp.p) for b in bts) < 1e-3  # the two really are close

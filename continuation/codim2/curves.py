@@ -19,8 +19,10 @@ hopf        generalised Hopf ``gh``        first Lyapunov coefficient ``l1``
 =========== ============================== ===========================================
 
 Each located zero is confirmed by the problem's ``classify`` (a ``zh``/``hh`` zero
-without an imaginary pair is a neutral saddle and is dropped; a sign change
-through a pole, as of ``l1`` where ``J`` becomes singular, is dropped) and stored as a
+without an imaginary pair is a neutral saddle and is dropped; ``bt``/``cusp`` zeros
+where ``J`` has a kernel of dimension two or more are dropped; a sign change
+through a pole, as of ``l1`` where ``J`` becomes singular, is dropped; a cusp zero
+at a located BT point is that BT point) and stored as a
 :class:`~continuation.branch.SpecialPoint` of kind ``bt``, ``cusp``, ``zh``, ``gh``
 (``hh`` has no dedicated kind yet and is stored as ``user`` with label ``HH<k>``).
 
@@ -119,6 +121,66 @@ def _is_pole(branch: Any, problem: AugmentedProblem, name: str, sp: Any) -> bool
     return bool(g > 2.0 * max(ga, gb))
 
 
+#: a ``bt``/``cusp`` zero is dropped where the second-smallest singular value of ``J``
+#: falls below this fraction of its larger value at the two rows around the zero
+KERNEL_GROWTH = 1e-3
+
+
+def _second_singular_value(problem: AugmentedProblem, z: Any, p: float) -> float:
+    """Second-smallest singular value of ``J = df/dx`` at the curve point ``(z, p)``."""
+    s = np.linalg.svd(problem.state_jacobian(np.asarray(z, dtype=float), p), compute_uv=False)
+    return float(s[-2])
+
+
+def _kernel_grows(branch: Any, problem: AugmentedProblem, sp: Any) -> bool:
+    """True when ``J`` has a kernel of dimension two or more at the point ``sp``.
+
+    A Bogdanov-Takens point has ``J`` of rank ``n - 1`` (its double zero eigenvalue in
+    a nilpotent Jordan block; Kuznetsov 2004, Sec. 8.4, ``J_0 != 0`` for ``n = 2``),
+    and the cusp test ``v^T adj(J) B(v, v)`` vanishes wherever ``adj(J) = 0``, i.e.
+    wherever the rank drops below ``n - 1``. Along the curve the second-smallest
+    singular value ``s_{n-1}`` of ``J`` is continuous; it is judged against its own
+    values at the two rows around the point (so neither the scale of the model nor
+    the stiffness of ``J`` enters): at a point where the rank drops it falls below
+    ``KERNEL_GROWTH`` times the larger of them. Such a zero (e.g. ``J = 0`` in two
+    dimensions) marks a point of higher codimension, neither a BT point nor a cusp.
+    """
+    i = sp.index
+    if problem.n < 2 or not 0 <= i < len(branch) - 1:
+        return False
+    s_pt = _second_singular_value(problem, sp.x, sp.p)
+    s_rows = max(
+        _second_singular_value(problem, branch.x[i], branch.p[i]),
+        _second_singular_value(problem, branch.x[i + 1], branch.p[i + 1]),
+    )
+    return bool(s_pt < KERNEL_GROWTH * s_rows)
+
+
+#: a cusp-test zero within this relative distance of a located BT point is that point
+COINCIDE = 1e-7
+
+
+def _cusp_at_bt(problem: AugmentedProblem, sp: Any, bts: Sequence[Any]) -> bool:
+    """True when the cusp-test zero ``sp`` is a located Bogdanov-Takens point of ``bts``.
+
+    The cusp test ``v^T adj(J) B(v, v)`` is ``w^T B(v, v)`` with the left null vector
+    ``w = adj(J)^T v``; at a BT point ``w`` is orthogonal to ``v`` and the test is the
+    BT point's own quadratic coefficient, which vanishes identically in models with an
+    invariant subspace (a zero row of ``J``: ``w`` a unit vector off the subspace, and
+    ``B(v, v)`` inside it). Such a zero at the BT point (the same point to ``COINCIDE``,
+    relative, in the state, ``free1`` and ``free2``) is that BT point (degenerate), not
+    a cusp; a cusp near but apart from a BT point (e.g. close to the codim-3 point
+    where they meet) is kept.
+    """
+    m = problem.n + 1
+    u = np.append(np.asarray(sp.x, dtype=float)[:m], sp.p)
+    for bt in bts:
+        ub = np.append(np.asarray(bt.x, dtype=float)[:m], bt.p)
+        if np.max(np.abs(u - ub)) <= COINCIDE * (1.0 + np.max(np.abs(ub))):
+            return True
+    return False
+
+
 def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
     """Turn the driver's ``codim2:<name>`` user events into codim-2 special points.
 
@@ -129,6 +191,11 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
     """
     counters: dict[str, int] = {}
     out = []
+    bts = [
+        sp
+        for sp in branch.special_points
+        if sp.label == _PREFIX + "bt" and sp.located and not _kernel_grows(branch, problem, sp)
+    ]
     for sp in branch.special_points:
         if not sp.label.startswith(_PREFIX):
             out.append(sp)
@@ -137,6 +204,24 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
         z = np.asarray(sp.x, dtype=float)
         kind = problem.classify(name, z, sp.p) if sp.located else name  # type: ignore[attr-defined]
         if kind is not None and _is_pole(branch, problem, name, sp):
+            kind = None
+        if kind in ("bt", "cusp") and _kernel_grows(branch, problem, sp):
+            log.warning(
+                "%s test zero at %s=%.10g dropped: the Jacobian's kernel has dimension "
+                "two or more there (a point of higher codimension, not a %s)",
+                name,
+                branch.free,
+                sp.p,
+                "Bogdanov-Takens point" if kind == "bt" else "cusp",
+            )
+            kind = None
+        if kind == "cusp" and _cusp_at_bt(problem, sp, bts):
+            log.info(
+                "fold curve: cusp test zero at %s=%.10g is the BT point there (its quadratic "
+                "coefficient vanishes), not a cusp",
+                branch.free,
+                sp.p,
+            )
             kind = None
         if kind is None:
             log.debug("dropped %s zero at %s=%g (not a codim-2 point)", name, branch.free, sp.p)

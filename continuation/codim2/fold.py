@@ -43,7 +43,6 @@ import numpy as np
 from ..typing import FloatArray
 from ._base import (
     AugmentedProblem,
-    adjugate,
     null_vector,
     scaled_adjugate,
     signed_product,
@@ -101,7 +100,9 @@ class FoldProblem(AugmentedProblem):
         """
         x, v = self.state(z), self.vector(z)
         Pv = self.param_vector(z, p)
-        adj = adjugate(self.state_jacobian(z, p))
+        # the scaled adjugate: a positive multiple of adj(J), which cancels in the ratio,
+        # without the overflow of a product of n - 1 singular values (stiff or large J)
+        adj = scaled_adjugate(self.state_jacobian(z, p))
         w = adj.T @ v
         return float(w @ self.functions.bvv(x, Pv, v) / (2.0 * (w @ v)))
 
