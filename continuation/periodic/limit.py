@@ -211,11 +211,14 @@ def limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
     period on the mesh with every interval halved, ``delta = |p_{2N} - p_N|``. Rows
     within ``LIMIT_MARGIN delta + 1e-12 (1 + |p*|)`` of ``p*`` (the last term the
     round-off of ``p``) cannot tell on which side of the limit they are: the branch is
-    cut before the first of them, with ``Status.PERIOD_UNBOUNDED``. A discretised
+    cut after the last row farther than that from ``p*`` (before the tail of rows all
+    within it), with ``Status.PERIOD_UNBOUNDED``. Rows of a branch that snakes towards
+    a saddle-focus loop (Shilnikov), passing ``p*`` and turning back at folds of cycles
+    far from it on either side, are kept with their folds. A discretised
     cycle does not see the end (on a finite mesh the period stays finite and the rows
     may pass ``p*``, where no cycle exists), so this is where the branch must stop.
-    Only where the fit is as good as that bound: a cycle snaking towards a
-    saddle-focus loop (Shilnikov; cycles on both sides of ``p*``) is not ended here.
+    Only where the fit of the last rows is as good as that bound: a snake whose last
+    rows still swing about ``p*`` by more than it is not ended here.
     """
     n = len(br)
     if n < n_tail + 2:
@@ -255,22 +258,21 @@ def limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
         return None
     log.debug("period limit %s*=%.15g: delta %.2g, fit rms %.2g, last row %.3g from it",
               free, lim.p_star, delta, lim.fit_residual, float(br.p[-1]) - lim.p_star)  # fmt: skip
-    # the side of the rows: that of the rows before the period took off
-    T_all = np.asarray(br.records["T"], dtype=float)
-    rising = n - 1
-    while rising > 0 and T_all[rising - 1] < T_all[rising]:
-        rising -= 1
-    dist = np.asarray(br.p, dtype=float) - lim.p_star
-    side = math.copysign(1.0, float(dist[rising]) if dist[rising] != 0.0 else 1.0)
-    dist = side * dist
-    close = np.flatnonzero(dist[rising:] <= thr)
-    if close.size == 0:
+    # the rows that tell their side of p*: farther from it than thr. Where the branch
+    # snakes towards a saddle-focus loop (Shilnikov) it passes p* and turns back at
+    # folds of cycles, far from p* on both sides: those rows are cycles like any other
+    # and are kept (with their folds); the branch is cut after the last of them, before
+    # the tail whose rows all lie within thr of p*. (Cutting at the first row within
+    # thr of p* on the far side would drop the whole snake.)
+    dist = np.abs(np.asarray(br.p, dtype=float) - lim.p_star)
+    if dist[-1] > thr:
         return None
-    k = max(rising + int(close[0]) - 1, 1)
+    far = np.flatnonzero(dist > thr)
+    k = max(int(far[-1]) if far.size else 0, 1)
     msg = (
         f"{Status.PERIOD_UNBOUNDED.value} The period grows without bound towards "
         f"{free}*={lim.p_star:.12g} (fit of T = a - b ln|{free}* - {free}|); the rows "
-        f"stop {dist[k]:.2g} before it, where the parameter's discretisation error "
+        f"stop {dist[k]:.2g} from it, where the parameter's discretisation error "
         f"({delta:.1g}) no longer tells the side. Last period T={br.records['T'][k]:.10g} "
         f"at {free}={br.p[k]:.12g}."
     )
