@@ -1,0 +1,442 @@
+"""Periodic-orbit continuation at the default settings on published problems.
+
+Three of AUTO-07p's demos (Doedel et al., AUTO-07p manual, chapter "AUTO Demos"; the
+equations are those of ``demos/tor/tor.f90``, ``demos/chu/chu.f90`` and
+``demos/pp2/pp2.f90`` of the AUTO-07p repository), run as a researcher would: the
+equilibria in one parameter, the Hopf point, the cycles born there, with
+:class:`~continuation.settings.ContinuationSettings` at its defaults (only bounds set).
+Every value is checked against a closed form or an independent computation in this
+file (SciPy shooting with the variational equations, ``rtol = 1e-12``; stable and
+unstable manifolds integrated to a section):
+
+* ``tor`` -- Freire, Rodriguez-Luis, Gamero & Ponce (1993), "A case study for
+  homoclinic chaos in an autonomous electronic circuit", Physica D 62:230-253: a Hopf
+  point of the origin next to a pitchfork (both in one default step), a fold and a
+  symmetry-breaking branch point of cycles, a Shilnikov snake of folds of cycles.
+* ``chu`` -- Chua's circuit with the smooth nonlinearity ``|x| ~ (2 x / pi)
+  arctan(K x)``, ``K = 10`` (Khibnik, Roose & Chua 1993, "On periodic orbits and
+  homoclinic bifurcations in Chua's circuit with a smooth nonlinearity", IJBC
+  3:363-384): Hopf point, period doubling, the snake of folds and period doublings of
+  cycles approaching the saddle-focus homoclinic orbit of the origin.
+* ``pp2`` -- a predator-prey model with harvesting (AUTO-07p manual, demo pp2): a
+  branch of cycles ending at a heteroclinic cycle between two saddles on the prey axis.
+
+Tolerances. Cycles are solved with the collocation error estimate below ``error_tol =
+1e-6`` (states' units, the default), and special points located to ``1e-10`` in their
+test functions; the parameter of a special point or of the period limit then carries
+an error of the order of the states' error (the test functions are smooth functions of
+the cycle with O(1) derivatives), so 1e-6 is allowed, 1e-5 where a multiplier of the
+cycle is of order 1e4 (the snake). The SciPy references are converged to 1e-10 or
+better (checked by varying their own tolerances while writing the test).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from continuation import ContinuationSettings, Status, System, continue_equilibria
+from continuation.periodic import continue_from_hopf, multipliers, orbit_at, period_limit
+
+
+# ------------------------------------------------------------------ shooting reference
+def _flow(f, jac, x0, T, var=True):
+    """``x(T)`` and the monodromy ``dx(T)/dx0`` by SciPy (DOP853, rtol 1e-12)."""
+    n = x0.size
+    if not var:
+        r = solve_ivp(lambda t, x: f(x), (0, T), x0, rtol=1e-12, atol=1e-13, method="DOP853")
+        return r.y[:, -1], None
+
+    def rhs(t, y):
+        x, M = y[:n], y[n:].reshape(n, n)
+        return np.concatenate([f(x), (jac(x) @ M).ravel()])
+
+    y0 = np.concatenate([x0, np.eye(n).ravel()])
+    r = solve_ivp(rhs, (0, T), y0, rtol=1e-12, atol=1e-13, method="DOP853")
+    return r.y[:n, -1], r.y[n:, -1].reshape(n, n)
+
+
+def _shoot(f, jac, x0, T):
+    """The cycle through the section ``x[k] = x0[k]`` (``k``: the largest component of the
+    flow at ``x0``): Newton on ``x(T) - x0`` for the other components of ``x0`` and
+    ``T``. Returns ``(x0, T, monodromy)``."""
+    x0 = np.array(x0, dtype=float)
+    fix = int(np.argmax(np.abs(f(x0))))
+    free = [i for i in range(x0.size) if i != fix]
+    for _ in range(20):
+        xT, M = _flow(f, jac, x0, T)
+        A = np.column_stack([(M - np.eye(x0.size))[:, free], f(xT)])
+        d = np.linalg.solve(A, x0 - xT)
+        x0[free] += d[:-1]
+        T += d[-1]
+        if np.max(np.abs(d)) < 1e-11:
+            break
+    _, M = _flow(f, jac, x0, T)
+    return x0, T, M
+
+
+def _shoot_at_period(fp, jacp, p, x0, T, h=1e-7):
+    """The cycle of period ``T`` through the section of :func:`_shoot`: Newton for
+    ``(x0, p)`` (``d x(T) / dp`` by a forward difference). Returns ``p``."""
+    x0 = np.array(x0, dtype=float)
+    fix = int(np.argmax(np.abs(fp(x0, p))))
+    free = [i for i in range(x0.size) if i != fix]
+    for _ in range(20):
+        xT, M = _flow(lambda x, p=p: fp(x, p), lambda x, p=p: jacp(x, p), x0, T)
+        dp = (_flow(lambda x, p=p: fp(x, p + h), None, x0, T, var=False)[0] - xT) / h
+        A = np.column_stack([(M - np.eye(x0.size))[:, free], dp])
+        d = np.linalg.solve(A, x0 - xT)
+        x0[free] += d[:-1]
+        p += d[-1]
+        if np.max(np.abs(d)) < 1e-12:
+            break
+    return p
+
+
+def _nontrivial(M, f0):
+    """Multipliers of ``M`` without the trivial one (the eigenvalue nearest 1 whose
+    eigenvector is along the flow ``f0``)."""
+    w, V = np.linalg.eig(M)
+    along = np.abs(f0 @ V) / (np.linalg.norm(V, axis=0) * np.linalg.norm(f0))
+    k = int(np.argmax(along - np.abs(w - 1.0)))
+    return np.delete(w, k)
+
+
+# ------------------------------------------------------------------ tor (Freire et al. 1993)
+TOR = {"nu": -0.9, "beta": 0.5, "gamma": -0.6, "r": 0.6, "a3": 0.328578, "b3": 0.933578}
+
+
+def _tor_rhs(x, p, ops):
+    nu, be, ga, r, a3, b3 = p[0], p[1], p[2], p[3], p[4], p[5]
+    d3 = (x[1] - x[0]) ** 3
+    return ops.stack([
+        (-(be + nu) * x[0] + be * x[1] - a3 * x[0] ** 3 + b3 * d3) / r,
+        be * x[0] - (be + ga) * x[1] - x[2] - b3 * d3,
+        x[1],
+    ])  # fmt: skip
+
+
+def _tor_f(x, nu):
+    be, ga, r, a3, b3 = (TOR[k] for k in ("beta", "gamma", "r", "a3", "b3"))
+    d3 = (x[1] - x[0]) ** 3
+    return np.array([(-(be + nu) * x[0] + be * x[1] - a3 * x[0] ** 3 + b3 * d3) / r,
+                     be * x[0] - (be + ga) * x[1] - x[2] - b3 * d3, x[1]])  # fmt: skip
+
+
+def _tor_jac(x, nu):
+    be, ga, r, a3, b3 = (TOR[k] for k in ("beta", "gamma", "r", "a3", "b3"))
+    q = 3 * b3 * (x[1] - x[0]) ** 2
+    return np.array([[(-(be + nu) - 3 * a3 * x[0] ** 2 - q) / r, (be + q) / r, 0.0],
+                     [be + q, -(be + ga) - q, -1.0], [0.0, 1.0, 0.0]])  # fmt: skip
+
+
+def _tor_hopf():
+    r"""The Hopf point of the origin in closed form.
+
+    With ``a = (beta + nu) / r`` the characteristic polynomial at the origin is
+    :math:`\lambda^3 + (s + a)\lambda^2 + (q + a s)\lambda + a`, ``s = beta + gamma``,
+    ``q = 1 - beta^2 / r``; a pair ``+-i omega`` where ``(s + a)(q + a s) = a``, i.e.
+    :math:`s a^2 + (q + s^2 - 1) a + s q = 0`, with :math:`\omega^2 = q + a s > 0`.
+    Returns ``(nu_H, omega)`` for the root in ``nu > -0.9``.
+    """
+    be, ga, r = TOR["beta"], TOR["gamma"], TOR["r"]
+    s, q = be + ga, 1 - be**2 / r
+    roots = np.roots([s, q + s * s - 1, s * q]).real
+    nus = r * roots - be
+    nu = float(nus[nus > -0.9][0])
+    a = (be + nu) / r
+    return nu, math.sqrt(q + a * s)
+
+
+@pytest.fixture(scope="module")
+def tor_equilibria():
+    s = System(_tor_rhs, ("x", "y", "z"), tuple(TOR))
+    return continue_equilibria(s, [0, 0, 0], TOR, "nu", p_min=-0.9, p_max=-0.4,
+                               direction="forward")  # fmt: skip
+
+
+def test_tor_hopf_point_beside_the_pitchfork_at_defaults(tor_equilibria):
+    """The Hopf point of the origin (closed form) and the pitchfork at ``nu = -beta``.
+
+    At the default step the pitchfork (a real eigenvalue through zero) and the Hopf
+    point fall in one step, where the real and the pair counts of unstable eigenvalues
+    both change: the Hopf point was not detected before (regression)."""
+    eq = tor_equilibria
+    nu_h, omega = _tor_hopf()
+    (h,) = eq.find("hopf")
+    assert h.located and h.p == pytest.approx(nu_h, abs=1e-9)
+    assert h.data["omega"] == pytest.approx(omega, abs=1e-8)
+    (bp,) = eq.find("bp")
+    assert bp.located and bp.p == pytest.approx(-TOR["beta"], abs=1e-9)
+
+
+def test_tor_fold_and_symmetry_breaking_branch_point_of_cycles(tor_equilibria):
+    """The symmetric cycles from HB1 turn at a fold (LPC) and lose their symmetry at a
+    branch point (BPC), both within 0.006 of the Hopf point. References by shooting:
+    the LPC is the largest ``nu`` of the cycles of fixed period (a parabola through
+    three shooting solutions at fixed period around the LPC's); at the BPC one
+    nontrivial multiplier is 1 (secant of ``mu(nu) - 1`` from two shooting solutions)."""
+    eq = tor_equilibria
+    nu_h, omega = _tor_hopf()
+    br = continue_from_hopf(eq, eq.find("hopf")[0], ContinuationSettings(p_min=-0.7))
+    assert br.status == Status.PARAM_BOUND, br.message
+    assert br.records["T"][0] == pytest.approx(2 * math.pi / omega, rel=1e-3)
+    assert np.max(br.records["error"]) <= 1.01e-6
+    (lpc,) = br.find("fold")
+    (bpc,) = br.find("bp")
+    assert lpc.label == "LPC1" and bpc.label == "BPC1" and lpc.located and bpc.located
+    # LPC: max of nu over the cycles of fixed period
+    o = orbit_at(br, lpc)
+    h = 0.02
+    nus = [_shoot_at_period(_tor_f, _tor_jac, lpc.p, o.X[0], o.T + d) for d in (-h, 0.0, h)]
+    curv = (nus[0] - 2 * nus[1] + nus[2]) / h**2
+    nu_lpc = nus[1] - (nus[2] - nus[0]) ** 2 / (8 * h**2 * curv)
+    assert curv < 0 and lpc.p == pytest.approx(nu_lpc, abs=1e-6)
+    # BPC: a nontrivial multiplier crosses 1 along the symmetric branch
+    o = orbit_at(br, bpc)
+
+    def mu_near_1(nu):
+        x0, T, M = _shoot(lambda x: _tor_f(x, nu), lambda x: _tor_jac(x, nu), o.X[0], o.T)
+        w = _nontrivial(M, _tor_f(x0, nu))
+        return float(w[np.argmin(np.abs(w - 1.0))].real)
+
+    m0, m1 = mu_near_1(bpc.p), mu_near_1(bpc.p - 1e-4)
+    nu_bpc = bpc.p - (m0 - 1.0) * (-1e-4) / (m1 - m0)
+    assert bpc.p == pytest.approx(nu_bpc, abs=1e-6)
+    # the branch's own multipliers there: one of the nontrivial ones at 1
+    k = int(np.argmin(np.abs(br.p - bpc.p)))
+    assert np.min(np.abs(multipliers(br)[k] - 1.0)) < 0.2
+
+
+# ------------------------------------------------------------------ chu (Chua's circuit)
+CHUA = {"alpha": 1.0, "beta": 14.3, "K": 10.0, "a0": -1.0 / 7.0, "a1": 2.0 / 7.0}
+
+
+def _chua_rhs(x, p, ops):
+    al, be, K, a0, a1 = p[0], p[1], p[2], p[3], p[4]
+
+    def ab(u):
+        return 2 * u * ops.arctan(K * u) / math.pi
+
+    h = a1 * x[0] + 0.5 * (a0 - a1) * (ab(x[0] + 1) - ab(x[0] - 1))
+    return ops.stack([al * (x[1] - h), x[0] - x[1] + x[2], -be * x[1]])
+
+
+def _chua_h(x, derivative=False):
+    K, a0, a1 = CHUA["K"], CHUA["a0"], CHUA["a1"]
+    if derivative:
+        d = lambda u: 2 / math.pi * (np.arctan(K * u) + K * u / (1 + (K * u) ** 2))  # noqa: E731
+        return a1 + 0.5 * (a0 - a1) * (d(x + 1) - d(x - 1))
+    ab = lambda u: 2 * u * np.arctan(K * u) / math.pi  # noqa: E731
+    return a1 * x + 0.5 * (a0 - a1) * (ab(x + 1) - ab(x - 1))
+
+
+def _chua_f(x, al):
+    return np.array([al * (x[1] - _chua_h(x[0])), x[0] - x[1] + x[2], -CHUA["beta"] * x[1]])
+
+
+def _chua_jac(x, al):
+    return np.array([[-al * _chua_h(x[0], True), al, 0.0], [1.0, -1.0, 1.0],
+                     [0.0, -CHUA["beta"], 0.0]])  # fmt: skip
+
+
+def _chua_hopf():
+    r"""Hopf point of the equilibrium ``(x*, 0, -x*)``, ``h(x*) = 0``, in closed form.
+
+    With ``k = h'(x*)`` the characteristic polynomial is :math:`\lambda^3 + (1 + \alpha
+    k)\lambda^2 + (\beta + \alpha k - \alpha)\lambda + \alpha k \beta`; Routh-Hurwitz
+    ``a_2 a_1 = a_0`` gives :math:`\beta + \alpha (k - 1) + \alpha^2 k (k - 1) = 0`,
+    :math:`\omega^2 = \beta + \alpha k - \alpha`. Returns ``(x*, alpha_H, omega)``.
+    """
+    xs = brentq(_chua_h, 1.2, 2.0, xtol=1e-15)
+    k, be = _chua_h(xs, True), CHUA["beta"]
+    al = float(max(np.roots([k * (k - 1), k - 1, be]).real))
+    return xs, al, math.sqrt(be + al * k - al)
+
+
+def _chua_cycles(p_max, max_steps=500):
+    s = System(_chua_rhs, ("x", "y", "z"), tuple(CHUA))
+    xs = _chua_hopf()[0]
+    eq = continue_equilibria(s, [xs, 0, -xs], CHUA, "alpha", p_min=0.0, p_max=20.0,
+                             direction="forward")  # fmt: skip
+    st = ContinuationSettings(p_max=p_max, max_steps=max_steps)
+    return eq, continue_from_hopf(eq, eq.find("hopf")[0], st)
+
+
+def test_chua_hopf_and_period_doubling():
+    """Hopf point (closed form) and the first period doubling of the cycles born there.
+    Reference: at the located ``alpha`` the shooting monodromy has a multiplier at -1
+    (secant of ``mu(alpha) + 1`` from two shooting solutions gives ``alpha_PD``)."""
+    xs, al_h, omega = _chua_hopf()
+    eq, br = _chua_cycles(9.0)
+    (h,) = eq.find("hopf")
+    assert h.located and h.p == pytest.approx(al_h, abs=1e-9)
+    assert h.data["omega"] == pytest.approx(omega, abs=1e-8)
+    assert br.status == Status.PARAM_BOUND, br.message
+    (pd,) = br.find("pd")
+    assert pd.located and pd.data["mu"] == pytest.approx(-1.0, abs=1e-8)
+    o = orbit_at(br, pd)
+
+    def mu_near_m1(al):
+        x0, T, M = _shoot(lambda x: _chua_f(x, al), lambda x: _chua_jac(x, al), o.X[0], o.T)
+        w = _nontrivial(M, _chua_f(x0, al))
+        return float(w[np.argmin(np.abs(w + 1.0))].real), T
+
+    (m0, T0), (m1, _) = mu_near_m1(pd.p), mu_near_m1(pd.p + 1e-3)
+    al_pd = pd.p - (m0 + 1.0) * 1e-3 / (m1 - m0)
+    assert pd.p == pytest.approx(al_pd, abs=1e-6)
+    assert o.T == pytest.approx(T0, abs=1e-8)
+
+
+def _chua_homoclinic_alpha():
+    """``alpha`` of the homoclinic orbit of the origin (a saddle-focus) by bisection on the
+    side of its unstable manifold: the branch ``+v_u`` leaves the origin, spirals back
+    into it, and is ejected along ``+v_u`` or ``-v_u`` (``w_u . x`` at ``|x| = 0.4``
+    after it came within 0.15). The bisection brackets the sign change to 1e-13."""
+
+    def ev(r, d):
+        e = lambda t, x: float(x @ x) - r * r  # noqa: E731
+        e.terminal, e.direction = True, d
+        return e
+
+    def side(al):
+        J = _chua_jac(np.zeros(3), al)
+        w, V = np.linalg.eig(J)
+        wl, W = np.linalg.eig(J.T)
+        vu = V[:, int(np.argmax(w.real))].real
+        wu = W[:, int(np.argmax(wl.real))].real
+        wu = wu * np.sign(wu @ vu)
+        x = 1e-9 * vu
+        for r, d in ((0.5, 1), (0.15, -1), (0.4, 1)):
+            sol = solve_ivp(lambda t, y: _chua_f(y, al), (0, 60), x, rtol=1e-12, atol=1e-16,
+                            method="DOP853", events=ev(r, d))  # fmt: skip
+            x = sol.y_events[0][0] * (1 + 1e-12 * d)
+        return float(wu @ x)
+
+    return brentq(side, 11.07835, 11.07845, xtol=1e-13)
+
+
+@pytest.mark.slow
+def test_chua_cycles_snake_into_the_shilnikov_homoclinic_orbit():
+    """The cycles approach the homoclinic orbit of the saddle-focus origin (Shilnikov:
+    ``lambda_u = 2.83 > -Re lambda_s = 1.12``) by a snake: the branch passes the limit,
+    turns at folds of cycles on both sides of it, each with a period doubling beside it,
+    the period growing through every turn. The branch ends with PERIOD_UNBOUNDED at the
+    limit; before the fix the rows were cut at the first pass of the limit (no fold,
+    one PD)."""
+    al_hom = _chua_homoclinic_alpha()  # 11.0784015787...
+    _, br = _chua_cycles(20.0)
+    assert br.status == Status.PERIOD_UNBOUNDED, br.message
+    star = float(re.search(r"alpha\*=([0-9.]+)", br.message).group(1))
+    assert star == pytest.approx(al_hom, abs=1e-7)
+    assert abs(br.p[-1] - al_hom) < 1e-5
+    folds = br.find("fold")
+    assert len(folds) >= 4 and all(f.located for f in folds[:4])
+    left = [f.p for f in folds if f.p < al_hom]
+    right = [f.p for f in folds if f.p > al_hom]
+    assert left and right  # folds on both sides of the limit
+    # the folds close in on the limit
+    assert abs(folds[3].p - al_hom) < abs(folds[0].p - al_hom)
+    assert np.all(np.diff(br.records["T"]) > 0)
+    assert len(br.find("pd")) >= 4
+    assert np.max(br.records["error"]) <= 1.01e-6
+    # the last cycle passes next to the origin
+    o = orbit_at(br, len(br) - 1)
+    assert np.min(np.linalg.norm(o.X, axis=1)) < 1e-3
+
+
+# ------------------------------------------------------------------ pp2 (predator-prey)
+PP2 = {"quota": 0.0, "p2": 3.0, "p3": 5.0, "p4": 3.0}
+
+
+def _pp2_rhs(x, p, ops):
+    q, p2, p3, p4 = p[0], p[1], p[2], p[3]
+    return ops.stack([p2 * x[0] * (1 - x[0]) - x[0] * x[1] - q * (1 - ops.exp(-p3 * x[0])),
+                      -x[1] + p4 * x[0] * x[1]])  # fmt: skip
+
+
+def _pp2_hopf():
+    r"""Hopf point in closed form: at the coexistence equilibrium ``u1 = 1 / p4`` the
+    Jacobian has ``J22 = 0`` and trace ``J11 = p2 (1 - 2 u1) - u2 - q p3 e``, ``e =
+    exp(-p3 u1)``, ``u2 = p2 (1 - u1) - q (1 - e) / u1``; trace 0 at :math:`q =
+    p_2 u_1 / ((1 - e)/u_1 - p_3 e)`, :math:`\omega^2 = \det = p_4 u_1 u_2`."""
+    p2, p3, p4 = PP2["p2"], PP2["p3"], PP2["p4"]
+    u1 = 1 / p4
+    e = math.exp(-p3 * u1)
+    q = p2 * u1 / ((1 - e) / u1 - p3 * e)
+    u2 = p2 * (1 - u1) - q * (1 - e) / u1
+    return q, math.sqrt(p4 * u1 * u2)
+
+
+def _pp2_prey_equilibria(q):
+    """The two prey-only equilibria ``(u, 0)``, ``p2 (1 - u) = q (1 - exp(-p3 u)) / u``."""
+    p2, p3 = PP2["p2"], PP2["p3"]
+    g = lambda u: p2 * (1 - u) - q * (1 - math.exp(-p3 * u)) / u  # noqa: E731
+    us = np.linspace(1e-3, 1.0, 1001)
+    gv = [g(u) for u in us]
+    return [brentq(g, us[i], us[i + 1], xtol=1e-15) for i in range(us.size - 1)
+            if gv[i] * gv[i + 1] < 0]  # fmt: skip
+
+
+def _pp2_heteroclinic_quota():
+    """``quota`` where the unstable manifold of the large prey-only saddle ``A`` meets the
+    stable manifold of the small one ``B`` (both leave the prey axis into ``u2 > 0``;
+    the return ``B -> A`` along the axis exists for every quota): the gap in ``u2`` of
+    the two manifolds (integrated from 1e-6 along their eigenvectors) at the section
+    ``u1 = (u_A + u_B) / 2``, zero by Brent's method."""
+    p2, p3, p4 = PP2["p2"], PP2["p3"], PP2["p4"]
+
+    def gap(q):
+        uB, uA = _pp2_prey_equilibria(q)
+        f = lambda t, x: [p2 * x[0] * (1 - x[0]) - x[0] * x[1] - q * (1 - math.exp(-p3 * x[0])),  # noqa: E731
+                          -x[1] + p4 * x[0] * x[1]]  # fmt: skip
+        fp = lambda u: p2 * (1 - 2 * u) - q * p3 * math.exp(-p3 * u)  # noqa: E731
+        ends = []
+        for u, t_end in ((uA, 200.0), (uB, -200.0)):
+            lam = -1 + p4 * u  # the eigenvalue off the axis, eigenvector (-u / (lam - f'), 1)
+            v = np.array([-u / (lam - fp(u)), 1.0])
+            sec = lambda t, x: x[0] - 0.5 * (uA + uB)  # noqa: E731
+            sec.terminal = True
+            r = solve_ivp(f, (0, t_end), np.array([u, 0.0]) + 1e-6 * v / np.linalg.norm(v),
+                          events=sec, rtol=1e-12, atol=1e-14, method="DOP853")  # fmt: skip
+            ends.append(r.y_events[0][0][1])
+        return ends[0] - ends[1]
+
+    return brentq(gap, 0.705, 0.71, xtol=1e-14)
+
+
+def test_pp2_cycles_end_at_the_heteroclinic_cycle():
+    """From the Hopf point (closed form) the cycles grow until they approach the
+    heteroclinic cycle of the two prey-only saddles (the AUTO demo stops at period 36,
+    "when the heteroclinic orbit is very close"); at defaults the branch ends with
+    PERIOD_UNBOUNDED where the rows can no longer tell the side of the limit, the limit
+    within 1e-9 of the manifolds' reference (its own accuracy about 1e-13)."""
+    q_h, omega = _pp2_hopf()
+    s = System(_pp2_rhs, ("fish", "sharks"), tuple(PP2))
+    u1 = 1 / PP2["p4"]
+    eq = continue_equilibria(s, [u1, PP2["p2"] * (1 - u1)], PP2, "quota", p_min=0.0,
+                             p_max=1.0, direction="forward")  # fmt: skip
+    (h,) = eq.find("hopf")
+    assert h.located and h.p == pytest.approx(q_h, abs=1e-9)
+    assert h.data["omega"] == pytest.approx(omega, abs=1e-8)
+    br = continue_from_hopf(eq, h, ContinuationSettings(p_min=0.0, p_max=1.0))
+    assert br.status == Status.PERIOD_UNBOUNDED, br.message
+    assert br.records["T"][0] == pytest.approx(2 * math.pi / omega, rel=1e-3)
+    assert np.max(br.records["error"]) <= 1.01e-6
+    q_star = _pp2_heteroclinic_quota()  # 0.70807280749846
+    lim = period_limit(br)
+    assert lim.p_star == pytest.approx(q_star, abs=1e-9)
+    assert np.all(br.p < q_star) and br.p[-1] == pytest.approx(q_star, abs=1e-9)
+    assert br.records["T"][-1] > 60.0
+    # the saddle the cycle lingers at: the large prey-only equilibrium, its rate off the axis
+    uA = max(_pp2_prey_equilibria(q_star))
+    assert lim.saddle == pytest.approx([uA, 0.0], abs=1e-6)
+    assert lim.lambda_u == pytest.approx(-1 + PP2["p4"] * uA, rel=1e-6)
+    # every nontrivial multiplier is inside the unit circle (stable cycles) and tends to 0
+    mu = multipliers(br)[:, 0]
+    assert np.all(np.abs(mu) < 1.0) and abs(mu[-1]) < 1e-6
