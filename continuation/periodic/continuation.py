@@ -124,6 +124,7 @@ def continue_periodic(
     adapt_every: int = 0,
     error_tol: float | None = ERROR_TOL,
     max_intervals: int = 400,
+    previous: PeriodicOrbit | None = None,
 ) -> Branch:
     r"""Continue a branch of periodic orbits in the parameter ``free``.
 
@@ -191,6 +192,12 @@ def continue_periodic(
         branch at a homoclinic end but ``period_max``.
     max_intervals : int
         Cap on the number of intervals for ``error_tol``.
+    previous : PeriodicOrbit, optional
+        A cycle of the same branch just before the start: the first step then follows
+        the secant from it to the start (``direction`` ``"forward"``; ``"backward"``
+        the opposite way) instead of the sign of ``settings.ds`` in the parameter, as
+        where the branch is vertical in ``free`` (a pitchfork of cycles:
+        :func:`~continuation.periodic.branch_point.continue_from_branch_point`).
 
     Returns
     -------
@@ -238,23 +245,26 @@ def continue_periodic(
                events=events, progress=progress, throw=throw,
                error_tol=error_tol)  # fmt: skip
 
-    def one(st: ContinuationSettings) -> Branch:
+    def one(st: ContinuationSettings, prev: PeriodicOrbit | None) -> Branch:
         if adapt_every == 0 and error_tol is None:
-            return continue_once(orb, free, st, **run)  # type: ignore[arg-type]
-        return continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals)
+            return continue_once(orb, free, st, previous=prev, **run)  # type: ignore[arg-type]
+        return continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals,
+                                 previous=prev)  # fmt: skip
 
     back = dataclasses.replace(settings, ds=-settings.ds)
+    # the mirror of `previous` through the start: its secant points the other way
+    prev_back = None if previous is None else _mirrored(previous, orb, free)
     # one BLAS thread for the whole run, the start corrections and mesh adaptations
     # included (the driver limits only its own steps): the blocks are small, and on a
     # loaded 2-core machine OpenBLAS's second thread made the condensed factorisations
     # of AUTO's demo ab up to 100x slower (benchmarks/README.md)
     with blas_threads_for(orb.X.size, sparse=True):
         if direction == "forward":
-            br = one(settings)
+            br = one(settings, previous)
         elif direction == "backward":
-            br = one(back)
+            br = one(back, prev_back)
         else:
-            b, f = one(back), one(settings)
+            b, f = one(back, prev_back), one(settings, previous)
             if len(b) == 0 or len(f) == 0:
                 br = f if len(f) else b
             else:
@@ -263,6 +273,13 @@ def continue_periodic(
                     br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
                 )
         return _finish(br, free, period_max, error_tol)
+
+
+def _mirrored(previous: PeriodicOrbit, orb: PeriodicOrbit, free: str) -> PeriodicOrbit:
+    """``2 orb - previous`` on ``orb``'s mesh (the secant from it to ``orb`` reversed)."""
+    prev = previous.on_mesh(orb.mesh)
+    params = orb.params.replace(**{free: 2 * orb.param(free) - previous.param(free)})
+    return dataclasses.replace(prev, X=2 * orb.X - prev.X, T=2 * orb.T - prev.T, params=params)
 
 
 def _finish(

@@ -120,11 +120,13 @@ def continue_segments(
     run: dict[str, Any],
     error_tol: float | None = None,
     max_intervals: int = 400,
+    previous: PeriodicOrbit | None = None,
 ) -> Branch:
     """Segments of ``every`` steps, each on an equidistributed mesh, merged into one branch.
 
     See :func:`continue_periodic`; with ``error_tol`` the number of intervals grows where
-    the error estimate of a segment's last cycle exceeds it.
+    the error estimate of a segment's last cycle exceeds it. ``previous``: as for
+    :func:`continue_once`, for the first segment.
 
     Each segment after the first starts from the last cycle interpolated onto the
     equidistributed mesh; the driver's start correction (at fixed parameter) solves it
@@ -136,7 +138,8 @@ def continue_segments(
     segs: list[Branch] = []
     left = settings.max_steps
     st = settings
-    br = continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)), **run)
+    br = continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)),
+                       previous=previous, **run)  # fmt: skip
     while True:
         segs.append(br)
         left -= max(len(br) - 1, 0)
