@@ -213,6 +213,97 @@ def test_tor_fold_and_symmetry_breaking_branch_point_of_cycles(tor_equilibria):
     assert np.min(np.abs(multipliers(br)[k] - 1.0)) < 0.2
 
 
+def _tor_saddle(nu):
+    """The equilibrium ``(x, 0, beta x + b3 x^3)``, ``x^2 = -(beta + nu) / (a3 + b3)``."""
+    x = math.sqrt(-(TOR["beta"] + nu) / (TOR["a3"] + TOR["b3"]))
+    return np.array([x, 0.0, TOR["beta"] * x + TOR["b3"] * x**3])
+
+
+def _tor_homoclinic_nu():
+    """``nu`` of the homoclinic orbit of the saddle-focus ``E`` (:func:`_tor_saddle`;
+    eigenvalues -1.67 and 0.25 +- 0.63 i): its 1-D stable manifold, integrated backward
+    from ``E`` towards the origin's side, spirals back into ``E`` and is ejected along
+    ``+v_s`` or ``-v_s``; the side (``w_s . (x - E)`` where it leaves the ball of radius
+    0.3 after coming within 0.11) changes sign at the homoclinic orbit (Brent, 1e-14;
+    radii 0.115 and 0.25 give the same value to 3e-14)."""
+
+    def ev(E, r, d):
+        e = lambda t, x: float((x - E) @ (x - E)) - r * r  # noqa: E731
+        e.terminal, e.direction = True, d
+        return e
+
+    def side(nu):
+        E = _tor_saddle(nu)
+        J = _tor_jac(E, nu)
+        w, V = np.linalg.eig(J)
+        wl, W = np.linalg.eig(J.T)
+        vs = V[:, int(np.argmin(w.real))].real
+        vs = -vs * np.sign(vs @ E)
+        ws = W[:, int(np.argmin(wl.real))].real
+        ws = ws * np.sign(ws @ vs)
+        x = E + 1e-9 * vs
+        for r, d in ((0.5, 1), (0.11, -1), (0.3, 1)):
+            sol = solve_ivp(lambda t, y: -_tor_f(y, nu), (0, 100), x, rtol=1e-12, atol=1e-16,
+                            method="DOP853", events=ev(E, r, d))  # fmt: skip
+            x = E + (sol.y_events[0][0] - E) * (1 + 1e-12 * d)
+        return float(ws @ (x - E))
+
+    return brentq(side, -0.729, -0.7289, xtol=1e-14)
+
+
+def test_tor_switch_at_the_branch_point_onto_the_asymmetric_cycles(tor_equilibria):
+    """AUTO demo tor, run 3 (``run(r2('BP1'), ISW=-1)``): the asymmetric cycles born at
+    BPC1 lose stability at a Neimark-Sacker (torus) bifurcation, TR1, then period-double
+    and snake into the homoclinic orbit of the saddle-focus ``E``, with a fold and a
+    period doubling at every turn. ``switch_branch`` continues them as cycles (the NS was
+    reported as a 'hopf' point of the Floquet exponents before, no PD, no mesh
+    adaptation, rows past the homoclinic end). References: shooting for NS (``|mu| = 1``,
+    secant) and PD, the stable manifold of ``E`` for the end."""
+    from continuation import switch_branch
+
+    eq = tor_equilibria
+    br = continue_from_hopf(eq, eq.find("hopf")[0], ContinuationSettings(p_min=-0.7))
+    b2 = switch_branch(br, "BPC1", settings=ContinuationSettings(p_min=-0.9, p_max=-0.4),
+                       direction="forward")  # fmt: skip
+    assert not b2.find("hopf")
+    (ns,) = b2.find("ns")
+    assert ns.located
+    o = orbit_at(b2, ns)
+
+    def pair(nu):
+        x0, T, M = _shoot(lambda x: _tor_f(x, nu), lambda x: _tor_jac(x, nu), o.X[0], o.T)
+        w = _nontrivial(M, _tor_f(x0, nu))
+        return w[int(np.argmax(w.imag))]
+
+    w0, w1 = pair(ns.p), pair(ns.p - 1e-4)
+    nu_ns = ns.p - (abs(w0) - 1.0) * (-1e-4) / (abs(w1) - abs(w0))
+    assert ns.p == pytest.approx(nu_ns, abs=1e-6)  # -0.5916501950
+    assert ns.data["theta"] == pytest.approx(float(np.angle(w0)), abs=1e-6)  # 0.6090741
+    pds = b2.find("pd")
+    pd = pds[0]
+    assert pd.located and pd.p < ns.p
+    o = orbit_at(b2, pd)
+
+    def mu_near_m1(nu):
+        x0, T, M = _shoot(lambda x: _tor_f(x, nu), lambda x: _tor_jac(x, nu), o.X[0], o.T)
+        w = _nontrivial(M, _tor_f(x0, nu))
+        return float(w[np.argmin(np.abs(w + 1.0))].real)
+
+    m0, m1 = mu_near_m1(pd.p), mu_near_m1(pd.p - 1e-4)
+    assert pd.p == pytest.approx(pd.p - (m0 + 1.0) * (-1e-4) / (m1 - m0), abs=1e-6)
+    # a located PD has a multiplier at -1; deep in the snake (multipliers of 1e10 and
+    # more) sign changes of the PD test without one are reported as bracketed only
+    assert all(abs(p.data["mu"] + 1.0) <= 1e-3 for p in pds if p.located)
+    assert len(b2.find("fold")) >= 4
+    assert b2.status == Status.PERIOD_UNBOUNDED, b2.message
+    nu_hom = _tor_homoclinic_nu()  # -0.72894100482
+    star = float(re.search(r"nu\*=(-[0-9.]+)", b2.message).group(1))
+    assert star == pytest.approx(nu_hom, abs=1e-8)
+    lim = period_limit(b2)
+    assert lim.saddle == pytest.approx(_tor_saddle(nu_hom), abs=1e-6)
+    assert np.max(b2.records["error"]) <= 1.01e-6
+
+
 # ------------------------------------------------------------------ chu (Chua's circuit)
 CHUA = {"alpha": 1.0, "beta": 14.3, "K": 10.0, "a0": -1.0 / 7.0, "a1": 2.0 / 7.0}
 
@@ -344,6 +435,7 @@ def test_chua_cycles_snake_into_the_shilnikov_homoclinic_orbit():
     assert abs(folds[3].p - al_hom) < abs(folds[0].p - al_hom)
     assert np.all(np.diff(br.records["T"]) > 0)
     assert len(br.find("pd")) >= 4
+    assert all(abs(p.data["mu"] + 1.0) <= 1e-3 for p in br.find("pd") if p.located)
     assert np.max(br.records["error"]) <= 1.01e-6
     # the last cycle passes next to the origin
     o = orbit_at(br, len(br) - 1)
