@@ -32,6 +32,7 @@ better (checked by varying their own tolerances while writing the test).
 
 from __future__ import annotations
 
+import logging
 import math
 import re
 
@@ -413,7 +414,7 @@ def _chua_homoclinic_alpha():
 
 
 @pytest.mark.slow
-def test_chua_cycles_snake_into_the_shilnikov_homoclinic_orbit():
+def test_chua_cycles_snake_into_the_shilnikov_homoclinic_orbit(caplog):
     """The cycles approach the homoclinic orbit of the saddle-focus origin (Shilnikov:
     ``lambda_u = 2.83 > -Re lambda_s = 1.12``) by a snake: the branch passes the limit,
     turns at folds of cycles on both sides of it, each with a period doubling beside it,
@@ -440,6 +441,10 @@ def test_chua_cycles_snake_into_the_shilnikov_homoclinic_orbit():
     # the last cycle passes next to the origin
     o = orbit_at(br, len(br) - 1)
     assert np.min(np.linalg.norm(o.X, axis=1)) < 1e-3
+    # the kept rows swing about the limit: a fit of the monotone law to them says so
+    with caplog.at_level(logging.WARNING, logger="continuation.periodic.limit"):
+        lim = period_limit(br)
+    assert "unreliable" in caplog.text and lim.fit_residual > abs(br.p[-1] - lim.p_star)
 
 
 # ------------------------------------------------------------------ pp2 (predator-prey)
@@ -502,7 +507,7 @@ def _pp2_heteroclinic_quota():
     return brentq(gap, 0.705, 0.71, xtol=1e-14)
 
 
-def test_pp2_cycles_end_at_the_heteroclinic_cycle():
+def test_pp2_cycles_end_at_the_heteroclinic_cycle(caplog):
     """From the Hopf point (closed form) the cycles grow until they approach the
     heteroclinic cycle of the two prey-only saddles (the AUTO demo stops at period 36,
     "when the heteroclinic orbit is very close"); at defaults the branch ends with
@@ -521,7 +526,9 @@ def test_pp2_cycles_end_at_the_heteroclinic_cycle():
     assert br.records["T"][0] == pytest.approx(2 * math.pi / omega, rel=1e-3)
     assert np.max(br.records["error"]) <= 1.01e-6
     q_star = _pp2_heteroclinic_quota()  # 0.70807280749846
-    lim = period_limit(br)
+    with caplog.at_level(logging.WARNING, logger="continuation.periodic.limit"):
+        lim = period_limit(br)
+    assert "unreliable" not in caplog.text  # (a monotone approach)
     assert lim.p_star == pytest.approx(q_star, abs=1e-9)
     assert np.all(br.p < q_star) and br.p[-1] == pytest.approx(q_star, abs=1e-9)
     assert br.records["T"][-1] > 60.0

@@ -154,7 +154,7 @@ def _log_fit(
     return p_star, math.exp(q), rms
 
 
-def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
+def period_limit(branch: Branch, n_fit: int = 8, *, warn: bool = True) -> PeriodLimit:
     """The limit of a cycle branch whose period grows (see :class:`PeriodLimit`).
 
     Parameters
@@ -164,6 +164,16 @@ def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
         ``Status.PERIOD_UNBOUNDED``).
     n_fit : int
         Number of last rows in the fit (at least 4).
+    warn : bool
+        Log a warning where the fit is poor (below).
+
+    Notes
+    -----
+    The law holds for a monotone approach. Where the branch snakes towards a
+    saddle-focus loop (Shilnikov: folds of cycles on both sides of ``p*``) its rows
+    swing about the limit and the fit is poor (``fit_residual`` larger than the last
+    row's distance from ``p_star``; a warning is logged); the branch's message then
+    holds the limit ``continue_periodic`` fitted on the converged rows beyond its end.
     """
     problem_at(branch, 0)  # (checks the branch)
     if not (isinstance(n_fit, int) and n_fit >= 4):
@@ -181,6 +191,15 @@ def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
         p_star, b, rms = _log_fit(p, T, 1.0 / lam_u if lam_u > 0 else None)
     except (ValueError, np.linalg.LinAlgError, FloatingPointError):
         p_star, b, rms = math.nan, math.nan, math.nan
+    if warn and math.isfinite(rms) and rms > abs(float(p[-1]) - p_star) > 0.0:
+        # the rows swing about the limit by more than they are from it: a branch that
+        # snakes towards a saddle-focus loop (folds of cycles on both sides of p*), whose
+        # end continue_periodic cuts before such rows (the limit it fitted on the rows
+        # past the cut is in the branch's message)
+        log.warning("period limit %s*=%.10g: the last %d rows do not follow T = a - b ln|%s* - "
+                    "%s| (fit residual %.2g, last row %.2g from the limit): p* is unreliable",
+                    branch.free, p_star, k, branch.free, branch.free, rms,
+                    abs(float(p[-1]) - p_star))  # fmt: skip
     t0 = float(orb.t[q])
     t = np.linspace(t0, t0 + orb.T, 4 * orb.mesh.n_points)
     x = orb(t)
@@ -232,7 +251,7 @@ def limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
     if not (np.all(dp > 0) or np.all(dp < 0) or stalled):
         return None  # (the parameter turns: not the monotone approach, e.g. snaking)
     try:
-        lim = period_limit(br, n_fit=n_tail)
+        lim = period_limit(br, n_fit=n_tail, warn=False)
     except (ValueError, np.linalg.LinAlgError):
         return None
     if not math.isfinite(lim.p_star):
