@@ -46,6 +46,7 @@ from ..settings import ContinuationSettings
 from ..status import Status
 from ..system import as_params
 from ..typing import FloatArray
+from .collapse import hopf_end
 from .limit import LIMIT_MARGIN, PeriodLimit, period_limit
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
 from .rows import (
@@ -199,6 +200,12 @@ def continue_periodic(
         where the branch is vertical in ``free`` (a pitchfork of cycles:
         :func:`~continuation.periodic.branch_point.continue_from_branch_point`).
 
+    A branch whose cycles shrink onto an equilibrium (a Hopf point: their amplitude
+    passes through zero between two rows) ends at the row before, with
+    ``Status.EVENT`` and a Hopf point ``"H"`` bracketed there
+    (:func:`~continuation.periodic.collapse.hopf_end`): beyond it the rows would retrace
+    the branch, with a false fold of cycles at the Hopf point.
+
     Returns
     -------
     Branch
@@ -247,7 +254,8 @@ def continue_periodic(
 
     def one(st: ContinuationSettings, prev: PeriodicOrbit | None) -> Branch:
         if adapt_every == 0 and error_tol is None:
-            return continue_once(orb, free, st, previous=prev, **run)  # type: ignore[arg-type]
+            br = continue_once(orb, free, st, previous=prev, **run)  # type: ignore[arg-type]
+            return hopf_end(br, free) or br
         return continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals,
                                  previous=prev)  # fmt: skip
 
