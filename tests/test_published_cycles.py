@@ -85,16 +85,43 @@ def _shoot_at_period(fp, jacp, p, x0, T, h=1e-7):
     """The cycle of period ``T`` through the section of :func:`_shoot`: Newton for
     ``(x0, p)`` (``d x(T) / dp`` by a forward difference). Returns ``p``."""
     x0 = np.array(x0, dtype=float)
+    n = x0.size
     fix = int(np.argmax(np.abs(fp(x0, p))))
-    free = [i for i in range(x0.size) if i != fix]
-    for _ in range(20):
+    free = [i for i in range(n) if i != fix]
+    for _ in range(30):
         xT, M = _flow(lambda x, p=p: fp(x, p), lambda x, p=p: jacp(x, p), x0, T)
         dp = (_flow(lambda x, p=p: fp(x, p + h), None, x0, T, var=False)[0] - xT) / h
-        A = np.column_stack([(M - np.eye(x0.size))[:, free], dp])
+        A = np.column_stack([(M - np.eye(n))[:, free], dp])
         d = np.linalg.solve(A, x0 - xT)
         x0[free] += d[:-1]
         p += d[-1]
-        if np.max(np.abs(d)) < 1e-12:
+        if abs(d[-1]) < 1e-13 * (1 + abs(p)) and np.max(np.abs(d[:-1])) < 1e-11 * (
+            1 + np.max(np.abs(x0))
+        ):
+            break
+    return p
+
+
+def _shoot_through(fp, jacp, dfdp, p, x0, T):
+    """The planar cycle through the point ``x0``: Newton for ``(T, p)`` on ``x(T) = x0``
+    (the variational equations for ``d x(T) / dp``). Returns ``p``."""
+    x0 = np.asarray(x0, dtype=float)
+    n = x0.size
+
+    def rhs(t, y, p):
+        x, W = y[:n], y[n:].reshape(n, n + 1)
+        J = jacp(x, p)
+        return np.concatenate([fp(x, p), (J @ W + np.column_stack(
+            [np.zeros((n, n)), dfdp(x, p)])).ravel()])  # fmt: skip
+
+    W0 = np.column_stack([np.eye(n), np.zeros(n)]).ravel()
+    for _ in range(30):
+        r = solve_ivp(rhs, (0, T), np.concatenate([x0, W0]), args=(p,), rtol=1e-12,
+                      atol=1e-13, method="DOP853")  # fmt: skip
+        xT, dp = r.y[:n, -1], r.y[n:, -1].reshape(n, n + 1)[:, n]
+        d = np.linalg.solve(np.column_stack([fp(xT, p), dp]), x0 - xT)
+        T, p = T + d[0], p + d[1]
+        if abs(d[1]) < 1e-13 * (1 + abs(p)) and abs(d[0]) < 1e-11 * (1 + T):
             break
     return p
 
@@ -539,3 +566,98 @@ def test_pp2_cycles_end_at_the_heteroclinic_cycle(caplog):
     # every nontrivial multiplier is inside the unit circle (stable cycles) and tends to 0
     mu = multipliers(br)[:, 0]
     assert np.all(np.abs(mu) < 1.0) and abs(mu[-1]) < 1e-6
+
+
+# ------------------------------------------------------------------ plp (activator-inhibitor)
+PLP = {"s0": 110.0, "a0": 500.0, "alpha": 0.2, "rho": 2.021628, "kappa": 0.1}
+
+
+def _plp_rhs(x, p, ops):
+    s0, a0, al, rho, k = p[0], p[1], p[2], p[3], p[4]
+    R = x[0] * x[1] / (1 + x[0] + k * x[0] ** 2)
+    return ops.stack([(s0 - x[0]) - rho * R, al * (a0 - x[1]) - rho * R])
+
+
+def _plp_f(x, rho):
+    R = x[0] * x[1] / (1 + x[0] + PLP["kappa"] * x[0] ** 2)
+    return np.array([(PLP["s0"] - x[0]) - rho * R, PLP["alpha"] * (PLP["a0"] - x[1]) - rho * R])
+
+
+def _plp_jac(x, rho):
+    s, a, k = x[0], x[1], PLP["kappa"]
+    D = 1 + s + k * s * s
+    Rs, Ra = (a * D - s * a * (1 + 2 * k * s)) / D**2, s / D
+    return np.array([[-1 - rho * Rs, -rho * Ra], [-rho * Rs, -PLP["alpha"] - rho * Ra]])
+
+
+def _plp_dfdrho(x, rho):
+    R = x[0] * x[1] / (1 + x[0] + PLP["kappa"] * x[0] ** 2)
+    return np.array([-R, -R])
+
+
+def _plp_hopf_points():
+    r"""The Hopf points of the equilibria, parametrised by ``s``.
+
+    An equilibrium has ``a = a0 - (s0 - s) / alpha`` and ``rho = (s0 - s) / R(s, a)``;
+    its Jacobian :func:`_plp_jac` has trace zero (Brent on ``s``) with positive
+    determinant :math:`\omega^2`. Returns ``[(rho_H, omega), ...]`` in increasing ``rho``.
+    """
+    s0, a0, al = PLP["s0"], PLP["a0"], PLP["alpha"]
+
+    def at(s):
+        a = a0 - (s0 - s) / al
+        rho = (s0 - s) * (1 + s + PLP["kappa"] * s * s) / (s * a)
+        return rho, _plp_jac(np.array([s, a]), rho)
+
+    ss = np.linspace(s0 - al * a0 + 1e-6, s0 - 1e-6, 4001)
+    tr = np.array([np.trace(at(s)[1]) for s in ss])
+    out = []
+    for i in np.flatnonzero(tr[:-1] * tr[1:] < 0):
+        s = brentq(lambda s: np.trace(at(s)[1]), ss[i], ss[i + 1], xtol=1e-14)
+        rho, J = at(s)
+        out.append((rho, math.sqrt(np.linalg.det(J))))
+    return sorted(out)
+
+
+def test_plp_cycles_join_the_two_hopf_points_through_two_folds():
+    """AUTO demo plp (Doedel, Keller & Kernevez 1991; the activator-inhibitor model of
+    Kernevez et al. 1980), ``s0 = 110, a0 = 500, alpha = 0.2, kappa = 0.1``, free
+    ``rho``: the equilibria lose stability at two Hopf points; the cycles from the first
+    turn at two folds of cycles and shrink back onto the equilibrium at the second.
+    References: the Hopf points in closed form (trace zero), each LPC by shooting (the
+    extremum of ``rho`` over the cycles of fixed period). The branch must end at the
+    second Hopf point (before, it retraced itself with false LPCs at both Hopf values
+    until the mesh ran out). ``ds_max = 3`` as in the demo's constants files (the states
+    are of order 100: the default 0.1 in the ``(s, a, rho)`` norm needs over 500 steps)."""
+    (h1, w1), (h2, w2) = _plp_hopf_points()  # rho_H = 3.49995383, 4.65045781
+    s = System(_plp_rhs, ("s", "a"), tuple(PLP))
+    eq = continue_equilibria(s, [45.55974, 177.7987], PLP, "rho", p_min=0.0, p_max=6.0,
+                             direction="both", ds_max=3.0)  # fmt: skip
+    hs = eq.find("hopf")
+    assert [h.located for h in hs] == [True, True]
+    assert sorted(h.p for h in hs) == pytest.approx([h1, h2], abs=1e-9)
+    assert sorted(hs, key=lambda h: h.p)[0].data["omega"] == pytest.approx(w1, abs=1e-8)
+    start = min(hs, key=lambda h: abs(h.p - h1))
+    br = continue_from_hopf(eq, start, ContinuationSettings(p_min=0.0, p_max=6.0, ds_max=3.0))
+    assert br.status == Status.EVENT and "Hopf point" in br.message, br.message
+    folds = br.find("fold")
+    assert [f.label for f in folds] == ["LPC1", "LPC2"] and all(f.located for f in folds)
+    for lpc in folds:
+        # the cycles through the points x0 + r e of a line across them (e from the mean
+        # of the LPC's cycle to its point x0): rho(r) is extremal at the LPC (a parabola
+        # through three of them, sharp: rho'' ~ 1.5e3 at LPC1, so r = +-1e-5 keeps Newton
+        # in its basin; the period is not monotone along the family here)
+        o = orbit_at(br, lpc)
+        e = o.X[0] - o.X.mean(axis=0)
+        h = 1e-5
+        rhos = [_shoot_through(_plp_f, _plp_jac, _plp_dfdrho, lpc.p, o.X[0] + d * e, o.T)
+                for d in (-h, 0, h)]  # fmt: skip
+        curv = (rhos[0] - 2 * rhos[1] + rhos[2]) / h**2
+        rho_lpc = rhos[1] - (rhos[2] - rhos[0]) ** 2 / (8 * h**2 * curv)
+        assert lpc.p == pytest.approx(rho_lpc, abs=1e-6)  # 2.75968746, 5.00783976
+    # the end: a Hopf point bracketed (not located) near the second one
+    (end,) = br.find("hopf")
+    assert not end.located and end.index == len(br) - 1
+    assert end.p == pytest.approx(h2, abs=0.02)
+    assert end.data["omega"] == pytest.approx(w2, rel=0.02)
+    assert np.max(br.records["error"]) <= 1.01e-6
