@@ -412,6 +412,50 @@ def test_chua_hopf_and_period_doubling():
     assert o.T == pytest.approx(T0, abs=1e-8)
 
 
+def test_chua_cycle_from_a_trajectory_and_the_doubled_branch():
+    """The stable cycle simulated at ``alpha = 7.5`` (``orbit_from_trajectory``), continued
+    both ways: backward its cycles shrink onto the equilibrium at the Hopf point (the
+    branch ends there, the point bracketed), forward the PD of
+    :func:`test_chua_hopf_and_period_doubling`; on the doubled branch
+    (``continue_period_doubled``) the next PD of the cascade. Reference: shooting of the
+    doubled cycle (period ``~2 T``), multiplier -1 by a secant in ``alpha``."""
+    from continuation import simulate
+    from continuation.periodic import (
+        continue_period_doubled,
+        continue_periodic,
+        orbit_from_trajectory,
+    )
+
+    _, al_h, omega = _chua_hopf()
+    s = System(_chua_rhs, ("x", "y", "z"), tuple(CHUA))
+    P = dict(CHUA, alpha=7.5)
+    tr = simulate(s, [1.6, 0.0, -1.5], P, (0.0, 200.0), dt=0.01)
+    orb = orbit_from_trajectory(s, P, tr)
+    br = continue_periodic(s, orb, P, "alpha", ContinuationSettings(p_min=0.0, p_max=9.0),
+                           direction="both")  # fmt: skip
+    assert br.status == Status.PARAM_BOUND and "Hopf point" in br.message, br.message
+    (h,) = br.find("hopf")
+    assert not h.located and h.index == 0 and h.p == pytest.approx(al_h, abs=1e-3)
+    assert h.data["omega"] == pytest.approx(omega, rel=1e-3)
+    assert not br.find("fold") and not br.find("bp")
+    (pd,) = br.find("pd")
+    assert pd.located and pd.p == pytest.approx(8.19599212, abs=1e-6)  # the Hopf start's
+    b2 = continue_period_doubled(br, pd, ContinuationSettings(p_min=0.0, p_max=9.5))
+    assert b2.records["T"][0] == pytest.approx(2 * orbit_at(br, pd).T, rel=1e-4)
+    (pd2,) = b2.find("pd")
+    assert pd2.located
+    o = orbit_at(b2, pd2)
+
+    def mu_near_m1(al):
+        x0, T, M = _shoot(lambda x: _chua_f(x, al), lambda x: _chua_jac(x, al), o.X[0], o.T)
+        w = _nontrivial(M, _chua_f(x0, al))
+        return float(w[np.argmin(np.abs(w + 1.0))].real), T
+
+    (m0, T0), (m1, _) = mu_near_m1(pd2.p), mu_near_m1(pd2.p + 1e-3)
+    assert pd2.p == pytest.approx(pd2.p - (m0 + 1.0) * 1e-3 / (m1 - m0), abs=1e-6)  # 8.4183872
+    assert o.T == pytest.approx(T0, abs=1e-7)
+
+
 def _chua_homoclinic_alpha():
     """``alpha`` of the homoclinic orbit of the origin (a saddle-focus) by bisection on the
     side of its unstable manifold: the branch ``+v_u`` leaves the origin, spirals back
