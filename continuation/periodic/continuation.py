@@ -7,9 +7,11 @@ cycles (see :mod:`continuation.periodic.floquet`):
 
 * ``LPC`` -- fold of cycles: the driver's fold (kind ``fold``, relabelled ``LPC1``...);
 * ``BPC`` -- branch point of cycles: the driver's branch point (kind ``bp``, ``BPC1``);
+  ``switch_branch`` continues the crossing branch
+  (:func:`~continuation.periodic.branch_point.continue_from_branch_point`);
 * ``PD`` -- period doubling, a located zero of :math:`\prod (\mu_i + 1)` (kind
-  ``pd``, labelled ``"PD"``; ``br.find("pd")``); :func:`switch_period_doubling` starts
-  the doubled branch;
+  ``pd``, labelled ``"PD"``; ``br.find("pd")``; located only with a multiplier within
+  ``PD_TOL`` of -1); :func:`switch_period_doubling` starts the doubled branch;
 * ``NS`` -- Neimark-Sacker, a located zero of :math:`\prod_{i<j} (\mu_i \mu_j - 1)`
   with a complex pair on the unit circle (kind ``ns``, labelled ``"NS"``; neutral
   saddles dropped).
