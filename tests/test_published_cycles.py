@@ -705,3 +705,25 @@ def test_plp_cycles_join_the_two_hopf_points_through_two_folds():
     assert end.p == pytest.approx(h2, abs=0.02)
     assert end.data["omega"] == pytest.approx(w2, rel=0.02)
     assert np.max(br.records["error"]) <= 1.01e-6
+
+
+def test_tor_both_halves_of_the_asymmetric_cycles_are_mirror_images(tor_equilibria):
+    """The tor system is odd (``x -> -x`` maps solutions to solutions): the two halves of
+    the branch crossing at the symmetry-breaking BPC1 are mirror images, each with its
+    own TR1 at the same ``nu``; ``direction="both"`` joins them into one branch."""
+    from continuation.periodic import continue_from_branch_point
+
+    eq = tor_equilibria
+    br = continue_from_hopf(eq, eq.find("hopf")[0], ContinuationSettings(p_min=-0.7))
+    st = ContinuationSettings(p_min=-0.65, p_max=-0.4)
+    fw = continue_from_branch_point(br, "BPC1", st, direction="forward")
+    bw = continue_from_branch_point(br, "BPC1", st, direction="backward")
+    assert fw.status == bw.status == Status.PARAM_BOUND
+    assert fw.records["max_x"][-1] == pytest.approx(-bw.records["min_x"][-1], abs=1e-6)
+    assert fw.records["T"][-1] == pytest.approx(bw.records["T"][-1], abs=1e-6)
+    assert fw.records["max_x"][-1] > 0.2 + bw.records["max_x"][-1]  # not the same half
+    (n1,), (n2,) = fw.find("ns"), bw.find("ns")
+    assert n1.p == pytest.approx(n2.p, abs=1e-8)
+    both = continue_from_branch_point(br, "BPC1", st, direction="both")
+    assert len(both.find("ns")) == 2 and len(both.find("pd")) == 2
+    assert both.p[0] == pytest.approx(-0.65) and both.p[-1] == pytest.approx(-0.65)
