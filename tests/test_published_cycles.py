@@ -279,6 +279,70 @@ def _tor_homoclinic_nu():
     return brentq(side, -0.729, -0.7289, xtol=1e-14)
 
 
+def _tor_heteroclinic_nu():
+    """``nu`` of the heteroclinic cycle ``E- -> E+ -> E-`` of the two saddle-foci ``E+-``
+    (:func:`_tor_saddle`; one exists with the other by the symmetry ``x -> -x``): the
+    1-D stable manifold of ``E-``, integrated backward from ``E-`` towards ``E+``, comes
+    within 0.15 of ``E+`` and is ejected along ``+-v_s(E+)``; the side changes sign at
+    the connection (Brent; 1e-8 / 1e-10 offsets and rtol 1e-12 / 1e-13 agree to 1e-14)."""
+
+    def ev(E, r, d):
+        e = lambda t, x: float((x - E) @ (x - E)) - r * r  # noqa: E731
+        e.terminal, e.direction = True, d
+        return e
+
+    def side(nu):
+        Ep = _tor_saddle(nu)
+        Em = -Ep
+        w, V = np.linalg.eig(_tor_jac(Em, nu))
+        vs = V[:, int(np.argmin(w.real))].real
+        vs = vs * np.sign(vs @ (Ep - Em))
+        wp, Vp = np.linalg.eig(_tor_jac(Ep, nu))
+        wl, W = np.linalg.eig(_tor_jac(Ep, nu).T)
+        ws = W[:, int(np.argmin(wl.real))].real
+        ws = ws * np.sign(ws @ Vp[:, int(np.argmin(wp.real))].real)
+        x = Em + 1e-9 * vs
+        for r, d in ((0.15, -1), (0.3, 1)):
+            sol = solve_ivp(lambda t, y: -_tor_f(y, nu), (0, 200), x, rtol=1e-12, atol=1e-16,
+                            method="DOP853", events=ev(Ep, r, d))  # fmt: skip
+            x = Ep + (sol.y_events[0][0] - Ep) * (1 + 1e-12 * d)
+        return float(ws @ (x - Ep))
+
+    return brentq(side, -0.7975, -0.79752, xtol=1e-15)
+
+
+@pytest.mark.slow
+def test_tor_symmetric_cycles_snake_into_the_heteroclinic_cycle(tor_equilibria):
+    """At the default settings the symmetric cycles from HB1 snake towards the
+    heteroclinic cycle between the saddle-foci ``E+-`` (eigenvalues -1.67 and 0.28 +-
+    0.6 i): folds of cycles on both sides of its ``nu``, closing in on it, the swings of
+    the rows decaying like ``exp(-0.28 T / 2)``. The branch goes on until the cycles'
+    multipliers (1e14 and more) make the collocation system too ill-conditioned; it ends
+    there with a failure status that says so (no false PERIOD_UNBOUNDED claim), or at the
+    period limit."""
+    eq = tor_equilibria
+    br = continue_from_hopf(eq, eq.find("hopf")[0], ContinuationSettings())
+    nu_het = _tor_heteroclinic_nu()  # -0.79751983065330
+    if br.status != Status.PERIOD_UNBOUNDED:
+        assert not br.status.ok and "ill-conditioned" in br.message, br.message
+    else:
+        star = float(re.search(r"nu\*=(-[0-9.]+)", br.message).group(1))
+        assert star == pytest.approx(nu_het, abs=1e-8)
+    folds = [f for f in br.find("fold") if f.located and f.p < -0.7]
+    assert len(folds) >= 6
+    d = [f.p - nu_het for f in folds]
+    assert min(d) < 0 < max(d)  # folds on both sides
+    assert abs(d[-1]) < abs(d[0]) / 100  # closing in
+    T = br.records["T"]
+    assert np.all(np.abs(br.p[T > 100] - nu_het) < 1e-6)
+    assert np.all(np.abs(br.p[T > 130] - nu_het) < 3e-8)
+    assert np.max(br.records["error"]) <= 1.01e-6
+    o = orbit_at(br, len(br) - 1)
+    E = _tor_saddle(br.p[-1])
+    assert np.min(np.linalg.norm(o.X - E, axis=1)) < 1e-5
+    assert np.min(np.linalg.norm(o.X + E, axis=1)) < 1e-5
+
+
 def test_tor_switch_at_the_branch_point_onto_the_asymmetric_cycles(tor_equilibria):
     """AUTO demo tor, run 3 (``run(r2('BP1'), ISW=-1)``): the asymmetric cycles born at
     BPC1 lose stability at a Neimark-Sacker (torus) bifurcation, TR1, then period-double

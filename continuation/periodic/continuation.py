@@ -285,6 +285,13 @@ def continue_periodic(
         return _finish(br, free, period_max, error_tol)
 
 
+#: A branch that fails (``DS_MIN``, ``NEWTON_FAILED``) at a row whose largest multiplier
+#: exceeds this says so in its message: the collocation system's condition grows with
+#: it, towards the limit of double precision (``1/eps ~ 4.5e15``), as for the cycles of
+#: a snake deep towards a saddle-focus loop.
+MU_ILL_CONDITIONED = 1e12
+
+
 def _mirrored(previous: PeriodicOrbit, orb: PeriodicOrbit, free: str) -> PeriodicOrbit:
     """``2 orb - previous`` on ``orb``'s mesh (the secant from it to ``orb`` reversed)."""
     prev = previous.on_mesh(orb.mesh)
@@ -334,6 +341,20 @@ def _finish(
             )
             log.warning(note.strip())
             message = message + note
+    if (
+        len(br)
+        and status in (Status.DS_MIN, Status.NEWTON_FAILED)
+        and "mu_max" in br.records
+        and br.records["mu_max"][-1] > MU_ILL_CONDITIONED
+    ):
+        note = (
+            f" The last cycle ({free}={br.p[-1]:.10g}, T={br.records['T'][-1]:.6g}) has a "
+            f"multiplier of {br.records['mu_max'][-1]:.2g}: its collocation system is "
+            "ill-conditioned in proportion, near the limit of double precision, which "
+            "may be why the corrector fails here."
+        )
+        log.warning(note.strip())
+        message = message + note
     if len(br) and error_tol is None and "error" in br.records:
         rel = br.records["error"] / _state_ranges(br)
         over = np.flatnonzero(rel > ERROR_NOTE_REL)
