@@ -22,7 +22,6 @@ import numpy as np
 
 from ..branch import Branch, SpecialKind, SpecialPoint
 from ..settings import ContinuationSettings
-from ..status import Status
 from .continuation import continue_periodic
 from .rows import merge_segments, orbit_at, reversed_segments, special_problem
 
@@ -99,7 +98,8 @@ def continue_from_branch_point(
         :func:`~continuation.switching.switch.switch_branch`.
     direction : {"forward", "backward", "both"}
         One half of the crossing branch, the other, or both (one branch from the
-        backward end through the branch point to the forward end).
+        backward end to the forward end, each half started off the branch point; the
+        status is the forward half's, the backward half's is in the message).
     amplitude : float, optional
         Distance of the first point from the branch point (as in
         :func:`~continuation.switching.switch.switch_branch`).
@@ -146,12 +146,13 @@ def continue_from_branch_point(
     b, f = halves
     if len(b) == 0 or len(f) == 0:
         return f if len(f) else b
+    # (as continue_periodic's "both": the forward half's status, the backward's in the
+    # message; the forward half's first cycle, the join, is dropped by the merge)
     merged = merge_segments([reversed_segments(b), f])
     return dataclasses.replace(
-        merged,
-        status=f.status if f.status is not Status.SUCCESS else b.status,
-        message=f"{f.message} (backward half: {b.status.name}: {b.message})",
-    )
+        merged, status=f.status, message=f"{f.message} (backward half: {b.status.name}: "
+        f"{b.message})"
+    )  # fmt: skip
 
 
 __all__ = ["continue_from_branch_point"]
