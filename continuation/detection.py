@@ -29,7 +29,16 @@ from .algorithms.corrector import CorrectorResult, correct
 from .algorithms.point import PointInfo, make_point
 from .branch import BranchPoint, SpecialKind, SpecialPoint
 from .dynamics.trajectory import hermite
-from .events import MAX_DIP_POINTS, Event, HopfTest, bp_test, crossed, event_slope, hermite_dip
+from .events import (
+    MAX_DIP_POINTS,
+    Event,
+    HopfTest,
+    bp_test,
+    complex_mask,
+    crossed,
+    event_slope,
+    hermite_dip,
+)
 from .linalg import bordered_column_max, bordered_rcond
 from .locate import LocateResult, fold_guess, locate_beyond, locate_zero, point_at
 from .problem import difference, has_periodic_states, record_function
@@ -103,6 +112,29 @@ def _hermite_at_p(
         if abs(step) <= 1e-14:
             break
     return np.asarray(hermite(sv, h, ua, ta, ub, tb))
+
+
+def hopf_beside_real_crossing(a: Any, b: Any, imag_tol: float) -> bool:
+    """Whether a step whose real *and* pair counts changed may hold a Hopf point.
+
+    The Hopf test asks for a change of the number of unstable complex pairs. Alone it
+    is one; where the number of unstable real eigenvalues changed too, the pairs' change
+    may instead come from two real eigenvalues colliding into a pair (or a pair
+    splitting) off the axis. That is told apart by the total number of complex pairs,
+    stable or not, which a collision changes and a Hopf point with a real eigenvalue
+    crossing zero beside it (a fold or branch point in the same step, e.g. the
+    pitchfork next to the Hopf point of AUTO-07p's demo ``tor``) does not. Accepted
+    here: the pair count changed by one, the real count by an odd number (a real zero
+    crossing: the determinant's sign changed) and the total number of complex pairs is
+    the same at both rows; the crossing pair must then still be found by
+    :class:`~continuation.events.HopfTest`.
+    """
+    ac, bc = a.counts, b.counts
+    if a.eig is None or b.eig is None or abs(bc[1] - ac[1]) != 1 or (bc[0] - ac[0]) % 2 == 0:
+        return False
+    na = int(np.count_nonzero(complex_mask(a.eig, imag_tol)))
+    nb = int(np.count_nonzero(complex_mask(b.eig, imag_tol)))
+    return na == nb
 
 
 @dataclass(eq=False, slots=True)
@@ -369,7 +401,12 @@ class RunContext:
         pa, pb = a.point, b.point
         ac, bc = a.counts, b.counts
         fold = det.fold and pa.tau[-1] * pb.tau[-1] < 0
-        hopf = det.hopf and ac is not None and bc is not None and ac[0] == bc[0] and ac[1] != bc[1]
+        hopf = det.hopf and ac is not None and bc is not None and ac[1] != bc[1]
+        # a real eigenvalue crossing zero in the same step (a fold or branch point next to
+        # the Hopf point) changes the real count too: see hopf_beside_real_crossing
+        mixed = hopf and ac[0] != bc[0]  # type: ignore[index]
+        if mixed and not hopf_beside_real_crossing(a, b, det.imag_tol):
+            hopf = False
         if not (fold or hopf or self.events or (det.branch_point and pa.bp_sign != pb.bp_sign)):
             return []  # (the common case: nothing to locate)
         found: list[tuple[SpecialKind, LocateResult, dict[str, float], str]] = []
@@ -402,7 +439,9 @@ class RunContext:
                     pb.p,
                 )
             ht = HopfTest(a.eig, b.eig, det.imag_tol, det.eig_tol)
-            if ht.ok:
+            if mixed and not ht.ok:
+                pass  # (no pair crosses: the real count's change explains the pairs')
+            elif ht.ok:
 
                 def g_h(pt: PointInfo, t: float) -> float:
                     lam = ht.track(self.eig(pt), t)

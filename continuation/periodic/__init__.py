@@ -21,8 +21,9 @@ meshes), :mod:`~continuation.periodic.limit` (the period's blow-up end).
   rotation orbits by a winding number per periodic state) as a continuation problem;
 * :func:`continue_periodic` -- its branch by the pseudo-arclength driver, with LPC,
   BPC, PD and NS located; :func:`continue_from_hopf`, :func:`continue_period_doubled`
-  start at a Hopf point or at a PD point; ``period_max`` ends a branch whose period
-  grows without bound (``Status.PERIOD_UNBOUNDED``; :func:`period_limit` fits the limit
+  start at a Hopf point or at a PD point, :func:`continue_from_branch_point` (or
+  ``switch_branch``) on the branch crossing at a BPC; ``period_max`` ends a branch whose
+  period grows without bound (``Status.PERIOD_UNBOUNDED``; :func:`period_limit` fits the limit
   and gives a guess of the connecting orbit);
 * starts: :func:`periodic_orbit_from_hopf`, :func:`orbit_from_trajectory`,
   :func:`orbit_from_array`; :func:`solve_orbit`, :func:`adapt_mesh`;
@@ -51,6 +52,7 @@ from typing import TYPE_CHECKING
 from .._lazy import lazy_exports
 
 if TYPE_CHECKING:  # for type checkers; _EXPORTS is what runs (names imported on first use)
+    from .branch_point import continue_from_branch_point
     from .collocation import CollocationLayout, monodromy_factors
     from .continuation import continue_periodic
     from .doubling import continue_period_doubled, doubled_orbit, switch_period_doubling
@@ -65,6 +67,7 @@ if TYPE_CHECKING:  # for type checkers; _EXPORTS is what runs (names imported on
 
 #: Sub-module -> the public names it defines (imported on first use: issue 27).
 _EXPORTS: dict[str, tuple[str, ...]] = {
+    "branch_point": ("continue_from_branch_point",),
     "collocation": ("CollocationLayout", "monodromy_factors"),
     "continuation": ("continue_periodic",),
     "limit": ("PeriodLimit", "period_limit"),
@@ -89,6 +92,7 @@ __all__ = [
     "PeriodicOrbit",
     "PeriodicOrbitProblem",
     "adapt_mesh",
+    "continue_from_branch_point",
     "continue_from_hopf",
     "continue_period_doubled",
     "continue_periodic",

@@ -7,9 +7,11 @@ cycles (see :mod:`continuation.periodic.floquet`):
 
 * ``LPC`` -- fold of cycles: the driver's fold (kind ``fold``, relabelled ``LPC1``...);
 * ``BPC`` -- branch point of cycles: the driver's branch point (kind ``bp``, ``BPC1``);
+  ``switch_branch`` continues the crossing branch
+  (:func:`~continuation.periodic.branch_point.continue_from_branch_point`);
 * ``PD`` -- period doubling, a located zero of :math:`\prod (\mu_i + 1)` (kind
-  ``pd``, labelled ``"PD"``; ``br.find("pd")``); :func:`switch_period_doubling` starts
-  the doubled branch;
+  ``pd``, labelled ``"PD"``; ``br.find("pd")``; located only with a multiplier within
+  ``PD_TOL`` of -1); :func:`switch_period_doubling` starts the doubled branch;
 * ``NS`` -- Neimark-Sacker, a located zero of :math:`\prod_{i<j} (\mu_i \mu_j - 1)`
   with a complex pair on the unit circle (kind ``ns``, labelled ``"NS"``; neutral
   saddles dropped).
@@ -46,6 +48,7 @@ from ..settings import ContinuationSettings
 from ..status import Status
 from ..system import as_params
 from ..typing import FloatArray
+from .collapse import hopf_end
 from .limit import LIMIT_MARGIN, PeriodLimit, period_limit
 from .orbit import PeriodicOrbit, orbit_from_array, winding_vector
 from .rows import (
@@ -124,6 +127,7 @@ def continue_periodic(
     adapt_every: int = 0,
     error_tol: float | None = ERROR_TOL,
     max_intervals: int = 400,
+    previous: PeriodicOrbit | None = None,
 ) -> Branch:
     r"""Continue a branch of periodic orbits in the parameter ``free``.
 
@@ -191,6 +195,18 @@ def continue_periodic(
         branch at a homoclinic end but ``period_max``.
     max_intervals : int
         Cap on the number of intervals for ``error_tol``.
+    previous : PeriodicOrbit, optional
+        A cycle of the same branch just before the start: the first step then follows
+        the secant from it to the start (``direction`` ``"forward"``; ``"backward"``
+        the opposite way) instead of the sign of ``settings.ds`` in the parameter, as
+        where the branch is vertical in ``free`` (a pitchfork of cycles:
+        :func:`~continuation.periodic.branch_point.continue_from_branch_point`).
+
+    A branch whose cycles shrink onto an equilibrium (a Hopf point: their amplitude
+    passes through zero between two rows) ends at the row before, with
+    ``Status.EVENT`` and a Hopf point ``"H"`` bracketed there
+    (:func:`~continuation.periodic.collapse.hopf_end`): beyond it the rows would retrace
+    the branch, with a false fold of cycles at the Hopf point.
 
     Returns
     -------
@@ -238,23 +254,27 @@ def continue_periodic(
                events=events, progress=progress, throw=throw,
                error_tol=error_tol)  # fmt: skip
 
-    def one(st: ContinuationSettings) -> Branch:
+    def one(st: ContinuationSettings, prev: PeriodicOrbit | None) -> Branch:
         if adapt_every == 0 and error_tol is None:
-            return continue_once(orb, free, st, **run)  # type: ignore[arg-type]
-        return continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals)
+            br = continue_once(orb, free, st, previous=prev, **run)  # type: ignore[arg-type]
+            return hopf_end(br, free) or br
+        return continue_segments(orb, free, st, adapt_every, run, error_tol, max_intervals,
+                                 previous=prev)  # fmt: skip
 
     back = dataclasses.replace(settings, ds=-settings.ds)
+    # the mirror of `previous` through the start: its secant points the other way
+    prev_back = None if previous is None else _mirrored(previous, orb, free)
     # one BLAS thread for the whole run, the start corrections and mesh adaptations
     # included (the driver limits only its own steps): the blocks are small, and on a
     # loaded 2-core machine OpenBLAS's second thread made the condensed factorisations
     # of AUTO's demo ab up to 100x slower (benchmarks/README.md)
     with blas_threads_for(orb.X.size, sparse=True):
         if direction == "forward":
-            br = one(settings)
+            br = one(settings, previous)
         elif direction == "backward":
-            br = one(back)
+            br = one(back, prev_back)
         else:
-            b, f = one(back), one(settings)
+            b, f = one(back, prev_back), one(settings, previous)
             if len(b) == 0 or len(f) == 0:
                 br = f if len(f) else b
             else:
@@ -263,6 +283,20 @@ def continue_periodic(
                     br, message=f"{f.message} (backward end: {b.status.name}: {b.message})"
                 )
         return _finish(br, free, period_max, error_tol)
+
+
+#: A branch that fails (``DS_MIN``, ``NEWTON_FAILED``) at a row whose largest multiplier
+#: exceeds this says so in its message: the collocation system's condition grows with
+#: it, towards the limit of double precision (``1/eps ~ 4.5e15``), as for the cycles of
+#: a snake deep towards a saddle-focus loop.
+MU_ILL_CONDITIONED = 1e12
+
+
+def _mirrored(previous: PeriodicOrbit, orb: PeriodicOrbit, free: str) -> PeriodicOrbit:
+    """``2 orb - previous`` on ``orb``'s mesh (the secant from it to ``orb`` reversed)."""
+    prev = previous.on_mesh(orb.mesh)
+    params = orb.params.replace(**{free: 2 * orb.param(free) - previous.param(free)})
+    return dataclasses.replace(prev, X=2 * orb.X - prev.X, T=2 * orb.T - prev.T, params=params)
 
 
 def _finish(
@@ -307,6 +341,20 @@ def _finish(
             )
             log.warning(note.strip())
             message = message + note
+    if (
+        len(br)
+        and status in (Status.DS_MIN, Status.NEWTON_FAILED)
+        and "mu_max" in br.records
+        and br.records["mu_max"][-1] > MU_ILL_CONDITIONED
+    ):
+        note = (
+            f" The last cycle ({free}={br.p[-1]:.10g}, T={br.records['T'][-1]:.6g}) has a "
+            f"multiplier of {br.records['mu_max'][-1]:.2g}: its collocation system is "
+            "ill-conditioned in proportion, near the limit of double precision, which "
+            "may be why the corrector fails here."
+        )
+        log.warning(note.strip())
+        message = message + note
     if len(br) and error_tol is None and "error" in br.records:
         rel = br.records["error"] / _state_ranges(br)
         over = np.flatnonzero(rel > ERROR_NOTE_REL)

@@ -154,7 +154,7 @@ def _log_fit(
     return p_star, math.exp(q), rms
 
 
-def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
+def period_limit(branch: Branch, n_fit: int = 8, *, warn: bool = True) -> PeriodLimit:
     """The limit of a cycle branch whose period grows (see :class:`PeriodLimit`).
 
     Parameters
@@ -164,6 +164,16 @@ def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
         ``Status.PERIOD_UNBOUNDED``).
     n_fit : int
         Number of last rows in the fit (at least 4).
+    warn : bool
+        Log a warning where the fit is poor (below).
+
+    Notes
+    -----
+    The law holds for a monotone approach. Where the branch snakes towards a
+    saddle-focus loop (Shilnikov: folds of cycles on both sides of ``p*``) its rows
+    swing about the limit and the fit is poor (``fit_residual`` larger than the last
+    row's distance from ``p_star``; a warning is logged); the branch's message then
+    holds the limit ``continue_periodic`` fitted on the converged rows beyond its end.
     """
     problem_at(branch, 0)  # (checks the branch)
     if not (isinstance(n_fit, int) and n_fit >= 4):
@@ -181,6 +191,15 @@ def period_limit(branch: Branch, n_fit: int = 8) -> PeriodLimit:
         p_star, b, rms = _log_fit(p, T, 1.0 / lam_u if lam_u > 0 else None)
     except (ValueError, np.linalg.LinAlgError, FloatingPointError):
         p_star, b, rms = math.nan, math.nan, math.nan
+    if warn and math.isfinite(rms) and rms > abs(float(p[-1]) - p_star) > 0.0:
+        # the rows swing about the limit by more than they are from it: a branch that
+        # snakes towards a saddle-focus loop (folds of cycles on both sides of p*), whose
+        # end continue_periodic cuts before such rows (the limit it fitted on the rows
+        # past the cut is in the branch's message)
+        log.warning("period limit %s*=%.10g: the last %d rows do not follow T = a - b ln|%s* - "
+                    "%s| (fit residual %.2g, last row %.2g from the limit): p* is unreliable",
+                    branch.free, p_star, k, branch.free, branch.free, rms,
+                    abs(float(p[-1]) - p_star))  # fmt: skip
     t0 = float(orb.t[q])
     t = np.linspace(t0, t0 + orb.T, 4 * orb.mesh.n_points)
     x = orb(t)
@@ -211,11 +230,14 @@ def limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
     period on the mesh with every interval halved, ``delta = |p_{2N} - p_N|``. Rows
     within ``LIMIT_MARGIN delta + 1e-12 (1 + |p*|)`` of ``p*`` (the last term the
     round-off of ``p``) cannot tell on which side of the limit they are: the branch is
-    cut before the first of them, with ``Status.PERIOD_UNBOUNDED``. A discretised
+    cut after the last row farther than that from ``p*`` (before the tail of rows all
+    within it), with ``Status.PERIOD_UNBOUNDED``. Rows of a branch that snakes towards
+    a saddle-focus loop (Shilnikov), passing ``p*`` and turning back at folds of cycles
+    far from it on either side, are kept with their folds. A discretised
     cycle does not see the end (on a finite mesh the period stays finite and the rows
     may pass ``p*``, where no cycle exists), so this is where the branch must stop.
-    Only where the fit is as good as that bound: a cycle snaking towards a
-    saddle-focus loop (Shilnikov; cycles on both sides of ``p*``) is not ended here.
+    Only where the fit of the last rows is as good as that bound: a snake whose last
+    rows still swing about ``p*`` by more than it is not ended here.
     """
     n = len(br)
     if n < n_tail + 2:
@@ -229,7 +251,7 @@ def limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
     if not (np.all(dp > 0) or np.all(dp < 0) or stalled):
         return None  # (the parameter turns: not the monotone approach, e.g. snaking)
     try:
-        lim = period_limit(br, n_fit=n_tail)
+        lim = period_limit(br, n_fit=n_tail, warn=False)
     except (ValueError, np.linalg.LinAlgError):
         return None
     if not math.isfinite(lim.p_star):
@@ -255,22 +277,21 @@ def limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
         return None
     log.debug("period limit %s*=%.15g: delta %.2g, fit rms %.2g, last row %.3g from it",
               free, lim.p_star, delta, lim.fit_residual, float(br.p[-1]) - lim.p_star)  # fmt: skip
-    # the side of the rows: that of the rows before the period took off
-    T_all = np.asarray(br.records["T"], dtype=float)
-    rising = n - 1
-    while rising > 0 and T_all[rising - 1] < T_all[rising]:
-        rising -= 1
-    dist = np.asarray(br.p, dtype=float) - lim.p_star
-    side = math.copysign(1.0, float(dist[rising]) if dist[rising] != 0.0 else 1.0)
-    dist = side * dist
-    close = np.flatnonzero(dist[rising:] <= thr)
-    if close.size == 0:
+    # the rows that tell their side of p*: farther from it than thr. Where the branch
+    # snakes towards a saddle-focus loop (Shilnikov) it passes p* and turns back at
+    # folds of cycles, far from p* on both sides: those rows are cycles like any other
+    # and are kept (with their folds); the branch is cut after the last of them, before
+    # the tail whose rows all lie within thr of p*. (Cutting at the first row within
+    # thr of p* on the far side would drop the whole snake.)
+    dist = np.abs(np.asarray(br.p, dtype=float) - lim.p_star)
+    if dist[-1] > thr:
         return None
-    k = max(rising + int(close[0]) - 1, 1)
+    far = np.flatnonzero(dist > thr)
+    k = max(int(far[-1]) if far.size else 0, 1)
     msg = (
         f"{Status.PERIOD_UNBOUNDED.value} The period grows without bound towards "
         f"{free}*={lim.p_star:.12g} (fit of T = a - b ln|{free}* - {free}|); the rows "
-        f"stop {dist[k]:.2g} before it, where the parameter's discretisation error "
+        f"stop {dist[k]:.2g} from it, where the parameter's discretisation error "
         f"({delta:.1g}) no longer tells the side. Last period T={br.records['T'][k]:.10g} "
         f"at {free}={br.p[k]:.12g}."
     )

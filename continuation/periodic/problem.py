@@ -63,6 +63,13 @@ def error_estimate(mesh: CollocationMesh, X: FloatArray) -> float:
 KERNELS = "continuation.bvp._collocation_jit"
 
 
+#: A located period doubling has a multiplier within this distance of -1 (as
+#: :func:`~continuation.periodic.floquet.is_neimark_sacker` asks of a pair on the unit
+#: circle); the test :math:`\prod (\mu_i + 1)` can change sign across a jump where other
+#: multipliers are huge (cycles near a homoclinic orbit), with none at -1.
+PD_TOL = 1e-3
+
+
 @dataclass(frozen=True, eq=False)
 class PeriodicOrbitProblem:
     r"""Cycles of a :class:`~continuation.system.System` as a continuation problem.
@@ -92,6 +99,9 @@ class PeriodicOrbitProblem:
     :math:`(\int_0^1 |x|^2 d\tau)^{1/2}`), ``mu_max`` (largest nontrivial ``|mu|``),
     ``trivial_error`` (``|mu_trivial - 1|``) and ``error`` (:func:`error_estimate`).
     """
+
+    #: Marks the problem of a cycle branch (``switch_branch`` hands it to the cycles').
+    is_cycle_problem: ClassVar[bool] = True
 
     system: Any
     params: Params
@@ -194,7 +204,9 @@ class PeriodicOrbitProblem:
         Folds become ``LPC1, LPC2, ...``, branch points ``BPC1, ...``; the zeros of the
         events ``"PD"``/``"NS"`` become the kinds ``pd`` (with the multiplier ``mu``
         next to ``-1``) and ``ns`` (with the angle ``theta`` of the pair on the unit
-        circle); an NS zero without such a pair (a neutral saddle) is dropped.
+        circle); an NS zero without such a pair (a neutral saddle) is dropped, a PD zero
+        without a multiplier within :data:`PD_TOL` of ``-1`` is reported as bracketed
+        (not located).
         """
         out = []
         count = {"LPC": 0, "BPC": 0}
@@ -216,9 +228,18 @@ class PeriodicOrbitProblem:
             elif sp.kind == SpecialKind.USER and sp.label == "PD":
                 mu = self.floquet(sp.x, sp.p).multipliers
                 k = int(np.argmin(np.abs(mu + 1.0)))
+                located = sp.located
+                if located and not abs(mu[k] + 1.0) <= PD_TOL:
+                    # the test's sign changed, but no multiplier is at -1 where the locator
+                    # stopped (multipliers of 1e10 and more: a jump of the product, not a
+                    # zero): bracketed only
+                    log.warning("PD at p=%.8g: no multiplier at -1 there (nearest %.6g); "
+                                "reported as bracketed, not located", sp.p, mu[k].real)  # fmt: skip
+                    located = False
                 sp = dataclasses.replace(
-                    sp, kind=SpecialKind.PERIOD_DOUBLING, data={**sp.data, "mu": float(mu[k].real)}
-                )
+                    sp, kind=SpecialKind.PERIOD_DOUBLING, located=located,
+                    data={**sp.data, "mu": float(mu[k].real)},
+                )  # fmt: skip
             out.append(sp)
         return tuple(out)
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -41,6 +41,9 @@ class CycleSegments:
     first_row : tuple of int
         Branch row where each segment starts.
     """
+
+    #: Marks the problem of a cycle branch (``switch_branch`` hands it to the cycles').
+    is_cycle_problem: ClassVar[bool] = True
 
     problems: tuple[PeriodicOrbitProblem, ...]
     first_row: tuple[int, ...]

@@ -6,7 +6,9 @@ of a few steps, each on the mesh equidistributed on the last cycle of the one be
 (more intervals where the error estimate passed ``error_tol``:
 :func:`~continuation.periodic.solve.refined_intervals`), restarts along the secant of the
 last step, ends the branch at a period limit (:func:`~continuation.periodic.limit.limit_end`)
-and merges the segments into one branch (:func:`~continuation.periodic.rows.merge_segments`).
+or at a Hopf point where its cycles shrink to an equilibrium
+(:func:`~continuation.periodic.collapse.hopf_end`) and merges the segments into one
+branch (:func:`~continuation.periodic.rows.merge_segments`).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from ..events import Event
 from ..settings import ContinuationSettings
 from ..status import Status
 from ..typing import FloatArray
+from .collapse import hopf_end
 from .limit import limit_end
 from .orbit import PeriodicOrbit
 from .problem import PeriodicOrbitProblem
@@ -120,11 +123,13 @@ def continue_segments(
     run: dict[str, Any],
     error_tol: float | None = None,
     max_intervals: int = 400,
+    previous: PeriodicOrbit | None = None,
 ) -> Branch:
     """Segments of ``every`` steps, each on an equidistributed mesh, merged into one branch.
 
     See :func:`continue_periodic`; with ``error_tol`` the number of intervals grows where
-    the error estimate of a segment's last cycle exceeds it.
+    the error estimate of a segment's last cycle exceeds it. ``previous``: as for
+    :func:`continue_once`, for the first segment.
 
     Each segment after the first starts from the last cycle interpolated onto the
     equidistributed mesh; the driver's start correction (at fixed parameter) solves it
@@ -136,12 +141,19 @@ def continue_segments(
     segs: list[Branch] = []
     left = settings.max_steps
     st = settings
-    br = continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)), **run)
+    br = continue_once(orb, free, dataclasses.replace(st, max_steps=min(every, left)),
+                       previous=previous, **run)  # fmt: skip
+    checked = 0  # rows before this one were examined for a Hopf end
     while True:
         segs.append(br)
         left -= max(len(br) - 1, 0)
+        merged = merge_segments(segs)
+        end = hopf_end(merged, free, start=checked)
+        if end is not None:
+            return end
+        checked = max(len(merged) - 1, 0)
         if error_tol is not None:
-            end = limit_end(merge_segments(segs), free)
+            end = limit_end(merged, free)
             if end is not None:
                 return end
         at_tol = br.status == Status.EVENT and repr(ERR_EVENT) in br.message

@@ -287,6 +287,42 @@ def switch_branch(
 ) -> Branch:
     r"""Continue the branch that crosses ``branch`` at the simple branch point ``point``.
 
+    On a branch of cycles (``continue_periodic``) the crossing branch is a cycle branch
+    continued by :func:`~continuation.periodic.branch_point.continue_from_branch_point`
+    (Floquet tests, mesh adaptation, period limit; ``algorithm`` is not used there);
+    otherwise :func:`switch_branch_rows` below does the whole continuation.
+    """
+    if isinstance(branch, Branch) and getattr(branch.problem, "is_cycle_problem", False):
+        from ..periodic.branch_point import continue_from_branch_point
+
+        return continue_from_branch_point(
+            branch, point, settings, direction=direction, amplitude=amplitude, throw=throw,
+            events=events, progress=progress,
+        )  # fmt: skip
+    return switch_branch_rows(
+        branch, point, settings=settings, direction=direction, events=events,
+        amplitude=amplitude, algorithm=algorithm, throw=throw, progress=progress,
+    )  # fmt: skip
+
+
+def switch_branch_rows(
+    branch: Branch,
+    point: SpecialPoint | str,
+    *,
+    settings: ContinuationSettings | None = None,
+    direction: Direction = "both",
+    events: Sequence[Event] = (),
+    amplitude: float | None = None,
+    algorithm: ContinuationAlgorithm | None = None,
+    throw: bool = False,
+    progress: Callable[[BranchPoint], None] | None = None,
+) -> Branch:
+    r"""The crossing branch at a simple branch point, continued by the driver itself.
+
+    :func:`switch_branch` for any problem; on a cycle branch only its first rows serve
+    (the driver alone would test the Floquet exponents for Hopf points and miss PD, NS
+    and the mesh adaptation).
+
     The tangent of the crossing branch is the root of the algebraic bifurcation
     equation (module notes)
 
@@ -514,4 +550,4 @@ def switch_branch(
     )
 
 
-__all__ = ["DENSE_KERNEL_MAX", "Direction", "switch_branch"]
+__all__ = ["DENSE_KERNEL_MAX", "Direction", "switch_branch", "switch_branch_rows"]
