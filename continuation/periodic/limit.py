@@ -230,10 +230,11 @@ def limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
     period on the mesh with every interval halved, ``delta = |p_{2N} - p_N|``. Rows
     within ``LIMIT_MARGIN delta + 1e-12 (1 + |p*|)`` of ``p*`` (the last term the
     round-off of ``p``) cannot tell on which side of the limit they are: the branch is
-    cut after the last row farther than that from ``p*`` (before the tail of rows all
-    within it), with ``Status.PERIOD_UNBOUNDED``. Rows of a branch that snakes towards
-    a saddle-focus loop (Shilnikov), passing ``p*`` and turning back at folds of cycles
-    far from it on either side, are kept with their folds. A discretised
+    cut before the first of the last ``n_tail`` rows (those of the monotone approach)
+    that is within that distance or past ``p*``, with ``Status.PERIOD_UNBOUNDED``. Rows
+    before them are kept wherever they lie: a branch that snakes towards a saddle-focus
+    loop (Shilnikov) passes ``p*`` and turns back at folds of cycles far from it on
+    either side, and keeps those rows with their folds. A discretised
     cycle does not see the end (on a finite mesh the period stays finite and the rows
     may pass ``p*``, where no cycle exists), so this is where the branch must stop.
     Only where the fit of the last rows is as good as that bound: a snake whose last
@@ -277,17 +278,26 @@ def limit_end(br: Branch, free: str, n_tail: int = 8) -> Branch | None:
         return None
     log.debug("period limit %s*=%.15g: delta %.2g, fit rms %.2g, last row %.3g from it",
               free, lim.p_star, delta, lim.fit_residual, float(br.p[-1]) - lim.p_star)  # fmt: skip
-    # the rows that tell their side of p*: farther from it than thr. Where the branch
-    # snakes towards a saddle-focus loop (Shilnikov) it passes p* and turns back at
-    # folds of cycles, far from p* on both sides: those rows are cycles like any other
-    # and are kept (with their folds); the branch is cut after the last of them, before
-    # the tail whose rows all lie within thr of p*. (Cutting at the first row within
-    # thr of p* on the far side would drop the whole snake.)
-    dist = np.abs(np.asarray(br.p, dtype=float) - lim.p_star)
-    if dist[-1] > thr:
+    # The side of the rows is that of the tail's approach (the tail moves one way, its
+    # first row farthest from p*). The branch is cut before the first tail row that is
+    # not farther than thr on that side (within thr, or past p*: on a finite mesh the
+    # rows may pass the limit, where no cycle exists), and before any rows within thr
+    # just ahead of it. Rows before the tail are kept wherever they lie: where the
+    # branch snakes towards a saddle-focus loop (Shilnikov) it passes p* and turns back
+    # at folds of cycles far from it on both sides, and those rows are cycles like any
+    # other, kept with their folds (cutting at the first pass of p* dropped the snake).
+    p_all = np.asarray(br.p, dtype=float)
+    tail0 = n - n_tail
+    side = 1.0 if p_all[tail0] >= lim.p_star else -1.0
+    signed = side * (p_all - lim.p_star)
+    close = np.flatnonzero(signed[tail0:] <= thr)
+    if close.size == 0:
         return None
-    far = np.flatnonzero(dist > thr)
-    k = max(int(far[-1]) if far.size else 0, 1)
+    k = tail0 + int(close[0]) - 1
+    while k > 1 and abs(signed[k]) <= thr:
+        k -= 1
+    k = max(k, 1)
+    dist = np.abs(p_all - lim.p_star)
     msg = (
         f"{Status.PERIOD_UNBOUNDED.value} The period grows without bound towards "
         f"{free}*={lim.p_star:.12g} (fit of T = a - b ln|{free}* - {free}|); the rows "
