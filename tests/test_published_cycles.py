@@ -790,4 +790,14 @@ def test_tor_both_halves_of_the_asymmetric_cycles_are_mirror_images(tor_equilibr
     assert n1.p == pytest.approx(n2.p, abs=1e-8)
     both = continue_from_branch_point(br, "BPC1", st, direction="both")
     assert len(both.find("ns")) == 2 and len(both.find("pd")) == 2
+    # every cycle of both halves is kept (the halves start apart, off the branch point)
+    assert len(both) == len(fw) + len(bw)
+    # from the backward half's end to the forward half's end (the halves' ends differ by
+    # more than 0.2 in max x, above; each row is within error_tol = 1e-6)
+    mx = both.records["max_x"]
+    assert mx[0] == pytest.approx(bw.records["max_x"][-1], abs=1e-6)
+    assert mx[-1] == pytest.approx(fw.records["max_x"][-1], abs=1e-6)
+    assert mx[len(bw) - 1] == pytest.approx(bw.records["max_x"][0], abs=1e-6)
+    assert mx[len(bw)] == pytest.approx(fw.records["max_x"][0], abs=1e-6)
+    assert both.status == fw.status
     assert both.p[0] == pytest.approx(-0.65) and both.p[-1] == pytest.approx(-0.65)

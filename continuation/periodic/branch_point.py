@@ -143,12 +143,12 @@ def continue_from_branch_point(
         halves.append(dataclasses.replace(br, message=f"{info}; {br.message}"))
     if len(halves) == 1:
         return halves[0]
-    b, f = halves
+    f, b = halves  # (in the order of `sides`)
     if len(b) == 0 or len(f) == 0:
         return f if len(f) else b
     # (as continue_periodic's "both": the forward half's status, the backward's in the
-    # message; the forward half's first cycle, the join, is dropped by the merge)
-    merged = merge_segments([reversed_segments(b), f])
+    # message; the halves start apart, off the branch point, so every row is kept)
+    merged = merge_segments([reversed_segments(b), f], joined=False)
     return dataclasses.replace(
         merged, status=f.status, message=f"{f.message} (backward half: {b.status.name}: "
         f"{b.message})"

@@ -111,11 +111,12 @@ def truncated(br: Branch, k: int, status: Status, message: str) -> Branch:
     )
 
 
-def merge_segments(segs: list[Branch]) -> Branch:
+def merge_segments(segs: list[Branch], *, joined: bool = True) -> Branch:
     """One branch from consecutive segments.
 
-    The first row of each later segment, the previous segment's last cycle on the new mesh,
-    is dropped.
+    ``joined``: the first row of each later segment is the previous segment's last cycle
+    on the new mesh, and is dropped; else (two halves started apart, on either side of
+    a branch point) every row is kept.
     """
     rows: dict[str, list[Any]] = {k: [] for k in ("p", "x", "eig", "nun", "ds", "it")}
     recs: dict[str, list[float]] = {}
@@ -123,7 +124,7 @@ def merge_segments(segs: list[Branch]) -> Branch:
     first_row, probs = [], []
     base, s_base = 0, 0.0
     for k, b in enumerate(segs):
-        lo = 0 if k == 0 else 1
+        lo = 1 if k and joined else 0
         sub_p, sub_f = segments_of(b)
         for q, fr in zip(sub_p, sub_f, strict=True):
             probs.append(q)
@@ -138,7 +139,7 @@ def merge_segments(segs: list[Branch]) -> Branch:
             recs.setdefault(name, []).extend(col[lo:].tolist())
         for sp in b.special_points:
             specials.append(dataclasses.replace(sp, index=base + sp.index, s=s_base + sp.s))
-        base += len(b) - 1
+        base += len(b) - 1 if joined else len(b)
         s_base += float(b.arclength[-1]) if len(b) else 0.0
     last = segs[-1]
     wide = max(x.shape[1] for x in rows["x"])  # meshes of more intervals: NaN-pad the rest
