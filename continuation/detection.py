@@ -460,6 +460,16 @@ class RunContext:
                     pb.p,
                     r.message,
                 )
+            elif r.error > det.tol:
+                log.warning(
+                    "%s between p=%.8g and p=%.8g was located with error %.1e > tol %.1e (%s)",
+                    label or kind.value,
+                    pa.p,
+                    pb.p,
+                    r.error,
+                    det.tol,
+                    r.message,
+                )
             out.append(
                 SpecialPoint(
                     kind=kind,
@@ -473,6 +483,7 @@ class RunContext:
                     data=dict(data),
                     s=s_a + r.sigma,
                     tangent=np.array(r.point.tau),
+                    error=float(r.error),
                 )
             )
         out.sort(key=lambda sp: sp.s)
