@@ -8,16 +8,18 @@ produced row ``b`` from row ``a``. A trial point at ``sigma`` is predicted on th
 branch and strictly inside the step. The zero of the test function ``g(sigma)`` is
 found by the Illinois variant of regula falsi (Dowell & Jarratt 1971, BIT 11:168-174),
 which keeps a sign-changing bracket and converges superlinearly; it stops when the
-sign-changing bracket has collapsed to width ``tol`` (in ``sigma``): when the secant
-correction falls below ``tol`` the next trial point is placed ``tol / 2`` beyond the
-secant zero, so that the bracket closes around it (the "tolerance step" of Brent 1973,
-*Algorithms for Minimization without Derivatives*, Ch. 4); if that probe does not
-change sign, the secant is unreliable there (a zero of higher odd order, where ``g``
-is flat) and the search bisects from then on, as it does once ``STALL`` trial
-points have not halved the bracket, unless the midpoint's corrected point leaves the
-branch (:func:`tangent_agrees`; next to a branch point, where the secant approaching
-from the branch's side is kept). The returned point is a bracket end,
-so its error in ``sigma`` (:attr:`LocateResult.error`) is at most the bracket width; a
+sign-changing bracket has collapsed to width ``tol`` (in ``sigma``), or when the
+secant correction falls below ``tol`` and a probe ``tol`` beyond the trial point
+towards the secant's zero changes sign (the "tolerance step" of Brent 1973,
+*Algorithms for Minimization without Derivatives*, Ch. 4), which proves the zero
+within ``tol``. If the probe does not change sign but ``|g|`` still falls, the secant
+was misled by a flat ``g`` (a zero of higher odd order) and the search goes on by
+bisection, as it does once ``STALL`` trial points have not halved the bracket (unless
+the midpoint's corrected point leaves the branch, :func:`tangent_agrees`: next to a
+branch point the secant approaching from the branch's side is kept); otherwise ``g``
+is noise there and the point is returned with the bracket as its error. The returned
+point is a bracket end, so its error in ``sigma`` (:attr:`LocateResult.error`) is at
+least the distance to the zero of ``g`` in the bracket; a
 tiny ``|g|`` alone is never taken as a zero (``g = x^3`` is ``1e-15`` already
 ``1e-5`` from its zero). A point counts as located only if ``|g|`` there is below
 ``1e-3 max(|g_a|, |g_b|)`` once the bracket has collapsed, so a sign change across a
@@ -600,6 +602,9 @@ def locate_beyond(
 #: a bisection step is taken when ``STALL`` trial points have not halved the bracket
 #: (Illinois creeps towards a zero of higher odd order, or when one bracket end is far)
 STALL = 4
+#: the probe's distance in units of ``tol`` (below 1 by more than the rounding of
+#: ``sigma + tol - sigma``)
+PROBE = 1.0 - 1e-6
 
 
 def locate_zero(
@@ -724,27 +729,25 @@ def locate_zero(
     glo, ghi = g_a, g_b  # glo/ghi are Illinois-scaled values
     side = 0
     s_prev = math.nan
-    probe: float | None = None  # a tolerance step to close the bracket around the zero
-    probe_side = 0  # the bracket end the probe stepped from
-    bisect = False  # a probe failed: the secant is unreliable here (a flat zero)
     widths = [width]  # bracket width after each trial point
+    bisect = False  # the secant stalls: bisect from now on
     safeguard = True  # bisection steps allowed (off once one left the branch)
     for it in range(1, max_iter + 1):
         s = hi - ghi * (hi - lo) / (ghi - glo)
         if it == 1 and first is not None and 0.0 < first < sigma_b:
             s = first
-        halving = len(widths) > STALL and widths[-1] > 0.5 * widths[-1 - STALL]
-        bisect = bisect or (safeguard and halving)  # (from then on: the secant stalls)
-        mid = bisect
-        if mid:
+        bisect = bisect or (
+            safeguard and len(widths) > STALL and widths[-1] > 0.5 * widths[-1 - STALL]
+        )
+        if bisect:
             s = 0.5 * (lo + hi)
-        if probe is not None:
-            s, probe, mid = probe, None, False
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
         near = min(end_lo, end_hi, key=lambda e: abs(e[0] - s))
-        pt = point_at(problem, a, b, s, sigma_b, w, newton, (near[0], near[1]), same_branch or mid)
-        if pt is None and mid and not same_branch:
+        pt = point_at(
+            problem, a, b, s, sigma_b, w, newton, (near[0], near[1]), same_branch or bisect
+        )
+        if pt is None and bisect and not same_branch:
             # a bisection point off this branch (next to a branch point): back to the
             # secant, which approaches from the branch's side
             safeguard = bisect = False
@@ -798,30 +801,47 @@ def locate_zero(
                 ghi *= 0.5
             side = -1
         widths.append(hi - lo)
-        if probe_side:
-            # the probe did not change sign: the zero is farther than the secant said
-            # (g flat, a zero of higher order): bisect from now on
-            bisect = bisect or side == probe_side
-            probe_side = 0
-        if hi - lo <= tol:
+        # the next (Illinois-scaled) secant correction, without evaluating it: when it
+        # (or the last step) is below tol the zero is probably within tol of this trial
+        # point, but only a sign change proves it (a flat g, at a zero of higher order,
+        # has tiny secant corrections far from its zero)
+        s_next = hi - ghi * (hi - lo) / (ghi - glo)
+        collapsed = hi - lo <= tol
+        if collapsed or (not bisect and (abs(s - s_prev) <= tol or abs(s_next - s) <= tol)):
             best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
             # a larger |g| than g_ok means the bracket closed on a jump of g (e.g. trial
             # points corrected onto a crossing branch next to a branch point, or a Hopf
             # test that switched between eigenvalue pairs), not on a zero
-            if abs(best[2]) > g_ok(hi - lo):
+            d = min(hi - lo, max(abs(s_next - s), tol))
+            if abs(best[2]) > g_ok(d):
                 return bracket_result(it, "test function jumps, no zero")
-            return _located(problem, best, hi - lo, samples, lo, hi, w, tol, it, evaluate)
-        # the next (Illinois-scaled) secant correction, without evaluating it: when it
-        # (or the last step) is below tol the zero is probably within tol of this trial
-        # point, but only a sign change proves it: step tol / 2 beyond the secant zero,
-        # away from this point, so that the bracket closes around the zero
-        s_next = hi - ghi * (hi - lo) / (ghi - glo)
-        if not bisect and (abs(s - s_prev) <= tol or abs(s_next - s) <= tol):
+            if collapsed:
+                return _located(problem, best, hi - lo, samples, lo, hi, w, tol, it, evaluate)
+            # probe tol beyond this trial point towards the secant's zero: a sign change
+            # there proves the zero within tol; otherwise the bracket (narrowed by the
+            # probe) is the honest error, and the search goes on only if g is smooth
+            # there (a flat zero), not noise
             toward = 1.0 if s == lo else -1.0
-            probe = s + toward * max(abs(s_next - s) + 0.5 * tol, 0.5 * tol)
-            probe_side = side
-            if not lo < probe < hi:
-                probe, probe_side = 0.5 * (lo + hi), 0
+            q = evaluate(s + toward * min(PROBE * tol, 0.5 * (hi - lo)))
+            if q is not None:
+                samples.append(q)
+                if (q[2] > 0) != (g > 0):
+                    lo_v, hi_v = sorted((s, q[0]))
+                    err = max(abs(best[0] - lo_v), abs(best[0] - hi_v))
+                    return _located(problem, best, err, samples, lo_v, hi_v, w, tol, it, evaluate)
+                if toward > 0:
+                    lo, glo, end_lo = q[0], q[2], q
+                else:
+                    hi, ghi, end_hi = q[0], q[2], q
+                widths.append(hi - lo)
+                if abs(q[2]) < abs(g):
+                    # |g| still falls towards the zero: smooth and flat, keep searching
+                    # (bisecting: the secant creeps)
+                    bisect = safeguard
+                    s_prev = s
+                    continue
+            best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
+            return _located(problem, best, hi - lo, samples, lo, hi, w, tol, it, evaluate)
         s_prev = s
     return bracket_result(max_iter, "max_iter reached")
 
