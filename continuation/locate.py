@@ -607,6 +607,38 @@ STALL = 4
 PROBE = 1.0 - 1e-6
 
 
+def _probe_limit(
+    trail: list[float],
+    q: tuple[float, PointInfo, float],
+    toward: float,
+    evaluate: Callable[[float], tuple[float, PointInfo, float] | None],
+    tol: float,
+) -> tuple[float, PointInfo, float] | None:
+    """A point just beyond the limit of a linearly converging secant, if ``g`` changes sign.
+
+    Returns ``(sigma, point, g)`` with ``g`` of the other sign than at ``q``, else None.
+
+    The last three trial points ``s0, s1, s2`` (``trail``) approach the zero
+    monotonically with ratio ``r = (s2 - s1) / (s1 - s0)``, ``0 < r < 1``; their limit is
+    ``s2 + (s2 - s1) r / (1 - r)`` (Aitken's delta-squared). The probe is ``tol / 2``
+    beyond it, in the direction ``toward``, and past ``q`` (the failed tolerance probe).
+    """
+    if len(trail) < 3:
+        return None
+    s0, s1, s2 = trail[-3:]
+    d1, d2 = s1 - s0, s2 - s1
+    if not (d1 * d2 > 0 and abs(d2) < abs(d1)):
+        return None
+    r = d2 / d1
+    s_lim = s2 + d2 * r / (1.0 - r) + toward * 0.5 * tol
+    if not (s_lim - q[0]) * toward > 0:
+        return None
+    got = evaluate(s_lim)
+    if got is None or (got[2] > 0) == (q[2] > 0):
+        return None
+    return got
+
+
 def locate_zero(
     problem: Any,
     a: PointInfo,
@@ -730,6 +762,7 @@ def locate_zero(
     side = 0
     s_prev = math.nan
     widths = [width]  # bracket width after each trial point
+    trail: list[float] = []  # the trial points' sigma, in order
     bisect = False  # the secant stalls: bisect from now on
     safeguard = True  # bisection steps allowed (off once one left the branch)
     for it in range(1, max_iter + 1):
@@ -790,6 +823,7 @@ def locate_zero(
         if g == 0.0:
             return _located(problem, (s, pt, g), 0.0, samples, s, s, w, tol, it, evaluate)
         samples.append((s, pt, g))
+        trail.append(s)
         if (g > 0) == (ghi > 0):
             hi, ghi, end_hi = s, g, (s, pt, g)
             if side == 1:
@@ -829,15 +863,29 @@ def locate_zero(
                     lo_v, hi_v = sorted((s, q[0]))
                     err = max(abs(best[0] - lo_v), abs(best[0] - hi_v))
                     return _located(problem, best, err, samples, lo_v, hi_v, w, tol, it, evaluate)
+                # (the same end moved again: Illinois halves the other end's value)
                 if toward > 0:
-                    lo, glo, end_lo = q[0], q[2], q
+                    lo, glo, end_lo, side = q[0], q[2], q, -1
+                    ghi *= 0.5
                 else:
-                    hi, ghi, end_hi = q[0], q[2], q
+                    hi, ghi, end_hi, side = q[0], q[2], q, 1
+                    glo *= 0.5
                 widths.append(hi - lo)
                 if abs(q[2]) < abs(g):
                     # |g| still falls towards the zero: smooth and flat, keep searching
-                    # (bisecting: the secant creeps)
+                    # (bisecting: the secant creeps); where bisection would leave the
+                    # branch, the secant creeps linearly from the branch's side and the
+                    # limit of its last three points (Aitken's delta-squared) is probed
                     bisect = safeguard
+                    r_lim = None if bisect else _probe_limit(trail, q, toward, evaluate, tol)
+                    if r_lim is not None:
+                        samples.append(r_lim)
+                        lo_v, hi_v = sorted((q[0], r_lim[0]))
+                        best = min(q, r_lim, key=lambda e: abs(e[2]))
+                        err = hi_v - lo_v
+                        return _located(
+                            problem, best, err, samples, lo_v, hi_v, w, tol, it, evaluate
+                        )
                     s_prev = s
                     continue
             best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
