@@ -107,8 +107,10 @@ class SpecialPoint:
     x : ndarray, shape (N,)
         Unknowns ``z`` at the point (the state, for equilibrium branches).
     located : bool
-        True when the locator converged; False: only bracketed (then ``p``, ``x``
-        are those of the best trial point or of row ``index``).
+        True when the locator converged on a zero of the test function (a sign change
+        proved within ``DetectionSettings.tol``, not a jump), to within ``error``;
+        False: only bracketed (then ``p``, ``x`` are those of the best trial point or
+        of row ``index``).
     bracket : tuple of float
         ``(p[index], p[index + 1])``, the parameter values of the two rows around it.
     delta_unstable : tuple of int

@@ -807,9 +807,10 @@ def locate_zero(
                 msg = f"corrector failed in a bracket of width {hi - lo:.1e}"
                 if r_int is not None:
                     msg = f"{msg}; {r_int.message}"
+                    # (not located: the zero is surely only in the bracket)
                     return LocateResult(
                         r_int.sigma, r_int.point, r_int.g, r_int.located, it, msg,
-                        error=r_int.error,
+                        error=max(r_int.error, hi - lo),
                     )  # fmt: skip
                 # otherwise accept the bracket if it is already narrow and g small at its
                 # better end (its error, the bracket's width, is reported)
