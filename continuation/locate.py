@@ -453,13 +453,16 @@ def point_error(problem: Any, pt: PointInfo, w: Any) -> float:
     (``A`` nearly singular, smallest singular value ``s = |r| / |d|_theta`` along ``d``)
     the residual grows quadratically along the near-null direction
     ``v = d / |d|_theta``: ``|G(u + e v)| ~ s e + M e^2 / 2`` with
-    ``M = |A'(u)[v] v|`` (a finite difference of the Jacobian along ``v``), so a
-    residual ``|r|`` leaves the point uncertain by the smaller root
-    ``e = 2 |r| / (s + sqrt(s^2 + 2 M |r|))``, of order ``sqrt(2 |r| / M)`` where
-    ``s -> 0`` (Keller 1977, "Numerical solution of bifurcation and nonlinear
-    eigenvalue problems", in *Applications of Bifurcation Theory*, Sec. 5; a corrected
-    point within ``tol_G / sigma_min`` only to first order). ``M`` is only evaluated
-    when ``|d|_theta`` itself exceeds ``1e-12``.
+    ``M = |A'(u)[v] v|``, so a residual ``|r|`` leaves the point uncertain by the
+    smaller root ``e = 2 |r| / (s + sqrt(s^2 + 2 M |r|))``, of order
+    ``sqrt(2 |r| / M)`` where ``s -> 0``; where ``M`` vanishes too (a pitchfork, the
+    residual cubic along ``v``) by ``(6 |r| / M_3)^(1/3)``, ``M_3 = |A''(u)[v, v] v|``;
+    the smaller of the two is returned (Keller 1977, "Numerical solution of
+    bifurcation and nonlinear eigenvalue problems", in *Applications of Bifurcation
+    Theory*, Sec. 5: a corrected point is within ``tol_G / sigma_min`` only to first
+    order). ``M`` and ``M_3`` are central differences of ``A(u + t v) v`` with
+    ``t = +-h``, ``h = 1e-4 (1 + |u|_inf)``, evaluated only when ``|d|_theta`` itself
+    exceeds ``1e-12``.
 
     Returns
     -------
@@ -484,18 +487,26 @@ def point_error(problem: Any, pt: PointInfo, w: Any) -> float:
     v = d / lin_err
     s_min = rn / lin_err
     u = pt.u
-    h = 1e-6 * (1.0 + float(np.max(np.abs(u))))
+    h = 1e-4 * (1.0 + float(np.max(np.abs(u))))
     n = u.size - 1
+
+    def a_v(sign: float) -> np.ndarray:
+        """``A(u + sign h v) v`` (the Jacobian rows of the bordered matrix)."""
+        _, gz, gp = linearize(problem, u[:n] + sign * h * v[:n], float(u[n] + sign * h * v[n]))
+        return np.asarray(gz @ v[:n] + gp * v[n], dtype=float).ravel()
+
     try:
-        _, gz_h, gp_h = linearize(problem, u[:n] + h * v[:n], float(u[n] + h * v[n]))
+        av_p, av_m = a_v(1.0), a_v(-1.0)
     except (ValueError, ArithmeticError):
         return lin_err
-    av_h = gz_h @ v[:n] + gp_h * v[n]
-    av_0 = pt.Gz @ v[:n] + pt.Gp * v[n]
-    m = float(np.linalg.norm(np.asarray(av_h - av_0, dtype=float).ravel())) / h
-    if not math.isfinite(m):
+    av_0 = np.asarray(pt.Gz @ v[:n] + pt.Gp * v[n], dtype=float).ravel()
+    m2 = float(np.linalg.norm(av_p - av_m)) / (2.0 * h)
+    m3 = float(np.linalg.norm(av_p - 2.0 * av_0 + av_m)) / (h * h)
+    if not (math.isfinite(m2) and math.isfinite(m3)):
         return lin_err
-    return 2.0 * rn / (s_min + math.sqrt(s_min * s_min + 2.0 * m * rn))
+    e_quad = 2.0 * rn / (s_min + math.sqrt(s_min * s_min + 2.0 * m2 * rn))
+    e_cub = min(lin_err, (6.0 * rn / m3) ** (1.0 / 3.0)) if m3 > 0.0 else lin_err
+    return min(e_quad, e_cub)
 
 
 def _located(
@@ -518,7 +529,7 @@ def _located(
     bracket closed on a zero, not a jump) but says so in its message and ``error``.
     """
     err = width
-    why = []
+    why = [] if width <= tol else [f"the sign change is bracketed to {width:.1e}"]
     e_noise = _noise_error(samples, lo, hi, best, evaluate)
     if e_noise > max(err, tol):
         why.append(f"|g| = {abs(best[2]):.1e} at the zero is noise of the test function")
@@ -748,10 +759,14 @@ def locate_zero(
         return LocateResult(best[0], best[1], best[2], False, it, message, error=hi - lo)
 
     def evaluate(s: float) -> tuple[float, PointInfo, float] | None:
-        """``(s, point, g)`` at a corrected point strictly inside the step, or None."""
+        """``(s, point, g)`` at a corrected point of this branch inside the step, or None.
+
+        Only points whose tangent is the branch's (:func:`tangent_agrees`): a probe
+        corrected onto a crossing branch would read a jump of ``g`` as its noise.
+        """
         if not 0.0 < s < sigma_b:
             return None
-        q = point_at(problem, a, b, s, sigma_b, w, newton, None, same_branch)
+        q = point_at(problem, a, b, s, sigma_b, w, newton, None, True)
         if q is None:
             return None
         gq = float(test(q, s / sigma_b))
