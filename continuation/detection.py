@@ -603,7 +603,8 @@ class RunContext:
         pt = solved[1]
         pt.iters = r.point.iters
         sigma = float(c.dot(pt.u - a.point.u))
-        return LocateResult(sigma, pt, 0.0, True, r.iterations, r.message)
+        # (on p = bound exactly: no location error beyond the corrector's)
+        return LocateResult(sigma, pt, 0.0, True, r.iterations, r.message, error=0.0)
 
     def point_on_bound(
         self, u: FloatArray, bound: float, c: FloatArray, w: FloatArray
@@ -657,7 +658,8 @@ class RunContext:
             chord, w
         ):
             return None
-        return LocateResult(sigma, pt, 0.0, True, 1)
+        # (on p = bound exactly: no location error beyond the corrector's)
+        return LocateResult(sigma, pt, 0.0, True, 1, error=0.0)
 
     def stop_point(
         self, a: Row, b: Row, sigma_b: float, w: FloatArray

@@ -904,8 +904,16 @@ def locate_zero(
                         )
                     s_prev = s
                     continue
+            # no sign change within tol, and |g| does not fall towards the zero: the
+            # zero is |g| / |g'| away for a smooth g (|g'| from samples above the noise,
+            # see _noise_slope), plus the noise of g (_located); the bracket otherwise
             best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
-            return _located(problem, best, hi - lo, samples, lo, hi, w, tol, it, evaluate)
+            m = _noise_slope(samples, lo, hi, best[2])
+            err = hi - lo
+            if math.isfinite(m) and m > 0.0:
+                step = abs(q[0] - s) if q is not None else tol
+                err = min(err, max(step, abs(best[2]) / m))
+            return _located(problem, best, err, samples, lo, hi, w, tol, it, evaluate)
         s_prev = s
     return bracket_result(max_iter, "max_iter reached")
 
