@@ -8,26 +8,28 @@ produced row ``b`` from row ``a``. A trial point at ``sigma`` is predicted on th
 branch and strictly inside the step. The zero of the test function ``g(sigma)`` is
 found by the Illinois variant of regula falsi (Dowell & Jarratt 1971, BIT 11:168-174),
 which keeps a sign-changing bracket and converges superlinearly; it stops when the
-sign-changing bracket has collapsed to width ``tol`` (in ``sigma``), or when the
-secant correction falls below ``tol`` and a probe ``tol`` beyond the trial point
-towards the secant's zero changes sign (the "tolerance step" of Brent 1973,
-*Algorithms for Minimization without Derivatives*, Ch. 4), which proves the zero
-within ``tol``. If the probe does not change sign but ``|g|`` still falls, the secant
-was misled by a flat ``g`` (a zero of higher odd order) and the search goes on by
-bisection, as it does once ``STALL`` trial points have not halved the bracket (unless
-the midpoint's corrected point leaves the branch, :func:`tangent_agrees`: next to a
-branch point the secant approaching from the branch's side is kept); otherwise ``g``
-is noise there and the point is returned with the bracket as its error. The returned
-point is a bracket end, so its error in ``sigma`` (:attr:`LocateResult.error`) is at
-least the distance to the zero of ``g`` in the bracket; a
-tiny ``|g|`` alone is never taken as a zero (``g = x^3`` is ``1e-15`` already
-``1e-5`` from its zero). A point counts as located only if ``|g|`` there is below
-``1e-3 max(|g_a|, |g_b|)`` once the bracket has collapsed, so a sign change across a
-jump of ``g`` is reported as bracketed, never as a zero, while round-off noise in
-``g`` near a genuine zero is tolerated. This bounds the distance to the zero of the
-*computed* ``g`` along the *computed* branch; errors of ``g`` itself (finite-difference
-derivatives) and of the corrected points (next to a branch point, where the bordered
-matrix is singular) are estimated by the callers (:func:`point_error`).
+bracket has collapsed to width ``tol`` (in ``sigma``), or when the secant correction
+falls below ``tol`` and a probe ``tol`` beyond the trial point towards the secant's
+zero changes sign (the "tolerance step" of Brent 1973, *Algorithms for Minimization
+without Derivatives*, Ch. 4), which proves the zero within ``tol``. A tiny ``|g|``
+alone is never taken as a zero (``g = x^3`` is ``1e-15`` already ``1e-5`` from its
+zero). If the probe does not change sign but ``|g|`` still falls, the secant was misled
+by a flat ``g`` (a zero of higher odd order) and the search goes on by bisection, as it
+does once ``STALL`` trial points have not halved the bracket (unless the midpoint's
+corrected point leaves the branch, :func:`tangent_agrees`; next to a branch point the
+secant creeping from the branch's side is kept and the limit of its last points is
+probed, :func:`_probe_limit`); if ``|g|`` does not fall, ``g`` is noise there and the
+error is ``|g| / |g'|``. A point counts as located only if ``|g|`` there is below
+``1e-3 max(|g_a|, |g_b|)``, so a sign change across a jump of ``g`` is reported as
+bracketed, never as a zero, while round-off noise in ``g`` near a genuine zero is
+tolerated.
+
+Every result carries ``error``, the estimated distance in ``sigma`` to the zero
+(:func:`_located`): the width of the bracket that proves it, or more where ``g`` is
+noisy there (round-off, finite-difference derivatives; :func:`_noise_error` samples the
+noise) or the corrected point itself is ill-determined (next to a branch point of the
+branch a residual ``|G|`` leaves it uncertain by about ``sqrt(|G|)``,
+:func:`point_error`). A located point with ``error > tol`` says so in its message.
 
 Next to a branch point of the branch the bordered matrix is singular: Newton's method
 determines a trial point only to ``tol / sigma_min`` and may converge onto the crossing
