@@ -107,8 +107,10 @@ class SpecialPoint:
     x : ndarray, shape (N,)
         Unknowns ``z`` at the point (the state, for equilibrium branches).
     located : bool
-        True when the locator converged; False: only bracketed (then ``p``, ``x``
-        are those of the best trial point or of row ``index``).
+        True when the locator converged on a zero of the test function (a sign change
+        proved within ``DetectionSettings.tol``, not a jump), to within ``error``;
+        False: only bracketed (then ``p``, ``x`` are those of the best trial point or
+        of row ``index``).
     bracket : tuple of float
         ``(p[index], p[index + 1])``, the parameter values of the two rows around it.
     delta_unstable : tuple of int
@@ -123,6 +125,13 @@ class SpecialPoint:
         Pseudo-arclength position; ``arclength[index] <= s <= arclength[index + 1]``.
     tangent : ndarray, shape (N + 1,) or None
         Unit tangent ``(dz/ds, dp/ds)`` of the branch at the point, if known.
+    error : float
+        The locator's estimate of the error of ``s`` (the distance along the branch to
+        the zero of the test function): at most ``DetectionSettings.tol`` when
+        ``located``; otherwise the bracket's width, a larger estimate (e.g. a test
+        function whose noise leaves its zero uncertain), or NaN (unknown). The unit
+        tangent has ``|dp/ds| <= 1 / sqrt(theta)`` (``theta`` of the settings), so the
+        error of ``p`` is at most ``error / sqrt(theta)`` to first order.
     """
 
     kind: SpecialKind
@@ -136,6 +145,7 @@ class SpecialPoint:
     data: Mapping[str, float] = field(default_factory=dict)
     s: float = math.nan
     tangent: FloatArray | None = None
+    error: float = math.nan
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "kind", _kind(self.kind))
@@ -154,6 +164,7 @@ class SpecialPoint:
             "data": {k: float(v) for k, v in self.data.items()},
             "s": float(self.s),
             "tangent": None if self.tangent is None else [float(v) for v in self.tangent],
+            "error": float(self.error),
         }
 
     @classmethod
@@ -171,6 +182,7 @@ class SpecialPoint:
             data={k: float(v) for k, v in d.get("data", {}).items()},
             s=float(d.get("s", math.nan)),
             tangent=None if d.get("tangent") is None else np.asarray(d["tangent"], float),
+            error=float(d.get("error", math.nan)),
         )
 
     def reversed(self, index: int, s: float) -> SpecialPoint:

@@ -499,6 +499,16 @@ class RunContext:
                     pb.p,
                     r.message,
                 )
+            elif r.error > det.tol:
+                log.warning(
+                    "%s between p=%.8g and p=%.8g was located with error %.1e > tol %.1e (%s)",
+                    label or kind.value,
+                    pa.p,
+                    pb.p,
+                    r.error,
+                    det.tol,
+                    r.message,
+                )
             out.append(
                 SpecialPoint(
                     kind=kind,
@@ -512,6 +522,7 @@ class RunContext:
                     data=dict(data),
                     s=s_a + r.sigma,
                     tangent=np.array(r.point.tau),
+                    error=float(r.error),
                 )
             )
         out.sort(key=lambda sp: sp.s)
@@ -631,7 +642,8 @@ class RunContext:
         pt = solved[1]
         pt.iters = r.point.iters
         sigma = float(c.dot(pt.u - a.point.u))
-        return LocateResult(sigma, pt, 0.0, True, r.iterations, r.message)
+        # (on p = bound exactly: no location error beyond the corrector's)
+        return LocateResult(sigma, pt, 0.0, True, r.iterations, r.message, error=0.0)
 
     def point_on_bound(
         self, u: FloatArray, bound: float, c: FloatArray, w: FloatArray
@@ -685,7 +697,8 @@ class RunContext:
             chord, w
         ):
             return None
-        return LocateResult(sigma, pt, 0.0, True, 1)
+        # (on p = bound exactly: no location error beyond the corrector's)
+        return LocateResult(sigma, pt, 0.0, True, 1, error=0.0)
 
     def stop_point(
         self, a: Row, b: Row, sigma_b: float, w: FloatArray

@@ -8,10 +8,28 @@ produced row ``b`` from row ``a``. A trial point at ``sigma`` is predicted on th
 branch and strictly inside the step. The zero of the test function ``g(sigma)`` is
 found by the Illinois variant of regula falsi (Dowell & Jarratt 1971, BIT 11:168-174),
 which keeps a sign-changing bracket and converges superlinearly; it stops when the
-bracket or the last secant correction is below ``tol`` (in ``sigma``). A point counts
-as located only if ``|g|`` there is below ``1e-3 max(|g_a|, |g_b|)`` once the bracket
-has collapsed, so a sign change across a jump of ``g`` is reported as bracketed, never
-as a zero, while round-off noise in ``g`` near a genuine zero is tolerated.
+bracket has collapsed to width ``tol`` (in ``sigma``), or when the secant correction
+falls below ``tol`` and a probe ``tol`` beyond the trial point towards the secant's
+zero changes sign (the "tolerance step" of Brent 1973, *Algorithms for Minimization
+without Derivatives*, Ch. 4), which proves the zero within ``tol``. A tiny ``|g|``
+alone is never taken as a zero (``g = x^3`` is ``1e-15`` already ``1e-5`` from its
+zero). If the probe does not change sign but ``|g|`` still falls, the secant was misled
+by a flat ``g`` (a zero of higher odd order) and the search goes on by bisection, as it
+does once ``STALL`` trial points have not halved the bracket (unless the midpoint's
+corrected point leaves the branch, :func:`tangent_agrees`; next to a branch point the
+secant creeping from the branch's side is kept and the limit of its last points is
+probed, :func:`_probe_limit`); if ``|g|`` does not fall, ``g`` is noise there and the
+error is ``|g| / |g'|``. A point counts as located only if ``|g|`` there is below
+``1e-3 max(|g_a|, |g_b|)``, so a sign change across a jump of ``g`` is reported as
+bracketed, never as a zero, while round-off noise in ``g`` near a genuine zero is
+tolerated.
+
+Every result carries ``error``, the estimated distance in ``sigma`` to the zero
+(:func:`_located`): the width of the bracket that proves it, or more where ``g`` is
+noisy there (round-off, finite-difference derivatives; :func:`_noise_error` samples the
+noise) or the corrected point itself is ill-determined (next to a branch point of the
+branch a residual ``|G|`` leaves it uncertain by about ``sqrt(|G|)``,
+:func:`point_error`). A located point with ``error > tol`` says so in its message.
 
 Next to a branch point of the branch the bordered matrix is singular: Newton's method
 determines a trial point only to ``tol / sigma_min`` and may converge onto the crossing
@@ -61,6 +79,10 @@ class LocateResult:
     iterations : int
         Number of trial points corrected.
     message : str
+    error : float
+        Estimated error of ``sigma`` (distance to the zero of ``g`` along the branch):
+        at most ``tol`` when located; the bracket's width, an interpolation's error
+        estimate, or NaN (unknown) otherwise.
     """
 
     sigma: float
@@ -69,6 +91,7 @@ class LocateResult:
     located: bool
     iterations: int
     message: str = ""
+    error: float = math.nan
 
 
 def _chord_point(
@@ -291,7 +314,9 @@ def _interpolated_zero(
     with only the two bracket ends it is the bracket's width. The point is
     ``located`` only if that estimate is at most ``tol`` and ``max |G(u*)|`` at most
     ``newton.tol``; it is returned (not located) if only the residual test passes, and
-    None is returned otherwise.
+    None is returned otherwise. The result's ``error`` is the larger of that estimate
+    and the point's own distance to the branch (:func:`point_error`), which next to
+    the branch point can exceed ``tol`` although the residual is tiny.
     """
     lo, hi = end_lo[0], end_hi[0]
     if not (hi > lo and end_lo[2] * end_hi[2] < 0):
@@ -343,7 +368,182 @@ def _interpolated_zero(
         f"interpolated through {len(chosen)} points on the branch next to a point where "
         f"the corrector fails (error estimate {err:.1e})"
     )
-    return LocateResult(s, pt, g, err <= tol, 0, msg)
+    located = err <= tol
+    # the interpolated point is not a Newton solution: its own distance to the branch
+    # (next to a branch point, of order sqrt(|G|)) enters its error, not its acceptance
+    e_pt = point_error(problem, pt, w)
+    if math.isfinite(e_pt) and e_pt > max(err, tol):
+        err = e_pt
+        msg = (
+            f"{msg}; located only to {err:.1e}, not to tol {tol:.1e}: the point is "
+            "ill-determined (bordered matrix near singular)"
+        )
+    return LocateResult(s, pt, g, located, 0, msg, error=err)
+
+
+#: a sample's ``|g|`` must exceed the located point's by this factor to enter the slope
+#: of :func:`_noise_error` (its value is then signal, not noise)
+NOISE_MARGIN = 100.0
+
+
+def _noise_slope(
+    samples: list[tuple[float, PointInfo, float]], lo: float, hi: float, g_best: float
+) -> float:
+    r"""Slope ``|g'|`` at a zero bracketed by ``[lo, hi]``, from samples above the noise.
+
+    The secant slope between the nearest samples on either side of the bracket whose
+    ``|g|`` exceeds ``NOISE_MARGIN |g_best|`` (their difference is then signal, not
+    noise); NaN when there is no such pair on both sides (the samples cannot tell).
+    """
+    g0 = abs(g_best)
+    left = [q for q in samples if q[0] <= lo and abs(q[2]) > NOISE_MARGIN * g0]
+    right = [q for q in samples if q[0] >= hi and abs(q[2]) > NOISE_MARGIN * g0]
+    if not left or not right:
+        return math.nan
+    ql = max(left, key=lambda q: q[0])
+    qr = min(right, key=lambda q: q[0])
+    if ql[2] * qr[2] >= 0 or qr[0] <= ql[0]:
+        return math.nan
+    return abs(qr[2] - ql[2]) / (qr[0] - ql[0])
+
+
+#: extra trial points at ``s_best + k delta`` that sample the noise of ``g`` at a zero
+NOISE_PROBES = (-3.0, -1.0, 1.0, 3.0)
+
+
+def _noise_error(
+    samples: list[tuple[float, PointInfo, float]],
+    lo: float,
+    hi: float,
+    best: tuple[float, PointInfo, float],
+    evaluate: Callable[[float], tuple[float, PointInfo, float] | None],
+) -> float:
+    r"""Uncertainty in ``sigma`` of a zero bracketed by ``[lo, hi]`` from the noise in ``g``.
+
+    Once the bracket is narrow, ``|g|`` at its better end is bounded by ``|g'| (hi - lo)``
+    for a smooth ``g``; a larger value is noise (round-off, or the error of
+    finite-difference derivatives inside ``g``), and the sign changes seen inside the
+    bracket are those of the noise. With ``g_i = m (s_i - s*) + n_i``, ``|n_i| <= A``
+    (``m`` from :func:`_noise_slope`), the zero ``s*`` is then only known to
+    ``(|g_best| + A) / m``. The amplitude ``A`` is sampled: ``g`` is evaluated
+    (``evaluate(sigma)``, a corrected point of the branch) at ``s_best + k delta``,
+    ``k`` in ``NOISE_PROBES``, ``delta = |g_best| / m``, and ``A`` is estimated by the
+    largest ``|r_i - r_best|`` of the residuals ``r_i = g_i - m (s_i - s_best)`` of these
+    and the samples within ``3 delta``. Returns 0 when ``g`` is not noisy
+    (``|g_best| <= m (hi - lo)``) or the samples cannot tell (no slope).
+    """
+    s_b, _, g_b = best
+    m = _noise_slope(samples, lo, hi, g_b)
+    if not (math.isfinite(m) and m > 0.0) or abs(g_b) <= m * max(hi - lo, 0.0):
+        return 0.0
+    delta = abs(g_b) / m
+    near = [q for q in samples if abs(q[0] - s_b) <= 3.0 * delta]
+    for k in NOISE_PROBES:
+        q = evaluate(s_b + k * delta)
+        if q is not None:
+            near.append(q)
+    amp = max((abs((q[2] - m * (q[0] - s_b)) - g_b) for q in near), default=0.0)
+    return (abs(g_b) + amp) / m
+
+
+def point_error(problem: Any, pt: PointInfo, w: Any) -> float:
+    r"""Estimated ``theta``-distance from a corrected point to the branch it approximates.
+
+    The corrector stops at a residual ``r = (G, 0)`` of the bordered system
+    ``A = [[G_z, G_p], [c^T]]``; the next Newton correction ``d = A^{-1} r`` estimates
+    the error where ``A`` is well conditioned. Next to a branch point of the branch
+    (``A`` nearly singular, smallest singular value ``s = |r| / |d|_theta`` along ``d``)
+    the residual grows quadratically along the near-null direction
+    ``v = d / |d|_theta``: ``|G(u + e v)| ~ s e + M e^2 / 2`` with
+    ``M = |A'(u)[v] v|``, so a residual ``|r|`` leaves the point uncertain by the
+    smaller root ``e = 2 |r| / (s + sqrt(s^2 + 2 M |r|))``, of order
+    ``sqrt(2 |r| / M)`` where ``s -> 0``; where ``M`` vanishes too (a pitchfork, the
+    residual cubic along ``v``) by ``(6 |r| / M_3)^(1/3)``, ``M_3 = |A''(u)[v, v] v|``;
+    the smaller of the two is returned (Keller 1977, "Numerical solution of
+    bifurcation and nonlinear eigenvalue problems", in *Applications of Bifurcation
+    Theory*, Sec. 5: a corrected point is within ``tol_G / sigma_min`` only to first
+    order). ``M`` and ``M_3`` are central differences of ``A(u + t v) v`` with
+    ``t = +-h``, ``h = 1e-4 (1 + |u|_inf)``, evaluated only when ``|d|_theta`` itself
+    exceeds ``1e-12``.
+
+    Returns
+    -------
+    float
+        ``e``; NaN when the point has no factorisation (an exactly singular point).
+    """
+    r = np.append(np.asarray(pt.G, dtype=float), 0.0)
+    rn = float(np.linalg.norm(r))
+    if rn == 0.0:
+        return 0.0
+    if pt.lu is None:
+        return math.nan
+    try:
+        d = pt.lu.solve(r)
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+        return math.nan
+    lin_err = float(theta_norm(d, w))
+    if not math.isfinite(lin_err) or lin_err == 0.0:
+        return lin_err if math.isfinite(lin_err) else math.nan
+    if lin_err <= 1e-12:
+        return lin_err
+    v = d / lin_err
+    s_min = rn / lin_err
+    u = pt.u
+    h = 1e-4 * (1.0 + float(np.max(np.abs(u))))
+    n = u.size - 1
+
+    def a_v(sign: float) -> np.ndarray:
+        """``A(u + sign h v) v`` (the Jacobian rows of the bordered matrix)."""
+        _, gz, gp = linearize(problem, u[:n] + sign * h * v[:n], float(u[n] + sign * h * v[n]))
+        return np.asarray(gz @ v[:n] + gp * v[n], dtype=float).ravel()
+
+    try:
+        av_p, av_m = a_v(1.0), a_v(-1.0)
+    except (ValueError, ArithmeticError):
+        return lin_err
+    av_0 = np.asarray(pt.Gz @ v[:n] + pt.Gp * v[n], dtype=float).ravel()
+    m2 = float(np.linalg.norm(av_p - av_m)) / (2.0 * h)
+    m3 = float(np.linalg.norm(av_p - 2.0 * av_0 + av_m)) / (h * h)
+    if not (math.isfinite(m2) and math.isfinite(m3)):
+        return lin_err
+    e_quad = 2.0 * rn / (s_min + math.sqrt(s_min * s_min + 2.0 * m2 * rn))
+    e_cub = min(lin_err, (6.0 * rn / m3) ** (1.0 / 3.0)) if m3 > 0.0 else lin_err
+    return min(e_quad, e_cub)
+
+
+def _located(
+    problem: Any,
+    best: tuple[float, PointInfo, float],
+    width: float,
+    samples: list[tuple[float, PointInfo, float]],
+    lo: float,
+    hi: float,
+    w: Any,
+    tol: float,
+    it: int,
+    evaluate: Callable[[float], tuple[float, PointInfo, float] | None],
+) -> LocateResult:
+    """A located zero at ``best`` with its error estimate.
+
+    The error is the largest of the bracket width, the uncertainty from the noise of
+    ``g`` (:func:`_noise_error`) and that of the corrected point itself
+    (:func:`point_error`); the point stays located when it exceeds ``tol`` (the
+    bracket closed on a zero, not a jump) but says so in its message and ``error``.
+    """
+    err = width
+    why = [] if width <= tol else [f"the sign change is bracketed to {width:.1e}"]
+    e_noise = _noise_error(samples, lo, hi, best, evaluate)
+    if e_noise > max(err, tol):
+        why.append(f"|g| = {abs(best[2]):.1e} at the zero is noise of the test function")
+    err = max(err, e_noise)
+    e_pt = point_error(problem, best[1], w)
+    if math.isfinite(e_pt) and e_pt > max(err, tol):
+        why.append("the corrected point is ill-determined (bordered matrix near singular)")
+        err = e_pt
+    msg = ""
+    if err > tol:
+        msg = f"located only to {err:.1e}, not to tol {tol:.1e}: " + "; ".join(why)
+    return LocateResult(best[0], best[1], best[2], True, it, msg, error=err)
 
 
 def locate_beyond(
@@ -410,6 +610,46 @@ def locate_beyond(
             return LocateResult(s, pt, g, ok, it, msg)
         s_prev, g_prev, s = s, g, s_next
     return LocateResult(s_e, q, g_e, False, max_iter, "zero beyond the row not found")
+
+
+#: a bisection step is taken when ``STALL`` trial points have not halved the bracket
+#: (Illinois creeps towards a zero of higher odd order, or when one bracket end is far)
+STALL = 4
+#: the probe's distance in units of ``tol`` (below 1 by more than the rounding of
+#: ``sigma + tol - sigma``)
+PROBE = 1.0 - 1e-6
+
+
+def _probe_limit(
+    trail: list[float],
+    q: tuple[float, PointInfo, float],
+    toward: float,
+    evaluate: Callable[[float], tuple[float, PointInfo, float] | None],
+    tol: float,
+) -> tuple[float, PointInfo, float] | None:
+    """A point just beyond the limit of a linearly converging secant, if ``g`` changes sign.
+
+    Returns ``(sigma, point, g)`` with ``g`` of the other sign than at ``q``, else None.
+
+    The last three trial points ``s0, s1, s2`` (``trail``) approach the zero
+    monotonically with ratio ``r = (s2 - s1) / (s1 - s0)``, ``0 < r < 1``; their limit is
+    ``s2 + (s2 - s1) r / (1 - r)`` (Aitken's delta-squared). The probe is ``tol / 2``
+    beyond it, in the direction ``toward``, and past ``q`` (the failed tolerance probe).
+    """
+    if len(trail) < 3:
+        return None
+    s0, s1, s2 = trail[-3:]
+    d1, d2 = s1 - s0, s2 - s1
+    if not (d1 * d2 > 0 and abs(d2) < abs(d1)):
+        return None
+    r = d2 / d1
+    s_lim = s2 + d2 * r / (1.0 - r) + toward * 0.5 * tol
+    if not (s_lim - q[0]) * toward > 0:
+        return None
+    got = evaluate(s_lim)
+    if got is None or (got[2] > 0) == (q[2] > 0):
+        return None
+    return got
 
 
 def locate_zero(
@@ -485,9 +725,9 @@ def locate_zero(
         g_a, g_b = end_lo[2], end_hi[2]
     lo, hi = end_lo[0], end_hi[0]
     if g_a == 0.0:
-        return LocateResult(lo, end_lo[1], 0.0, True, 0)
+        return LocateResult(lo, end_lo[1], 0.0, True, 0, error=0.0)
     if g_b == 0.0:
-        return LocateResult(hi, end_hi[1], 0.0, True, 0)
+        return LocateResult(hi, end_hi[1], 0.0, True, 0, error=0.0)
     if not (
         sigma_b > 0
         and 0.0 <= lo < hi <= sigma_b
@@ -497,7 +737,6 @@ def locate_zero(
     ):
         return LocateResult(lo, end_lo[1], g_a, False, 0, "test function does not change sign")
     width = hi - lo  # (sigma_b unless a sub-bracket is given)
-    g_small = 1e-14 * max(abs(g_a), abs(g_b))
     # a located zero must have |g| <= g_jump * max(|g_a|, |g_b|) once the bracket has
     # collapsed: a continuous g is far smaller there (it is bounded by its slope times the
     # tolerance, plus round-off noise), a jump of g is not
@@ -516,18 +755,57 @@ def locate_zero(
             bound = min(bound, continuity * abs(g_b - g_a) / width * d + 1e-6 * g_max)
         return bound
 
+    def bracket_result(it: int, message: str = "") -> LocateResult:
+        """The better bracket end, not located, its error the bracket's width."""
+        best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
+        return LocateResult(best[0], best[1], best[2], False, it, message, error=hi - lo)
+
+    def evaluate(s: float) -> tuple[float, PointInfo, float] | None:
+        """``(s, point, g)`` at a corrected point of this branch inside the step, or None.
+
+        Only points whose tangent is the branch's (:func:`tangent_agrees`): a probe
+        corrected onto a crossing branch would read a jump of ``g`` as its noise.
+        """
+        if not 0.0 < s < sigma_b:
+            return None
+        q = point_at(problem, a, b, s, sigma_b, w, newton, None, True)
+        if q is None:
+            return None
+        gq = float(test(q, s / sigma_b))
+        return (s, q, gq) if math.isfinite(gq) else None
+
     samples = [end_lo, end_hi]  # points on the branch with their test values
     glo, ghi = g_a, g_b  # glo/ghi are Illinois-scaled values
     side = 0
     s_prev = math.nan
+    widths = [width]  # bracket width after each trial point
+    trail: list[float] = []  # the trial points' sigma, in order
+    bisect = False  # the secant stalls: bisect from now on
+    safeguard = True  # bisection steps allowed (off once one left the branch)
     for it in range(1, max_iter + 1):
         s = hi - ghi * (hi - lo) / (ghi - glo)
         if it == 1 and first is not None and 0.0 < first < sigma_b:
             s = first
+        bisect = bisect or (
+            safeguard and len(widths) > STALL and widths[-1] > 0.5 * widths[-1 - STALL]
+        )
+        if bisect:
+            s = 0.5 * (lo + hi)
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
         near = min(end_lo, end_hi, key=lambda e: abs(e[0] - s))
-        pt = point_at(problem, a, b, s, sigma_b, w, newton, (near[0], near[1]), same_branch)
+        pt = point_at(
+            problem, a, b, s, sigma_b, w, newton, (near[0], near[1]), same_branch or bisect
+        )
+        if pt is None and bisect and not same_branch:
+            # a bisection point off this branch (next to a branch point): back to the
+            # secant, which approaches from the branch's side
+            safeguard = bisect = False
+            s = hi - ghi * (hi - lo) / (ghi - glo)
+            if not (lo < s < hi):
+                s = 0.5 * (lo + hi)
+            near = min(end_lo, end_hi, key=lambda e: abs(e[0] - s))
+            pt = point_at(problem, a, b, s, sigma_b, w, newton, (near[0], near[1]), False)
         if pt is None:
             # Newton cannot produce a point of this branch here (e.g. next to a branch
             # point, where the bordered matrix is singular and the corrected point is
@@ -546,20 +824,24 @@ def locate_zero(
                 msg = f"corrector failed in a bracket of width {hi - lo:.1e}"
                 if r_int is not None:
                     msg = f"{msg}; {r_int.message}"
-                    return LocateResult(r_int.sigma, r_int.point, r_int.g, r_int.located, it, msg)
+                    # (not located: the zero is surely only in the bracket)
+                    return LocateResult(
+                        r_int.sigma, r_int.point, r_int.g, r_int.located, it, msg,
+                        error=max(r_int.error, hi - lo),
+                    )  # fmt: skip
                 # otherwise accept the bracket if it is already narrow and g small at its
-                # better end
+                # better end (its error, the bracket's width, is reported)
                 best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
                 narrow = hi - lo <= 1e-6 * width
                 ok = narrow and abs(best[2]) <= g_jump * max(abs(g_a), abs(g_b))
-                return LocateResult(best[0], best[1], best[2], ok, it, msg)
+                return LocateResult(best[0], best[1], best[2], ok, it, msg, error=hi - lo)
         g = float(test(pt, s / sigma_b))
         if not math.isfinite(g):
-            best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
-            return LocateResult(best[0], best[1], best[2], False, it, "test not finite")
-        if abs(g) <= g_small:
-            return LocateResult(s, pt, g, True, it)
+            return bracket_result(it, "test not finite")
+        if g == 0.0:
+            return _located(problem, (s, pt, g), 0.0, samples, s, s, w, tol, it, evaluate)
         samples.append((s, pt, g))
+        trail.append(s)
         if (g > 0) == (ghi > 0):
             hi, ghi, end_hi = s, g, (s, pt, g)
             if side == 1:
@@ -570,30 +852,77 @@ def locate_zero(
             if side == -1:
                 ghi *= 0.5
             side = -1
+        widths.append(hi - lo)
         # the next (Illinois-scaled) secant correction, without evaluating it: when it
-        # is below tol the zero is within tol of this trial point (a halved stale end
-        # value only lengthens the predicted correction, so the test stays conservative)
+        # (or the last step) is below tol the zero is probably within tol of this trial
+        # point, but only a sign change proves it (a flat g, at a zero of higher order,
+        # has tiny secant corrections far from its zero)
         s_next = hi - ghi * (hi - lo) / (ghi - glo)
-        if hi - lo <= tol or abs(s - s_prev) <= tol or abs(s_next - s) <= tol:
+        collapsed = hi - lo <= tol
+        if collapsed or (not bisect and (abs(s - s_prev) <= tol or abs(s_next - s) <= tol)):
             best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
             # a larger |g| than g_ok means the bracket closed on a jump of g (e.g. trial
             # points corrected onto a crossing branch next to a branch point, or a Hopf
             # test that switched between eigenvalue pairs), not on a zero
             d = min(hi - lo, max(abs(s_next - s), tol))
             if abs(best[2]) > g_ok(d):
-                # converged onto a jump of g, not a zero (e.g. a Hopf test that switched
-                # between eigenvalue pairs): report the bracket only
-                return LocateResult(
-                    best[0], best[1], best[2], False, it, "test function jumps, no zero"
-                )
-            return LocateResult(best[0], best[1], best[2], True, it)
+                return bracket_result(it, "test function jumps, no zero")
+            if collapsed:
+                return _located(problem, best, hi - lo, samples, lo, hi, w, tol, it, evaluate)
+            # probe tol beyond this trial point towards the secant's zero: a sign change
+            # there proves the zero within tol; otherwise the bracket (narrowed by the
+            # probe) is the honest error, and the search goes on only if g is smooth
+            # there (a flat zero), not noise
+            toward = 1.0 if s == lo else -1.0
+            q = evaluate(s + toward * min(PROBE * tol, 0.5 * (hi - lo)))
+            if q is not None:
+                samples.append(q)
+                if (q[2] > 0) != (g > 0):
+                    lo_v, hi_v = sorted((s, q[0]))
+                    err = max(abs(best[0] - lo_v), abs(best[0] - hi_v))
+                    return _located(problem, best, err, samples, lo_v, hi_v, w, tol, it, evaluate)
+                # (the same end moved again: Illinois halves the other end's value)
+                if toward > 0:
+                    lo, glo, end_lo, side = q[0], q[2], q, -1
+                    ghi *= 0.5
+                else:
+                    hi, ghi, end_hi, side = q[0], q[2], q, 1
+                    glo *= 0.5
+                widths.append(hi - lo)
+                if abs(q[2]) < abs(g):
+                    # |g| still falls towards the zero: smooth and flat, keep searching
+                    # (bisecting: the secant creeps); where bisection would leave the
+                    # branch, the secant creeps linearly from the branch's side and the
+                    # limit of its last three points (Aitken's delta-squared) is probed
+                    bisect = safeguard
+                    r_lim = None if bisect else _probe_limit(trail, q, toward, evaluate, tol)
+                    if r_lim is not None:
+                        samples.append(r_lim)
+                        lo_v, hi_v = sorted((q[0], r_lim[0]))
+                        best = min(q, r_lim, key=lambda e: abs(e[2]))
+                        err = hi_v - lo_v
+                        return _located(
+                            problem, best, err, samples, lo_v, hi_v, w, tol, it, evaluate
+                        )
+                    s_prev = s
+                    continue
+            # no sign change within tol, and |g| does not fall towards the zero: the
+            # zero is |g| / |g'| away for a smooth g (|g'| from samples above the noise,
+            # see _noise_slope), plus the noise of g (_located); the bracket otherwise
+            best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
+            m = _noise_slope(samples, lo, hi, best[2])
+            err = hi - lo
+            if math.isfinite(m) and m > 0.0:
+                step = abs(q[0] - s) if q is not None else tol
+                err = min(err, max(step, abs(best[2]) / m))
+            return _located(problem, best, err, samples, lo, hi, w, tol, it, evaluate)
         s_prev = s
-    best = min(end_lo, end_hi, key=lambda e: abs(e[2]))
-    return LocateResult(best[0], best[1], best[2], False, max_iter, "max_iter reached")
+    return bracket_result(max_iter, "max_iter reached")
 
 
 __all__ = [
     "LocateResult",
+    "point_error",
     "fold_guess",
     "locate_beyond",
     "locate_zero",

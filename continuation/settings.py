@@ -53,7 +53,10 @@ class DetectionSettings:
     locate : bool
         Locate detected points to ``tol`` (otherwise only bracket them).
     tol : float
-        Location tolerance on the arclength/parameter.
+        Location tolerance on the arclength (``theta``-norm): a located point is
+        within ``tol`` of the zero of its test function along the branch, unless its
+        ``SpecialPoint.error`` states more (a noisy test function, or a point next
+        to a branch point that the corrector determines only to ``sqrt(|G|)``).
     max_iter : int
         Maximum iterations of the locator.
     eig_tol : float

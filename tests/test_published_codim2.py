@@ -207,12 +207,12 @@ class TestGrayScott:
 
 
 # ===================================================================== FitzHugh-Nagumo
-def fitzhugh_nagumo() -> System:
+def fitzhugh_nagumo(backend: str = "auto") -> System:
     def rhs(x, p, ops):
         a, b, c = p[0], p[1], p[2]
         return ops.stack([c * (x[0] - x[0] ** 3 / 3 + x[1]), -(x[0] - a + b * x[1]) / c])
 
-    return System(rhs, ("x", "y"), ("a", "b", "c"))
+    return System(rhs, ("x", "y"), ("a", "b", "c"), backend=backend)
 
 
 def test_fitzhugh_nagumo_hopf_curve_and_bautin_points():
@@ -269,6 +269,36 @@ def test_fitzhugh_nagumo_hopf_curve_and_bautin_points():
         assert g.data["a"] == pytest.approx(sgn * 2 / 15, abs=1e-9)
         assert g.data["omega"] ** 2 == pytest.approx(0.4, abs=1e-9)
     assert not curve.find("bt") and not curve.find("zh") and not curve.find("hh")
+
+
+@pytest.mark.parametrize("backend", ["casadi", "numpy"])
+def test_fitzhugh_nagumo_bautin_points_carry_their_error(backend):
+    """The Bautin points of AUTO demo ``fhn`` (closed form ``c^2 = b^2/(2b - 1)``, see
+    above) lie within the error they carry: ``|c - c*| <= error / sqrt(theta)``
+    (``SpecialPoint.error`` is in pseudo-arclength, ``|dp/ds| <= 1/sqrt(theta)``).
+
+    With CasADi ``l1`` is exact to round-off and the points are located to ``tol``.
+    Without it (``backend="numpy"``) ``B(v, v)`` is a second difference with step
+    ``h = eps^(1/4)``: round-off ``eps / h^2 ~ sqrt(eps) ~ 1.5e-8`` relative, amplified
+    in ``l1`` to noise of about ``2e-7`` (|g'| ~ 1), so the zero of ``l1`` is only known to
+    that: the points must say so (``error > tol``) and still cover the true point.
+    Regression: they were reported located (to ``tol = 1e-10``) 5e-8 off.
+    """
+    b = 0.8
+    theta = ContinuationSettings().theta
+    tol = ContinuationSettings().detect.tol
+    br = continue_equilibria(fitzhugh_nagumo(backend), [0, 0], {"a": 0, "b": b, "c": 3.0}, "a",
+                             p_min=-0.1, p_max=1.0, direction="forward")  # fmt: skip
+    curve = continue_codim2(br, _one(br, "hopf"), "c", ContinuationSettings(p_min=0.0, p_max=10.0))
+    ghs = curve.find("gh")
+    assert len(ghs) == 2 and all(g.located for g in ghs)
+    c_gh = np.sqrt(b * b / (2 * b - 1))
+    for g in ghs:
+        assert abs(g.p - c_gh) <= g.error / np.sqrt(theta)
+        if backend == "casadi":
+            assert g.error <= tol
+        else:
+            assert tol < g.error < 1e-5  # (finite-difference noise, not a lost point)
 
 
 # ================================================================ A -> B -> C reaction
@@ -724,6 +754,29 @@ def test_pp3_fold_curve_bt_points_without_false_cusps(pp3_branch):
             np.testing.assert_allclose(cp.x[:3], [1.0, 0.0, 0.0], atol=1e-7)
         else:
             assert min(cp.bracket) <= p4 <= max(cp.bracket)
+
+
+def test_pp3_cusp_next_to_a_branch_point_of_the_fold_curve_carries_its_error(pp3_branch):
+    """The degenerate transcritical points of the pp3 fold curve (closed form, see
+    above) sit where the fold curve crosses the line of transcritical points: a
+    branch point of the Moore-Spence system, where a point with residual ``|G|`` is
+    only determined to about ``sqrt(|G|)`` along the near-null direction. Every
+    codim-2 point of the curve lies within the error it carries,
+    ``|p4 - p4*| <= error / sqrt(theta)``, whether located or not; located points
+    with ``error > tol`` say so. Regression: the first was reported located (to
+    ``tol = 1e-10``) 4.6e-9 off in ``p4``, its point interpolated next to the branch
+    point with a residual of 2e-16 but 2e-8 off the curve in ``u2``."""
+    theta = ContinuationSettings().theta
+    fold = _one(pp3_branch, "fold")
+    curve = continue_codim2(pp3_branch, fold, "p4", ContinuationSettings(p_min=0.25, p_max=4.0))
+    half, disc = PP3["p6"] / 4, np.sqrt(PP3["p6"] ** 2 / 16 - PP3["p2"] * PP3["p6"] / 2)
+    cps = sorted(curve.find("cusp"), key=lambda s: s.p)
+    assert len(cps) == 2
+    for cp, p4 in zip(cps, (half - disc, half + disc), strict=True):
+        assert np.isfinite(cp.error)
+        assert abs(cp.p - p4) <= cp.error / np.sqrt(theta)
+    for bt in curve.find("bt"):
+        assert bt.located and bt.error <= ContinuationSettings().detect.tol
 
 
 def test_pp3_hopf_curve_zero_hopf_points(pp3_branch):

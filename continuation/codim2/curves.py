@@ -24,7 +24,11 @@ where ``J`` has a kernel of dimension two or more are dropped; a sign change
 through a pole, as of ``l1`` where ``J`` becomes singular, is dropped; a cusp zero
 at a located BT point is that BT point) and stored as a
 :class:`~continuation.branch.SpecialPoint` of kind ``bt``, ``cusp``, ``zh``, ``gh``
-(``hh`` has no dedicated kind yet and is stored as ``user`` with label ``HH<k>``).
+(``hh`` has no dedicated kind yet and is stored as ``user`` with label ``HH<k>``),
+keeping the locator's ``located`` and ``error`` (its estimate of the distance in
+arclength to the zero; larger than ``detect.tol`` where the test function is noisy,
+e.g. ``l1`` from finite differences without CasADi, or the point sits next to a
+branch point of the curve).
 
 The resulting branch's ``p`` is ``free2``; ``records[free1]`` holds the first
 parameter (and, on Hopf curves, ``records["omega"]`` and ``records["kappa"]``);
