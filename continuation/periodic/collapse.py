@@ -19,12 +19,13 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+from typing import Any
 
 import numpy as np
 
 from ..branch import Branch, SpecialKind, SpecialPoint
 from ..status import Status
-from .rows import orbit_at, truncated
+from .rows import orbit_at, problem_at, truncated
 
 log = logging.getLogger(__name__)
 
@@ -37,9 +38,45 @@ N_SAMPLES = 64
 
 
 def _deviation(br: Branch, k: int) -> np.ndarray:
+    """Deviation from its mean of the cycle of row ``k``, sampled at ``N_SAMPLES`` times."""
     o = orbit_at(br, k)
     x = o(np.arange(N_SAMPLES) * (o.T / N_SAMPLES))
     return x - x.mean(axis=0)
+
+
+def _stage_deviation(br: Branch, k: int) -> tuple[Any, np.ndarray, np.ndarray]:
+    """The deviation of row ``k`` at its collocation points, with its problem.
+
+    Returns ``(problem, D, w)``, ``w`` the Gauss weights ``h_j b_l`` of the time average
+    (no interpolation: rows on one mesh are compared point by point).
+    """
+    prob = problem_at(br, k)
+    X, _ = prob.layout.split(np.asarray(br.x[k][: prob.n_unknowns], dtype=float))
+    mesh = prob.mesh
+    w = (mesh.h[:, None] * mesh.b[None, :]).reshape(-1)
+    Xs = X[mesh.stage_mask]
+    return prob, Xs - (w @ Xs) / w.sum(), w
+
+
+def _correlation(
+    br: Branch, k: int, here: tuple[Any, np.ndarray, np.ndarray]
+) -> tuple[float, tuple[Any, np.ndarray, np.ndarray]]:
+    """Correlation of the deviations of rows ``k`` and ``k + 1`` (NaN at zero amplitude).
+
+    Also returns row ``k + 1``'s stage deviation. On one mesh the time average is the
+    Gauss quadrature at the collocation points; across meshes both cycles are sampled.
+    """
+    nxt = _stage_deviation(br, k + 1)
+    if nxt[0] is here[0]:
+        (_, a, w), (_, b, _) = here, nxt
+        num = float(np.sum(w[:, None] * a * b))
+        na, nb = float(np.sum(w[:, None] * a * a)), float(np.sum(w[:, None] * b * b))
+    else:
+        a, b = _deviation(br, k), _deviation(br, k + 1)
+        num, na, nb = float(np.sum(a * b)), float(np.sum(a * a)), float(np.sum(b * b))
+    if na <= 0.0 or nb <= 0.0:
+        return math.nan, nxt
+    return num / math.sqrt(na * nb), nxt
 
 
 def hopf_end(br: Branch, free: str, start: int = 0) -> Branch | None:
@@ -58,22 +95,14 @@ def hopf_end(br: Branch, free: str, start: int = 0) -> Branch | None:
     if n < 2:
         return None
     k0 = max(start, 0)
-    amp = {}
-    prev = _deviation(br, k0)
+    here = _stage_deviation(br, k0)
     for k in range(k0, n - 1):
-        nxt = _deviation(br, k + 1)
-        a0, a1 = float(np.linalg.norm(prev)), float(np.linalg.norm(nxt))
-        amp[k] = a0
-        if a0 > 0.0 and a1 > 0.0:
-            corr = float(np.sum(prev * nxt)) / (a0 * a1)
-            if corr < PASSAGE_CORRELATION:
-                if k == 0:
-                    return _cut(br, free, k, [k, k + 1], np.array([a0, -a1]))
-                am = amp.get(k - 1)
-                if am is None:
-                    am = float(np.linalg.norm(_deviation(br, k - 1)))
-                return _cut(br, free, k, [k - 1, k, k + 1], np.array([am, a0, -a1]))
-        prev = nxt
+        corr, here = _correlation(br, k, here)
+        if corr < PASSAGE_CORRELATION:
+            rows = [k, k + 1] if k == 0 else [k - 1, k, k + 1]
+            amp = [float(np.linalg.norm(_deviation(br, j))) for j in rows]
+            amp[-1] = -amp[-1]
+            return _cut(br, free, k, rows, np.array(amp))
     return None
 
 
