@@ -331,10 +331,18 @@ def find_connection(
     lam_m = np.linalg.eigvals(system.jacobian(x_m, pvec))
     n_u = int(np.sum(lam_m.real > 0))
     if n_u != 1:
+        lam_p = np.linalg.eigvals(system.jacobian(x_p, pvec))
+        hint = "give a guess to solve_connection instead"
+        if int(np.sum(lam_p.real < 0)) == 1:
+            # the time-reversed flow has the same orbit, from the target's 1-D manifold
+            hint = (
+                "the target's stable manifold is one-dimensional: reverse time (a System "
+                "with rhs -f) and swap `source` and `target`, or " + hint
+            )
         raise ValueError(
-            f"`source` has a {n_u}-dimensional unstable manifold (eigenvalues {lam_m}); "
-            "find_connection integrates a one-dimensional one: give a guess to "
-            "solve_connection instead"
+            f"`source` has a {n_u}-dimensional unstable manifold (eigenvalues "
+            f"{np.array2string(lam_m, precision=4)}); find_connection integrates a "
+            f"one-dimensional one: {hint}"
         )
     lam_u = float(np.max(lam_m.real))
     if t_max is None:

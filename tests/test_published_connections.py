@@ -1,0 +1,334 @@
+"""Connecting orbits at the default settings on published problems not used elsewhere.
+
+Run as a researcher would: :func:`~continuation.bvp.find_connection` from the saddle
+alone (or :func:`~continuation.bvp.solve_connection` from a rough guess), default
+:class:`~continuation.bvp.ConnectionAccuracy`, then
+:func:`~continuation.bvp.continue_connection` in a second parameter. A ``SUCCESS`` is a
+claim: its value must be within its own error estimate of the reference, and that
+estimate small enough to be useful (below the default tolerance ``atol + rtol |p|``).
+
+* Chua's circuit with the smooth nonlinearity ``|x| ~ (2 x / pi) arctan(K x)``, ``K =
+  10`` (Khibnik, Roose & Chua 1993, "On periodic orbits and homoclinic bifurcations in
+  Chua's circuit with a smooth nonlinearity", IJBC 3:363-384; equations of AUTO-07p's
+  ``demos/chu/chu.f90``): the Shilnikov homoclinic orbit of the saddle-focus origin
+  (``lambda_u = 2.83 > -Re lambda_s = 1.12``), ``alpha* = 11.07840157874`` at ``beta =
+  14.3``, and its curve in ``beta``. Reference: the side on which the 1-D unstable
+  manifold is ejected after its return changes sign at the connection (SciPy DOP853,
+  ``rtol = 1e-12``, Brent to 1e-13; :func:`_chua_alpha`), independent of collocation.
+* The electronic circuit of Freire, Rodriguez-Luis, Gamero & Ponce (1993), "A case
+  study for homoclinic chaos in an autonomous electronic circuit", Physica D
+  62:230-253 (AUTO-07p ``demos/tor/tor.f90``, ``beta = 0.5``, ``gamma = -0.6``, ``r =
+  0.6``, ``a3 = 0.328578``, ``b3 = 0.933578``): the homoclinic orbit of the
+  saddle-focus ``E = (x, 0, beta x + b3 x^3)``, ``x^2 = -(beta + nu) / (a3 + b3)``,
+  whose unstable manifold is 2-D (eigenvalues 0.25 +- 0.63 i, -1.6): found in
+  reversed time, ``nu* = -0.72894100482`` (the 1-D stable manifold's side changes sign,
+  :func:`_tor_nu`; the same value is the period limit of the cycles in
+  ``tests/test_published_cycles.py``).
+* The reversible fourth-order equation of AUTO-07p's HomCont demo ``rev``
+  (``demos/rev/rev.f90``; Champneys & Spence 1993, "Hunting for homoclinic orbits in
+  reversible systems: a shooting technique", Adv. Comput. Math. 1:81-108):
+  ``u'''' + P u'' + u - u^3 = 0``. Its homoclinic orbits of the origin persist in
+  ``P`` (a Hamiltonian, reversible family), so a dissipative term ``eps u'`` is added
+  and solved for: ``dH/dt = -eps u'^2`` for the energy ``H = u' u''' - u''^2 / 2 + P
+  u'^2 / 2 + u^2 / 2 - u^4 / 4``, so a homoclinic orbit has ``eps = 0`` exactly, for
+  every ``P``. At ``P = -5/2`` the orbit is in closed form (derived here: insert ``A
+  sech^2(k t)``; the ``sech^2, sech^4, sech^6`` terms give ``16 k^4 + 4 P k^2 + 1 = 0``,
+  ``P = -20 k^2``, ``A^2 = 120 k^4``): ``u = sqrt(15/8) sech^2(t / (2 sqrt 2))``.
+  Continued to the demo's ``P = 1.6``, where the origin is a saddle-focus.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq, minimize_scalar
+
+from continuation import ContinuationSettings, Status, System
+from continuation.bvp import (
+    HeteroclinicProblem,
+    connection_at,
+    continue_connection,
+    find_connection,
+    solve_connection,
+)
+
+#: ConnectionAccuracy's default tolerances (rtol, atol): a useful estimate is below them.
+RTOL, ATOL = 1e-6, 1e-8
+
+
+def _useful(res, name):
+    """The estimate is finite, positive and within the default tolerance."""
+    e = res.error(name)
+    return 0.0 < e <= ATOL + RTOL * abs(res.value(name))
+
+
+def _sphere(center, r, direction):
+    e = lambda t, x: float((x - center) @ (x - center)) - r * r  # noqa: E731
+    e.terminal, e.direction = True, direction
+    return e
+
+
+def _ejection_side(f, x0, v, w, radii, t_max=100.0):
+    """``w . (x - x0)`` where the orbit from ``x0 + 1e-9 v`` leaves ``radii[2]`` after
+    going beyond ``radii[0]`` and returning within ``radii[1]`` of ``x0``."""
+    x = x0 + 1e-9 * v
+    for r, d in zip(radii, (1, -1, 1)):
+        sol = solve_ivp(lambda t, y: f(y), (0, t_max), x, rtol=1e-12, atol=1e-16,
+                        method="DOP853", events=_sphere(x0, r, d))  # fmt: skip
+        x = x0 + (sol.y_events[0][0] - x0) * (1 + 1e-12 * d)
+    return float(w @ (x - x0))
+
+
+def _eigen_pair(J, pick):
+    """The real eigenvector and left eigenvector of the eigenvalue chosen by ``pick``
+    (argmax/argmin of the real part), signed so that ``w . v > 0``."""
+    lam, V = np.linalg.eig(J)
+    laml, W = np.linalg.eig(J.T)
+    v = V[:, int(pick(lam.real))].real
+    w = W[:, int(pick(laml.real))].real
+    return v, w * np.sign(w @ v)
+
+
+# ------------------------------------------------------------------ Chua (smooth)
+CHUA = {"alpha": 11.0, "beta": 14.3, "K": 10.0, "a0": -1.0 / 7.0, "a1": 2.0 / 7.0}
+
+
+def _chua_rhs(x, p, ops):
+    al, be, K, a0, a1 = p[0], p[1], p[2], p[3], p[4]
+
+    def ab(u):
+        return 2 * u * ops.arctan(K * u) / math.pi
+
+    h = a1 * x[0] + 0.5 * (a0 - a1) * (ab(x[0] + 1) - ab(x[0] - 1))
+    return ops.stack([al * (x[1] - h), x[0] - x[1] + x[2], -be * x[1]])
+
+
+def _chua_np(al, be):
+    K, a0, a1 = CHUA["K"], CHUA["a0"], CHUA["a1"]
+
+    def h(u, d=False):
+        if d:
+            g = lambda s: 2 / math.pi * (np.arctan(K * s) + K * s / (1 + (K * s) ** 2))  # noqa: E731
+            return a1 + 0.5 * (a0 - a1) * (g(u + 1) - g(u - 1))
+        g = lambda s: 2 * s * np.arctan(K * s) / math.pi  # noqa: E731
+        return a1 * u + 0.5 * (a0 - a1) * (g(u + 1) - g(u - 1))
+
+    f = lambda x: np.array([al * (x[1] - h(x[0])), x[0] - x[1] + x[2], -be * x[1]])  # noqa: E731
+    J = np.array([[-al * h(0.0, True), al, 0.0], [1.0, -1.0, 1.0], [0.0, -be, 0.0]])
+    return f, J
+
+
+def _chua_alpha(be, lo, hi, size=1.0):
+    """``alpha`` of the homoclinic orbit of the origin at ``beta`` by Brent on the side
+    of the unstable manifold's ejection after its return (spheres of radii 0.5, 0.15 and
+    0.4 times ``size``: 1 at ``beta = 14.3`` as in ``tests/test_published_cycles.py``,
+    the orbit's largest ``|x|`` elsewhere)."""
+
+    def side(al):
+        f, J = _chua_np(al, be)
+        v, w = _eigen_pair(J, np.argmax)
+        return _ejection_side(f, np.zeros(3), v, w, (0.5 * size, 0.15 * size, 0.4 * size))
+
+    return brentq(side, lo, hi, xtol=1e-13)
+
+
+@pytest.fixture(scope="module")
+def chua():
+    s = System(_chua_rhs, ("x", "y", "z"), tuple(CHUA))
+    res = find_connection(s, s.params(**CHUA), "alpha", source=[0.0, 0.0, 0.0], shift=0)
+    return s, res
+
+
+def test_chua_shilnikov_homoclinic_from_the_saddle_alone(chua):
+    """From ``alpha = 11`` (and 10.5, 12) the connection is found within its estimate
+    of ``alpha* = 11.07840157874``; the orbit leaves and returns to the origin and its
+    excursion is that of the unstable manifold at ``alpha*`` (first maximum of ``|x|``
+    along the manifold, integrated by SciPy: the orbit's error is of the order of the
+    parameter's, 1e-7 allowed)."""
+    s, res = chua
+    ref = _chua_alpha(14.3, 11.07835, 11.07845, 1.0)
+    assert ref == pytest.approx(11.07840157874, abs=1e-10)
+    for r in (
+        res,
+        find_connection(s, s.params(**{**CHUA, "alpha": 10.5}), "alpha", source=[0, 0, 0], shift=0),
+        find_connection(
+            s, s.params(**{**CHUA, "alpha": 12.0}), "alpha", source=[0, 0, 0], shift=0, branch=-1
+        ),  # fmt: skip
+    ):
+        assert r.status is Status.SUCCESS, r.message
+        assert abs(r.value("alpha") - ref) <= r.error("alpha"), (r.value("alpha"), r.errors)
+        assert _useful(r, "alpha")
+    x = res.x
+    assert np.linalg.norm(x[0]) < 1e-3 and np.linalg.norm(x[-1]) < 1e-3
+    f, J = _chua_np(ref, 14.3)
+    v, _ = _eigen_pair(J, np.argmax)
+    v = v * np.sign(v @ x[int(np.argmax(np.linalg.norm(x, axis=1)))])
+    sol = solve_ivp(lambda t, y: f(y), (0, 12), 1e-9 * v, rtol=1e-12, atol=1e-16,
+                    method="DOP853", dense_output=True)  # fmt: skip
+    tt = np.linspace(0, 12, 24001)
+    r_sim = np.linalg.norm(sol.sol(tt), axis=0)
+    k = int(np.argmax(r_sim > 1.0))
+    k += int(np.argmax(np.diff(r_sim[k:]) < 0))  # first maximum after leaving
+    x_fine = res.interpolate(np.linspace(0.0, res.T, 20001))
+    assert np.max(np.linalg.norm(x_fine, axis=1)) == pytest.approx(r_sim[k], abs=1e-6)
+
+
+def test_chua_homoclinic_curve_in_beta(chua):
+    """Continued in ``beta`` over [13, 16] at default settings: rows agree with the
+    shooting reference within the default tolerance ``atol + rtol |alpha|`` (branch
+    rows carry no estimate; they stay on the start's adapted mesh and ``T``), and a
+    row re-solved by :func:`solve_connection` is within its own estimate."""
+    _, res = chua
+    br = continue_connection(res, "beta", ContinuationSettings(p_min=13.0, p_max=16.0),
+                             direction="both")  # fmt: skip
+    assert br.status is Status.PARAM_BOUND, br.message
+    assert br.p.min() == pytest.approx(13.0, abs=1e-10)
+    assert br.p.max() == pytest.approx(16.0, abs=1e-10)
+    assert np.all(np.diff(br.records["alpha"][np.argsort(br.p)]) > 0)
+    for j in (int(np.argmin(br.p)), int(np.argmax(br.p))):
+        be, al = float(br.p[j]), float(br.records["alpha"][j])
+        size = float(np.max(np.linalg.norm(connection_at(br, j).x, axis=1)))
+        ref = _chua_alpha(be, al - 0.05, al + 0.05, size)
+        assert abs(al - ref) <= ATOL + RTOL * abs(ref), (be, al, ref)
+        re = solve_connection(connection_at(br, j).problem, connection_at(br, j))
+        assert re.status is Status.SUCCESS, re.message
+        assert abs(re.value("alpha") - ref) <= re.error("alpha"), (be, re.errors)
+        assert _useful(re, "alpha")
+
+
+# ------------------------------------------------------------------ tor (Freire et al.)
+TOR = {"nu": -0.72, "beta": 0.5, "gamma": -0.6, "r": 0.6, "a3": 0.328578, "b3": 0.933578}
+
+
+def _tor_system(sign):
+    """The tor vector field times ``sign`` (-1: time reversed)."""
+
+    def rhs(x, p, ops):
+        nu, be, ga, r, a3, b3 = (p[i] for i in range(6))
+        d3 = (x[1] - x[0]) ** 3
+        return ops.stack([
+            sign * (-(be + nu) * x[0] + be * x[1] - a3 * x[0] ** 3 + b3 * d3) / r,
+            sign * (be * x[0] - (be + ga) * x[1] - x[2] - b3 * d3),
+            sign * x[1],
+        ])  # fmt: skip
+
+    return System(rhs, ("x", "y", "z"), tuple(TOR))
+
+
+def _tor_E(nu):
+    x = math.sqrt(-(TOR["beta"] + nu) / (TOR["a3"] + TOR["b3"]))
+    return np.array([x, 0.0, TOR["beta"] * x + TOR["b3"] * x**3])
+
+
+def _tor_nu():
+    """``nu`` of the homoclinic orbit of ``E``: the 1-D stable manifold, integrated
+    backward from ``E`` (on the side away from the origin's mirror image), spirals back
+    into ``E`` and is ejected along ``+v_s`` or ``-v_s``; Brent on that side."""
+    be, ga, r, a3, b3 = (TOR[k] for k in ("beta", "gamma", "r", "a3", "b3"))
+
+    def side(nu):
+        def f(x):  # reversed flow
+            d3 = (x[1] - x[0]) ** 3
+            return -np.array([(-(be + nu) * x[0] + be * x[1] - a3 * x[0] ** 3 + b3 * d3) / r,
+                              be * x[0] - (be + ga) * x[1] - x[2] - b3 * d3, x[1]])  # fmt: skip
+
+        E = _tor_E(nu)
+        q = 3 * b3 * (E[1] - E[0]) ** 2
+        J = np.array([[(-(be + nu) - 3 * a3 * E[0] ** 2 - q) / r, (be + q) / r, 0.0],
+                      [be + q, -(be + ga) - q, -1.0], [0.0, 1.0, 0.0]])  # fmt: skip
+        v, w = _eigen_pair(-J, np.argmax)  # the unstable direction of the reversed flow
+        v = -v * np.sign(v @ E)
+        return _ejection_side(f, E, v, w * np.sign(w @ v), (0.5, 0.11, 0.3))
+
+    return brentq(side, -0.729, -0.7289, xtol=1e-14)
+
+
+def test_tor_saddle_focus_homoclinic_in_reversed_time():
+    """``E`` has a 2-D unstable manifold: ``find_connection`` says so and points to the
+    time-reversed flow, where it finds the orbit from several starting ``nu`` within its
+    estimate of ``nu* = -0.72894100482``; the other branch of the reversed manifold
+    escapes to infinity and fails, saying the manifold does not come near the target."""
+    ref = _tor_nu()
+    assert ref == pytest.approx(-0.72894100482, abs=1e-11)
+    fwd = _tor_system(1)
+    with pytest.raises(ValueError, match="2-dimensional unstable manifold.*reverse time"):
+        find_connection(fwd, fwd.params(**TOR), "nu", source=_tor_E(-0.72), shift=0)
+    rev = _tor_system(-1)
+    for nu0 in (-0.70, -0.72, -0.75):
+        res = find_connection(rev, rev.params(**{**TOR, "nu": nu0}), "nu", source=_tor_E(nu0),
+                              shift=0, branch=-1)  # fmt: skip
+        assert res.status is Status.SUCCESS, res.message
+        assert abs(res.value("nu") - ref) <= res.error("nu"), (nu0, res.errors)
+        assert _useful(res, "nu")
+        # the orbit ends at E(nu*) (the saddle is refined with the parameter)
+        assert res.x_from == pytest.approx(_tor_E(ref), abs=1e-6)
+    bad = find_connection(rev, rev.params(**TOR), "nu", source=_tor_E(-0.72), shift=0, branch=1)
+    assert not bad.success
+    assert "does not come near the target" in bad.message
+
+
+# ------------------------------------------------------------------ rev (Champneys)
+A_REV, K_REV = math.sqrt(15.0 / 8.0), 1.0 / (2.0 * math.sqrt(2.0))
+
+
+def _rev_rhs(x, p, ops):
+    P, eps = p[0], p[1]
+    return ops.stack([x[1], x[2], x[3], -P * x[2] - x[0] + x[0] ** 3 - eps * x[1]])
+
+
+def _rev_exact(t):
+    """``u = A sech^2(k t)`` and its first three derivatives, shape (K, 4)."""
+    s, th = 1.0 / np.cosh(K_REV * t), np.tanh(K_REV * t)
+    k = K_REV
+    return np.column_stack([
+        A_REV * s**2,
+        -2 * A_REV * k * s**2 * th,
+        A_REV * k**2 * (4 * s**2 - 6 * s**4),
+        A_REV * k**3 * (-8 * s**2 * th + 24 * s**4 * th),
+    ])  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def rev():
+    """Solved from a rough guess: 0.8 times the closed form, ``eps = 0.05``."""
+    s = System(_rev_rhs, ("u", "u1", "u2", "u3"), ("P", "eps"))
+    T = 60.0
+    t = np.linspace(0.0, T, 400)
+    prob = HeteroclinicProblem(s, s.params(P=-2.5, eps=0.05), "eps", saddle_from=np.zeros(4),
+                               shift=0, T=T)  # fmt: skip
+    return solve_connection(prob, (t, 0.8 * _rev_exact(t - T / 2)))
+
+
+def test_rev_homoclinic_closed_form(rev):
+    """At ``P = -5/2``: ``eps = 0`` within the estimate, and the orbit is the closed form
+    ``sqrt(15/8) sech^2(t / (2 sqrt 2))`` up to a time shift (collocation error of the
+    adapted mesh, under 1e-5; the ends within 1e-7 of the origin)."""
+    res = rev
+    assert res.status is Status.SUCCESS, res.message
+    assert abs(res.value("eps")) <= res.error("eps") < ATOL
+    t = res.t
+    shift = minimize_scalar(lambda c: np.max(np.abs(res.x - _rev_exact(t - c))),
+                            bounds=(25.0, 35.0), method="bounded",
+                            options={"xatol": 1e-9}).x  # fmt: skip
+    assert np.max(np.abs(res.x - _rev_exact(t - shift))) < 1e-5
+    assert np.max(res.x[:, 0]) == pytest.approx(A_REV, abs=1e-6)
+
+
+def test_rev_homoclinic_persists_in_P(rev):
+    """Continued in ``P`` from -5/2 (a real saddle) through ``P = -2`` (double
+    eigenvalues) to the demo's 1.6 (a saddle-focus): ``eps`` stays 0 along the branch
+    (to 1e-10: truncation at ``T = 60``), and a re-solve at ``P = 1.6`` is within its
+    estimate of 0."""
+    br = continue_connection(rev, "P", ContinuationSettings(p_min=-2.5, p_max=1.6))
+    assert br.status is Status.PARAM_BOUND, br.message
+    assert br.p.max() == pytest.approx(1.6, abs=1e-10)
+    assert np.max(np.abs(br.records["eps"])) < 1e-10
+    j = int(np.argmax(br.p))
+    end = solve_connection(connection_at(br, j).problem, connection_at(br, j))
+    assert end.status is Status.SUCCESS, end.message
+    assert abs(end.value("eps")) <= end.error("eps") < ATOL
+    # the origin is a saddle-focus there: the orbit's tail oscillates (u changes sign)
+    assert np.min(end.x[:, 0]) < 0.0
