@@ -75,7 +75,7 @@ def _ejection_side(f, x0, v, w, radii, t_max=100.0):
     """``w . (x - x0)`` where the orbit from ``x0 + 1e-9 v`` leaves ``radii[2]`` after
     going beyond ``radii[0]`` and returning within ``radii[1]`` of ``x0``."""
     x = x0 + 1e-9 * v
-    for r, d in zip(radii, (1, -1, 1)):
+    for r, d in zip(radii, (1, -1, 1), strict=True):
         sol = solve_ivp(lambda t, y: f(y), (0, t_max), x, rtol=1e-12, atol=1e-16,
                         method="DOP853", events=_sphere(x0, r, d))  # fmt: skip
         x = x0 + (sol.y_events[0][0] - x0) * (1 + 1e-12 * d)
