@@ -71,15 +71,16 @@ def _sphere(center, r, direction):
     return e
 
 
-def _ejection_side(f, x0, v, w, radii, t_max=100.0):
-    """``w . (x - x0)`` where the orbit from ``x0 + 1e-9 v`` leaves ``radii[2]`` after
-    going beyond ``radii[0]`` and returning within ``radii[1]`` of ``x0``."""
-    x = x0 + 1e-9 * v
-    for r, d in zip(radii, (1, -1, 1), strict=True):
+def _ejection_side(f, x_start, center, w, steps, t_max=200.0):
+    """``w . (x - center)`` where the orbit of ``f`` from ``x_start`` leaves the last
+    sphere about ``center`` of ``steps``, a sequence of ``(radius, direction)``: it
+    crosses each sphere in turn, inwards (-1) or outwards (+1)."""
+    x = x_start
+    for r, d in steps:
         sol = solve_ivp(lambda t, y: f(y), (0, t_max), x, rtol=1e-12, atol=1e-16,
-                        method="DOP853", events=_sphere(x0, r, d))  # fmt: skip
-        x = x0 + (sol.y_events[0][0] - x0) * (1 + 1e-12 * d)
-    return float(w @ (x - x0))
+                        method="DOP853", events=_sphere(center, r, d))  # fmt: skip
+        x = center + (sol.y_events[0][0] - center) * (1 + 1e-12 * d)
+    return float(w @ (x - center))
 
 
 def _eigen_pair(J, pick):
@@ -130,7 +131,8 @@ def _chua_alpha(be, lo, hi, size=1.0):
     def side(al):
         f, J = _chua_np(al, be)
         v, w = _eigen_pair(J, np.argmax)
-        return _ejection_side(f, np.zeros(3), v, w, (0.5 * size, 0.15 * size, 0.4 * size))
+        steps = ((0.5 * size, 1), (0.15 * size, -1), (0.4 * size, 1))
+        return _ejection_side(f, 1e-9 * v, np.zeros(3), w, steps)
 
     return brentq(side, lo, hi, xtol=1e-13)
 
@@ -223,27 +225,54 @@ def _tor_E(nu):
     return np.array([x, 0.0, TOR["beta"] * x + TOR["b3"] * x**3])
 
 
-def _tor_nu():
-    """``nu`` of the homoclinic orbit of ``E``: the 1-D stable manifold, integrated
-    backward from ``E`` (on the side away from the origin's mirror image), spirals back
-    into ``E`` and is ejected along ``+v_s`` or ``-v_s``; Brent on that side."""
+def _tor_reversed(nu):
+    """The reversed flow ``-f`` and its Jacobian ``-Df`` at ``nu`` (NumPy)."""
     be, ga, r, a3, b3 = (TOR[k] for k in ("beta", "gamma", "r", "a3", "b3"))
 
+    def f(x):
+        d3 = (x[1] - x[0]) ** 3
+        return -np.array([(-(be + nu) * x[0] + be * x[1] - a3 * x[0] ** 3 + b3 * d3) / r,
+                          be * x[0] - (be + ga) * x[1] - x[2] - b3 * d3, x[1]])  # fmt: skip
+
+    def jac(x):
+        q = 3 * b3 * (x[1] - x[0]) ** 2
+        return -np.array([[(-(be + nu) - 3 * a3 * x[0] ** 2 - q) / r, (be + q) / r, 0.0],
+                          [be + q, -(be + ga) - q, -1.0], [0.0, 1.0, 0.0]])  # fmt: skip
+
+    return f, jac
+
+
+def _tor_nu(lo=-0.729, hi=-0.7289):
+    """``nu`` of the homoclinic orbit of ``E``: the 1-D stable manifold, integrated
+    backward from ``E`` (on the side away from the origin), spirals back into ``E`` and
+    is ejected along one side of that manifold or the other; Brent on the side."""
+
     def side(nu):
-        def f(x):  # reversed flow
-            d3 = (x[1] - x[0]) ** 3
-            return -np.array([(-(be + nu) * x[0] + be * x[1] - a3 * x[0] ** 3 + b3 * d3) / r,
-                              be * x[0] - (be + ga) * x[1] - x[2] - b3 * d3, x[1]])  # fmt: skip
-
+        f, jac = _tor_reversed(nu)
         E = _tor_E(nu)
-        q = 3 * b3 * (E[1] - E[0]) ** 2
-        J = np.array([[(-(be + nu) - 3 * a3 * E[0] ** 2 - q) / r, (be + q) / r, 0.0],
-                      [be + q, -(be + ga) - q, -1.0], [0.0, 1.0, 0.0]])  # fmt: skip
-        v, w = _eigen_pair(-J, np.argmax)  # the unstable direction of the reversed flow
+        v, w = _eigen_pair(jac(E), np.argmax)  # the unstable direction of the reversed flow
         v = -v * np.sign(v @ E)
-        return _ejection_side(f, E, v, w * np.sign(w @ v), (0.5, 0.11, 0.3))
+        return _ejection_side(f, E + 1e-9 * v, E, w, ((0.5, 1), (0.11, -1), (0.3, 1)))
 
-    return brentq(side, -0.729, -0.7289, xtol=1e-14)
+    return brentq(side, lo, hi, xtol=1e-14)
+
+
+def _tor_heteroclinic_nu(lo, hi):
+    """``nu`` of a connection ``E+ -> E-`` (``E- = -E+``; its mirror image ``E- -> E+``
+    closes the heteroclinic cycle): the 1-D stable manifold of ``E-``, integrated
+    backward towards ``E+``, comes within 0.15 of ``E+`` and is ejected on one side of
+    the stable manifold of ``E+`` or the other (as ``_tor_heteroclinic_nu`` of
+    ``tests/test_published_cycles.py``); Brent on the side in ``[lo, hi]``."""
+
+    def side(nu):
+        f, jac = _tor_reversed(nu)
+        Ep = _tor_E(nu)
+        v, _ = _eigen_pair(jac(-Ep), np.argmax)
+        v = v * np.sign(v @ Ep)
+        _, w = _eigen_pair(jac(Ep), np.argmax)
+        return _ejection_side(f, -Ep + 1e-9 * v, Ep, w, ((0.15, -1), (0.3, 1)))
+
+    return brentq(side, lo, hi, xtol=1e-15)
 
 
 def test_tor_saddle_focus_homoclinic_in_reversed_time():
@@ -268,6 +297,28 @@ def test_tor_saddle_focus_homoclinic_in_reversed_time():
     bad = find_connection(rev, rev.params(**TOR), "nu", source=_tor_E(-0.72), shift=0, branch=1)
     assert not bad.success
     assert "does not come near the target" in bad.message
+
+
+def test_tor_heteroclinic_connection_between_the_saddle_foci():
+    """``E+ -> E-`` in reversed time (source ``E-``, the target ``E+`` of the reversed
+    flow): from ``nu = -0.8`` the primary connection of the heteroclinic cycle,
+    ``nu* = -0.79751983065`` (the limit of the symmetric cycles'
+    snake in ``tests/test_published_cycles.py``); from ``nu = -0.7`` another, longer one
+    (the closest approach of the manifold picks the orbit; shooting finds that one at
+    ``-0.70422393628`` too: near a heteroclinic cycle of saddle-foci there are many).
+    Both within their estimates."""
+    rev = _tor_system(-1)
+    refs = []
+    for nu0, lo, hi in ((-0.8, -0.7975, -0.79752), (-0.7, -0.7043, -0.7041)):
+        ref = _tor_heteroclinic_nu(lo, hi)
+        refs.append(ref)
+        E = _tor_E(nu0)
+        res = find_connection(rev, rev.params(**{**TOR, "nu": nu0}), "nu", source=-E, target=E)
+        assert res.status is Status.SUCCESS, res.message
+        assert abs(res.value("nu") - ref) <= res.error("nu"), (nu0, ref, res.errors)
+        assert _useful(res, "nu")
+        assert res.x_to == pytest.approx(_tor_E(ref), abs=1e-6)
+    assert refs == pytest.approx([-0.79751983065, -0.70422393628], abs=1e-10)
 
 
 # ------------------------------------------------------------------ rev (Champneys)
