@@ -201,6 +201,27 @@ def test_chua_homoclinic_curve_in_beta(chua):
         assert _useful(re, "alpha")
 
 
+@pytest.mark.parametrize("scale", [1e3, 1e5])
+def test_chua_homoclinic_in_other_units(scale):
+    """The same circuit with the states in other units, ``X = scale x`` (volts against
+    millivolts): the orbit and ``alpha*`` are those of ``scale = 1``. Regression: the
+    Newton tolerance (1e-10, absolute) was below the residual's rounding floor (about
+    1e-16 |X| in the collocation rows, 1e-16 |X|^2 in the integral phase row), so at
+    ``scale = 1e3`` the halved-mesh re-solve failed (DISCRETISATION_ERROR) and at
+    ``1e5`` the solve itself (NEWTON_FAILED); the rows are now weighted by the states'
+    magnitude (``continuation.bvp.solve._row_weights``)."""
+
+    def rhs(x, p, ops):
+        return scale * _chua_rhs([x[i] / scale for i in range(3)], p, ops)
+
+    s = System(rhs, ("x", "y", "z"), tuple(CHUA))
+    res = find_connection(s, s.params(**CHUA), "alpha", source=[0.0, 0.0, 0.0], shift=0)
+    assert res.status is Status.SUCCESS, res.message
+    assert abs(res.value("alpha") - 11.078401578740419) <= res.error("alpha")
+    assert _useful(res, "alpha")
+    assert np.max(np.linalg.norm(res.x, axis=1)) == pytest.approx(3.27 * scale, rel=0.01)
+
+
 # ------------------------------------------------------------------ tor (Freire et al.)
 TOR = {"nu": -0.72, "beta": 0.5, "gamma": -0.6, "r": 0.6, "a3": 0.328578, "b3": 0.933578}
 

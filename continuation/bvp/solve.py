@@ -20,9 +20,11 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..casadi_compile import compiling
 from ..errors import ConvergenceError
+from ..linalg import csc_with_data
 from ..newton import NewtonResult, newton
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
@@ -79,24 +81,60 @@ class _Solver:
     what: str = "connection"
 
 
+def _row_weights(prob: Any, z0: FloatArray) -> tuple[int, FloatArray | None]:
+    r"""Row weights that make the convergence test relative to the states' magnitude.
+
+    The collocation, continuity and boundary rows are differences of states (their
+    rounding floor is about :math:`\epsilon_{mach} \max|X|`), the integral phase row
+    a product of two (floor :math:`\epsilon_{mach} \max|X|^2`). With ``S = 2^e`` the
+    smallest power of two at least ``max|X|`` of ``z0``'s orbit, the rows are divided by
+    ``S`` and the integral phase row by ``S^2``, so that the absolute Newton tolerance
+    (``1e-10``) holds relative to the states' scale: a problem written in units where
+    the states are O(1e3) converges as the same problem in O(1) units does (before,
+    the residual stalled at its rounding floor above the tolerance). Newton's steps are
+    invariant under row scaling; powers of two scale exactly. ``(0, None)`` where
+    ``max|X| <= 1`` (nothing changes).
+    """
+    X = prob.layout.orbit_of(np.asarray(z0, dtype=float))
+    xs = float(np.max(np.abs(X))) if X.size else 0.0
+    if not (math.isfinite(xs) and xs > 1.0):
+        return 0, None
+    e = math.ceil(math.log2(xs))
+    w = np.full(prob.n_unknowns, 2.0**-e)
+    lay = prob.layout
+    if not lay.start_point and lay.pin is None:  # the integral phase row, the last one
+        w[-1] = 2.0 ** (-2 * e)
+    return e, w
+
+
 def _newton_solve(prob: Any, z0: FloatArray, solver: _Solver) -> NewtonResult:
     """Newton (or its simplified forms, ``solver.method``) on ``prob.residual(z, p) = 0``.
 
     ``prob`` is a :class:`HeteroclinicProblem` or a
-    :class:`~continuation.bvp.landing.LandingProblem` (the same collocation core).
+    :class:`~continuation.bvp.landing.LandingProblem` (the same collocation core). The
+    rows are weighted by :func:`_row_weights` (the tolerance is relative to the states'
+    magnitude where it exceeds 1); the result's ``residual_norm`` is the weighted one.
     """
     settings, method, store = solver.settings, solver.method, solver.store
     p = _value(prob)
+    e, w = _row_weights(prob, z0)
 
     def res(z: FloatArray) -> FloatArray:
-        return prob.residual(z, p)
+        g = prob.residual(z, p)
+        return g if w is None else w * g
 
     def jac(z: FloatArray) -> Any:
-        return prob.jacobian(z, p)
+        J = prob.jacobian(z, p)
+        if w is None:
+            return J
+        if sp.issparse(J) and J.format == "csc":  # the pattern and its condensed LU kept
+            return csc_with_data(J, J.data * w[J.indices])
+        return sp.diags(w) @ J
 
     if method == "newton":
         return newton(res, jac, z0, settings)
-    cache = None if store is None else store.setdefault(_store_key(prob), JacobianCache())
+    key = _store_key(prob) + (e,)
+    cache = None if store is None else store.setdefault(key, JacobianCache())
     out = simplified_newton(res, jac, z0, settings, broyden=method == "broyden", cache=cache)
     if not out.converged:  # e.g. far from the solution: the damped Newton method
         log.info("%s iteration failed (%s); falling back to Newton", method, out.message)
@@ -135,7 +173,9 @@ def _solved(prob: Any, z0: FloatArray, solver: _Solver) -> Any:
             newton_iters=res.iterations,
             message=f"converged, but the solution is not a valid {solver.what}: {exc}",
         )
-    rn = float(np.max(np.abs(new.residual(z, p))))
+    w = _row_weights(new, z)[1]
+    g = new.residual(z, p)
+    rn = float(np.max(np.abs(g if w is None else w * g)))
     iters = res.iterations
     if rn > solver.settings.tol:
         res2 = _newton_solve(new, z, solver)
