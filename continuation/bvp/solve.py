@@ -248,7 +248,9 @@ def solve_connection(
         rounds, at most 3 doublings of the intervals and 2 extensions of ``T`` by
         1.5). ``ConnectionAccuracy(estimate=False)``: a plain solve on the given mesh.
     newton : NewtonSettings, optional
-        Default: ``tol=1e-10`` (max-norm of the residual), ``max_iter=40``, damped.
+        Default: ``tol=1e-10`` (max-norm of the residual, its rows divided by the
+        states' magnitude where that exceeds 1: :func:`_row_weights`), ``max_iter=40``,
+        damped.
     throw : bool
         Raise :class:`~continuation.errors.ConvergenceError` when the result is not
         ``SUCCESS``.
