@@ -145,7 +145,7 @@ def chua():
 
 
 def test_chua_shilnikov_homoclinic_from_the_saddle_alone(chua):
-    """From ``alpha = 11`` (and 10.5, 12) the connection is found within its estimate
+    """From ``alpha = 11`` (and 9, 10.5, 12, 20) the connection is found within its estimate
     of ``alpha* = 11.07840157874``; the orbit leaves and returns to the origin and its
     excursion is that of the unstable manifold at ``alpha*`` (first maximum of ``|x|``
     along the manifold, integrated by SciPy: the orbit's error is of the order of the
@@ -155,7 +155,10 @@ def test_chua_shilnikov_homoclinic_from_the_saddle_alone(chua):
     assert ref == pytest.approx(11.07840157874, abs=1e-10)
     for r in (
         res,
-        find_connection(s, s.params(**{**CHUA, "alpha": 10.5}), "alpha", source=[0, 0, 0], shift=0),
+        *(
+            find_connection(s, s.params(**{**CHUA, "alpha": a}), "alpha", source=[0, 0, 0], shift=0)
+            for a in (9.0, 10.5, 20.0)
+        ),
         find_connection(
             s, s.params(**{**CHUA, "alpha": 12.0}), "alpha", source=[0, 0, 0], shift=0, branch=-1
         ),  # fmt: skip
@@ -176,6 +179,28 @@ def test_chua_shilnikov_homoclinic_from_the_saddle_alone(chua):
     k += int(np.argmax(np.diff(r_sim[k:]) < 0))  # first maximum after leaving
     x_fine = res.interpolate(np.linspace(0.0, res.T, 20001))
     assert np.max(np.linalg.norm(x_fine, axis=1)) == pytest.approx(r_sim[k], abs=1e-6)
+
+
+def test_chua_another_homoclinic_orbit_from_further_away(chua):
+    """From ``alpha = 8`` the closest approach of the manifold picks another homoclinic
+    orbit of the origin, a longer one (``T = 17.5``; it passes 0.69, 0.43 and 0.31 from
+    the origin before spiralling in): shooting (ejection side after the manifold has
+    gone beyond 1, come within 0.1 and left 0.3) puts it at ``alpha = 10.2692090943``;
+    the SUCCESS is within its estimate (about 5e-6, the mesh's) of that, not of the
+    primary orbit's 11.078."""
+    s, _ = chua
+    res = find_connection(s, s.params(**{**CHUA, "alpha": 8.0}), "alpha", source=[0, 0, 0], shift=0)
+
+    def side(al):
+        f, J = _chua_np(al, 14.3)
+        v, w = _eigen_pair(J, np.argmax)
+        return _ejection_side(f, 1e-9 * v, np.zeros(3), w, ((1.0, 1), (0.1, -1), (0.3, 1)))
+
+    ref = brentq(side, 10.2691, 10.2693, xtol=1e-13)
+    assert ref == pytest.approx(10.2692090943, abs=1e-9)
+    assert res.status is Status.SUCCESS, res.message
+    assert abs(res.value("alpha") - ref) <= res.error("alpha"), res.errors
+    assert _useful(res, "alpha")
 
 
 def test_chua_homoclinic_curve_in_beta(chua):
