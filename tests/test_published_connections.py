@@ -226,15 +226,19 @@ def test_chua_homoclinic_curve_in_beta(chua):
         assert _useful(re, "alpha")
 
 
-@pytest.mark.parametrize("scale", [1e3, 1e5])
+@pytest.mark.parametrize("scale", [1e-6, 1e-4, 1e-3, 1e3, 1e5])
 def test_chua_homoclinic_in_other_units(scale):
     """The same circuit with the states in other units, ``X = scale x`` (volts against
-    millivolts): the orbit and ``alpha*`` are those of ``scale = 1``. Regression: the
+    millivolts): the orbit and ``alpha*`` are those of ``scale = 1``. Regressions: the
     Newton tolerance (1e-10, absolute) was below the residual's rounding floor (about
     1e-16 |X| in the collocation rows, 1e-16 |X|^2 in the integral phase row), so at
     ``scale = 1e3`` the halved-mesh re-solve failed (DISCRETISATION_ERROR) and at
     ``1e5`` the solve itself (NEWTON_FAILED); the rows are now weighted by the states'
-    magnitude (``continuation.bvp.solve._row_weights``)."""
+    magnitude (``continuation.bvp.solve._row_weights``). At ``scale <= 1e-4`` the
+    fixed end distance 1e-4 of ``find_connection`` was a third of the orbit or more
+    (NEWTON_FAILED, DISCRETISATION_ERROR), at ``1e-3`` it gave an error of 1e-6 (within
+    its estimate); the default now shrinks where the flow is not linear at that
+    distance or the manifold's excursion is small (``find._linear_distance``)."""
 
     def rhs(x, p, ops):
         return scale * _chua_rhs([x[i] / scale for i in range(3)], p, ops)

@@ -123,7 +123,7 @@ def solve_landing(
         only that Newton converged; ``errors`` is None).
     newton : NewtonSettings, optional
         Default ``tol=1e-10`` (max-norm of the residual, relative to the states'
-        magnitude where that exceeds 1), damped, 40 iterations.
+        magnitude), damped, 40 iterations.
     throw : bool
         Raise :class:`~continuation.errors.ConvergenceError` unless ``SUCCESS``.
     progress : callable, optional
