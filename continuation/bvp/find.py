@@ -244,7 +244,7 @@ def _end_pad(
 
 #: Default distance of the guess's ends from the saddles (states' 2-norm), and the
 #: largest relative defect of the linearised flow there (:func:`_linear_distance`).
-_END_DISTANCE, _LINEAR_DEFECT = 1e-4, 1e-3
+_END_DISTANCE, _LINEAR_DEFECT = 1e-4, 1e-2
 #: A default end distance is reduced to ``1e-4`` of the manifold's excursion when that
 #: excursion is less than this many end distances (states in small units).
 _SMALL_ORBIT = 1e3
@@ -256,7 +256,7 @@ def _linear_distance(system: Any, pvec: FloatArray, x_eq: FloatArray, A: FloatAr
 
     :data:`_END_DISTANCE`, divided by 10 (at most 8 times) while the flow there departs
     from its linearisation by more than :data:`_LINEAR_DEFECT` of the distance, measured
-    as a displacement, :math:`|A^{-1} (f(x + \delta v) - f(x) - \delta A v)| > 10^{-3}
+    as a displacement, :math:`|A^{-1} (f(x + \delta v) - f(x) - \delta A v)| > 10^{-2}
     \delta` (the defect of the velocity, mapped back through the linear flow, so that a
     fast slaved direction, whose defect is large in ``f`` but small in position, does
     not count): where the saddle's linear neighbourhood is small in the states' units (a
@@ -325,7 +325,7 @@ def find_connection(
         centres the guess (held at its ends when ``T`` is longer).
     end_distance : float, optional
         Distance (state 2-norm) of both ends of the guess from the saddles. Default
-        ``1e-4``, or less where the flow departs from its linearisation by more than 0.1 %
+        ``1e-4``, or less where the flow departs from its linearisation by more than 1 %
         at that distance along the unstable direction of ``source`` or the weakest stable
         one of the target (:func:`_linear_distance`), and ``1e-4`` of the manifold's
         excursion when that is less than ``0.1`` (states in small units: the manifold
