@@ -292,17 +292,20 @@ def _tor_reversed(nu):
     return f, jac
 
 
-def _tor_nu(lo=-0.729, hi=-0.7289):
+def _tor_nu(lo=-0.729, hi=-0.7289, size=1.0):
     """``nu`` of the homoclinic orbit of ``E``: the 1-D stable manifold, integrated
     backward from ``E`` (on the side away from the origin), spirals back into ``E`` and
-    is ejected along one side of that manifold or the other; Brent on the side."""
+    is ejected along one side of that manifold or the other; Brent on the side (spheres
+    about ``E`` of radii 0.5, 0.11 and 0.3 times ``size``, the orbit's largest distance
+    from ``E`` over 0.70 elsewhere than at the demo's parameters)."""
 
     def side(nu):
         f, jac = _tor_reversed(nu)
         E = _tor_E(nu)
         v, w = _eigen_pair(jac(E), np.argmax)  # the unstable direction of the reversed flow
         v = -v * np.sign(v @ E)
-        return _ejection_side(f, E + 1e-9 * v, E, w, ((0.5, 1), (0.11, -1), (0.3, 1)))
+        steps = ((0.5 * size, 1), (0.11 * size, -1), (0.3 * size, 1))
+        return _ejection_side(f, E + 1e-9 * v, E, w, steps)
 
     return brentq(side, lo, hi, xtol=1e-14)
 
@@ -347,6 +350,31 @@ def test_tor_saddle_focus_homoclinic_in_reversed_time():
     bad = find_connection(rev, rev.params(**TOR), "nu", source=_tor_E(-0.72), shift=0, branch=1)
     assert not bad.success
     assert "does not come near the target" in bad.message
+
+
+def test_tor_homoclinic_curve_in_gamma(monkeypatch):
+    """The saddle-focus homoclinic orbit continued in ``gamma`` from -0.6 to -0.7 at
+    default settings (reversed time): the end row is within the default tolerance
+    ``atol + rtol |nu|`` of shooting (``nu = -0.77005809975`` at ``gamma = -0.7``),
+    its re-solve within its own estimate."""
+    rev = _tor_system(-1)
+    res = find_connection(rev, rev.params(**TOR), "nu", source=_tor_E(-0.72), shift=0, branch=-1)
+    size0 = float(np.max(np.linalg.norm(res.x - res.x_from, axis=1)))
+    br = continue_connection(res, "gamma", ContinuationSettings(p_min=-0.7, p_max=-0.6),
+                             direction="backward")  # fmt: skip
+    assert br.status is Status.PARAM_BOUND, br.message
+    j = int(np.argmin(br.p))
+    assert br.p[j] == pytest.approx(-0.7, abs=1e-10)
+    nu, row = float(br.records["nu"][j]), connection_at(br, j)
+    size = float(np.max(np.linalg.norm(row.x - row.x_from, axis=1))) / size0
+    monkeypatch.setitem(TOR, "gamma", -0.7)
+    ref = _tor_nu(nu - 1e-3, nu + 1e-3, size)
+    assert ref == pytest.approx(-0.77005809975, abs=1e-10)
+    assert abs(nu - ref) <= ATOL + RTOL * abs(ref)
+    again = solve_connection(row.problem, row)
+    assert again.status is Status.SUCCESS, again.message
+    assert abs(again.value("nu") - ref) <= again.error("nu"), again.errors
+    assert _useful(again, "nu")
 
 
 def test_tor_heteroclinic_connection_between_the_saddle_foci():
