@@ -6,7 +6,8 @@ Steps:
    :math:`x_+ = x_- + \text{shift}`); the source must have a one-dimensional unstable
    manifold.
 2. Integrate the chosen branch of :math:`W^u(x_-)` from :math:`x_- \pm \delta v_u`,
-   :math:`\delta` = ``end_distance`` (:func:`continuation.dynamics.manifolds.unstable_manifold`,
+   :math:`\delta` = ``end_distance``, default ``1e-4`` or less in small units
+   (:func:`_linear_distance`; :func:`continuation.dynamics.manifolds.unstable_manifold`,
    CVODES), in segments until the window of step 3 has closed, at most ``t_max``.
 3. Cut it at its closest approach to :math:`x_+`: for a heteroclinic target the
    nearest sample after the orbit has left :math:`x_-` (half its largest distance
@@ -241,6 +242,43 @@ def _end_pad(
     return s, x_to + _linear_flow(A, d, s, unstable=False)
 
 
+#: Default distance of the guess's ends from the saddles (states' 2-norm), and the
+#: largest relative defect of the linearised flow there (:func:`_linear_distance`).
+_END_DISTANCE, _LINEAR_DEFECT = 1e-4, 1e-2
+#: A default end distance is reduced to ``1e-4`` of the manifold's excursion when that
+#: excursion is less than this many end distances (states in small units).
+_SMALL_ORBIT = 1e3
+
+
+def _linear_distance(system: Any, pvec: FloatArray, x_eq: FloatArray, A: FloatArray,
+                     v: FloatArray) -> float:  # fmt: skip
+    r"""The default end distance at ``x_eq`` along the eigendirection ``v`` (unit).
+
+    :data:`_END_DISTANCE`, divided by 10 (at most 8 times) while the flow there departs
+    from its linearisation by more than :data:`_LINEAR_DEFECT` of the distance, measured
+    as a displacement, :math:`|A^{-1} (f(x + \delta v) - f(x) - \delta A v)| > 10^{-2}
+    \delta` (the defect of the velocity, mapped back through the linear flow, so that a
+    fast slaved direction, whose defect is large in ``f`` but small in position, does
+    not count): where the saddle's linear neighbourhood is small in the states' units (a
+    problem written in units where the orbit is 1e-4 across) a fixed 1e-4 would start
+    the guess off the manifold, or outside the orbit.
+    """
+    v = np.real(np.asarray(v))
+    v = v / max(float(np.linalg.norm(v)), 1e-300)
+    f0 = np.asarray(system.f(x_eq, pvec), dtype=float)
+    delta = _END_DISTANCE
+    for _ in range(8):
+        defect = np.asarray(system.f(x_eq + delta * v, pvec), dtype=float) - f0 - delta * (A @ v)
+        try:
+            shift = np.linalg.solve(A, defect)
+        except np.linalg.LinAlgError:  # (a hyperbolic saddle has an invertible A)
+            break
+        if not float(np.linalg.norm(shift)) > _LINEAR_DEFECT * delta:
+            break
+        delta *= 0.1
+    return delta
+
+
 def find_connection(
     system: Any,
     params: Any,
@@ -251,7 +289,7 @@ def find_connection(
     shift: Any = None,
     branch: int = 1,
     T: float | None = None,
-    end_distance: float = 1e-4,
+    end_distance: float | None = None,
     t_max: float | None = None,
     n_intervals: int = DEFAULT_N_INTERVALS,
     degree: int = 4,
@@ -285,8 +323,13 @@ def find_connection(
     T : float, optional
         Truncation interval; default from the eigenvalues (step 4). A given ``T``
         centres the guess (held at its ends when ``T`` is longer).
-    end_distance : float
-        Distance (state 2-norm) of both ends of the guess from the saddles.
+    end_distance : float, optional
+        Distance (state 2-norm) of both ends of the guess from the saddles. Default
+        ``1e-4``, or less where the flow departs from its linearisation by more than 1 %
+        at that distance along the unstable direction of ``source`` or the weakest stable
+        one of the target (:func:`_linear_distance`), and ``1e-4`` of the manifold's
+        excursion when that is less than ``0.1`` (states in small units: the manifold
+        is integrated again from closer).
     t_max : float, optional
         Longest integration time of the manifold; default ``200 + 40 / lambda_u``. The
         integration stops earlier, once the distance to the target has risen out of
@@ -317,7 +360,9 @@ def find_connection(
         raise ValueError("give exactly one of `target` and `shift`")
     if branch not in (1, -1):
         raise ValueError(f"`branch` must be +1 or -1, got {branch!r}")
-    if not (isinstance(end_distance, (int, float)) and 0 < end_distance < 1):
+    if end_distance is not None and not (
+        isinstance(end_distance, (int, float)) and 0 < end_distance < 1
+    ):
         raise ValueError(f"`end_distance` must be in (0, 1), got {end_distance!r}")
     if T is not None and not (math.isfinite(T) and T > 0):
         raise ValueError(f"`T` must be a positive time, got {T!r}")
@@ -331,21 +376,52 @@ def find_connection(
     lam_m = np.linalg.eigvals(system.jacobian(x_m, pvec))
     n_u = int(np.sum(lam_m.real > 0))
     if n_u != 1:
+        lam_p = np.linalg.eigvals(system.jacobian(x_p, pvec))
+        hint = "give a guess to solve_connection instead"
+        if int(np.sum(lam_p.real < 0)) == 1:
+            # the time-reversed flow has the same orbit, from the target's 1-D manifold
+            hint = (
+                "the target's stable manifold is one-dimensional: reverse time (a System "
+                "with rhs -f) and swap `source` and `target`, or " + hint
+            )
         raise ValueError(
-            f"`source` has a {n_u}-dimensional unstable manifold (eigenvalues {lam_m}); "
-            "find_connection integrates a one-dimensional one: give a guess to "
-            "solve_connection instead"
+            f"`source` has a {n_u}-dimensional unstable manifold (eigenvalues "
+            f"{np.array2string(lam_m, precision=4)}); find_connection integrates a "
+            f"one-dimensional one: {hint}"
         )
     lam_u = float(np.max(lam_m.real))
     if t_max is None:
         t_max = 200.0 + 40.0 / lam_u
     A_p = np.asarray(system.jacobian(x_p, pvec), dtype=float)
+    auto_distance = end_distance is None
+    if end_distance is None:
+        A_m = np.asarray(system.jacobian(x_m, pvec), dtype=float)
+        lam, V = np.linalg.eig(A_m)
+        lam_p, V_p = np.linalg.eig(A_p)
+        stable = np.flatnonzero(lam_p.real < 0)
+        weak = stable[int(np.argmax(lam_p.real[stable]))] if stable.size else None
+        end_distance = _linear_distance(system, pvec, x_m, A_m, V[:, int(np.argmax(lam.real))])
+        if weak is not None:
+            d_p = _linear_distance(system, pvec, x_p, A_p, V_p[:, weak])
+            end_distance = min(end_distance, d_p)
     integrator = _manifold_method(system, lam_m, np.linalg.eigvals(A_p))
-    t, x, complete = _manifold_to_return(system, pvec, x_m, x_p, branch, end_distance, t_max,
-                                         integrator)  # fmt: skip
-    if not complete and integrator is not None:  # Adams failed before the return: BDF
-        log.info("the Adams integration of the manifold failed early; again with BDF")
-        t, x, _ = _manifold_to_return(system, pvec, x_m, x_p, branch, end_distance, t_max)
+
+    def manifold(delta: float) -> tuple[FloatArray, FloatArray]:
+        t, x, complete = _manifold_to_return(system, pvec, x_m, x_p, branch, delta, t_max,
+                                             integrator)  # fmt: skip
+        if not complete and integrator is not None:  # Adams failed before the return: BDF
+            log.info("the Adams integration of the manifold failed early; again with BDF")
+            t, x, _ = _manifold_to_return(system, pvec, x_m, x_p, branch, delta, t_max)
+        return t, x
+
+    t, x = manifold(end_distance)
+    if auto_distance:
+        # the orbit is small in the states' units: the ends within 1e-4 of its size
+        size = float(np.max(np.linalg.norm(x - x_m, axis=1)))
+        if size < _SMALL_ORBIT * end_distance and _END_DISTANCE * size < end_distance:
+            end_distance = _END_DISTANCE * size
+            log.info("the orbit is %.3g across: end distance %.3g", size, end_distance)
+            t, x = manifold(end_distance)
     k, d_min = cut_at_closest_approach(t, x, x_m, x_p)
     t, x = t[: k + 1] - t[0], x[: k + 1]
     if k < 2:

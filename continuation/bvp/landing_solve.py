@@ -122,7 +122,8 @@ def solve_landing(
         ``ConnectionAccuracy(estimate=False)``: one plain solve (``SUCCESS`` then means
         only that Newton converged; ``errors`` is None).
     newton : NewtonSettings, optional
-        Default ``tol=1e-10`` (max-norm of the residual), damped, 40 iterations.
+        Default ``tol=1e-10`` (max-norm of the residual, relative to the states'
+        magnitude), damped, 40 iterations.
     throw : bool
         Raise :class:`~continuation.errors.ConvergenceError` unless ``SUCCESS``.
     progress : callable, optional

@@ -20,9 +20,11 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..casadi_compile import compiling
 from ..errors import ConvergenceError
+from ..linalg import csc_with_data
 from ..newton import NewtonResult, newton
 from ..settings import ContinuationSettings, NewtonSettings
 from ..status import Status
@@ -79,24 +81,73 @@ class _Solver:
     what: str = "connection"
 
 
+def _row_weights(prob: Any, z0: FloatArray) -> tuple[int, FloatArray | None]:
+    r"""Row weights that make the convergence test relative to the states' magnitude.
+
+    The collocation, continuity, equilibrium, start and projection rows are states or
+    their rates (rounding floor about :math:`\epsilon_{mach} \max|X|`), the integral
+    phase row a product of two (floor :math:`\epsilon_{mach} \max|X|^2`), the Riccati
+    rows rates of the linearisation (independent of the states' unit). With ``S = 2^e``
+    the smallest power of two at least ``max|X|`` of ``z0``'s orbit, the state rows are
+    divided by ``S``, the integral phase row by ``S^2``, the Riccati rows not, so that the
+    Newton tolerance (``1e-10``) holds relative to the states' scale: a problem written
+    in units where the states are O(1e3) or O(1e-4) converges as the same problem in
+    O(1) units does (before, at O(1e3) the residual stalled at its rounding floor above
+    the tolerance; at O(1e-4) the tolerance allowed relative errors of 1e-6). Newton's
+    steps are invariant under row scaling; powers of two scale exactly. ``(0, None)``
+    where ``1/2 < max|X| <= 1`` (nothing changes) or the orbit is all zero.
+    """
+    X = prob.layout.orbit_of(np.asarray(z0, dtype=float))
+    xs = float(np.max(np.abs(X))) if X.size else 0.0
+    if not (math.isfinite(xs) and xs > 0.0):
+        return 0, None
+    e = math.ceil(math.log2(xs))
+    if e == 0:
+        return 0, None
+    lay = prob.layout
+    n, km, kp = lay.n, lay.k_minus, lay.k_plus
+    w = np.full(prob.n_unknowns, 2.0**-e)
+    # the boundary rows (order of continuation.bvp.casadi_backend): equilibria (and the
+    # start point), then per end with conditions its Riccati rows and projections
+    r = lay.boundary_row + n * (2 if lay.start_point or lay.separate_to else 1)
+    for k in (km, kp):
+        if k > 0:
+            n_ric = (n - k) * k if k < n else 0
+            w[r : r + n_ric] = 1.0
+            r += n_ric + k
+    if not lay.start_point and lay.pin is None:  # the integral phase row, the last one
+        w[-1] = 2.0 ** (-2 * e)
+    return e, w
+
+
 def _newton_solve(prob: Any, z0: FloatArray, solver: _Solver) -> NewtonResult:
     """Newton (or its simplified forms, ``solver.method``) on ``prob.residual(z, p) = 0``.
 
     ``prob`` is a :class:`HeteroclinicProblem` or a
-    :class:`~continuation.bvp.landing.LandingProblem` (the same collocation core).
+    :class:`~continuation.bvp.landing.LandingProblem` (the same collocation core). The
+    rows are weighted by :func:`_row_weights` (the tolerance is relative to the states'
+    magnitude); the result's ``residual_norm`` is the weighted one.
     """
     settings, method, store = solver.settings, solver.method, solver.store
     p = _value(prob)
+    e, w = _row_weights(prob, z0)
 
     def res(z: FloatArray) -> FloatArray:
-        return prob.residual(z, p)
+        g = prob.residual(z, p)
+        return g if w is None else w * g
 
     def jac(z: FloatArray) -> Any:
-        return prob.jacobian(z, p)
+        J = prob.jacobian(z, p)
+        if w is None:
+            return J
+        if sp.issparse(J) and J.format == "csc":  # the pattern and its condensed LU kept
+            return csc_with_data(J, J.data * w[J.indices])
+        return sp.diags(w) @ J
 
     if method == "newton":
         return newton(res, jac, z0, settings)
-    cache = None if store is None else store.setdefault(_store_key(prob), JacobianCache())
+    key = _store_key(prob) + (e,)
+    cache = None if store is None else store.setdefault(key, JacobianCache())
     out = simplified_newton(res, jac, z0, settings, broyden=method == "broyden", cache=cache)
     if not out.converged:  # e.g. far from the solution: the damped Newton method
         log.info("%s iteration failed (%s); falling back to Newton", method, out.message)
@@ -135,7 +186,9 @@ def _solved(prob: Any, z0: FloatArray, solver: _Solver) -> Any:
             newton_iters=res.iterations,
             message=f"converged, but the solution is not a valid {solver.what}: {exc}",
         )
-    rn = float(np.max(np.abs(new.residual(z, p))))
+    w = _row_weights(new, z)[1]
+    g = new.residual(z, p)
+    rn = float(np.max(np.abs(g if w is None else w * g)))
     iters = res.iterations
     if rn > solver.settings.tol:
         res2 = _newton_solve(new, z, solver)
@@ -208,7 +261,8 @@ def solve_connection(
         rounds, at most 3 doublings of the intervals and 2 extensions of ``T`` by
         1.5). ``ConnectionAccuracy(estimate=False)``: a plain solve on the given mesh.
     newton : NewtonSettings, optional
-        Default: ``tol=1e-10`` (max-norm of the residual), ``max_iter=40``, damped.
+        Default: ``tol=1e-10`` (max-norm of the residual, its rows divided by the
+        states' magnitude: :func:`_row_weights`), ``max_iter=40``, damped.
     throw : bool
         Raise :class:`~continuation.errors.ConvergenceError` when the result is not
         ``SUCCESS``.
