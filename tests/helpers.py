@@ -274,3 +274,24 @@ def assert_invariants(br, tol=1e-9):
                 lo, hi = sorted(sp.bracket)
                 assert lo - 1e-12 <= sp.p <= hi + 1e-12
         assert sp.bracket == (br.p[sp.index], br.p[sp.index + 1])
+
+
+def chua_rhs(x, p, ops):
+    r"""Chua's circuit with the smooth cubic-like nonlinearity of AUTO-07p's demo ``chu``
+    (``demos/chu/chu.f90``; Khibnik, Roose & Chua 1993): parameters
+    ``(alpha, beta, K, a0, a1)``,
+
+    .. math::
+
+        x' = \alpha (y - h(x)),\quad y' = x - y + z,\quad z' = -\beta y,\qquad
+        h(x) = a_1 x + \tfrac12 (a_0 - a_1)(|x + 1|_K - |x - 1|_K),
+
+    with the smooth absolute value :math:`|u|_K = (2/\pi)\, u \arctan(K u)`.
+    """
+    al, be, K, a0, a1 = p[0], p[1], p[2], p[3], p[4]
+
+    def ab(u):
+        return 2 * u * ops.arctan(K * u) / math.pi
+
+    h = a1 * x[0] + 0.5 * (a0 - a1) * (ab(x[0] + 1) - ab(x[0] - 1))
+    return ops.stack([al * (x[1] - h), x[0] - x[1] + x[2], -be * x[1]])

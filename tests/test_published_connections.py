@@ -43,6 +43,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import chua_rhs
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
@@ -97,16 +98,6 @@ def _eigen_pair(J, pick):
 CHUA = {"alpha": 11.0, "beta": 14.3, "K": 10.0, "a0": -1.0 / 7.0, "a1": 2.0 / 7.0}
 
 
-def _chua_rhs(x, p, ops):
-    al, be, K, a0, a1 = p[0], p[1], p[2], p[3], p[4]
-
-    def ab(u):
-        return 2 * u * ops.arctan(K * u) / math.pi
-
-    h = a1 * x[0] + 0.5 * (a0 - a1) * (ab(x[0] + 1) - ab(x[0] - 1))
-    return ops.stack([al * (x[1] - h), x[0] - x[1] + x[2], -be * x[1]])
-
-
 def _chua_np(al, be):
     K, a0, a1 = CHUA["K"], CHUA["a0"], CHUA["a1"]
 
@@ -139,7 +130,7 @@ def _chua_alpha(be, lo, hi, size=1.0):
 
 @pytest.fixture(scope="module")
 def chua():
-    s = System(_chua_rhs, ("x", "y", "z"), tuple(CHUA))
+    s = System(chua_rhs, ("x", "y", "z"), tuple(CHUA))
     res = find_connection(s, s.params(**CHUA), "alpha", source=[0.0, 0.0, 0.0], shift=0)
     return s, res
 
@@ -241,7 +232,7 @@ def test_chua_homoclinic_in_other_units(scale):
     distance or the manifold's excursion is small (``find._linear_distance``)."""
 
     def rhs(x, p, ops):
-        return scale * _chua_rhs([x[i] / scale for i in range(3)], p, ops)
+        return scale * chua_rhs([x[i] / scale for i in range(3)], p, ops)
 
     s = System(rhs, ("x", "y", "z"), tuple(CHUA))
     res = find_connection(s, s.params(**CHUA), "alpha", source=[0.0, 0.0, 0.0], shift=0)

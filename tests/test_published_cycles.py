@@ -38,6 +38,7 @@ import re
 
 import numpy as np
 import pytest
+from helpers import chua_rhs
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -400,16 +401,6 @@ def test_tor_switch_at_the_branch_point_onto_the_asymmetric_cycles(tor_equilibri
 CHUA = {"alpha": 1.0, "beta": 14.3, "K": 10.0, "a0": -1.0 / 7.0, "a1": 2.0 / 7.0}
 
 
-def _chua_rhs(x, p, ops):
-    al, be, K, a0, a1 = p[0], p[1], p[2], p[3], p[4]
-
-    def ab(u):
-        return 2 * u * ops.arctan(K * u) / math.pi
-
-    h = a1 * x[0] + 0.5 * (a0 - a1) * (ab(x[0] + 1) - ab(x[0] - 1))
-    return ops.stack([al * (x[1] - h), x[0] - x[1] + x[2], -be * x[1]])
-
-
 def _chua_h(x, derivative=False):
     K, a0, a1 = CHUA["K"], CHUA["a0"], CHUA["a1"]
     if derivative:
@@ -443,12 +434,20 @@ def _chua_hopf():
 
 
 def _chua_cycles(p_max, max_steps=500):
-    s = System(_chua_rhs, ("x", "y", "z"), tuple(CHUA))
+    s = System(chua_rhs, ("x", "y", "z"), tuple(CHUA))
     xs = _chua_hopf()[0]
     eq = continue_equilibria(s, [xs, 0, -xs], CHUA, "alpha", p_min=0.0, p_max=20.0,
                              direction="forward")  # fmt: skip
     st = ContinuationSettings(p_max=p_max, max_steps=max_steps)
     return eq, continue_from_hopf(eq, eq.find("hopf")[0], st)
+
+
+def _chua_mu_near_m1(o, al):
+    """Shooting from the cycle ``o`` at ``alpha = al``: the Floquet multiplier nearest -1
+    and the period (variational equations, ``_shoot``)."""
+    x0, T, M = _shoot(lambda x: _chua_f(x, al), lambda x: _chua_jac(x, al), o.X[0], o.T)
+    w = _nontrivial(M, _chua_f(x0, al))
+    return float(w[np.argmin(np.abs(w + 1.0))].real), T
 
 
 def test_chua_hopf_and_period_doubling():
@@ -465,12 +464,7 @@ def test_chua_hopf_and_period_doubling():
     assert pd.located and pd.data["mu"] == pytest.approx(-1.0, abs=1e-8)
     o = orbit_at(br, pd)
 
-    def mu_near_m1(al):
-        x0, T, M = _shoot(lambda x: _chua_f(x, al), lambda x: _chua_jac(x, al), o.X[0], o.T)
-        w = _nontrivial(M, _chua_f(x0, al))
-        return float(w[np.argmin(np.abs(w + 1.0))].real), T
-
-    (m0, T0), (m1, _) = mu_near_m1(pd.p), mu_near_m1(pd.p + 1e-3)
+    (m0, T0), (m1, _) = _chua_mu_near_m1(o, pd.p), _chua_mu_near_m1(o, pd.p + 1e-3)
     al_pd = pd.p - (m0 + 1.0) * 1e-3 / (m1 - m0)
     assert pd.p == pytest.approx(al_pd, abs=1e-6)
     assert o.T == pytest.approx(T0, abs=1e-8)
@@ -491,7 +485,7 @@ def test_chua_cycle_from_a_trajectory_and_the_doubled_branch():
     )
 
     _, al_h, omega = _chua_hopf()
-    s = System(_chua_rhs, ("x", "y", "z"), tuple(CHUA))
+    s = System(chua_rhs, ("x", "y", "z"), tuple(CHUA))
     P = dict(CHUA, alpha=7.5)
     tr = simulate(s, [1.6, 0.0, -1.5], P, (0.0, 200.0), dt=0.01)
     orb = orbit_from_trajectory(s, P, tr)
@@ -510,12 +504,7 @@ def test_chua_cycle_from_a_trajectory_and_the_doubled_branch():
     assert pd2.located
     o = orbit_at(b2, pd2)
 
-    def mu_near_m1(al):
-        x0, T, M = _shoot(lambda x: _chua_f(x, al), lambda x: _chua_jac(x, al), o.X[0], o.T)
-        w = _nontrivial(M, _chua_f(x0, al))
-        return float(w[np.argmin(np.abs(w + 1.0))].real), T
-
-    (m0, T0), (m1, _) = mu_near_m1(pd2.p), mu_near_m1(pd2.p + 1e-3)
+    (m0, T0), (m1, _) = _chua_mu_near_m1(o, pd2.p), _chua_mu_near_m1(o, pd2.p + 1e-3)
     assert pd2.p == pytest.approx(pd2.p - (m0 + 1.0) * 1e-3 / (m1 - m0), abs=1e-6)  # 8.4183872
     assert o.T == pytest.approx(T0, abs=1e-7)
 
