@@ -490,8 +490,11 @@ class RunContext:
         dr = (0, 0)
         if a.counts is not None and b.counts is not None:
             dr = (b.counts[0] - a.counts[0], b.counts[1] - a.counts[1])
+        quiet = {e.name for e in self.events or () if not e.report}
         for kind, r, data, label in found:
-            if not r.located:
+            if label in quiet:
+                pass  # (the caller classifies these zeros and reports what it keeps)
+            elif not r.located:
                 log.warning(
                     "%s between p=%.8g and p=%.8g was detected but not located (%s)",
                     label or kind.value,

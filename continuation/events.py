@@ -106,6 +106,10 @@ class Event:
         a step along which ``p`` is monotone is found by one Newton solve at fixed
         ``p = param_value`` (as a parameter bound), exactly on the value, instead of
         the secant search of a general event.
+    report : bool
+        Log a warning where a zero is detected but not located (default). ``False``
+        where the caller classifies the zeros afterwards and reports the ones it keeps
+        itself (the codim-2 tests: a zero that is dropped there is no point at all).
 
     Notes
     -----
@@ -126,6 +130,7 @@ class Event:
     continuity: float | None = None
     param_value: float | None = None
     slope: bool = True
+    report: bool = True
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name):

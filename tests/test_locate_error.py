@@ -80,3 +80,24 @@ def test_error_is_saved_and_loaded(tmp_path):
     d = sp.to_json()
     del d["error"]
     assert np.isnan(SpecialPoint.from_json(d).error)
+
+
+def test_an_event_with_report_false_is_not_warned_about(caplog):
+    """A jump of the test function is detected but not located and, by default, warned
+    about; ``Event(report=False)`` (the codim-2 tests, whose zeros are classified and
+    reported afterwards) keeps the point but leaves the warning to the caller."""
+    import logging
+
+    from continuation import System, continue_equilibria
+    from continuation.events import Event
+
+    s = System(lambda x, p, ops: ops.stack([p[0] - x[0]]), ("x",), ("mu",))
+    for report in (True, False):
+        caplog.clear()
+        ev = Event("jump", lambda z, p: 1.0 if z[0] > 0.3 else -1.0, report=report)
+        with caplog.at_level(logging.WARNING, logger="continuation.detection"):
+            br = continue_equilibria(s, [0.0], {"mu": 0.0}, "mu", p_max=1.0, events=[ev])
+        (sp,) = br.special_points
+        assert sp.label == "jump" and not sp.located
+        warned = any("detected but not located" in r.getMessage() for r in caplog.records)
+        assert warned is report

@@ -103,7 +103,9 @@ def codim2_events(problem: AugmentedProblem, names: Sequence[str] | None = None)
     # scaled-adjugate tests (bt, cusp) are not checked: in stiff problems their
     # round-off floor near the zero exceeds the continuity bound (l1 has poles instead,
     # see _is_pole)
-    return tuple(Event(_PREFIX + n, make(n), continuity=_CONTINUITY.get(n)) for n in chosen)
+    return tuple(
+        Event(_PREFIX + n, make(n), continuity=_CONTINUITY.get(n), report=False) for n in chosen
+    )
 
 
 def _is_pole(branch: Any, problem: AugmentedProblem, name: str, sp: Any) -> bool:
@@ -195,6 +197,8 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
     """
     counters: dict[str, int] = {}
     out = []
+    settings = getattr(branch, "settings", None)
+    tol = settings.detect.tol if settings is not None else DetectionSettings().tol
     bts = [
         sp
         for sp in branch.special_points
@@ -239,6 +243,15 @@ def relabel_codim2(branch: Any, problem: AugmentedProblem) -> Any:
                 _LABEL[kind],
                 branch.free,
                 *sp.bracket,
+            )
+        elif sp.error > tol:  # (NaN: no estimate, no warning)
+            log.warning(
+                "%s point at %s=%.10g was located with error %.1e > tol %.1e",
+                _LABEL[kind],
+                branch.free,
+                sp.p,
+                sp.error,
+                tol,
             )
         label = f"{_LABEL[kind]}{counters[kind]}"
         out.append(dataclasses.replace(sp, kind=_KIND[kind], label=label, data=data))
