@@ -135,6 +135,12 @@ class Event:
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name):
             raise ValueError(f"`name` must be a non-empty string, got {self.name!r}")
+        for flag in ("terminal", "slope", "report"):
+            if not isinstance(getattr(self, flag), (bool, np.bool_)):
+                raise ValueError(
+                    f"event {self.name!r}: `{flag}` must be True or False, "
+                    f"got {getattr(self, flag)!r}"
+                )
         if self.param_value is not None:
             if self.fn is not None:
                 raise ValueError(f"event {self.name!r}: give `fn` or `param_value`, not both")

@@ -101,3 +101,12 @@ def test_an_event_with_report_false_is_not_warned_about(caplog):
         assert sp.label == "jump" and not sp.located
         warned = any("detected but not located" in r.getMessage() for r in caplog.records)
         assert warned is report
+
+
+@pytest.mark.parametrize("flag", ["terminal", "slope", "report"])
+def test_an_event_flag_that_is_not_a_bool_is_refused_naming_it(flag):
+    from continuation.events import Event
+
+    with pytest.raises(ValueError, match=rf"`{flag}` must be True or False") as exc:
+        Event("g", lambda z, p: p, **{flag: "no"})
+    assert "\n" not in str(exc.value)
